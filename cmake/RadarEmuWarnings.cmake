@@ -1,0 +1,30 @@
+# Warning flags and sanitizers as INTERFACE targets that every project target links.
+add_library(radar_emu_warnings INTERFACE)
+target_compile_options(radar_emu_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast -Wcast-align
+  -Woverloaded-virtual -Wconversion -Wsign-conversion -Wnull-dereference -Wdouble-promotion
+  -Wimplicit-fallthrough -Wformat=2)
+if(RADAR_EMU_WERROR)
+  target_compile_options(radar_emu_warnings INTERFACE -Werror)
+endif()
+
+add_library(radar_emu_sanitizers INTERFACE)
+if(RADAR_EMU_SANITIZE)
+  target_compile_options(radar_emu_sanitizers INTERFACE
+    -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  target_link_options(radar_emu_sanitizers INTERFACE -fsanitize=address,undefined)
+endif()
+
+# radar_emu_module(NAME <name> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
+# Declares the library radar_emu_<name> (alias radar_emu::<name>) with the project root as
+# include directory, so headers read "#include \"<folder>/<file>.hpp\"".
+function(radar_emu_module)
+  cmake_parse_arguments(M "" "NAME" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(radar_emu_${M_NAME} STATIC ${M_SOURCES})
+  add_library(radar_emu::${M_NAME} ALIAS radar_emu_${M_NAME})
+  target_include_directories(radar_emu_${M_NAME} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_link_libraries(radar_emu_${M_NAME}
+    PUBLIC ${M_PUBLIC_DEPS} radar_emu_sanitizers
+    PRIVATE ${M_PRIVATE_DEPS} radar_emu_warnings)
+  set_target_properties(radar_emu_${M_NAME} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()

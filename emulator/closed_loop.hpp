@@ -1,0 +1,91 @@
+#pragma once
+// The closed loop: aircraft state in over the bus, SBR over the scene, sensor, detections out
+// over the bus, on a fixed-rate schedule, with per-stage timing. This is where the modules meet.
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "emulator/scenario.hpp"
+#include "io/canaerospace.hpp"
+#include "io/detection_icd.hpp"
+#include "radar/em/sbr.hpp"
+#include "radar/sensor/sensor.hpp"
+#include "timing/profiler.hpp"
+#include "timing/realtime.hpp"
+
+namespace radar_emu::emulator {
+
+struct RunOptions {
+  bool realtime = false;                     ///< pace frames on the monotonic wall clock
+  timing::RealtimeOptions rt{};              ///< bring-up when realtime
+  std::uint64_t record_frames_max = 20'000;  ///< frames kept for logs and detections.json
+  /// Called between frames (outside every timed stage) with (frames done, frames total).
+  std::function<void(std::uint64_t, std::uint64_t)> progress;
+};
+
+/// What one frame put on the bus.
+struct FrameRecord {
+  std::uint64_t frame_index = 0;  ///< scheduler period index
+  double time_s = 0.0;            ///< scenario time
+  io::icd::Header header{};
+  std::uint32_t first_detection = 0;  ///< index into RunResult::detections
+  std::uint32_t detection_count = 0;
+  bool late = false;
+};
+
+struct RunResult {
+  std::uint64_t frames = 0;
+  std::uint64_t frames_valid = 0;        ///< frames with a fresh ownship state
+  std::uint64_t frames_over_budget = 0;  ///< compute time of the frame exceeded the period
+  std::uint64_t overruns = 0;            ///< scheduler: frames started late
+  std::uint64_t missed_periods = 0;      ///< scheduler: periods skipped
+  std::uint64_t detections_total = 0;
+  std::uint64_t detections_min = 0;
+  std::uint64_t detections_max = 0;
+  io::canas::DecoderCounters decoder{};
+  std::uint64_t icd_dropped = 0;
+  std::uint64_t icd_truncated = 0;
+  radar::TraceStats trace{};         ///< summed over frames
+  radar::SensorStats sensor{};       ///< summed over frames
+  std::uint64_t bus_frames_in = 0;   ///< frames the radar received
+  std::uint64_t bus_frames_out = 0;  ///< frames the radar sent
+  std::uint64_t bus_rx_overflows = 0;
+  std::uint64_t record_overflows = 0;  ///< frames not kept in logs (record_frames_max)
+  std::uint64_t sink_lists = 0;        ///< detection lists the avionics sink reassembled
+  std::uint64_t sink_malformed = 0;
+  std::array<std::uint64_t, 4> injected_malformed{};  ///< by sim_bus::MalformedKind
+  std::array<timing::StageSummary, timing::kStageCount> stages{};
+  timing::RealtimeReport realtime{};
+  double wall_time_s = 0.0;
+  std::vector<FrameRecord> records;            ///< first record_frames_max frames
+  std::vector<io::icd::Detection> detections;  ///< as sent (before ICD quantisation)
+};
+
+class ClosedLoop {
+ public:
+  /// Setup: builds the scene, tracer, sensor, buses and peers; allocates every buffer the frame
+  /// path uses. Throws std::runtime_error with context on any invalid input.
+  ClosedLoop(const Scenario& scenario, const RunOptions& options);
+  ~ClosedLoop();
+  ClosedLoop(const ClosedLoop&) = delete;
+  ClosedLoop& operator=(const ClosedLoop&) = delete;
+
+  /// Runs scenario.frames frames.
+  RunResult run();
+
+  /// Writes report.json, detections.json, bus_in.log and bus_out.log into `dir` (created).
+  void write_outputs(const RunResult& result, const std::filesystem::path& dir) const;
+
+  [[nodiscard]] const Scenario& scenario() const noexcept;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace radar_emu::emulator

@@ -1,0 +1,333 @@
+#include "emulator/scenario.hpp"
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace radar_emu::emulator {
+
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+double from_db(double db) {
+  return std::pow(10.0, db / 10.0);
+}
+
+// The embedded default: a straight 3-degree approach to the default scene's runway (threshold at
+// the ENU origin, runway to the north), a forward-looking 94 GHz radar, 20 Hz frames.
+constexpr std::string_view kDefaultScenario =
+    R"(# radar-emu default scenario (embedded). Units are in the key names.
+name = "default approach, 94 GHz forward-looking radar over the default airport scene"
+
+[run]
+frames = 200                # bounded run (10 s at 20 Hz)
+rate_hz = 20.0              # radar frame rate
+epoch_unix_s = 1767225600   # bus time stamp of scenario time 0 (2026-01-01T00:00:00Z)
+state_timeout_s = 0.5       # older ownship data marks the output invalid
+
+[scene]
+builtin = "default"         # or: file = "scene.glb"
+
+[ownship]
+# Straight flight in the scene's East-North-Up frame: 4 km short of the threshold, on a
+# 3-degree glide path (70 m/s ground speed, 3.67 m/s sink rate), nose 2 degrees up.
+start_enu_m = [0.0, -4000.0, 230.0]
+velocity_enu_mps = [0.0, 70.0, -3.67]
+pitch_deg = 2.0
+roll_deg = 0.0
+heading_deg = 0.0
+ins_node_id = 1
+attitude_rate_hz = 80.0     # CANaerospace v1.7 baseline schedule
+navigation_rate_hz = 10.0
+
+[antenna]
+depression_deg = 5.0        # boresight below the body x axis (3 deg below the horizon here)
+azimuth_min_deg = -8.0
+azimuth_max_deg = 8.0
+elevation_min_deg = -4.0
+elevation_max_deg = 4.0
+azimuth_cell_deg = 1.0      # azimuth resolution (beam positions across the field of view)
+gain_db = 45.0
+
+[radar]
+carrier_hz = 94.0e9
+bandwidth_hz = 50.0e6       # range cell c/2B = 3.0 m
+prf_hz = 100.0e3            # chirp repetition: unambiguous velocity +-79.7 m/s
+pulses = 64                 # Doppler cell 2.49 m/s
+pulse_width_s = 10.0e-6
+tx_power_w = 20.0
+noise_figure_db = 5.0
+system_losses_db = 3.0
+max_range_m = 6000.0
+max_bounces = 3
+terrain_ray_spacing_deg = 0.0573   # 1 mrad
+target_ray_spacing_m = 0.25
+max_rays_per_target = 200000
+
+[detector]
+cfar_training_cells = 16
+cfar_guard_cells = 4
+cfar_pfa = 1.0e-6
+min_snr_db = 13.0
+max_detections = 64
+
+[faults]
+malformed_every_n_frames = 0  # >0: a faulty node sends a malformed CANaerospace frame this often
+)";
+
+class TableReader {
+ public:
+  TableReader(const toml::table& root, std::string_view table, const std::string& origin,
+              std::set<std::string> allowed)
+      : origin_(origin), name_(table), allowed_(std::move(allowed)) {
+    if (table.empty()) {
+      table_ = &root;
+    } else if (const toml::node* n = root.get(table)) {
+      table_ = n->as_table();
+      if (table_ == nullptr)
+        fail("", "must be a table");
+    }
+    if (table_ == nullptr)
+      return;
+    for (const auto& [key, value] : *table_) {
+      const std::string k(key.str());
+      if (table.empty() && value.is_table())
+        continue;  // sub-tables are checked on their own
+      if (!allowed_.contains(k))
+        fail(k, "unknown key");
+    }
+  }
+
+  [[noreturn]] void fail(std::string_view key, std::string_view what) const {
+    std::ostringstream os;
+    os << origin_ << ": ";
+    if (!name_.empty())
+      os << '[' << name_ << "] ";
+    os << key << (key.empty() ? "" : ": ") << what;
+    throw std::runtime_error(os.str());
+  }
+
+  const toml::node* node(std::string_view key) const {
+    return table_ == nullptr ? nullptr : table_->get(key);
+  }
+
+  void number(std::string_view key, double& out, double lo, double hi) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    std::optional<double> v = n->value<double>();
+    if (!v)
+      fail(key, "expected a number");
+    if (!std::isfinite(*v) || *v < lo || *v > hi) {
+      std::ostringstream os;
+      os << "value " << *v << " outside [" << lo << ", " << hi << "]";
+      fail(key, os.str());
+    }
+    out = *v;
+  }
+
+  template <typename Int>
+  void integer(std::string_view key, Int& out, std::int64_t lo, std::int64_t hi) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    if (!n->is_integer())
+      fail(key, "expected an integer");
+    const std::int64_t v = *n->value<std::int64_t>();
+    if (v < lo || v > hi) {
+      std::ostringstream os;
+      os << "value " << v << " outside [" << lo << ", " << hi << "]";
+      fail(key, os.str());
+    }
+    out = static_cast<Int>(v);
+  }
+
+  void string(std::string_view key, std::string& out) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    if (!n->is_string())
+      fail(key, "expected a string");
+    out = *n->value<std::string>();
+  }
+
+  void vec3(std::string_view key, glm::dvec3& out, double limit) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    const toml::array* a = n->as_array();
+    if (a == nullptr || a->size() != 3)
+      fail(key, "expected an array of 3 numbers");
+    for (std::size_t i = 0; i < 3; ++i) {
+      std::optional<double> v = (*a)[i].value<double>();
+      if (!v || !std::isfinite(*v) || std::abs(*v) > limit) {
+        fail(key, "element " + std::to_string(i) + " is not a finite number within +-" +
+                      std::to_string(limit));
+      }
+      out[static_cast<glm::length_t>(i)] = *v;
+    }
+  }
+
+  void degrees(std::string_view key, double& out_rad, double lo_deg, double hi_deg) const {
+    double deg = out_rad / kRadPerDeg;
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    number(key, deg, lo_deg, hi_deg);
+    out_rad = deg * kRadPerDeg;
+  }
+
+  void decibels(std::string_view key, double& out_linear, double lo_db, double hi_db) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    double db = 0.0;
+    number(key, db, lo_db, hi_db);
+    out_linear = from_db(db);
+  }
+
+ private:
+  const toml::table* table_ = nullptr;
+  std::string origin_;
+  std::string name_;
+  std::set<std::string> allowed_;
+};
+
+void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
+  toml::table root;
+  try {
+    root = toml::parse(text, origin);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream os;
+    os << origin << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
+       << e.description();
+    throw std::runtime_error(os.str());
+  }
+  const TableReader top(root, "", origin, {"name"});
+  for (const auto& [key, value] : root) {
+    static const std::set<std::string> kTables{"run",   "scene",    "ownship", "antenna",
+                                               "radar", "detector", "faults"};
+    if (value.is_table() && !kTables.contains(std::string(key.str()))) {
+      top.fail(key.str(), "unknown table");
+    }
+  }
+  top.string("name", s.name);
+
+  const TableReader run(root, "run", origin,
+                        {"frames", "rate_hz", "epoch_unix_s", "state_timeout_s"});
+  run.integer("frames", s.frames, 1, 100'000'000);
+  run.number("rate_hz", s.rate_hz, 0.1, 10'000.0);
+  std::int64_t epoch_s = s.epoch_unix_ns / 1'000'000'000LL;
+  run.integer("epoch_unix_s", epoch_s, 0, 4'000'000'000LL);
+  s.epoch_unix_ns = epoch_s * 1'000'000'000LL;
+  run.number("state_timeout_s", s.state_timeout_s, 0.001, 3600.0);
+
+  const TableReader scene(root, "scene", origin, {"builtin", "file"});
+  scene.string("builtin", s.scene_builtin);
+  std::string file;
+  scene.string("file", file);
+  if (!file.empty())
+    s.scene_file = file;
+  if (s.scene_file.empty() && s.scene_builtin != "default") {
+    scene.fail("builtin", "unknown built-in scene '" + s.scene_builtin + "' (known: default)");
+  }
+
+  const TableReader own(root, "ownship", origin,
+                        {"start_enu_m", "velocity_enu_mps", "pitch_deg", "roll_deg", "heading_deg",
+                         "ins_node_id", "attitude_rate_hz", "navigation_rate_hz"});
+  own.vec3("start_enu_m", s.ownship_start_enu_m, 1e6);
+  own.vec3("velocity_enu_mps", s.ownship_velocity_enu_mps, 1500.0);
+  own.degrees("pitch_deg", s.ownship_pitch_rad, -90.0, 90.0);
+  own.degrees("roll_deg", s.ownship_roll_rad, -180.0, 180.0);
+  own.degrees("heading_deg", s.ownship_heading_rad, -360.0, 360.0);
+  own.integer("ins_node_id", s.ins_node_id, 0, 255);
+  own.number("attitude_rate_hz", s.attitude_rate_hz, 0.1, 1000.0);
+  own.number("navigation_rate_hz", s.navigation_rate_hz, 0.1, 1000.0);
+
+  const TableReader ant(root, "antenna", origin,
+                        {"depression_deg", "azimuth_min_deg", "azimuth_max_deg",
+                         "elevation_min_deg", "elevation_max_deg", "azimuth_cell_deg", "gain_db"});
+  ant.degrees("depression_deg", s.antenna_depression_rad, -90.0, 90.0);
+  ant.degrees("azimuth_min_deg", s.sbr.azimuth_min_rad, -89.0, 89.0);
+  ant.degrees("azimuth_max_deg", s.sbr.azimuth_max_rad, -89.0, 89.0);
+  ant.degrees("elevation_min_deg", s.sbr.elevation_min_rad, -89.0, 89.0);
+  ant.degrees("elevation_max_deg", s.sbr.elevation_max_rad, -89.0, 89.0);
+  ant.degrees("azimuth_cell_deg", s.sensor.azimuth_cell_rad, 0.01, 90.0);
+  ant.decibels("gain_db", s.sensor.antenna_gain, 0.0, 80.0);
+  if (!(s.sbr.azimuth_min_rad < s.sbr.azimuth_max_rad)) {
+    ant.fail("azimuth_max_deg", "must be greater than azimuth_min_deg");
+  }
+  if (!(s.sbr.elevation_min_rad < s.sbr.elevation_max_rad)) {
+    ant.fail("elevation_max_deg", "must be greater than elevation_min_deg");
+  }
+  s.sensor.azimuth_min_rad = s.sbr.azimuth_min_rad;
+  s.sensor.azimuth_max_rad = s.sbr.azimuth_max_rad;
+
+  const TableReader rad(
+      root, "radar", origin,
+      {"carrier_hz", "bandwidth_hz", "prf_hz", "pulses", "pulse_width_s", "tx_power_w",
+       "noise_figure_db", "system_losses_db", "max_range_m", "max_bounces",
+       "terrain_ray_spacing_deg", "target_ray_spacing_m", "max_rays_per_target"});
+  rad.number("carrier_hz", s.sensor.carrier_hz, 1e8, 1e12);
+  s.sbr.carrier_hz = s.sensor.carrier_hz;
+  rad.number("bandwidth_hz", s.sensor.bandwidth_hz, 1e3, 1e10);
+  rad.number("prf_hz", s.sensor.prf_hz, 1.0, 1e8);
+  rad.integer("pulses", s.sensor.pulses, 1, 65536);
+  rad.number("pulse_width_s", s.sensor.pulse_width_s, 1e-10, 1.0);
+  rad.number("tx_power_w", s.sensor.tx_power_w, 1e-6, 1e7);
+  rad.decibels("noise_figure_db", s.sensor.noise_figure, 0.0, 30.0);
+  rad.decibels("system_losses_db", s.sensor.system_losses, 0.0, 60.0);
+  rad.number("max_range_m", s.sensor.max_range_m, 1.0, 1e6);
+  s.sbr.max_range_m = s.sensor.max_range_m;
+  rad.integer("max_bounces", s.sbr.max_bounces, 1, 16);
+  rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, 1e-4, 10.0);
+  rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, 1e-4, 100.0);
+  rad.integer("max_rays_per_target", s.sbr.max_rays_per_target, 1, 100'000'000);
+
+  const TableReader det(
+      root, "detector", origin,
+      {"cfar_training_cells", "cfar_guard_cells", "cfar_pfa", "min_snr_db", "max_detections"});
+  det.integer("cfar_training_cells", s.sensor.cfar_training_cells, 1, 1024);
+  det.integer("cfar_guard_cells", s.sensor.cfar_guard_cells, 0, 1024);
+  det.number("cfar_pfa", s.sensor.cfar_pfa, 1e-15, 0.5);
+  det.number("min_snr_db", s.sensor.min_snr_db, -50.0, 200.0);
+  det.integer("max_detections", s.sensor.max_detections, 0, 255);
+
+  const TableReader faults(root, "faults", origin, {"malformed_every_n_frames"});
+  faults.integer("malformed_every_n_frames", s.malformed_every_n_frames, 0, 1'000'000'000);
+}
+
+}  // namespace
+
+std::string_view default_scenario_toml() noexcept {
+  return kDefaultScenario;
+}
+
+Scenario parse_scenario(std::string_view toml_text, const std::string& origin) {
+  Scenario s;
+  apply_toml(s, kDefaultScenario, "<default scenario>");
+  if (origin != "<default scenario>")
+    apply_toml(s, toml_text, origin);
+  return s;
+}
+
+Scenario load_scenario(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw std::runtime_error(path.string() + ": cannot open scenario file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  Scenario s = parse_scenario(text.str(), path.string());
+  if (!s.scene_file.empty() && s.scene_file.is_relative()) {
+    s.scene_file = path.parent_path() / s.scene_file;  // relative to the scenario file
+  }
+  return s;
+}
+
+}  // namespace radar_emu::emulator

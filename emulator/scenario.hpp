@@ -1,0 +1,54 @@
+#pragma once
+// A scenario: everything one closed-loop run needs, read from TOML (setup only). The embedded
+// default (default_scenario_toml()) is what `radar-emu run` runs with no file. Degrees, dB and
+// other edge units appear only in the TOML; the struct holds SI.
+
+#include <cstdint>
+#include <filesystem>
+#include <glm/glm.hpp>
+#include <string>
+#include <string_view>
+
+#include "radar/em/sbr.hpp"
+#include "radar/sensor/sensor.hpp"
+
+namespace radar_emu::emulator {
+
+struct Scenario {
+  std::string name;
+  // [run]
+  std::uint64_t frames = 200;
+  double rate_hz = 20.0;
+  std::int64_t epoch_unix_ns = 1'767'225'600LL * 1'000'000'000LL;  ///< bus time of t = 0
+  double state_timeout_s = 0.5;  ///< ownship fields older than this make the output invalid
+  // [scene]
+  std::string scene_builtin = "default";  ///< used when scene_file is empty
+  std::filesystem::path scene_file;
+  // [ownship]: constant-velocity straight flight in the scene's ENU frame
+  glm::dvec3 ownship_start_enu_m{0.0, -4000.0, 230.0};
+  glm::dvec3 ownship_velocity_enu_mps{0.0, 70.0, -3.67};
+  double ownship_pitch_rad = 0.0;
+  double ownship_roll_rad = 0.0;
+  double ownship_heading_rad = 0.0;
+  std::uint8_t ins_node_id = 1;
+  double attitude_rate_hz = 80.0;
+  double navigation_rate_hz = 10.0;
+  // [antenna]
+  double antenna_depression_rad = 0.0;  ///< boresight below the body x axis
+  // [radar]
+  radar::SbrConfig sbr{};
+  radar::SensorConfig sensor{};
+  // [faults]
+  std::uint64_t malformed_every_n_frames = 0;  ///< 0 = no malformed-frame injection
+};
+
+/// The embedded default scenario, as TOML text (printed by `radar-emu run --print-scenario`).
+[[nodiscard]] std::string_view default_scenario_toml() noexcept;
+
+/// Parses a scenario. `origin` names the source in error messages ("FILE" or "<default>").
+/// Throws std::runtime_error "ORIGIN: [table] key: what is wrong" for missing, mistyped or
+/// out-of-range values; unknown keys are errors too (typos must not pass silently).
+[[nodiscard]] Scenario parse_scenario(std::string_view toml_text, const std::string& origin);
+[[nodiscard]] Scenario load_scenario(const std::filesystem::path& path);
+
+}  // namespace radar_emu::emulator

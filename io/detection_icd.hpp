@@ -1,0 +1,111 @@
+#pragma once
+// The radar-emu detection ICD, version 1, on classic CAN (docs/icd/detections.md, DBC file
+// docs/icd/radar_emu_detections.dbc). Per radar frame: one header frame, then two frames per
+// detection (A: range, radial velocity, SNR; B: azimuth, elevation, RCS). All signals are
+// little-endian (Intel, DBC "@1"). Identifiers are in CANaerospace's user-defined low-priority
+// range (1800-1899) so they cannot collide with normal-operation data on a shared bus.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+#include "io/can_frame.hpp"
+
+namespace radar_emu::io::icd {
+
+inline constexpr std::uint32_t kHeaderId = 0x708;      ///< 1800
+inline constexpr std::uint32_t kDetectionAId = 0x709;  ///< 1801
+inline constexpr std::uint32_t kDetectionBId = 0x70A;  ///< 1802
+inline constexpr std::size_t kMaxDetectionsPerFrame = 255;
+
+// Scaling of each signal: physical = raw * kScale (+ offset 0 for all signals).
+inline constexpr double kRangeScale_m = 0.01;             ///< u24: 0 .. 167772.15 m
+inline constexpr double kRadialVelocityScale_mps = 0.02;  ///< s16: -655.36 .. 655.34 m/s
+inline constexpr double kSnrScale_db = 0.5;               ///< u8: 0 .. 127.5 dB
+inline constexpr double kAngleScale_deg = 0.01;           ///< s16: azimuth/elevation
+inline constexpr double kRcsScale_dbsm = 0.01;            ///< s16: -327.68 .. 327.67 dBsm
+inline constexpr double kMaxRange_m = 16777215 * kRangeScale_m;
+inline constexpr double kMaxAbsAngle_deg = 90.0;  ///< ICD-valid angles: [-90, +90] deg
+inline constexpr double kMaxAbsRadialVelocity_mps = 655.34;
+
+/// Header status bits.
+namespace status {
+inline constexpr std::uint8_t kOwnshipInvalid = 0x01;  ///< ownship state stale or missing
+inline constexpr std::uint8_t kOverrun = 0x02;         ///< the previous frame missed its deadline
+inline constexpr std::uint8_t kTruncated = 0x04;       ///< more detections than the list carries
+inline constexpr std::uint8_t kDropped = 0x08;  ///< some detections were outside the ICD ranges
+}  // namespace status
+
+/// One detection in ICD units (the edge of the system: degrees and dB live here).
+struct Detection {
+  double range_m = 0.0;              ///< slant range [m], 0 .. kMaxRange_m
+  double azimuth_deg = 0.0;          ///< from antenna boresight, positive right [deg]
+  double elevation_deg = 0.0;        ///< from antenna boresight, positive up [deg]
+  double radial_velocity_mps = 0.0;  ///< range rate, positive receding [m/s]
+  double snr_db = 0.0;               ///< measured signal-to-noise ratio [dB]
+  double rcs_dbsm = 0.0;             ///< RCS estimate [dBsm]
+};
+
+struct Header {
+  std::uint16_t frame_counter = 0;   ///< increments by one per radar frame, wraps
+  std::uint8_t detection_count = 0;  ///< detections that follow in this list
+  std::uint8_t status = 0;           ///< status:: bits
+  std::uint32_t time_ms = 0;         ///< radar frame time since the start of the run [ms]
+};
+
+/// Result of encoding one detection list.
+struct EncodeResult {
+  std::size_t frames = 0;     ///< frames written to the output span
+  std::size_t encoded = 0;    ///< detections encoded
+  std::size_t dropped = 0;    ///< detections rejected (NaN or outside ICD ranges)
+  std::size_t truncated = 0;  ///< detections not sent for lack of space (list or span)
+};
+
+/// Encodes a header and the detections into `out` (real-time safe; no allocation). Detections
+/// that are NaN or outside the ICD's ranges are dropped and flagged (status::kDropped); if more
+/// than kMaxDetectionsPerFrame remain or `out` is too small, the rest are truncated
+/// (status::kTruncated). The header's detection_count is what was actually encoded.
+[[nodiscard]] EncodeResult encode(Header header, std::span<const Detection> detections,
+                                  std::span<CanFrame> out) noexcept;
+
+/// Frames needed for `n` detections: 1 + 2 n.
+[[nodiscard]] constexpr std::size_t frames_for(std::size_t n) noexcept {
+  return 1 + 2 * n;
+}
+
+/// A received detection list.
+struct DetectionList {
+  Header header{};
+  std::array<Detection, kMaxDetectionsPerFrame> detections{};
+  std::size_t count = 0;  ///< equals header.detection_count when complete
+};
+
+enum class FeedStatus : std::uint8_t {
+  kIgnored = 0,  ///< not an ICD identifier
+  kConsumed,     ///< part of a list still being assembled
+  kComplete,     ///< a list is complete: read it with list()
+  kMalformed,    ///< wrong DLC, index out of range, or frame counter mismatch (counted)
+  kOrphan,       ///< detection frame without a header (counted)
+};
+
+/// Reassembles detection lists from frames (the avionics side). Real-time safe.
+class ListDecoder {
+ public:
+  [[nodiscard]] FeedStatus feed(const CanFrame& frame) noexcept;
+  [[nodiscard]] const DetectionList& list() const noexcept { return list_; }
+  [[nodiscard]] std::uint64_t malformed() const noexcept { return malformed_; }
+  [[nodiscard]] std::uint64_t orphans() const noexcept { return orphans_; }
+  [[nodiscard]] std::uint64_t incomplete_lists() const noexcept { return incomplete_; }
+
+ private:
+  DetectionList list_{};
+  bool in_list_ = false;
+  std::array<std::uint8_t, kMaxDetectionsPerFrame> have_{};  // bit 0: A seen, bit 1: B seen
+  std::size_t parts_seen_ = 0;
+  std::uint64_t malformed_ = 0;
+  std::uint64_t orphans_ = 0;
+  std::uint64_t incomplete_ = 0;
+};
+
+}  // namespace radar_emu::io::icd

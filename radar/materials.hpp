@@ -1,0 +1,34 @@
+#pragma once
+// Radar properties of the scene's materials, looked up by material name at setup.
+//
+// Issue 2 ships a first, deliberately small catalogue: metals are perfect electric conductors
+// (R_perp = -1, R_par = +1, seed paper "Radar features"), terrain classes scatter diffusely
+// with the constant-gamma model sigma0 = gamma * cos(theta_i) (Richards, Principles of Modern
+// Radar, 2010, sec. 5.3; theta_i from the surface normal). The gamma values below are
+// placeholders of the right order for mm-wave land clutter, chosen by us, until the material
+// catalogue of issue 4 replaces them with sourced, frequency- and polarisation-dependent models.
+
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "scene/types.hpp"
+
+namespace radar_emu::radar {
+
+struct RadarMaterial {
+  std::string name;
+  bool conductor = false;  ///< perfect electric conductor: specular GO bounce + PO
+  double gamma = 0.0;      ///< constant-gamma clutter coefficient (linear) for non-conductors
+};
+
+/// The catalogue of known material names.
+[[nodiscard]] std::span<const RadarMaterial> material_catalogue() noexcept;
+
+/// Radar properties for each scene material, in the scene's material order. Throws
+/// std::invalid_argument naming the material and the known names when one is unknown (setup).
+[[nodiscard]] std::vector<RadarMaterial> resolve_materials(
+    std::span<const scene::Material> scene_materials);
+
+}  // namespace radar_emu::radar

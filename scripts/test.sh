@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# The test job: installs what is missing, builds with warnings as errors, runs every CTest
+# suite, then rebuilds with AddressSanitizer + UndefinedBehaviorSanitizer and runs the suites
+# that touch parsing and codecs (CTest label "sanitize") under it.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+jobs="$(nproc)"
+"$root/scripts/install-deps.sh"
+
+echo "== build (release, -Werror) =="
+"$root/scripts/build.sh" "$root/build" -DRADAR_EMU_WERROR=ON
+echo "== tests =="
+ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
+
+echo "== build (ASan+UBSan) =="
+"$root/scripts/build.sh" "$root/build-asan" -DRADAR_EMU_WERROR=ON -DRADAR_EMU_SANITIZE=ON \
+  -DRADAR_EMU_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=Debug
+echo "== tests under ASan+UBSan (label: sanitize) =="
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  ctest --test-dir "$root/build-asan" --output-on-failure -j "$jobs" -L sanitize
