@@ -1,0 +1,100 @@
+// Frame-path benchmarks on the default scenario: each stage alone, and whole frames.
+// Run: build/bench/bench_frame --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+
+#include <benchmark/benchmark.h>
+
+#include <vector>
+
+#include "emulator/closed_loop.hpp"
+#include "emulator/ownship.hpp"
+#include "emulator/scenario.hpp"
+#include "radar/em/sbr.hpp"
+#include "radar/sensor/sensor.hpp"
+#include "scene/default_scene.hpp"
+#include "scene/scene.hpp"
+
+namespace emu = radar_emu::emulator;
+namespace radar = radar_emu::radar;
+
+namespace {
+
+struct Fixture {
+  emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+  radar_emu::scene::Scene scene{radar_emu::scene::default_scene()};
+  radar::SbrTracer tracer{scene, s.sbr};
+  radar::Sensor sensor{s.sensor};
+  std::vector<radar::Contribution> contributions =
+      std::vector<radar::Contribution>(tracer.max_contributions());
+  std::vector<radar::Detection> detections = std::vector<radar::Detection>(s.sensor.max_detections);
+  radar::RadarPose pose;
+  Fixture() {
+    pose.position_m = s.ownship_start_enu_m;
+    pose.velocity_mps = s.ownship_velocity_enu_mps;
+    pose.world_from_antenna =
+        emu::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+        emu::body_from_antenna(s.antenna_depression_rad);
+  }
+};
+
+Fixture& fixture() {
+  static Fixture f;
+  return f;
+}
+
+void BM_Trace(benchmark::State& state) {
+  Fixture& f = fixture();
+  std::size_t n = 0;
+  radar::TraceStats stats;
+  for (auto _ : state) {
+    stats = {};
+    n = f.tracer.trace(f.pose, f.contributions, stats);
+    benchmark::DoNotOptimize(n);
+  }
+  state.counters["rays"] = static_cast<double>(stats.rays);
+  state.counters["contributions"] = static_cast<double>(n);
+  state.counters["Mrays_per_s"] =
+      benchmark::Counter(static_cast<double>(stats.rays) * 1e-6, benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_Trace)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_Sensor(benchmark::State& state) {
+  Fixture& f = fixture();
+  radar::TraceStats ts;
+  const std::size_t n = f.tracer.trace(f.pose, f.contributions, ts);
+  for (auto _ : state) {
+    radar::SensorStats ss;
+    benchmark::DoNotOptimize(f.sensor.process(
+        std::span<const radar::Contribution>(f.contributions.data(), n), f.detections, ss));
+  }
+  state.counters["contributions"] = static_cast<double>(n);
+}
+BENCHMARK(BM_Sensor)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_SceneSetTime(benchmark::State& state) {
+  Fixture& f = fixture();
+  double t = 0.0;
+  for (auto _ : state) {
+    f.scene.set_time(t);
+    t += 0.05;
+  }
+}
+BENCHMARK(BM_SceneSetTime)->Unit(benchmark::kMicrosecond);
+
+// Whole closed-loop frames (bus in, trace, sensor, bus out), 50 frames per iteration.
+void BM_ClosedLoop50Frames(benchmark::State& state) {
+  emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+  s.frames = 50;
+  for (auto _ : state) {
+    state.PauseTiming();
+    emu::ClosedLoop loop(s, {});
+    state.ResumeTiming();
+    benchmark::DoNotOptimize(loop.run());
+  }
+  state.counters["frames_per_s"] =
+      benchmark::Counter(50.0, benchmark::Counter::kIsIterationInvariantRate);
+}
+BENCHMARK(BM_ClosedLoop50Frames)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

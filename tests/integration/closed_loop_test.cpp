@@ -1,0 +1,467 @@
+// The closed loop on the software bus, end to end, checked against geometry this test computes
+// on its own: ownship on its scripted straight line, objects where the scene description puts
+// them, cells from the radar's parameters (c / 2B, lambda PRF / 4, azimuth cell width).
+
+#include "emulator/closed_loop.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <new>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "emulator/scenario.hpp"
+#include "io/candump.hpp"
+#include "io/detection_icd.hpp"
+#include "scene/default_scene.hpp"
+
+namespace emu = radar_emu::emulator;
+namespace fs = std::filesystem;
+
+// ---- allocation counter for the frame path (style.md item 10) ------------------------------
+namespace {
+std::atomic<bool> g_count_allocations{false};
+std::atomic<std::uint64_t> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t n) {
+  if (g_count_allocations.load(std::memory_order_relaxed)) {
+    g_allocations.fetch_add(1, std::memory_order_relaxed);
+  }
+  if (void* p = std::malloc(n == 0 ? 1 : n))
+    return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace {
+
+constexpr double kC_mps = 299792458.0;
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+fs::path temp_dir(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("radar_emu_it_" + name);
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+
+// What the test knows about one object at one time, in the world ENU frame.
+struct TruthObject {
+  std::string name;
+  std::vector<glm::dvec3> vertices_m;
+  glm::dvec3 velocity_mps{0.0};
+};
+
+std::vector<TruthObject> objects_at(const radar_emu::scene::SceneDescription& d, double t_s) {
+  std::vector<TruthObject> out;
+  for (const auto& o : d.objects) {
+    bool metal = false;
+    for (auto m : o.mesh.triangle_material)
+      metal |= d.materials[m].name == "metal";
+    if (!metal)
+      continue;
+    TruthObject t;
+    t.name = o.name;
+    if (o.motion) {
+      // Moving objects: body origin at start + v t, body x along the horizontal velocity.
+      const glm::dvec3 v = o.motion->velocity_mps;
+      const double yaw = std::atan2(v.y, v.x);
+      const glm::dvec3 p = o.motion->start_position_m + v * t_s;
+      for (const auto& b : o.mesh.positions_m) {
+        t.vertices_m.push_back(p + glm::dvec3(std::cos(yaw) * b.x - std::sin(yaw) * b.y,
+                                              std::sin(yaw) * b.x + std::cos(yaw) * b.y, b.z));
+      }
+      t.velocity_mps = v;
+    } else {
+      for (const auto& b : o.mesh.positions_m) {
+        t.vertices_m.push_back(glm::dvec3(o.world_from_body * glm::dvec4(glm::dvec3(b), 1.0)));
+      }
+    }
+    out.push_back(std::move(t));
+  }
+  return out;
+}
+
+// Antenna axes for a wings-level aircraft (roll 0): heading h from north clockwise, boresight
+// elevated by pitch - depression.
+struct Antenna {
+  glm::dvec3 boresight, right, up;
+};
+Antenna antenna_axes(double heading_rad, double elevation_rad) {
+  Antenna a;
+  a.boresight = {std::sin(heading_rad) * std::cos(elevation_rad),
+                 std::cos(heading_rad) * std::cos(elevation_rad), std::sin(elevation_rad)};
+  a.right = {std::cos(heading_rad), -std::sin(heading_rad), 0.0};
+  a.up = glm::cross(a.right, a.boresight);
+  return a;
+}
+
+struct Window {
+  double range_min_m = 1e30, range_max_m = -1e30;
+  double az_min_rad = 1e30, az_max_rad = -1e30;
+  double el_min_rad = 1e30, el_max_rad = -1e30;
+  double vr_min_mps = 1e30, vr_max_mps = -1e30;
+};
+
+Window window_of(const TruthObject& o, const glm::dvec3& radar, const glm::dvec3& v_radar,
+                 const Antenna& a) {
+  Window w;
+  for (const glm::dvec3& p : o.vertices_m) {
+    const glm::dvec3 d = p - radar;
+    const double r = glm::length(d);
+    const glm::dvec3 u = d / r;
+    w.range_min_m = std::min(w.range_min_m, r);
+    w.range_max_m = std::max(w.range_max_m, r);
+    const double az = std::atan2(glm::dot(u, a.right), glm::dot(u, a.boresight));
+    const double el = std::asin(std::clamp(glm::dot(u, a.up), -1.0, 1.0));
+    w.az_min_rad = std::min(w.az_min_rad, az);
+    w.az_max_rad = std::max(w.az_max_rad, az);
+    w.el_min_rad = std::min(w.el_min_rad, el);
+    w.el_max_rad = std::max(w.el_max_rad, el);
+    const double vr = glm::dot(o.velocity_mps - v_radar, u);  // range rate, + receding
+    w.vr_min_mps = std::min(w.vr_min_mps, vr);
+    w.vr_max_mps = std::max(w.vr_max_mps, vr);
+  }
+  // The nearest point of a face can be nearer than every vertex: widen by the object's size
+  // projected across the line of sight (bounded by its half extent).
+  return w;
+}
+
+struct Cells {
+  double range_cell_m, az_min_rad, az_cell_rad, v_ua_mps, doppler_cell_mps;
+  int n_doppler;
+  long range_cell(double r) const { return static_cast<long>(std::floor(r / range_cell_m)); }
+  long az_cell(double az) const {
+    return static_cast<long>(std::floor((az - az_min_rad) / az_cell_rad));
+  }
+  // Fold into [-v_ua, v_ua) (a sampled Doppler spectrum is periodic in 2 v_ua).
+  double fold(double v) const {
+    return v - 2.0 * v_ua_mps * std::floor((v + v_ua_mps) / (2.0 * v_ua_mps));
+  }
+  long doppler_cell(double v) const {
+    return static_cast<long>(std::floor((fold(v) + v_ua_mps) / doppler_cell_mps));
+  }
+  long doppler_distance(long a, long b) const {
+    const long d = std::labs(a - b) % n_doppler;
+    return std::min(d, n_doppler - d);
+  }
+};
+
+Cells cells_of(const emu::Scenario& s) {
+  Cells c{};
+  c.range_cell_m = kC_mps / (2.0 * s.sensor.bandwidth_hz);
+  c.az_min_rad = s.sensor.azimuth_min_rad;
+  c.az_cell_rad = s.sensor.azimuth_cell_rad;
+  const double lambda = kC_mps / s.sensor.carrier_hz;
+  c.v_ua_mps = lambda * s.sensor.prf_hz / 4.0;
+  c.n_doppler = s.sensor.pulses;
+  c.doppler_cell_mps = 2.0 * c.v_ua_mps / s.sensor.pulses;
+  return c;
+}
+
+emu::Scenario default_scenario() {
+  return emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+}
+
+}  // namespace
+
+class ClosedLoopDefault : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    scenario_ = new emu::Scenario(default_scenario());
+    ASSERT_GE(scenario_->frames, 200u);
+    emu::RunOptions options;
+    // Count heap allocations between frame 5 and the end: the frame path must not allocate.
+    options.progress = [](std::uint64_t done, std::uint64_t total) {
+      if (done == 5) {
+        g_allocations = 0;
+        g_count_allocations = true;
+      }
+      if (done == total)
+        g_count_allocations = false;
+    };
+    loop_ = new emu::ClosedLoop(*scenario_, options);
+    result_ = new emu::RunResult(loop_->run());
+    allocations_ = g_allocations.load();
+    out_ = temp_dir("default");
+    loop_->write_outputs(*result_, out_);
+  }
+  static void TearDownTestSuite() {
+    delete result_;
+    delete loop_;
+    delete scenario_;
+  }
+  static emu::Scenario* scenario_;
+  static emu::ClosedLoop* loop_;
+  static emu::RunResult* result_;
+  static std::uint64_t allocations_;
+  static fs::path out_;
+};
+emu::Scenario* ClosedLoopDefault::scenario_ = nullptr;
+emu::ClosedLoop* ClosedLoopDefault::loop_ = nullptr;
+emu::RunResult* ClosedLoopDefault::result_ = nullptr;
+std::uint64_t ClosedLoopDefault::allocations_ = 0;
+fs::path ClosedLoopDefault::out_;
+
+TEST_F(ClosedLoopDefault, EveryFrameRunsWithAValidStateAndReachesTheAvionics) {
+  const auto& r = *result_;
+  EXPECT_EQ(r.frames, scenario_->frames);
+  // The navigation data start at t = 0, so every frame has a fresh state.
+  EXPECT_EQ(r.frames_valid, r.frames);
+  EXPECT_EQ(r.decoder.rejected(), 0u);
+  EXPECT_EQ(r.decoder.message_code_gaps, 0u);
+  EXPECT_EQ(r.sink_lists, r.frames);
+  EXPECT_EQ(r.sink_malformed, 0u);
+  EXPECT_EQ(r.bus_rx_overflows, 0u);
+  EXPECT_EQ(r.record_overflows, 0u);
+  EXPECT_EQ(r.trace.dropped_contributions, 0u);
+  EXPECT_GT(r.detections_total, 0u);
+}
+
+TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
+  const emu::Scenario& s = *scenario_;
+  const Cells cells = cells_of(s);
+  const auto desc = radar_emu::scene::default_scene();
+  const Antenna ant =
+      antenna_axes(s.ownship_heading_rad, s.ownship_pitch_rad - s.antenna_depression_rad);
+  std::size_t frames_checked = 0;
+  std::vector<std::size_t> detected_frames_per_object;
+  std::vector<std::string> names;
+  for (const emu::FrameRecord& rec : result_->records) {
+    const double t = rec.time_s;
+    const glm::dvec3 radar = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * t;
+    const std::vector<TruthObject> objects = objects_at(desc, t);
+    if (names.empty()) {
+      for (const auto& o : objects)
+        names.push_back(o.name);
+      detected_frames_per_object.assign(objects.size(), 0);
+      ASSERT_EQ(objects.size(), 4u) << "the default scene has four metallic objects";
+    }
+    std::vector<Window> windows;
+    std::vector<bool> in_beam;
+    for (const auto& o : objects) {
+      const Window w = window_of(o, radar, s.ownship_velocity_enu_mps, ant);
+      windows.push_back(w);
+      in_beam.push_back(
+          w.az_min_rad > s.sbr.azimuth_min_rad && w.az_max_rad < s.sbr.azimuth_max_rad &&
+          w.el_min_rad > s.sbr.elevation_min_rad && w.el_max_rad < s.sbr.elevation_max_rad &&
+          w.range_max_m < s.sensor.max_range_m);
+    }
+    std::vector<bool> detected(objects.size(), false);
+    for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
+      const auto& d = result_->detections[rec.first_detection + i];
+      const long rc = cells.range_cell(d.range_m);
+      const long ac = cells.az_cell(d.azimuth_deg * kDeg);
+      const long dc = cells.doppler_cell(d.radial_velocity_mps);
+      bool matched = false;
+      for (std::size_t k = 0; k < objects.size(); ++k) {
+        const Window& w = windows[k];
+        const bool range_ok =
+            rc >= cells.range_cell(w.range_min_m) - 1 && rc <= cells.range_cell(w.range_max_m) + 1;
+        const bool az_ok =
+            ac >= cells.az_cell(w.az_min_rad) - 1 && ac <= cells.az_cell(w.az_max_rad) + 1;
+        const bool doppler_ok = cells.doppler_distance(dc, cells.doppler_cell(w.vr_min_mps)) <= 1 ||
+                                cells.doppler_distance(dc, cells.doppler_cell(w.vr_max_mps)) <= 1;
+        if (range_ok && az_ok && doppler_ok) {
+          matched = true;
+          detected[k] = true;
+        }
+      }
+      EXPECT_TRUE(matched) << "frame " << rec.header.frame_counter << " t=" << t
+                           << " s: detection at range " << d.range_m << " m, az " << d.azimuth_deg
+                           << " deg, vr " << d.radial_velocity_mps
+                           << " m/s matches no object inside the beam";
+      EXPECT_LE(std::abs(d.azimuth_deg * kDeg), s.sbr.azimuth_max_rad + 1e-9);
+    }
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+      if (!in_beam[k])
+        continue;
+      if (detected[k])
+        ++detected_frames_per_object[k];
+      EXPECT_TRUE(detected[k]) << "frame " << rec.header.frame_counter << " t=" << t
+                               << " s: " << objects[k].name << " inside the beam at range "
+                               << windows[k].range_min_m << ".." << windows[k].range_max_m
+                               << " m, az " << windows[k].az_min_rad / kDeg << ".."
+                               << windows[k].az_max_rad / kDeg << " deg, vr "
+                               << windows[k].vr_min_mps << " m/s was not detected";
+    }
+    ++frames_checked;
+  }
+  EXPECT_EQ(frames_checked, s.frames);
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    std::cout << "  " << names[k] << ": detected in " << detected_frames_per_object[k] << "/"
+              << frames_checked << " frames\n";
+  }
+}
+
+TEST_F(ClosedLoopDefault, MovingVehicleRadialVelocityFromItsKnownVelocity) {
+  // Tighter than the cell check: the reported radial velocity (a Doppler cell centre) is within
+  // one Doppler cell of the value computed from the vehicle's and the ownship's known velocities.
+  const emu::Scenario& s = *scenario_;
+  const Cells cells = cells_of(s);
+  const auto desc = radar_emu::scene::default_scene();
+  const Antenna ant =
+      antenna_axes(s.ownship_heading_rad, s.ownship_pitch_rad - s.antenna_depression_rad);
+  std::size_t frames_with_vehicle = 0;
+  for (const emu::FrameRecord& rec : result_->records) {
+    const glm::dvec3 radar = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * rec.time_s;
+    for (const auto& o : objects_at(desc, rec.time_s)) {
+      if (o.name != "moving_vehicle")
+        continue;
+      const Window w = window_of(o, radar, s.ownship_velocity_enu_mps, ant);
+      const double vr_expected = cells.fold(0.5 * (w.vr_min_mps + w.vr_max_mps));
+      bool found = false;
+      for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
+        const auto& d = result_->detections[rec.first_detection + i];
+        const long rc = cells.range_cell(d.range_m);
+        if (rc < cells.range_cell(w.range_min_m) - 1 || rc > cells.range_cell(w.range_max_m) + 1) {
+          continue;
+        }
+        if (std::abs(d.radial_velocity_mps - vr_expected) <= cells.doppler_cell_mps)
+          found = true;
+      }
+      EXPECT_TRUE(found) << "t=" << rec.time_s << " expected vr " << vr_expected;
+      ++frames_with_vehicle;
+    }
+  }
+  EXPECT_EQ(frames_with_vehicle, s.frames);
+}
+
+TEST_F(ClosedLoopDefault, FramePathDoesNotAllocate) {
+  EXPECT_EQ(allocations_, 0u) << "heap allocations between frame 5 and the last frame";
+}
+
+TEST_F(ClosedLoopDefault, ReportHoldsStageTimingsAndCounters) {
+  std::ifstream in(out_ / "report.json");
+  ASSERT_TRUE(in) << "report.json missing";
+  const nlohmann::json rep = nlohmann::json::parse(in);
+  for (const char* stage : {"input", "scene_update", "trace", "sensor", "output", "frame"}) {
+    ASSERT_TRUE(rep["stage_timing"].contains(stage)) << stage;
+    EXPECT_EQ(rep["stage_timing"][stage]["count"].get<std::uint64_t>(), scenario_->frames);
+    for (const char* k : {"p50_ms", "p99_ms", "max_ms"}) {
+      EXPECT_TRUE(rep["stage_timing"][stage][k].is_number()) << stage << "." << k;
+    }
+  }
+  EXPECT_EQ(rep["frames"].get<std::uint64_t>(), scenario_->frames);
+  EXPECT_TRUE(rep["input"]["rejected_by_reason"].contains("short_frame"));
+  for (const char* f : {"detections.json", "bus_in.log", "bus_out.log"}) {
+    EXPECT_TRUE(fs::exists(out_ / f)) << f;
+  }
+}
+
+TEST_F(ClosedLoopDefault, BusOutputDecodesToTheDetectionsWithinIcdQuantisation) {
+  // Read our own candump log back and reassemble lists with the ICD decoder: what went on the
+  // bus is what detections.json says, within half a quantisation step.
+  const auto lines = radar_emu::io::read_candump_file(out_ / "bus_out.log");
+  radar_emu::io::icd::ListDecoder dec;
+  std::size_t list_index = 0;
+  for (const auto& line : lines) {
+    if (dec.feed(line.frame) != radar_emu::io::icd::FeedStatus::kComplete)
+      continue;
+    ASSERT_LT(list_index, result_->records.size());
+    const emu::FrameRecord& rec = result_->records[list_index++];
+    const auto& got = dec.list();
+    ASSERT_EQ(got.count, rec.detection_count);
+    EXPECT_EQ(got.header.frame_counter, rec.header.frame_counter);
+    for (std::size_t i = 0; i < got.count; ++i) {
+      const auto& want = result_->detections[rec.first_detection + i];
+      namespace icd = radar_emu::io::icd;
+      EXPECT_NEAR(got.detections[i].range_m, want.range_m, icd::kRangeScale_m / 2 + 1e-9);
+      EXPECT_NEAR(got.detections[i].azimuth_deg, want.azimuth_deg, icd::kAngleScale_deg / 2 + 1e-9);
+      EXPECT_NEAR(got.detections[i].elevation_deg, want.elevation_deg,
+                  icd::kAngleScale_deg / 2 + 1e-9);
+      EXPECT_NEAR(got.detections[i].radial_velocity_mps, want.radial_velocity_mps,
+                  icd::kRadialVelocityScale_mps / 2 + 1e-9);
+    }
+  }
+  EXPECT_EQ(list_index, result_->records.size());
+}
+
+TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {
+  emu::Scenario s = default_scenario();
+  s.frames = 40;
+  const fs::path a = temp_dir("repeat_a"), b = temp_dir("repeat_b");
+  {
+    emu::ClosedLoop loop(s, {});
+    loop.write_outputs(loop.run(), a);
+  }
+  {
+    emu::ClosedLoop loop(s, {});
+    loop.write_outputs(loop.run(), b);
+  }
+  for (const char* f : {"bus_out.log", "bus_in.log", "detections.json"}) {
+    const std::string x = slurp(a / f), y = slurp(b / f);
+    EXPECT_FALSE(x.empty()) << f;
+    EXPECT_TRUE(x == y) << f << " differs between two runs with the same inputs";
+  }
+}
+
+TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
+  emu::Scenario s = default_scenario();
+  s.frames = 40;
+  s.malformed_every_n_frames = 3;  // frames 0, 3, ..., 39: 14 malformed frames
+  emu::ClosedLoop loop(s, {});
+  const emu::RunResult r = loop.run();
+  const std::uint64_t injected = r.injected_malformed[0] + r.injected_malformed[1] +
+                                 r.injected_malformed[2] + r.injected_malformed[3];
+  EXPECT_EQ(injected, 14u);
+  EXPECT_EQ(r.decoder.short_frame, r.injected_malformed[0]);
+  EXPECT_EQ(r.decoder.unknown_data_type, r.injected_malformed[1]);
+  EXPECT_EQ(r.decoder.not_a_number, r.injected_malformed[2]);
+  EXPECT_EQ(r.decoder.out_of_range, r.injected_malformed[3]);
+  EXPECT_EQ(r.decoder.rejected(), injected);
+  // The good data still flow: every frame valid, detections still produced.
+  EXPECT_EQ(r.frames_valid, r.frames);
+  EXPECT_GT(r.detections_total, 0u);
+  const fs::path out = temp_dir("malformed");
+  loop.write_outputs(r, out);
+  std::ifstream in(out / "report.json");
+  const nlohmann::json rep = nlohmann::json::parse(in);
+  EXPECT_EQ(rep["input"]["rejected"].get<std::uint64_t>(), injected);
+  EXPECT_EQ(rep["input"]["rejected_by_reason"]["not_a_number"].get<std::uint64_t>(),
+            r.injected_malformed[2]);
+}
+
+TEST(ClosedLoop, StaleStateMarksOutputInvalidAndEmitsNoDetections) {
+  // Navigation at 0.2 Hz with a 0.5 s timeout: position is stale most of the time. Frames with a
+  // stale state must carry the invalid flag and no detections computed from old data.
+  emu::Scenario s = default_scenario();
+  s.frames = 40;
+  s.navigation_rate_hz = 0.2;
+  emu::ClosedLoop loop(s, {});
+  const emu::RunResult r = loop.run();
+  std::size_t invalid = 0;
+  for (const auto& rec : r.records) {
+    const bool flagged = (rec.header.status & radar_emu::io::icd::status::kOwnshipInvalid) != 0;
+    // The fix at t = 0 stays fresh until t = 0.5 s: frames 0..10 at 20 Hz are valid.
+    EXPECT_EQ(flagged, rec.time_s > 0.5 + 1e-9) << "t=" << rec.time_s;
+    if (flagged) {
+      ++invalid;
+      EXPECT_EQ(rec.detection_count, 0u);
+    }
+  }
+  EXPECT_EQ(invalid, 29u);
+  EXPECT_EQ(r.frames_valid, 11u);
+}

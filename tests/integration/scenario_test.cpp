@@ -1,0 +1,76 @@
+// Scenario parsing: the embedded default is complete and consistent, a user file overrides only
+// what it names, and every kind of bad input fails with a message that says where and why.
+
+#include "emulator/scenario.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace emu = radar_emu::emulator;
+
+namespace {
+std::string error_of(const std::string& text) {
+  try {
+    (void)emu::parse_scenario(text, "test.toml");
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+constexpr double kDeg = std::numbers::pi / 180.0;
+}  // namespace
+
+TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
+  const emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+  EXPECT_EQ(s.frames, 200u);
+  EXPECT_DOUBLE_EQ(s.rate_hz, 20.0);
+  EXPECT_DOUBLE_EQ(s.sensor.carrier_hz, 94e9);
+  EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, s.sensor.carrier_hz);
+  EXPECT_NEAR(s.sensor.noise_figure, std::pow(10.0, 0.5), 1e-12);  // 5 dB
+  EXPECT_NEAR(s.antenna_depression_rad, 5.0 * kDeg, 1e-15);
+  EXPECT_DOUBLE_EQ(s.sbr.azimuth_min_rad, s.sensor.azimuth_min_rad);
+  EXPECT_DOUBLE_EQ(s.ownship_start_enu_m.y, -4000.0);
+  EXPECT_EQ(s.scene_builtin, "default");
+  EXPECT_TRUE(s.scene_file.empty());
+}
+
+TEST(Scenario, UserFileOverridesOnlyWhatItNames) {
+  const emu::Scenario s =
+      emu::parse_scenario("[run]\nframes = 7\n[radar]\ncarrier_hz = 35.0e9\n", "user.toml");
+  EXPECT_EQ(s.frames, 7u);
+  EXPECT_DOUBLE_EQ(s.sensor.carrier_hz, 35e9);
+  EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, 35e9);
+  EXPECT_DOUBLE_EQ(s.rate_hz, 20.0);  // from the default
+}
+
+TEST(Scenario, BadInputFailsWithLocationAndReason) {
+  EXPECT_NE(error_of("[run]\nframez = 3\n").find("test.toml: [run] framez: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of("[rn]\n").find("unknown table"), std::string::npos);
+  EXPECT_NE(error_of("[run]\nframes = \"many\"\n").find("[run] frames: expected an integer"),
+            std::string::npos);
+  EXPECT_NE(error_of("[run]\nframes = 0\n").find("outside [1,"), std::string::npos);
+  EXPECT_NE(error_of("[run]\nrate_hz = nan\n").find("rate_hz"), std::string::npos);
+  EXPECT_NE(error_of("[ownship]\nstart_enu_m = [1.0, 2.0]\n").find("array of 3"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("[antenna]\nazimuth_min_deg = 10.0\nazimuth_max_deg = 5.0\n").find("greater than"),
+      std::string::npos);
+  EXPECT_NE(error_of("[scene]\nbuiltin = \"moon\"\n").find("unknown built-in scene"),
+            std::string::npos);
+  // Syntax errors carry line and column.
+  EXPECT_NE(error_of("[run]\nframes = = 3\n").find("test.toml:2:"), std::string::npos);
+}
+
+TEST(Scenario, MissingFileNamesThePath) {
+  try {
+    (void)emu::load_scenario("/nonexistent/dir/s.toml");
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/s.toml"), std::string::npos);
+  }
+}
