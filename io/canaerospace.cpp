@@ -1,0 +1,277 @@
+#include "io/canaerospace.hpp"
+
+#include <bit>
+#include <cmath>
+#include <numbers>
+
+namespace radar_emu::io::canas {
+
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+// Header bytes (spec sec. 4.1).
+constexpr std::size_t kNodeIdByte = 0;
+constexpr std::size_t kDataTypeByte = 1;
+constexpr std::size_t kMessageCodeByte = 3;
+constexpr std::size_t kHeaderBytes = 4;
+constexpr std::size_t kValue32Bytes = 8;
+
+std::uint32_t read_be32(const CanFrame& f) noexcept {
+  return (static_cast<std::uint32_t>(f.data[4]) << 24) |
+         (static_cast<std::uint32_t>(f.data[5]) << 16) |
+         (static_cast<std::uint32_t>(f.data[6]) << 8) | static_cast<std::uint32_t>(f.data[7]);
+}
+
+void write_be32(CanFrame& f, std::uint32_t v) noexcept {
+  f.data[4] = static_cast<std::uint8_t>(v >> 24);
+  f.data[5] = static_cast<std::uint8_t>(v >> 16);
+  f.data[6] = static_cast<std::uint8_t>(v >> 8);
+  f.data[7] = static_cast<std::uint8_t>(v);
+}
+
+CanFrame header_frame(std::uint16_t can_id, std::uint8_t node_id, DataType type,
+                      std::uint8_t message_code) noexcept {
+  CanFrame f;
+  f.id = can_id;
+  f.len = static_cast<std::uint8_t>(kValue32Bytes);
+  f.data[kNodeIdByte] = node_id;
+  f.data[kDataTypeByte] = static_cast<std::uint8_t>(type);
+  f.data[2] = 0;  // service code: 0 for normal operation data
+  f.data[kMessageCodeByte] = message_code;
+  return f;
+}
+
+// Field of an identifier, or kCount when radar-emu does not consume it.
+Field field_of(std::uint32_t can_id) noexcept {
+  switch (can_id) {
+    case id::kPitchAngle:
+      return Field::kPitch;
+    case id::kRollAngle:
+      return Field::kRoll;
+    case id::kTrueHeading:
+      return Field::kTrueHeading;
+    case id::kGpsLatitude:
+      return Field::kLatitude;
+    case id::kGpsLongitude:
+      return Field::kLongitude;
+    case id::kGpsHeight:
+      return Field::kHeight;
+    case id::kTrueEastVelocity:
+      return Field::kVelEast;
+    case id::kTrueNorthVelocity:
+      return Field::kVelNorth;
+    case id::kTrueUpVelocity:
+      return Field::kVelUp;
+    default:
+      return Field::kCount;
+  }
+}
+
+// Physical validity limits on the bus units (deg, m, m/s).
+struct Limits {
+  double lo, hi;
+};
+Limits limits_of(Field f) noexcept {
+  switch (f) {
+    case Field::kPitch:
+      return {-90.0, 90.0};
+    case Field::kRoll:
+      return {-180.0, 180.0};
+    case Field::kTrueHeading:
+      return {-360.0, 360.0};
+    case Field::kLatitude:
+      return {-90.0, 90.0};
+    case Field::kLongitude:
+      return {-180.0, 180.0};
+    case Field::kHeight:
+      return {-1000.0, 60000.0};
+    case Field::kVelEast:
+    case Field::kVelNorth:
+    case Field::kVelUp:
+      return {-1500.0, 1500.0};
+    case Field::kCount:
+      break;
+  }
+  return {0.0, 0.0};
+}
+
+bool is_angle(Field f) noexcept {
+  return f == Field::kPitch || f == Field::kRoll || f == Field::kTrueHeading ||
+         f == Field::kLatitude || f == Field::kLongitude;
+}
+
+}  // namespace
+
+std::uint16_t can_id_of(Field field) noexcept {
+  switch (field) {
+    case Field::kPitch:
+      return id::kPitchAngle;
+    case Field::kRoll:
+      return id::kRollAngle;
+    case Field::kTrueHeading:
+      return id::kTrueHeading;
+    case Field::kLatitude:
+      return id::kGpsLatitude;
+    case Field::kLongitude:
+      return id::kGpsLongitude;
+    case Field::kHeight:
+      return id::kGpsHeight;
+    case Field::kVelEast:
+      return id::kTrueEastVelocity;
+    case Field::kVelNorth:
+      return id::kTrueNorthVelocity;
+    case Field::kVelUp:
+      return id::kTrueUpVelocity;
+    case Field::kCount:
+      break;
+  }
+  return 0;
+}
+
+double OwnshipState::age_s(Field f, std::int64_t now_ns) const noexcept {
+  const FieldSample& s = (*this)[f];
+  if (!s.received)
+    return std::numeric_limits<double>::infinity();
+  return static_cast<double>(now_ns - s.updated_ns) * 1e-9;
+}
+
+bool OwnshipState::fresh(Field f, std::int64_t now_ns, std::int64_t timeout_ns) const noexcept {
+  const FieldSample& s = (*this)[f];
+  return s.received && now_ns - s.updated_ns <= timeout_ns;
+}
+
+bool OwnshipState::all_fresh(std::int64_t now_ns, std::int64_t timeout_ns) const noexcept {
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    if (!fresh(static_cast<Field>(i), now_ns, timeout_ns))
+      return false;
+  }
+  return true;
+}
+
+DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcept {
+  ++counters_.frames;
+  if (frame.extended) {
+    ++counters_.extended_id;
+    return DecodeStatus::kExtendedId;
+  }
+  const Field field = field_of(frame.id);
+  if (field == Field::kCount) {
+    ++counters_.ignored_id;
+    return DecodeStatus::kIgnoredId;
+  }
+  if (frame.len < kHeaderBytes) {
+    ++counters_.short_frame;
+    return DecodeStatus::kShortFrame;
+  }
+  const std::uint8_t type_code = frame.data[kDataTypeByte];
+  if (type_code > static_cast<std::uint8_t>(DataType::kDoubleL)) {
+    ++counters_.unknown_data_type;
+    return DecodeStatus::kUnknownDataType;
+  }
+  const auto type = static_cast<DataType>(type_code);
+  const bool lat_lon = field == Field::kLatitude || field == Field::kLongitude;
+  const bool accepted_type = type == DataType::kFloat || type == DataType::kDoubleH ||
+                             type == DataType::kDoubleL || (lat_lon && type == DataType::kLong);
+  if (!accepted_type) {
+    ++counters_.unsupported_data_type;
+    return DecodeStatus::kUnsupportedDataType;
+  }
+  if (frame.len < kValue32Bytes) {
+    ++counters_.short_frame;
+    return DecodeStatus::kShortFrame;
+  }
+
+  // Message-code tracking (spec sec. 4.1.4: incremented by one per message, wraps at 255).
+  IdTrack& track = track_[static_cast<std::size_t>(field)];
+  const std::uint8_t code = frame.data[kMessageCodeByte];
+  if (track.seen && code != static_cast<std::uint8_t>(track.last_message_code + 1)) {
+    ++counters_.message_code_gaps;
+  }
+  track.seen = true;
+  track.last_message_code = code;
+
+  const std::uint32_t bits = read_be32(frame);
+  double value = 0.0;
+  switch (type) {
+    case DataType::kDoubleH:
+      if (track.double_high_pending)
+        ++counters_.unpaired_double;  // previous high never closed
+      track.double_high_pending = true;
+      track.double_high_bits = bits;
+      return DecodeStatus::kPendingDoubleLow;
+    case DataType::kDoubleL: {
+      if (!track.double_high_pending) {
+        ++counters_.unpaired_double;
+        return DecodeStatus::kUnpairedDouble;
+      }
+      track.double_high_pending = false;
+      const std::uint64_t all = (static_cast<std::uint64_t>(track.double_high_bits) << 32) | bits;
+      value = std::bit_cast<double>(all);
+      break;
+    }
+    case DataType::kFloat:
+      value = static_cast<double>(std::bit_cast<float>(bits));
+      break;
+    case DataType::kLong:
+      value = static_cast<double>(std::bit_cast<std::int32_t>(bits)) * 1e-7;  // 1e-7 deg
+      break;
+    default:
+      ++counters_.unsupported_data_type;
+      return DecodeStatus::kUnsupportedDataType;
+  }
+  // A value in any other type breaks a pending DOUBLEH/DOUBLEL pair.
+  if (type != DataType::kDoubleL && track.double_high_pending) {
+    track.double_high_pending = false;
+    ++counters_.unpaired_double;
+  }
+
+  if (!std::isfinite(value)) {
+    ++counters_.not_a_number;
+    return DecodeStatus::kNotANumber;
+  }
+  const Limits lim = limits_of(field);
+  if (value < lim.lo || value > lim.hi) {
+    ++counters_.out_of_range;
+    return DecodeStatus::kOutOfRange;
+  }
+  double si = is_angle(field) ? value * kRadPerDeg : value;
+  if (field == Field::kTrueHeading) {
+    si = std::fmod(si, 2.0 * std::numbers::pi);
+    if (si < 0.0)
+      si += 2.0 * std::numbers::pi;
+  }
+  FieldSample& sample = state_.fields[static_cast<std::size_t>(field)];
+  sample.value = si;
+  sample.updated_ns = now_ns;
+  sample.received = true;
+  ++counters_.accepted;
+  return DecodeStatus::kAccepted;
+}
+
+CanFrame encode_float(std::uint16_t can_id, std::uint8_t node_id, std::uint8_t message_code,
+                      float value) noexcept {
+  CanFrame f = header_frame(can_id, node_id, DataType::kFloat, message_code);
+  write_be32(f, std::bit_cast<std::uint32_t>(value));
+  return f;
+}
+
+CanFrame encode_long(std::uint16_t can_id, std::uint8_t node_id, std::uint8_t message_code,
+                     std::int32_t value) noexcept {
+  CanFrame f = header_frame(can_id, node_id, DataType::kLong, message_code);
+  write_be32(f, std::bit_cast<std::uint32_t>(value));
+  return f;
+}
+
+std::pair<CanFrame, CanFrame> encode_double(std::uint16_t can_id, std::uint8_t node_id,
+                                            std::uint8_t message_code, double value) noexcept {
+  const auto bits = std::bit_cast<std::uint64_t>(value);
+  CanFrame high = header_frame(can_id, node_id, DataType::kDoubleH, message_code);
+  write_be32(high, static_cast<std::uint32_t>(bits >> 32));
+  CanFrame low = header_frame(can_id, node_id, DataType::kDoubleL,
+                              static_cast<std::uint8_t>(message_code + 1));
+  write_be32(low, static_cast<std::uint32_t>(bits & 0xFFFFFFFFu));
+  return {high, low};
+}
+
+}  // namespace radar_emu::io::canas
