@@ -2,7 +2,7 @@
 add_library(radar_emu_warnings INTERFACE)
 target_compile_options(radar_emu_warnings INTERFACE
   -Wall -Wextra -Wpedantic -Wshadow -Wnon-virtual-dtor -Wold-style-cast -Wcast-align
-  -Woverloaded-virtual -Wconversion -Wsign-conversion -Wnull-dereference -Wdouble-promotion
+  -Woverloaded-virtual -Wconversion -Wsign-conversion -Wdouble-promotion
   -Wimplicit-fallthrough -Wformat=2)
 if(RADAR_EMU_WERROR)
   target_compile_options(radar_emu_warnings INTERFACE -Werror)

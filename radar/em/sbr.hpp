@@ -46,11 +46,11 @@ struct SbrConfig {
   double azimuth_max_rad = 0.1745;
   double elevation_min_rad = -0.0873;
   double elevation_max_rad = 0.0873;
-  double terrain_ray_spacing_rad = 1e-3;     ///< angular spacing of the terrain grid (az and el)
-  double target_ray_spacing_m = 0.25;        ///< bundle spacing at the target's nearest range
-  std::size_t max_rays_per_target = 200000;  ///< bundles coarsen beyond this (counted)
-  double max_range_m = 6000.0;               ///< rays end here (one-way)
-  int max_bounces = 3;                       ///< GO bounces off conductors (>= 1)
+  double terrain_ray_spacing_rad = 1e-3;    ///< angular spacing of the terrain grid (az and el)
+  double target_ray_spacing_m = 0.25;       ///< bundle spacing at the target's nearest range
+  std::size_t max_rays_per_target = 50000;  ///< bundles coarsen beyond this (counted)
+  double max_range_m = 6000.0;              ///< rays end here (one-way)
+  int max_bounces = 3;                      ///< GO bounces off conductors (>= 1)
 };
 
 /// One return: a ray tube's contribution at one hit point, as seen by the radar.
@@ -92,9 +92,10 @@ class SbrTracer {
   [[nodiscard]] std::size_t max_contributions() const noexcept;
   /// Shoots all rays for `pose` against the scene at its current time and writes contributions
   /// to `out` (in a deterministic order, whatever the threading). Returns the number written.
-  /// Real-time safe apart from the worker threads it may use (TBB): no allocation per call.
+  /// Real-time safe apart from the worker threads it uses (TBB): no allocation per call. `out`
+  /// must hold max_contributions() elements (fewer: the excess is dropped and counted).
   [[nodiscard]] std::size_t trace(const RadarPose& pose, std::span<Contribution> out,
-                                  TraceStats& stats) const noexcept;
+                                  TraceStats& stats) noexcept;
 
   [[nodiscard]] const SbrConfig& config() const noexcept { return config_; }
 
@@ -102,7 +103,20 @@ class SbrTracer {
   const scene::Scene* scene_;
   SbrConfig config_;
   std::vector<RadarMaterial> materials_;
-  // Implementation state (free to change): grid sizes, per-object target flags, scratch.
+  struct Bundle {
+    std::uint32_t object_id = 0;
+    double az0_rad = 0, el0_rad = 0, daz_rad = 0, del_rad = 0;
+    std::size_t n_az = 0, n_el = 0, first_ray = 0;
+  };
+  void trace_ray(const RadarPose& pose, double az, double el, double daz, double del,
+                 std::uint32_t owner, bool terrain, Contribution* slot, std::uint8_t& count,
+                 TraceStats& stats) const noexcept;
+
+  std::vector<std::uint8_t> is_target_;  ///< per object: has a conducting triangle
+  std::size_t n_targets_ = 0;
+  std::size_t n_az_ = 0, n_el_ = 0;   ///< terrain grid
+  std::vector<Bundle> bundles_;       ///< per frame, capacity n_targets_
+  std::vector<std::uint8_t> counts_;  ///< contributions per ray slot
 };
 
 }  // namespace radar_emu::radar

@@ -40,7 +40,7 @@ struct Detection {
   double range_m = 0.0;
   double azimuth_rad = 0.0;
   double elevation_rad = 0.0;        ///< power-weighted mean elevation of the cell's returns
-  double radial_velocity_mps = 0.0;  ///< folded into [-v_ua, v_ua)
+  double radial_velocity_mps = 0.0;  ///< Doppler cell centre, folded: (cell - N/2) * dv
   double snr = 0.0;                  ///< linear
   double rcs_m2 = 0.0;               ///< from the radar equation at the cell's range
   std::uint32_t range_cell = 0;
@@ -52,8 +52,9 @@ struct SensorStats {
   std::uint64_t cells_touched = 0;
   std::uint64_t cfar_crossings = 0;
   std::uint64_t detections = 0;
-  std::uint64_t truncated = 0;    ///< detections beyond max_detections or the output span
-  std::uint64_t out_of_grid = 0;  ///< contributions beyond max range or azimuth
+  std::uint64_t truncated = 0;         ///< detections beyond max_detections or the output span
+  std::uint64_t out_of_grid = 0;       ///< contributions beyond max range or azimuth
+  std::uint64_t cells_overflowed = 0;  ///< power lost: more touched cells than reserved
 };
 
 class Sensor {
@@ -100,7 +101,12 @@ class Sensor {
     std::uint32_t slot;
   };
   std::vector<Candidate> candidates_;
+  std::vector<double> cfar_alpha_;  ///< threshold factor by number of training cells
   std::size_t n_range_ = 0, n_doppler_ = 0, n_az_ = 0;
+  double amplitude_scale_ = 0.0;  ///< sqrt(Pt G^2 lambda^2 / ((4 pi)^3 L)) [sqrt(W) m]
+  double snr_per_watt_ = 0.0;     ///< processing gain / noise power [1/W]
+  Cell* cell_for(std::uint32_t index, SensorStats& stats) noexcept;
+  [[nodiscard]] double snr_of_index(std::uint32_t index) const noexcept;
 };
 
 }  // namespace radar_emu::radar

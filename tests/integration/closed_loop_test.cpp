@@ -36,6 +36,8 @@ std::atomic<std::uint64_t> g_allocations{0};
 void* operator new(std::size_t n) {
   if (g_count_allocations.load(std::memory_order_relaxed)) {
     g_allocations.fetch_add(1, std::memory_order_relaxed);
+    if (std::getenv("RADAR_EMU_ABORT_ON_ALLOCATION") != nullptr)
+      std::abort();  // for gdb
   }
   if (void* p = std::malloc(n == 0 ? 1 : n))
     return p;
@@ -89,7 +91,8 @@ std::vector<TruthObject> objects_at(const radar_emu::scene::SceneDescription& d,
       const glm::dvec3 v = o.motion->velocity_mps;
       const double yaw = std::atan2(v.y, v.x);
       const glm::dvec3 p = o.motion->start_position_m + v * t_s;
-      for (const auto& b : o.mesh.positions_m) {
+      for (const auto& bf : o.mesh.positions_m) {
+        const glm::dvec3 b(bf);
         t.vertices_m.push_back(p + glm::dvec3(std::cos(yaw) * b.x - std::sin(yaw) * b.y,
                                               std::sin(yaw) * b.x + std::cos(yaw) * b.y, b.z));
       }
@@ -160,8 +163,10 @@ struct Cells {
   double fold(double v) const {
     return v - 2.0 * v_ua_mps * std::floor((v + v_ua_mps) / (2.0 * v_ua_mps));
   }
+  // FFT bins centred on multiples of the cell width, zero velocity at index N/2.
   long doppler_cell(double v) const {
-    return static_cast<long>(std::floor((fold(v) + v_ua_mps) / doppler_cell_mps));
+    const long bin = std::lround(fold(v) / doppler_cell_mps);
+    return ((bin + n_doppler / 2) % n_doppler + n_doppler) % n_doppler;
   }
   long doppler_distance(long a, long b) const {
     const long d = std::labs(a - b) % n_doppler;
