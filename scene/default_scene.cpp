@@ -9,11 +9,6 @@ namespace {
 
 constexpr std::uint16_t kGrass = 0, kAsphalt = 1, kMetal = 2;
 
-// Anchor of the default scene: the runway threshold (a made-up airport in southern France).
-constexpr double kAnchorLatitude_deg = 43.6;
-constexpr double kAnchorLongitude_deg = 1.4;
-constexpr double kAnchorHeight_m = 150.0;
-
 void add_quad(Mesh& m, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, std::uint16_t mat) {
   // a b c d counter-clockwise seen from the side the normal points to.
   const auto base = static_cast<unsigned>(m.positions_m.size());
@@ -61,9 +56,34 @@ void add_prism_x(Mesh& m, float x0, float x1, glm::vec2 centre, float radius, in
   }
 }
 
-glm::dmat4 translation(double x, double y, double z) {
+// Square trihedral corner reflector of edge a (three mutually perpendicular square plates, single
+// sheets), corner at `corner`, symmetry axis (the direction of peak return) along `axis`.
+// On axis its PO RCS is 12 pi a^4 / lambda^2 (physics.md, canonical targets), over a beam of
+// some +-20 degrees.
+void add_trihedral(Mesh& m, glm::dvec3 corner, glm::dvec3 axis, double a, std::uint16_t mat) {
+  // Rotation taking the local octant's diagonal (1,1,1)/sqrt(3) onto `axis` (Rodrigues).
+  const glm::dvec3 from = glm::normalize(glm::dvec3(1.0));
+  const glm::dvec3 to = glm::normalize(axis);
+  const glm::dvec3 k = glm::cross(from, to);
+  const double s = glm::length(k), c = glm::dot(from, to);
+  glm::dmat3 r(1.0);
+  if (s > 1e-12) {
+    const glm::dvec3 u = k / s;
+    const glm::dmat3 kx(glm::dvec3(0, u.z, -u.y), glm::dvec3(-u.z, 0, u.x),
+                        glm::dvec3(u.y, -u.x, 0));
+    r = glm::dmat3(1.0) + s * kx + (1.0 - c) * kx * kx;
+  }
+  auto p = [&](double x, double y, double z) {
+    return glm::vec3(corner + r * glm::dvec3(x, y, z));
+  };
+  add_quad(m, p(0, 0, 0), p(a, 0, 0), p(a, a, 0), p(0, a, 0), mat);  // floor, local normal +z
+  add_quad(m, p(0, 0, 0), p(0, 0, a), p(a, 0, a), p(a, 0, 0), mat);  // wall, local normal +y
+  add_quad(m, p(0, 0, 0), p(0, a, 0), p(0, a, a), p(0, 0, a), mat);  // wall, local normal +x
+}
+
+glm::dmat4 translation(const glm::dvec3& p) {
   glm::dmat4 t(1.0);
-  t[3] = glm::dvec4(x, y, z, 1.0);
+  t[3] = glm::dvec4(p, 1.0);
   return t;
 }
 
@@ -76,7 +96,7 @@ SceneDescription default_scene() {
                  {"asphalt", {0.2f, 0.2f, 0.22f}},
                  {"metal", {0.75f, 0.75f, 0.8f}}};
   const double deg = std::numbers::pi / 180.0;
-  d.anchor = {kAnchorLatitude_deg * deg, kAnchorLongitude_deg * deg, kAnchorHeight_m};
+  d.anchor = {L::kAnchorLatitude_deg * deg, L::kAnchorLongitude_deg * deg, L::kAnchorHeight_m};
 
   ObjectDesc ground{"ground", {}, glm::dmat4(1.0), std::nullopt};
   const auto gw = static_cast<float>(L::kGroundHalfWidth_m);
@@ -88,32 +108,51 @@ SceneDescription default_scene() {
   ObjectDesc runway{"runway", {}, glm::dmat4(1.0), std::nullopt};
   const auto rw = static_cast<float>(L::kRunwayWidth_m / 2.0);
   const auto rl = static_cast<float>(L::kRunwayLength_m);
-  add_quad(runway.mesh, {-rw, 0, 0.05f}, {rw, 0, 0.05f}, {rw, rl, 0.05f}, {-rw, rl, 0.05f},
-           kAsphalt);
+  const auto rh = static_cast<float>(L::kRunwayHeight_m);
+  add_quad(runway.mesh, {-rw, 0, rh}, {rw, 0, rh}, {rw, rl, rh}, {-rw, rl, rh}, kAsphalt);
   d.objects.push_back(std::move(runway));
 
   // Parked aircraft-sized object: fuselage east-west (12-sided prism, r 2 m, 32 m long, axis
-  // 3.5 m above ground), wings north-south (30 m x 4 m x 0.4 m), tail fin at the east end.
-  ObjectDesc aircraft{"parked_aircraft", {}, translation(110.0, 700.0, 0.0), std::nullopt};
+  // 3.5 m above ground), wings north-south (30 m x 4 m x 0.4 m), tail fin at the east end. The
+  // fin's root is sunk 0.2 m into the fuselage (whose flat top is at 3.5 + 2 sin 75 deg =
+  // 5.43 m) so that no gap opens between them; its tip is at 11.3 m.
+  ObjectDesc aircraft{"parked_aircraft", {}, translation(L::kParkedAircraft_m), std::nullopt};
   add_prism_x(aircraft.mesh, -16.0f, 16.0f, {0.0f, 3.5f}, 2.0f, 12, kMetal);
   add_box(aircraft.mesh, {-2.0f, -15.0f, 3.3f}, {2.0f, 15.0f, 3.7f}, kMetal);
-  add_box(aircraft.mesh, {11.0f, -0.2f, 5.5f}, {15.0f, 0.2f, 11.5f}, kMetal);
+  add_box(aircraft.mesh, {11.0f, -0.2f, 5.3f}, {15.0f, 0.2f, 11.3f}, kMetal);
+  // A trihedral on the fuselage top: a 32 m fuselage is bright (PO) only within 0.003 deg of
+  // broadside at 94 GHz, and the approach sees it 1.3 deg off.
+  add_trihedral(aircraft.mesh, {-6.0, 0.0, 5.5 + 0.5}, {0.0, -1.0, 0.06}, 0.5, kMetal);
   d.objects.push_back(std::move(aircraft));
 
-  ObjectDesc vehicle{"parked_vehicle", {}, translation(-70.0, 400.0, 0.0), std::nullopt};
+  // Flat faces of boxes flash only within a few hundredths of a degree of normal incidence at
+  // 94 GHz (PO), so each small object carries a 0.5 m square trihedral on its roof, aimed along
+  // the approach (toward the south, 3 degrees up), as test ranges mount corner reflectors; the
+  // corner sits one edge above the roof so that no plate dips into it.
+  const glm::dvec3 approach(0.0, -1.0, 0.06);
+  constexpr double kReflectorEdge_m = 0.5;
+  ObjectDesc vehicle{"parked_vehicle", {}, translation(L::kParkedVehicle_m), std::nullopt};
   add_box(vehicle.mesh, {-2.5f, -1.1f, 0.0f}, {2.5f, 1.1f, 2.2f}, kMetal);
+  add_trihedral(vehicle.mesh, {0.0, 0.0, 2.2 + kReflectorEdge_m}, approach, kReflectorEdge_m,
+                kMetal);
   d.objects.push_back(std::move(vehicle));
 
-  ObjectDesc mast{"light_mast", {}, translation(60.0, 250.0, 0.0), std::nullopt};
+  ObjectDesc mast{"light_mast", {}, translation(L::kLightMast_m), std::nullopt};
   add_box(mast.mesh, {-0.5f, -0.5f, 0.0f}, {0.5f, 0.5f, 12.0f}, kMetal);
   add_box(mast.mesh, {-2.0f, -0.5f, 12.0f}, {2.0f, 0.5f, 13.0f}, kMetal);
+  add_trihedral(mast.mesh, {0.0, 0.0, 13.0 + kReflectorEdge_m}, approach, kReflectorEdge_m, kMetal);
   d.objects.push_back(std::move(mast));
 
   // Moving vehicle: 6 m x 2.5 m x 2.5 m, body origin at its bottom centre, northward at 15 m/s
   // on a taxiway west of the runway.
-  ObjectDesc mover{
-      "moving_vehicle", {}, glm::dmat4(1.0), LinearMotion{{-120.0, 200.0, 0.0}, {0.0, 15.0, 0.0}}};
+  ObjectDesc mover{"moving_vehicle",
+                   {},
+                   glm::dmat4(1.0),
+                   LinearMotion{L::kMovingVehicleStart_m, L::kMovingVehicleVelocity_mps}};
   add_box(mover.mesh, {-3.0f, -1.25f, 0.0f}, {3.0f, 1.25f, 2.5f}, kMetal);
+  // Body frame: x along the velocity (north), so "toward the approach" is body -x.
+  add_trihedral(mover.mesh, {0.0, 0.0, 2.5 + kReflectorEdge_m}, {-1.0, 0.0, 0.06}, kReflectorEdge_m,
+                kMetal);
   d.objects.push_back(std::move(mover));
   return d;
 }

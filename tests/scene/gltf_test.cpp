@@ -1,74 +1,110 @@
-// glTF import/export: round trip of the default scene, a hand-encoded fixture, broken files.
+// glTF import/export: a hand-encoded fixture, round trips of the default scene, broken files.
+// Runs under AddressSanitizer + UndefinedBehaviorSanitizer in CI (label "sanitize").
 
 #include "scene/gltf.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <array>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <random>
 #include <stdexcept>
 #include <string>
 
 #include "scene/default_scene.hpp"
+#include "scene/scene.hpp"
 
 namespace sc = radar_emu::scene;
 namespace fs = std::filesystem;
+using nlohmann::json;
 
 namespace {
+
+// One scratch directory per process (ctest runs tests in parallel), removed at exit.
+struct ScratchDir {
+  fs::path path = fs::temp_directory_path() / ("radar_emu_gltf_test_" + std::to_string(::getpid()));
+  ScratchDir() { fs::create_directories(path); }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
 fs::path tmp(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / "radar_emu_gltf_test";
-  fs::create_directories(d);
-  return d / name;
+  static const ScratchDir dir;
+  return dir.path / name;
 }
 
+// RFC 4648 base64, written out here so that the fixture's bytes are encoded independently of
+// tinygltf.
 std::string base64(const std::vector<unsigned char>& in) {
-  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  static constexpr char kTable[] =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   std::string out;
   std::size_t i = 0;
   for (; i + 2 < in.size(); i += 3) {
-    const unsigned v = (in[i] << 16) | (in[i + 1] << 8) | in[i + 2];
-    out += {t[v >> 18], t[(v >> 12) & 63], t[(v >> 6) & 63], t[v & 63]};
+    const unsigned v = (unsigned{in[i]} << 16) | (unsigned{in[i + 1]} << 8) | in[i + 2];
+    out += {kTable[v >> 18], kTable[(v >> 12) & 63], kTable[(v >> 6) & 63], kTable[v & 63]};
   }
   if (i + 1 == in.size()) {
-    const unsigned v = in[i] << 16;
-    out += {t[v >> 18], t[(v >> 12) & 63], '=', '='};
+    const unsigned v = unsigned{in[i]} << 16;
+    out += {kTable[v >> 18], kTable[(v >> 12) & 63], '=', '='};
   } else if (i + 2 == in.size()) {
-    const unsigned v = (in[i] << 16) | (in[i + 1] << 8);
-    out += {t[v >> 18], t[(v >> 12) & 63], t[(v >> 6) & 63], '='};
+    const unsigned v = (unsigned{in[i]} << 16) | (unsigned{in[i + 1]} << 8);
+    out += {kTable[v >> 18], kTable[(v >> 12) & 63], kTable[(v >> 6) & 63], '='};
   }
   return out;
 }
 
-// One triangle, vertices (0,0,0), (1,0,0), (0,0,-1) in glTF (y up): in ENU (x, -z, y) that is
-// (0,0,0), (1,0,0), (0,1,0). Material "metal".
-std::string fixture(const std::string& mode_line, std::size_t buffer_bytes, int material = 0,
-                    const std::string& indices_count = "3") {
-  std::vector<unsigned char> buf(36 + 6);
-  const float v[9] = {0, 0, 0, 1, 0, 0, 0, 0, -1};
-  std::memcpy(buf.data(), v, 36);
-  const unsigned short idx[3] = {0, 1, 2};
-  std::memcpy(buf.data() + 36, idx, 6);
-  buf.resize(buffer_bytes);
-  std::string mat = material >= 0 ? ", \"material\": " + std::to_string(material) : "";
-  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
-  "nodes": [{"name": "tri", "mesh": 0}],
-  "meshes": [{"name": "m", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1)" +
-         mat + mode_line + R"(}]}],
-  "materials": [{"name": "metal"}],
-  "buffers": [{"byteLength": )" +
-         std::to_string(buffer_bytes) + R"(, "uri": "data:application/octet-stream;base64,)" +
-         base64(buf) + R"("}],
-  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
-                  {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
-  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
-                 "min": [0, 0, -1], "max": [1, 0, 0]},
-                {"bufferView": 1, "componentType": 5123, "count": )" +
-         indices_count + R"(, "type": "SCALAR"}]})";
+// The fixture's buffer, byte by byte (little-endian IEEE 754 binary32 and uint16): three VEC3
+// positions in glTF axes (y up), (0,0,0), (1,0,0), (2.5,3,-4), then three indices.
+std::vector<unsigned char> fixture_bytes(std::array<std::uint8_t, 3> indices = {0, 1, 2}) {
+  return {
+      0x00,       0x00, 0x00,       0x00, 0x00,       0x00,
+      0x00,       0x00, 0x00,       0x00, 0x00,       0x00,  // 0, 0, 0
+      0x00,       0x00, 0x80,       0x3F, 0x00,       0x00,
+      0x00,       0x00, 0x00,       0x00, 0x00,       0x00,  // 1, 0, 0
+      0x00,       0x00, 0x20,       0x40, 0x00,       0x00,
+      0x40,       0x40, 0x00,       0x00, 0x80,       0xC0,  // 2.5, 3, -4
+      indices[0], 0x00, indices[1], 0x00, indices[2], 0x00,  // u16 indices
+  };
+}
+
+// The fixture: one triangle, material "metal", buffer as a base64 data: URI.
+json make_fixture(const std::vector<unsigned char>& bytes = fixture_bytes()) {
+  json j = json::parse(R"({
+    "asset": {"version": "2.0"},
+    "scene": 0,
+    "scenes": [{"nodes": [0]}],
+    "nodes": [{"name": "tri", "mesh": 0}],
+    "meshes": [{"name": "m", "primitives": [{"attributes": {"POSITION": 0}, "indices": 1,
+                                             "material": 0}]}],
+    "materials": [{"name": "metal",
+                   "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.25, 0.75, 1.0]}}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                    {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                   "min": [0, 0, -4], "max": [2.5, 3, 0]},
+                  {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+  })");
+  j["buffers"] = json::array({{{"byteLength", bytes.size()},
+                               {"uri", "data:application/octet-stream;base64," + base64(bytes)}}});
+  return j;
 }
 
 void write(const fs::path& p, const std::string& s) {
   std::ofstream(p, std::ios::binary) << s;
+}
+
+fs::path write_fixture(const std::string& name, const json& j) {
+  const fs::path p = tmp(name);
+  write(p, j.dump(2));
+  return p;
 }
 
 std::string error_of(const fs::path& p) {
@@ -77,88 +113,396 @@ std::string error_of(const fs::path& p) {
   } catch (const std::runtime_error& e) {
     return e.what();
   }
-  return "";
+  return "(no error)";
 }
+
+// The error message must start with the file's path and contain `what`.
+void expect_error(const fs::path& p, const std::string& what) {
+  const std::string e = error_of(p);
+  EXPECT_EQ(e.rfind(p.string() + ": ", 0), 0u) << e;
+  EXPECT_NE(e.find(what), std::string::npos) << "expected '" << what << "' in: " << e;
+}
+
+glm::dvec3 world(const sc::ObjectDesc& o, glm::vec3 body) {
+  const glm::dmat4 x = o.motion ? glm::dmat4(1.0) : o.world_from_body;
+  return glm::dvec3(x * glm::dvec4(glm::dvec3(body), 1.0));
+}
+
 }  // namespace
 
 TEST(Gltf, HandEncodedFixtureLoadsInEnu) {
-  const fs::path p = tmp("fixture.gltf");
-  write(p, fixture("", 42));
+  const fs::path p = write_fixture("fixture.gltf", make_fixture());
   const sc::SceneDescription d = sc::load_gltf(p);
   ASSERT_EQ(d.objects.size(), 1u);
-  EXPECT_EQ(d.objects[0].name, "tri");
+  const sc::ObjectDesc& o = d.objects[0];
+  EXPECT_EQ(o.name, "tri");
+  EXPECT_FALSE(o.motion.has_value());
   ASSERT_EQ(d.materials.size(), 1u);
   EXPECT_EQ(d.materials[0].name, "metal");
-  const auto& pos = d.objects[0].mesh.positions_m;
-  ASSERT_EQ(pos.size(), 3u);
-  EXPECT_EQ(pos[1], glm::vec3(1, 0, 0));
-  EXPECT_EQ(pos[2], glm::vec3(0, 1, 0));  // glTF -z is north
-  EXPECT_EQ(d.objects[0].mesh.triangles[0], glm::uvec3(0, 1, 2));
+  EXPECT_EQ(d.materials[0].base_color, glm::vec3(0.5f, 0.25f, 0.75f));
+  ASSERT_EQ(o.mesh.positions_m.size(), 3u);
+  // glTF (x, y, z) with y up is ENU (x, -z, y): (2.5, 3, -4) is 2.5 m east, 4 m north, 3 m up.
+  EXPECT_EQ(world(o, o.mesh.positions_m[0]), glm::dvec3(0, 0, 0));
+  EXPECT_EQ(world(o, o.mesh.positions_m[1]), glm::dvec3(1, 0, 0));
+  EXPECT_EQ(world(o, o.mesh.positions_m[2]), glm::dvec3(2.5, 4, 3));
+  ASSERT_EQ(o.mesh.triangles.size(), 1u);
+  EXPECT_EQ(o.mesh.triangles[0], glm::uvec3(0, 1, 2));
+  EXPECT_EQ(o.mesh.triangle_material, std::vector<std::uint16_t>{0});
+  // No anchor in the file: the default (0, 0, 0).
+  EXPECT_EQ(d.anchor.latitude_rad, 0.0);
 }
 
-TEST(Gltf, BrokenFilesNameTheFileAndTheProblem) {
-  const fs::path points = tmp("points.gltf"), shortbuf = tmp("short.gltf"),
-                 nomat = tmp("nomat.gltf"), badidx = tmp("badidx.gltf"), json = tmp("json.gltf");
-  write(points, fixture(", \"mode\": 0", 42));
-  write(shortbuf, fixture("", 40));
-  write(nomat, fixture("", 42, -1));
-  write(badidx, fixture("", 42, 0, "6"));
-  write(json, "{ not json");
-  EXPECT_NE(error_of(points).find("points.gltf: mesh 'm' primitive 0: mode 0 is not TRIANGLES"),
-            std::string::npos)
-      << error_of(points);
-  EXPECT_NE(error_of(shortbuf).find("short.gltf"), std::string::npos);
-  EXPECT_NE(error_of(nomat).find("no material"), std::string::npos) << error_of(nomat);
-  EXPECT_NE(error_of(badidx).find("runs past the end"), std::string::npos) << error_of(badidx);
-  EXPECT_NE(error_of(json).find("json.gltf: not a valid glTF"), std::string::npos);
-  EXPECT_NE(error_of(tmp("missing.glb")).find("missing.glb: no such file"), std::string::npos);
+TEST(Gltf, NodeTransformsAreAppliedAndKeptInDouble) {
+  json j = make_fixture();
+  // Parent translates by (100, 20, -300) in glTF axes, child rotates 90 deg about glTF y (up)
+  // and scales by 2: local x -> -z (north), local z -> x (east).
+  j["nodes"] = json::parse(R"([
+    {"name": "parent", "translation": [100, 20, -300], "children": [1]},
+    {"name": "child", "mesh": 0, "rotation": [0, 0.7071067811865476, 0, 0.7071067811865476],
+     "scale": [2, 2, 2]}])");
+  const sc::SceneDescription d = sc::load_gltf(write_fixture("transform.gltf", j));
+  ASSERT_EQ(d.objects.size(), 1u);
+  const sc::ObjectDesc& o = d.objects[0];
+  EXPECT_EQ(o.name, "child");
+  // glTF: vertex (1,0,0) -> rotated (0,0,-1) -> scaled (0,0,-2) -> + (100,20,-300) =
+  // (100, 20, -302), i.e. ENU (100, 302, 20). Vertex (2.5,3,-4) -> rotate: (x,y,z) ->
+  // (z, y, -x) = (-4, 3, -2.5) -> x2 (-8, 6, -5) -> (92, 26, -305): ENU (92, 305, 26).
+  EXPECT_LT(glm::length(world(o, o.mesh.positions_m[1]) - glm::dvec3(100, 302, 20)), 1e-12);
+  EXPECT_LT(glm::length(world(o, o.mesh.positions_m[2]) - glm::dvec3(92, 305, 26)), 1e-12);
+  // The placement is kept in world_from_body, the vertices stay small (body frame).
+  EXPECT_LT(glm::length(glm::dvec3(o.world_from_body[3]) - glm::dvec3(100, 300, 20)), 1e-12);
+  EXPECT_LT(glm::length(o.mesh.positions_m[2]), 10.0f);
+}
+
+TEST(Gltf, MirroringNodeKeepsTheNormalOutward) {
+  json j = make_fixture();
+  j["nodes"][0]["scale"] = {1, 1, -1};  // mirror glTF z (north-south in ENU)
+  const sc::SceneDescription d = sc::load_gltf(write_fixture("mirror.gltf", j));
+  const sc::ObjectDesc& o = d.objects[0];
+  const glm::uvec3 t = o.mesh.triangles[0];
+  const glm::dvec3 a = world(o, o.mesh.positions_m[t.x]), b = world(o, o.mesh.positions_m[t.y]),
+                   c = world(o, o.mesh.positions_m[t.z]);
+  // Local normal (0,4,3)/5 (glTF); mirrored in z: (0,4,-3)/5; in ENU (x, -z, y): (0,3,4)/5.
+  const glm::dvec3 n = glm::normalize(glm::cross(b - a, c - a));
+  EXPECT_LT(glm::length(n - glm::dvec3(0, 0.6, 0.8)), 1e-12) << n.x << " " << n.y << " " << n.z;
+}
+
+TEST(Gltf, IndexTypesNonIndexedAndInterleavedPrimitives) {
+  // u8 indices.
+  {
+    json j = make_fixture();
+    j["accessors"][1]["componentType"] = 5121;
+    j["bufferViews"][1]["byteLength"] = 3;
+    std::vector<unsigned char> b = fixture_bytes();
+    b[37] = 1;  // bytes 36..38 = 0, 1, 2 as u8
+    b[38] = 2;
+    j["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64(b);
+    const auto d = sc::load_gltf(write_fixture("u8.gltf", j));
+    EXPECT_EQ(d.objects[0].mesh.triangles[0], glm::uvec3(0, 1, 2));
+  }
+  // u32 indices (12 bytes after the positions).
+  {
+    json j = make_fixture();
+    std::vector<unsigned char> b = fixture_bytes();
+    b.resize(36);
+    b.insert(b.end(), {2, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0});
+    j["buffers"] = json::array(
+        {{{"byteLength", b.size()}, {"uri", "data:application/octet-stream;base64," + base64(b)}}});
+    j["accessors"][1]["componentType"] = 5125;
+    j["bufferViews"][1]["byteLength"] = 12;
+    const auto d = sc::load_gltf(write_fixture("u32.gltf", j));
+    EXPECT_EQ(d.objects[0].mesh.triangles[0], glm::uvec3(2, 0, 1));
+  }
+  // Non-indexed: vertices 0, 1, 2 in order.
+  {
+    json j = make_fixture();
+    j["meshes"][0]["primitives"][0].erase("indices");
+    const auto d = sc::load_gltf(write_fixture("nonindexed.gltf", j));
+    EXPECT_EQ(d.objects[0].mesh.triangles[0], glm::uvec3(0, 1, 2));
+  }
+  // Interleaved positions (byteStride 16: x y z + 4 bytes of something else).
+  {
+    std::vector<unsigned char> b;
+    const std::vector<unsigned char> f = fixture_bytes();
+    for (int v = 0; v < 3; ++v) {
+      b.insert(b.end(), f.begin() + 12 * v, f.begin() + 12 * v + 12);
+      b.insert(b.end(), {0xFF, 0xFF, 0xFF, 0xFF});
+    }
+    b.insert(b.end(), f.begin() + 36, f.end());
+    json j = make_fixture(b);
+    j["bufferViews"] = json::parse(R"([{"buffer": 0, "byteOffset": 0, "byteLength": 48,
+                                         "byteStride": 16},
+                                        {"buffer": 0, "byteOffset": 48, "byteLength": 6}])");
+    const auto d = sc::load_gltf(write_fixture("stride.gltf", j));
+    const auto& o = d.objects[0];
+    EXPECT_EQ(world(o, o.mesh.positions_m[2]), glm::dvec3(2.5, 4, 3));
+  }
+  // Two primitives sharing one POSITION accessor share the vertices.
+  {
+    json j = make_fixture();
+    j["meshes"][0]["primitives"].push_back(j["meshes"][0]["primitives"][0]);
+    const auto d = sc::load_gltf(write_fixture("shared.gltf", j));
+    EXPECT_EQ(d.objects[0].mesh.positions_m.size(), 3u);
+    EXPECT_EQ(d.objects[0].mesh.triangles.size(), 2u);
+  }
+}
+
+TEST(Gltf, MovingObjectsAndAnchorFromExtras) {
+  json j = make_fixture();
+  j["nodes"][0]["translation"] = {5, 0, -7};
+  j["nodes"][0]["extras"] = json::parse(R"({"radar_emu": {"velocity_mps": [1.5, -2, 0]}})");
+  j["scenes"][0]["extras"] = json::parse(R"({"radar_emu": {"anchor_deg_m": [43.6, 1.4, 150]}})");
+  const sc::SceneDescription d = sc::load_gltf(write_fixture("moving.gltf", j));
+  const sc::ObjectDesc& o = d.objects[0];
+  ASSERT_TRUE(o.motion.has_value());
+  EXPECT_EQ(o.motion->velocity_mps, glm::dvec3(1.5, -2, 0));
+  // No explicit start: the node's translation (glTF (5, 0, -7) = ENU (5, 7, 0)).
+  EXPECT_EQ(o.motion->start_position_m, glm::dvec3(5, 7, 0));
+  EXPECT_EQ(glm::dvec3(o.mesh.positions_m[2]), glm::dvec3(2.5, 4, 3));  // body frame, in ENU axes
+  EXPECT_NEAR(d.anchor.latitude_rad, 43.6 * std::numbers::pi / 180.0, 1e-15);
+  EXPECT_NEAR(d.anchor.longitude_rad, 1.4 * std::numbers::pi / 180.0, 1e-15);
+  EXPECT_EQ(d.anchor.height_m, 150.0);
+  // A malformed velocity is an error, not a silently static object.
+  j["nodes"][0]["extras"] = json::parse(R"({"radar_emu": {"velocity_mps": [1, "x", 0]}})");
+  expect_error(write_fixture("badvel.gltf", j), "velocity_mps must be an array of 3 finite");
 }
 
 TEST(Gltf, DefaultSceneRoundTripsThroughGlbAndGltf) {
   const sc::SceneDescription d = sc::default_scene();
+  const sc::Scene original(d);
   for (const char* name : {"default.glb", "default.gltf"}) {
     const fs::path p = tmp(name);
     sc::write_gltf(d, p);
     const sc::SceneDescription r = sc::load_gltf(p);
     ASSERT_EQ(r.objects.size(), d.objects.size()) << name;
-    EXPECT_NEAR(r.anchor.latitude_rad, d.anchor.latitude_rad, 1e-15);
-    EXPECT_NEAR(r.anchor.height_m, d.anchor.height_m, 1e-12);
+    EXPECT_NEAR(r.anchor.latitude_rad, d.anchor.latitude_rad, 1e-15) << name;
+    EXPECT_NEAR(r.anchor.longitude_rad, d.anchor.longitude_rad, 1e-15) << name;
+    EXPECT_NEAR(r.anchor.height_m, d.anchor.height_m, 1e-12) << name;
     for (std::size_t i = 0; i < d.objects.size(); ++i) {
-      const auto& a = d.objects[i];
-      const auto& b = r.objects[i];
-      EXPECT_EQ(a.name, b.name);
+      const sc::ObjectDesc& a = d.objects[i];
+      const sc::ObjectDesc& b = r.objects[i];
+      EXPECT_EQ(a.name, b.name) << name;
       ASSERT_EQ(a.mesh.triangles.size(), b.mesh.triangles.size()) << a.name;
-      EXPECT_EQ(a.motion.has_value(), b.motion.has_value()) << a.name;
+      ASSERT_EQ(a.mesh.positions_m.size(), b.mesh.positions_m.size()) << a.name;
+      ASSERT_EQ(a.motion.has_value(), b.motion.has_value()) << a.name;
       if (a.motion) {
         EXPECT_EQ(a.motion->velocity_mps, b.motion->velocity_mps);
         EXPECT_EQ(a.motion->start_position_m, b.motion->start_position_m);
-      }
-      // Same world-space triangles with the same material names (primitives regroup them by
-      // material, so compare as sets of (centroid, material)).
-      auto world = [](const sc::ObjectDesc& o, std::size_t t) {
-        const glm::dmat4 x = o.motion ? glm::dmat4(1.0) : o.world_from_body;
-        glm::dvec3 c(0.0);
-        for (int k = 0; k < 3; ++k) {
-          c += glm::dvec3(x *
-                          glm::dvec4(glm::dvec3(o.mesh.positions_m[o.mesh.triangles[t][k]]), 1.0));
+      } else {
+        for (int c = 0; c < 4; ++c) {
+          for (int k = 0; k < 4; ++k)
+            EXPECT_NEAR(a.world_from_body[c][k], b.world_from_body[c][k], 1e-12) << a.name;
         }
-        return c / 3.0;
-      };
-      std::vector<std::pair<std::string, glm::dvec3>> ca, cb;
-      for (std::size_t t = 0; t < a.mesh.triangles.size(); ++t) {
-        ca.emplace_back(d.materials[a.mesh.triangle_material[t]].name, world(a, t));
-        cb.emplace_back(r.materials[b.mesh.triangle_material[t]].name, world(b, t));
       }
-      auto less = [](const auto& x, const auto& y) {
-        return std::tie(x.first, x.second.x, x.second.y, x.second.z) <
-               std::tie(y.first, y.second.x, y.second.y, y.second.z);
-      };
-      std::sort(ca.begin(), ca.end(), less);
-      std::sort(cb.begin(), cb.end(), less);
-      for (std::size_t t = 0; t < ca.size(); ++t) {
-        EXPECT_EQ(ca[t].first, cb[t].first);
-        EXPECT_LT(glm::length(ca[t].second - cb[t].second), 1e-3) << a.name;
+      for (std::size_t t = 0; t < a.mesh.triangles.size(); ++t) {
+        EXPECT_EQ(a.mesh.triangles[t], b.mesh.triangles[t]) << a.name << " " << t;
+        EXPECT_EQ(d.materials[a.mesh.triangle_material[t]].name,
+                  r.materials[b.mesh.triangle_material[t]].name)
+            << a.name << " " << t;
+      }
+      for (std::size_t v = 0; v < a.mesh.positions_m.size(); ++v) {
+        EXPECT_LT(glm::length(world(a, a.mesh.positions_m[v]) - world(b, b.mesh.positions_m[v])),
+                  1e-4)
+            << a.name << " " << v;
       }
     }
+    // The loaded scene answers rays like the original.
+    const sc::Scene loaded(r);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int k = 0; k < 200; ++k) {
+      sc::Ray ray;
+      ray.origin_m = {150 * u(rng), 450 + 300 * u(rng), 50.0};
+      ray.direction = glm::normalize(glm::dvec3(u(rng), u(rng), -1.0));
+      sc::Hit h1, h2;
+      ASSERT_EQ(original.intersect(ray, h1), loaded.intersect(ray, h2)) << name << " " << k;
+      EXPECT_NEAR(h1.t_m, h2.t_m, 1e-9) << name << " " << k;
+      EXPECT_EQ(h1.object_id, h2.object_id);
+      EXPECT_EQ(h1.primitive_id, h2.primitive_id);
+    }
   }
+}
+
+TEST(Gltf, BrokenFilesNameTheFileAndTheProblem) {
+  expect_error(tmp("missing.glb"), "no such file");
+  {
+    const fs::path p = tmp("json.gltf");
+    write(p, "{ \"asset\": {\"version\": \"2.0\"}, not json");
+    expect_error(p, "not a valid glTF 2.0 file");
+  }
+  json j = make_fixture();
+  j["meshes"][0]["primitives"][0]["mode"] = 0;
+  expect_error(write_fixture("points.gltf", j), "mesh 0 'm' primitive 0: mode 0 is not TRIANGLES");
+  j = make_fixture(fixture_bytes({0, 1, 5}));
+  expect_error(write_fixture("badidx.gltf", j), "index 2 = 5 is out of range (3 vertices)");
+  j = make_fixture();
+  j["meshes"][0]["primitives"][0].erase("material");
+  expect_error(write_fixture("nomat.gltf", j), "mesh 0 'm' primitive 0 has no material");
+  j = make_fixture();
+  j["meshes"][0]["primitives"][0]["material"] = 3;
+  expect_error(write_fixture("badmat.gltf", j), "material 3 does not exist");
+  j = make_fixture();
+  j["materials"][0].erase("name");
+  expect_error(write_fixture("unnamed.gltf", j), "material 0 has no name");
+  // Truncated buffer: the data holds 40 bytes but the index view needs 42.
+  {
+    std::vector<unsigned char> b = fixture_bytes();
+    b.resize(40);
+    j = make_fixture(b);
+    expect_error(write_fixture("short.gltf", j), "buffer view 1 runs past the end of its buffer");
+  }
+  // Declared byteLength larger than the data: tinygltf rejects the buffer.
+  j = make_fixture();
+  j["buffers"][0]["byteLength"] = 100;
+  expect_error(write_fixture("declared.gltf", j), "not a valid glTF 2.0 file");
+  j = make_fixture();
+  j["accessors"][0]["count"] = 4;
+  expect_error(write_fixture("count.gltf", j), "accessor 0 (4 elements) runs past the end");
+  j = make_fixture();
+  j["accessors"][0]["byteOffset"] = 4;
+  expect_error(write_fixture("offset.gltf", j), "runs past the end of its buffer view");
+  j = make_fixture();
+  j["accessors"][0]["count"] = 2147483647;
+  expect_error(write_fixture("hugecount.gltf", j), "runs past the end of its buffer view");
+  j = make_fixture();
+  j["accessors"][0]["sparse"] = json::parse(R"({"count": 1,
+      "indices": {"bufferView": 1, "componentType": 5123},
+      "values": {"bufferView": 0}})");
+  expect_error(write_fixture("sparse.gltf", j), "accessor 0 is sparse");
+  j = make_fixture();
+  j["accessors"][0]["componentType"] = 5123;
+  j["accessors"][0]["count"] = 1;
+  expect_error(write_fixture("intpos.gltf", j), "POSITION is not float");
+  j = make_fixture();
+  j["accessors"][0]["type"] = "VEC2";
+  expect_error(write_fixture("vec2.gltf", j), "accessor 0 has type");
+  j = make_fixture();
+  j["accessors"][1]["count"] = 2;
+  j["bufferViews"][1]["byteLength"] = 4;
+  expect_error(write_fixture("two.gltf", j), "2 indices is not a multiple of 3");
+  j = make_fixture();
+  j["nodes"][0]["children"] = {0};
+  expect_error(write_fixture("cycle.gltf", j), "node 0 appears twice");
+  j = make_fixture();
+  j["nodes"][0]["mesh"] = 4;
+  expect_error(write_fixture("nomesh.gltf", j), "refers to mesh 4");
+  j = make_fixture();
+  j["nodes"][0].erase("mesh");
+  expect_error(write_fixture("empty.gltf", j), "no triangle meshes");
+  j = make_fixture();
+  j["extensionsRequired"] = {"KHR_draco_mesh_compression"};
+  j["extensionsUsed"] = {"KHR_draco_mesh_compression"};
+  expect_error(write_fixture("draco.gltf", j), "KHR_draco_mesh_compression");
+  // Binary container cut short, and garbage behind a glTF magic.
+  {
+    const fs::path full = tmp("full.glb");
+    sc::write_gltf(sc::default_scene(), full);
+    std::ifstream in(full, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const fs::path cut = tmp("cut.glb");
+    write(cut, bytes.substr(0, bytes.size() / 2));
+    expect_error(cut, "not a valid glTF 2.0 file");
+    const fs::path garbage = tmp("garbage.glb");
+    write(garbage, "glTF\x02\x00\x00\x00\xff\xff\xff\xff");
+    expect_error(garbage, "not a valid glTF 2.0 file");
+  }
+}
+
+TEST(Gltf, WriteFailuresNameTheFile) {
+  const fs::path p = tmp("no_such_dir") / "x.glb";
+  try {
+    sc::write_gltf(sc::default_scene(), p);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(p.string() + ": ", 0), 0u) << e.what();
+  }
+  sc::SceneDescription bad = sc::default_scene();
+  bad.objects[2].mesh.triangle_material[0] = 9;
+  try {
+    sc::write_gltf(bad, tmp("bad.glb"));
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("object 'parked_aircraft': triangle 0"), std::string::npos)
+        << e.what();
+  }
+}
+
+// Structured fuzzing: random edits of the fixture's numbers and random byte damage to a .glb.
+// Every file must load or throw std::runtime_error; under ASan/UBSan nothing may read out of
+// bounds.
+TEST(Gltf, RandomlyDamagedFilesNeverCrash) {
+  const std::uint32_t seed = 1234;
+  std::cout << "seed " << seed << "\n";
+  std::mt19937 rng(seed);
+  const std::vector<std::pair<std::string, std::string>> fields = {
+      {"/accessors/0/count", ""},
+      {"/accessors/1/count", ""},
+      {"/accessors/0/byteOffset", ""},
+      {"/accessors/1/byteOffset", ""},
+      {"/accessors/0/componentType", ""},
+      {"/accessors/1/componentType", ""},
+      {"/accessors/0/bufferView", ""},
+      {"/accessors/1/bufferView", ""},
+      {"/bufferViews/0/byteOffset", ""},
+      {"/bufferViews/1/byteOffset", ""},
+      {"/bufferViews/0/byteLength", ""},
+      {"/bufferViews/1/byteLength", ""},
+      {"/bufferViews/0/byteStride", ""},
+      {"/bufferViews/0/buffer", ""},
+      {"/meshes/0/primitives/0/indices", ""},
+      {"/meshes/0/primitives/0/material", ""},
+      {"/nodes/0/mesh", ""},
+      {"/scene", ""},
+      {"/meshes/0/primitives/0/attributes/POSITION", ""}};
+  const std::vector<long long> values = {-1,  0,    1,    2,    3,    4,     5,         6,
+                                         7,   11,   12,   16,   36,   41,    42,        43,
+                                         255, 5121, 5123, 5125, 5126, 65535, 2147483647};
+  int loaded = 0, rejected = 0;
+  const fs::path p = tmp("fuzz.gltf");
+  for (int i = 0; i < 400; ++i) {
+    json j = make_fixture(fixture_bytes(
+        {static_cast<std::uint8_t>(rng() % 4), static_cast<std::uint8_t>(rng() % 4), 2}));
+    const int edits = 1 + static_cast<int>(rng() % 3);
+    for (int e = 0; e < edits; ++e) {
+      const auto& f = fields[rng() % fields.size()];
+      j[json::json_pointer(f.first)] = values[rng() % values.size()];
+    }
+    write(p, j.dump());
+    try {
+      (void)sc::load_gltf(p);
+      ++loaded;
+    } catch (const std::runtime_error& e) {
+      ++rejected;
+      EXPECT_EQ(std::string(e.what()).rfind(p.string() + ": ", 0), 0u) << e.what();
+    }
+  }
+  // Byte damage to a binary file (header, JSON chunk and BIN chunk alike).
+  const fs::path full = tmp("fuzz_src.glb");
+  sc::SceneDescription small;
+  small.materials = {{"metal", {}}};
+  small.objects.push_back(sc::default_scene().objects[3]);  // parked_vehicle
+  for (auto& m : small.objects[0].mesh.triangle_material)
+    m = 0;
+  sc::write_gltf(small, full);
+  std::ifstream in(full, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const fs::path q = tmp("fuzz.glb");
+  for (int i = 0; i < 400; ++i) {
+    std::string b = bytes;
+    const int flips = 1 + static_cast<int>(rng() % 4);
+    for (int k = 0; k < flips; ++k)
+      b[rng() % b.size()] = static_cast<char>(rng() & 0xFF);
+    if (rng() % 4 == 0)
+      b.resize(rng() % b.size());
+    write(q, b);
+    try {
+      (void)sc::load_gltf(q);
+      ++loaded;
+    } catch (const std::runtime_error& e) {
+      ++rejected;
+      EXPECT_EQ(std::string(e.what()).rfind(q.string() + ": ", 0), 0u) << e.what();
+    }
+  }
+  std::cout << loaded << " damaged files loaded, " << rejected << " rejected\n";
+  EXPECT_GT(rejected, 100);
 }

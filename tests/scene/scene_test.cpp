@@ -1,170 +1,437 @@
-// Ray queries against closed forms, moving objects, validation of broken descriptions.
+// Ray queries against closed forms, the double-precision refit, moving objects, validation.
 
 #include "scene/scene.hpp"
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <iostream>
+#include <numbers>
+#include <random>
 #include <stdexcept>
+#include <thread>
 
 #include "scene/default_scene.hpp"
 
 namespace sc = radar_emu::scene;
 
 namespace {
-sc::SceneDescription one_triangle_and_box() {
-  sc::SceneDescription d;
-  d.materials = {{"grass", {}}, {"metal", {}}};
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// Axis-aligned box [lo, hi] in the body frame, 12 triangles wound counter-clockwise seen from
+// outside. Triangles 2k and 2k+1 are face k: -z, +z, -y, +y, -x, +x.
+void add_box(sc::Mesh& m, glm::vec3 lo, glm::vec3 hi, std::uint16_t material) {
+  const auto b = static_cast<unsigned>(m.positions_m.size());
+  m.positions_m.insert(m.positions_m.end(), {{lo.x, lo.y, lo.z},
+                                             {hi.x, lo.y, lo.z},
+                                             {hi.x, hi.y, lo.z},
+                                             {lo.x, hi.y, lo.z},
+                                             {lo.x, lo.y, hi.z},
+                                             {hi.x, lo.y, hi.z},
+                                             {hi.x, hi.y, hi.z},
+                                             {lo.x, hi.y, hi.z}});
+  const std::array<glm::uvec3, 12> t = {{{0, 2, 1},
+                                         {0, 3, 2},
+                                         {4, 5, 6},
+                                         {4, 6, 7},
+                                         {0, 1, 5},
+                                         {0, 5, 4},
+                                         {3, 7, 6},
+                                         {3, 6, 2},
+                                         {0, 4, 7},
+                                         {0, 7, 3},
+                                         {1, 2, 6},
+                                         {1, 6, 5}}};
+  for (const glm::uvec3& x : t) {
+    m.triangles.push_back(x + glm::uvec3(b));
+    m.triangle_material.push_back(material);
+  }
+}
+
+sc::ObjectDesc ground_triangle() {
   sc::ObjectDesc ground{"ground", {}, glm::dmat4(1.0), std::nullopt};
   ground.mesh.positions_m = {{-1000, -1000, 0}, {1000, -1000, 0}, {0, 1000, 0}};
   ground.mesh.triangles = {{0, 1, 2}};
   ground.mesh.triangle_material = {0};
-  d.objects.push_back(ground);
+  return ground;
+}
+
+// Ground triangle (object 0, "grass") and a 2 m cube (object 1, "metal") whose body origin is
+// its bottom centre, moving along +x at 10 m/s from the origin.
+sc::SceneDescription triangle_and_moving_box() {
+  sc::SceneDescription d;
+  d.materials = {{"grass", {}}, {"metal", {}}};
+  d.objects.push_back(ground_triangle());
   sc::ObjectDesc box{"box", {}, glm::dmat4(1.0), sc::LinearMotion{{0, 0, 0}, {10, 0, 0}}};
-  // A 2 m cube centred 1 m above its origin.
-  const glm::vec3 lo(-1, -1, 0), hi(1, 1, 2);
-  box.mesh.positions_m = {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z},
-                          {lo.x, hi.y, lo.z}, {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z},
-                          {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}};
-  box.mesh.triangles = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                        {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
-  box.mesh.triangle_material.assign(12, 1);
+  add_box(box.mesh, {-1, -1, 0}, {1, 1, 2}, 1);
   d.objects.push_back(box);
   return d;
 }
+
+sc::Ray ray(glm::dvec3 origin, glm::dvec3 direction, double t_near = 0.0, double t_far = 1e30) {
+  sc::Ray r;
+  r.origin_m = origin;
+  r.direction = glm::normalize(direction);
+  r.t_near_m = t_near;
+  r.t_far_m = t_far;
+  return r;
+}
+
+// Closest entry distance of a ray into an axis-aligned box (slab method, in double), or -1.
+double slab_entry(glm::dvec3 o, glm::dvec3 d, glm::dvec3 lo, glm::dvec3 hi) {
+  double t0 = 0.0, t1 = 1e300;
+  for (int k = 0; k < 3; ++k) {
+    const double a = (lo[k] - o[k]) / d[k], b = (hi[k] - o[k]) / d[k];
+    t0 = std::max(t0, std::min(a, b));
+    t1 = std::min(t1, std::max(a, b));
+  }
+  return t0 <= t1 ? t0 : -1.0;
+}
+
 }  // namespace
 
-TEST(Scene, RayHitsGroundAtTheSlantDistance) {
-  sc::Scene s(one_triangle_and_box());
-  for (double angle_deg : {10.0, 30.0, 60.0, 89.0}) {
-    const double a = angle_deg * std::acos(-1.0) / 180.0;
-    sc::Ray r;
-    r.origin_m = {0.0, -500.0, 100.0};
-    r.direction = {0.0, std::cos(a), -std::sin(a)};  // depressed by `angle`
-    sc::Hit h;
-    ASSERT_TRUE(s.intersect(r, h)) << angle_deg;
-    EXPECT_NEAR(h.t_m, 100.0 / std::sin(a), 1e-9 * h.t_m) << angle_deg;
-    EXPECT_NEAR(h.position_m.z, 0.0, 1e-9);
-    EXPECT_NEAR(h.normal.z, 1.0, 1e-12);
-    EXPECT_EQ(h.object_id, 0u);
-    EXPECT_EQ(h.material_id, 0);
+TEST(SceneRays, TriangleHitAtTheSlantRangeOfEachAngle) {
+  const sc::Scene s(triangle_and_moving_box());
+  const double h = 100.0;
+  for (double incidence_deg : {0.0, 10.0, 30.0, 45.0, 60.0, 80.0}) {
+    const double a = incidence_deg * kDeg;  // from the vertical
+    const sc::Ray r = ray({0.0, -500.0, h}, {0.0, std::sin(a), -std::cos(a)});
+    sc::Hit hit;
+    ASSERT_TRUE(s.intersect(r, hit)) << incidence_deg;
+    EXPECT_NEAR(hit.t_m, h / std::cos(a), 1e-12 * hit.t_m) << incidence_deg;
+    EXPECT_NEAR(hit.position_m.y, -500.0 + h * std::tan(a), 1e-9) << incidence_deg;
+    EXPECT_NEAR(hit.position_m.z, 0.0, 1e-12);
+    EXPECT_DOUBLE_EQ(hit.normal.z, 1.0);
+    EXPECT_EQ(hit.object_id, 0u);
+    EXPECT_EQ(hit.primitive_id, 0u);
+    EXPECT_EQ(hit.material_id, 0);
     EXPECT_TRUE(s.occluded(r));
+    // Only up to t_far: just short of the ground is a miss for both queries.
+    const sc::Ray short_ray = ray(r.origin_m, r.direction, 0.0, 0.999 * h / std::cos(a));
+    EXPECT_FALSE(s.intersect(short_ray, hit));
+    EXPECT_FALSE(s.occluded(short_ray));
   }
-  sc::Ray up;
-  up.origin_m = {0, -500, 100};
-  up.direction = {0, 0, 1};
-  sc::Hit h;
-  EXPECT_FALSE(s.intersect(up, h));
-  EXPECT_FALSE(s.occluded(up));
 }
 
-TEST(Scene, DoublePrecisionRefitFromTenKilometres) {
-  sc::Scene s(one_triangle_and_box());
-  sc::Ray r;
-  r.origin_m = {0.0, -10000.0, 523.0};
-  const glm::dvec3 target(3.3, 123.4567, 0.0);
-  r.direction = glm::normalize(target - r.origin_m);
-  sc::Hit h;
-  ASSERT_TRUE(s.intersect(r, h));
-  EXPECT_NEAR(h.position_m.z, 0.0, 1e-9);  // on the plane to 1e-9 m, not float's ~1 mm
-  EXPECT_NEAR(glm::length(h.position_m - target), 0.0, 1e-8);
+TEST(SceneRays, NormalIsAsWoundNotFlippedTowardTheRay) {
+  const sc::Scene s(triangle_and_moving_box());
+  sc::Hit hit;
+  // From below, the ground's normal still points up (+z, as wound).
+  ASSERT_TRUE(s.intersect(ray({10.0, 10.0, -50.0}, {0.0, 0.0, 1.0}), hit));
+  EXPECT_NEAR(hit.t_m, 50.0, 1e-12);
+  EXPECT_DOUBLE_EQ(hit.normal.z, 1.0);
 }
 
-TEST(Scene, MovingBoxIsHitWhereItHasMoved) {
-  sc::Scene s(one_triangle_and_box());
-  sc::Ray r;
-  r.origin_m = {-100.0, 0.0, 1.0};
-  r.direction = {1.0, 0.0, 0.0};
-  sc::Hit h;
-  ASSERT_TRUE(s.intersect(r, h));
-  EXPECT_NEAR(h.t_m, 99.0, 1e-9);  // face at x = -1
-  EXPECT_EQ(h.object_id, 1u);
-  EXPECT_NEAR(h.normal.x, -1.0, 1e-12);
-  s.set_time(2.5);  // moved 25 m along +x
-  ASSERT_TRUE(s.intersect(r, h));
-  EXPECT_NEAR(h.t_m, 124.0, 1e-9);
-  EXPECT_NEAR(s.objects()[1].bounds_min_m.x, 24.0, 1e-9);
-  EXPECT_NEAR(s.objects()[1].bounds_max_m.x, 26.0, 1e-9);
-  EXPECT_DOUBLE_EQ(s.objects()[1].velocity_mps.x, 10.0);
+TEST(SceneRays, RaysThatMustMiss) {
+  const sc::Scene s(triangle_and_moving_box());
+  sc::Hit hit;
+  const sc::Ray misses[] = {
+      ray({0, -500, 100}, {0, 0, 1}),                  // up, away from everything
+      ray({990, 900, 100}, {0, 0, -1}),                // beside the triangle's slanted edge
+      ray({0, -1001, 100}, {0, 0, -1}),                // just south of the triangle's base
+      ray({0, -500, 100}, {1, 0, 0}),                  // parallel to the ground, above the box
+      ray({0, -500, 100}, {0, 0.5, -1}, 200.0, 1e30),  // t_near beyond the ground
+  };
+  for (const sc::Ray& r : misses) {
+    EXPECT_FALSE(s.intersect(r, hit)) << r.origin_m.x << " " << r.origin_m.y;
+    EXPECT_FALSE(s.occluded(r)) << r.origin_m.x << " " << r.origin_m.y;
+  }
+  // Invalid rays are misses, not crashes.
+  EXPECT_FALSE(s.intersect(ray({0, 0, 100}, {0, 0, -1}, 10.0, 5.0), hit));
+  sc::Ray nan = ray({0, 0, 100}, {0, 0, -1});
+  nan.origin_m.x = std::nan("");
+  EXPECT_FALSE(s.intersect(nan, hit));
+  EXPECT_FALSE(s.occluded(nan));
+}
+
+TEST(SceneRays, DefaultGroundAndRunwayAtTheSlantRange) {
+  using L = sc::DefaultSceneLayout;
+  const sc::SceneDescription d = sc::default_scene();
+  const sc::Scene s(d);
+  const double h = 300.0;
+  for (double incidence_deg : {0.0, 20.0, 50.0, 75.0}) {
+    const double a = incidence_deg * kDeg;
+    sc::Hit hit;
+    // Grass east of the runway, looking east.
+    ASSERT_TRUE(s.intersect(ray({500.0, 2000.0, h}, {std::sin(a), 0.0, -std::cos(a)}), hit));
+    EXPECT_NEAR(hit.t_m, h / std::cos(a), 1e-12 * hit.t_m);
+    EXPECT_EQ(s.objects()[hit.object_id].name, "ground");
+    EXPECT_EQ(d.materials[hit.material_id].name, "grass");
+    EXPECT_DOUBLE_EQ(hit.normal.z, 1.0);
+    // The runway, 5 cm above the grass, looking north along the centreline.
+    ASSERT_TRUE(s.intersect(ray({0.0, 1000.0, h}, {0.0, std::sin(a), -std::cos(a)}), hit));
+    // (The runway's height is stored as a float vertex coordinate: 0.05f.)
+    const double runway_z = static_cast<double>(static_cast<float>(L::kRunwayHeight_m));
+    EXPECT_NEAR(hit.t_m, (h - runway_z) / std::cos(a), 1e-12 * hit.t_m);
+    EXPECT_EQ(s.objects()[hit.object_id].name, "runway");
+    EXPECT_EQ(d.materials[hit.material_id].name, "asphalt");
+  }
+  // Beyond the ground's edge: nothing.
+  sc::Hit hit;
+  EXPECT_FALSE(s.intersect(ray({3100.0, 0.0, h}, {0, 0, -1}), hit));
+}
+
+TEST(SceneRays, RotatedBoxEntryDistanceIsTheSlabSolution) {
+  // A static 4 x 2 x 3 m box yawed by 30 deg and placed at (200, 50, 10).
+  sc::SceneDescription d;
+  d.materials = {{"metal", {}}};
+  const double yaw = 30.0 * kDeg;
+  glm::dmat4 world_from_body(1.0);
+  world_from_body[0] = {std::cos(yaw), std::sin(yaw), 0, 0};
+  world_from_body[1] = {-std::sin(yaw), std::cos(yaw), 0, 0};
+  world_from_body[3] = {200, 50, 10, 1};
+  sc::ObjectDesc box{"box", {}, world_from_body, std::nullopt};
+  const glm::dvec3 lo(-2, -1, 0), hi(2, 1, 3);
+  add_box(box.mesh, glm::vec3(lo), glm::vec3(hi), 0);
+  d.objects.push_back(box);
+  const sc::Scene s(d);
+  const glm::dmat4 body_from_world = glm::inverse(world_from_body);
+  std::mt19937 rng(2024);
+  std::cout << "seed 2024\n";
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits = 0;
+  for (int i = 0; i < 500; ++i) {
+    const glm::dvec3 o(200 + 300 * u(rng), 50 + 300 * u(rng), 10 + 100 * u(rng));
+    const glm::dvec3 target(200 + 2 * u(rng), 50 + 2 * u(rng), 11.5 + 1.5 * u(rng));
+    const sc::Ray r = ray(o, target - o);
+    const glm::dvec3 ob(body_from_world * glm::dvec4(o, 1.0));
+    const glm::dvec3 db(body_from_world * glm::dvec4(r.direction, 0.0));
+    const double t_exact = slab_entry(ob, db, lo, hi);
+    sc::Hit hit;
+    const bool got = s.intersect(r, hit);
+    if (t_exact < 0.0 || !got) {
+      // Rays aimed near the box but missing it (target outside the yawed footprint).
+      EXPECT_EQ(got, t_exact >= 0.0) << i;
+      continue;
+    }
+    ++hits;
+    EXPECT_NEAR(hit.t_m, t_exact, 1e-9 * t_exact) << i;
+    // The normal is the outward normal of the face entered: it opposes the ray.
+    EXPECT_LT(glm::dot(hit.normal, r.direction), 0.0) << i;
+    const glm::dvec3 nb(body_from_world * glm::dvec4(hit.normal, 0.0));
+    EXPECT_NEAR(std::max({std::abs(nb.x), std::abs(nb.y), std::abs(nb.z)}), 1.0, 1e-12) << i;
+  }
+  EXPECT_GT(hits, 300);
+}
+
+TEST(SceneRefit, HitsFromTenKilometresLieOnTheTrianglePlane) {
+  // A tilted triangle (normal not along an axis, vertices not on a nice grid).
+  sc::SceneDescription d;
+  d.materials = {{"metal", {}}};
+  sc::ObjectDesc tri{"tilted", {}, glm::dmat4(1.0), std::nullopt};
+  tri.mesh.positions_m = {{-37.3f, -41.9f, 3.1f}, {52.7f, -12.3f, 17.9f}, {-8.1f, 61.3f, 29.3f}};
+  tri.mesh.triangles = {{0, 1, 2}};
+  tri.mesh.triangle_material = {0};
+  d.objects.push_back(tri);
+  // The same triangle as a moving object, far from the origin, seen through an instance.
+  sc::ObjectDesc mover = tri;
+  mover.name = "tilted_mover";
+  mover.motion = sc::LinearMotion{{3000.0, -2000.0, 0.0}, {31.7, 23.3, 0.0}};
+  d.objects.push_back(mover);
+  sc::Scene s(d);
+  s.set_time(7.123);
+  const std::uint32_t seed = 77;
+  std::cout << "seed " << seed << "\n";
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  double worst = 0.0;
+  for (std::uint32_t object = 0; object < 2; ++object) {
+    const glm::dmat4 x = s.world_from_body(object);
+    const auto& p = d.objects[object].mesh.positions_m;
+    const glm::dvec3 a(x * glm::dvec4(glm::dvec3(p[0]), 1.0));
+    const glm::dvec3 b(x * glm::dvec4(glm::dvec3(p[1]), 1.0));
+    const glm::dvec3 c(x * glm::dvec4(glm::dvec3(p[2]), 1.0));
+    const glm::dvec3 n = glm::normalize(glm::cross(b - a, c - a));
+    for (int i = 0; i < 200; ++i) {
+      // A point well inside the triangle, seen from 10 km away in a random upper direction.
+      double w1 = 0.1 + 0.8 * u(rng), w2 = 0.1 + 0.8 * u(rng);
+      if (const double sum = w1 + w2; sum > 0.9) {
+        w1 *= 0.9 / sum;
+        w2 *= 0.9 / sum;
+      }
+      const glm::dvec3 target = a + w1 * (b - a) + w2 * (c - a);
+      const double az = 2.0 * std::numbers::pi * u(rng), el = (10.0 + 70.0 * u(rng)) * kDeg;
+      const glm::dvec3 from = target + 1e4 * glm::dvec3(std::cos(el) * std::cos(az),
+                                                        std::cos(el) * std::sin(az), std::sin(el));
+      const sc::Ray r = ray(from, target - from);
+      sc::Hit hit;
+      ASSERT_TRUE(s.intersect(r, hit)) << object << " " << i;
+      ASSERT_EQ(hit.object_id, object);
+      const double off_plane = std::abs(glm::dot(hit.position_m - a, n));
+      worst = std::max(worst, off_plane / hit.t_m);
+      EXPECT_LT(off_plane, 1e-9 * hit.t_m) << object << " " << i;
+      // And t is the exact range to the aimed point (float traversal alone is ~1e-7 off).
+      EXPECT_NEAR(hit.t_m, glm::length(target - from), 1e-9 * hit.t_m) << object << " " << i;
+      EXPECT_NEAR(std::abs(glm::dot(hit.normal, n)), 1.0, 1e-12);
+    }
+  }
+  std::cout << "worst off-plane distance / range " << worst << "\n";
+}
+
+TEST(SceneMotion, SetTimeMovesTheInstanceNotTheStaticGeometry) {
+  sc::Scene s(triangle_and_moving_box());
+  EXPECT_EQ(s.static_build_count(), 1u);
+  EXPECT_EQ(s.embree_commit_count(), 2u);  // the static BVH and the box's body-frame BVH
+  const sc::Ray r = ray({-100.0, 0.0, 1.0}, {1.0, 0.0, 0.0});
+  sc::Hit hit;
+  ASSERT_TRUE(s.intersect(r, hit));
+  EXPECT_NEAR(hit.t_m, 99.0, 1e-12);  // face at x = -1
+  EXPECT_EQ(hit.object_id, 1u);
+  EXPECT_EQ(hit.material_id, 1);
+  EXPECT_DOUBLE_EQ(hit.normal.x, -1.0);
+  const glm::dvec3 lo0 = s.objects()[1].bounds_min_m, hi0 = s.objects()[1].bounds_max_m;
+  for (double t : {2.5, 0.1, 13.0, 0.0}) {
+    s.set_time(t);
+    EXPECT_DOUBLE_EQ(s.time_s(), t);
+    ASSERT_TRUE(s.intersect(r, hit)) << t;
+    EXPECT_NEAR(hit.t_m, 99.0 + 10.0 * t, 1e-12 * hit.t_m) << t;
+    EXPECT_NEAR(hit.position_m.x, -1.0 + 10.0 * t, 1e-9) << t;
+    EXPECT_EQ(hit.object_id, 1u);
+    EXPECT_TRUE(s.occluded(ray({-100.0, 0.0, 1.0}, {1.0, 0.0, 0.0}, 0.0, 100.0 + 10.0 * t)));
+    EXPECT_FALSE(s.occluded(ray({-100.0, 0.0, 1.0}, {1.0, 0.0, 0.0}, 0.0, 98.0 + 10.0 * t)));
+    const sc::ObjectState& st = s.objects()[1];
+    EXPECT_NEAR(st.bounds_min_m.x, lo0.x + 10.0 * t, 1e-12);
+    EXPECT_NEAR(st.bounds_max_m.x, hi0.x + 10.0 * t, 1e-12);
+    EXPECT_EQ(st.bounds_min_m.y, lo0.y);
+    EXPECT_EQ(st.bounds_max_m.z, hi0.z);
+  }
+  // Four set_time() calls later nothing has been rebuilt or recommitted.
+  EXPECT_EQ(s.static_build_count(), 1u);
+  EXPECT_EQ(s.embree_commit_count(), 2u);
+  EXPECT_EQ(s.embree_error_count(), 0u);
+  // The static ground did not move.
+  ASSERT_TRUE(s.intersect(ray({50.0, 50.0, 10.0}, {0, 0, -1}), hit));
+  EXPECT_EQ(hit.object_id, 0u);
+  EXPECT_NEAR(hit.t_m, 10.0, 1e-12);
   EXPECT_TRUE(s.objects()[1].moving);
   EXPECT_FALSE(s.objects()[0].moving);
+  EXPECT_DOUBLE_EQ(s.objects()[1].velocity_mps.x, 10.0);
+  EXPECT_EQ(s.objects()[0].velocity_mps, glm::dvec3(0.0));
 }
 
-TEST(Scene, BrokenDescriptionsFailWithContext) {
-  auto expect_error = [](sc::SceneDescription d, const std::string& needle) {
-    try {
-      sc::Scene s(std::move(d));
-      ADD_FAILURE() << "no error for " << needle;
-    } catch (const std::runtime_error& e) {
-      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
-    }
-  };
-  auto d = one_triangle_and_box();
-  d.objects[1].mesh.triangles[3] = {0, 1, 99};
-  expect_error(d, "object 'box': triangle 3 indexes vertex");
-  d = one_triangle_and_box();
-  d.objects[0].mesh.positions_m[1].x = std::nanf("");
-  expect_error(d, "object 'ground': vertex 1 is not finite");
-  d = one_triangle_and_box();
-  d.objects[0].mesh.triangle_material[0] = 7;
-  expect_error(d, "material index 7");
-  d = one_triangle_and_box();
-  d.objects[0].mesh.positions_m = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-  expect_error(d, "only degenerate triangles");
-  expect_error(sc::SceneDescription{}, "no objects");
-}
-
-TEST(DefaultScene, HasTheDocumentedObjectsAndLayout) {
-  const sc::SceneDescription d = sc::default_scene();
+TEST(SceneMotion, BodyXPointsAlongTheHorizontalVelocity) {
+  // A 6 m (body x) x 2 m box moving north-east: its long axis lies along the diagonal.
+  sc::SceneDescription d;
+  d.materials = {{"metal", {}}};
+  const glm::dvec3 v(10.0, 10.0, 0.0);
+  sc::ObjectDesc box{"box", {}, glm::dmat4(1.0), sc::LinearMotion{{100.0, 100.0, 0.0}, v}};
+  add_box(box.mesh, {-3, -1, 0}, {3, 1, 2}, 0);
+  d.objects.push_back(box);
   sc::Scene s(d);
-  std::vector<std::string> names;
-  for (const auto& o : s.objects())
-    names.push_back(o.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"ground", "runway", "parked_aircraft",
-                                             "parked_vehicle", "light_mast", "moving_vehicle"}));
-  const auto& runway = s.objects()[1];
-  EXPECT_NEAR(runway.bounds_max_m.x - runway.bounds_min_m.x, 45.0, 1e-6);
-  EXPECT_NEAR(runway.bounds_max_m.y - runway.bounds_min_m.y, 3000.0, 1e-6);
-  const auto& aircraft = s.objects()[2];
-  EXPECT_NEAR(aircraft.bounds_max_m.x - aircraft.bounds_min_m.x, 32.0, 1e-5);  // fuselage
-  EXPECT_NEAR(aircraft.bounds_max_m.y - aircraft.bounds_min_m.y, 30.0, 1e-5);  // wing span
-  EXPECT_TRUE(s.objects()[5].moving);
-  EXPECT_DOUBLE_EQ(s.objects()[5].velocity_mps.y, 15.0);
-  // A ray straight down onto the runway centreline hits asphalt, beside it grass.
-  sc::Ray r;
-  r.origin_m = {0, 1500, 100};
-  r.direction = {0, 0, -1};
-  sc::Hit h;
-  ASSERT_TRUE(s.intersect(r, h));
-  EXPECT_EQ(d.materials[h.material_id].name, "asphalt");
-  r.origin_m = {-40, 1500, 100};
-  ASSERT_TRUE(s.intersect(r, h));
-  EXPECT_EQ(d.materials[h.material_id].name, "grass");
-  // Every metallic object's mesh is closed: each edge is shared by exactly two triangles.
-  for (const auto& o : d.objects) {
-    if (o.name == "ground" || o.name == "runway")
-      continue;
-    std::map<std::pair<glm::vec3, glm::vec3>, int,
-             bool (*)(const std::pair<glm::vec3, glm::vec3>&,
-                      const std::pair<glm::vec3, glm::vec3>&)>
-        edges([](const auto& a, const auto& b) {
-          auto key = [](const auto& e) {
-            return std::make_tuple(e.first.x, e.first.y, e.first.z, e.second.x, e.second.y,
-                                   e.second.z);
-          };
-          return key(a) < key(b);
-        });
-    for (const auto& t : o.mesh.triangles) {
-      const glm::vec3 v[3] = {o.mesh.positions_m[t.x], o.mesh.positions_m[t.y],
-                              o.mesh.positions_m[t.z]};
-      for (int k = 0; k < 3; ++k)
-        ++edges[{v[k], v[(k + 1) % 3]}];
-    }
-    for (const auto& [e, count] : edges) {
-      // Directed edge a->b appears once and its reverse once: closed and consistently wound.
-      EXPECT_EQ(count, 1) << o.name;
-      const auto it = edges.find({e.second, e.first});
-      EXPECT_TRUE(it != edges.end()) << o.name << " has an open edge";
-    }
+  s.set_time(1.0);
+  const glm::dvec3 centre(110.0, 110.0, 1.0);
+  const glm::dvec3 along = glm::normalize(v), across(-along.y, along.x, 0.0);
+  sc::Hit hit;
+  // From behind along body -x: hits the rear face 3 m from the centre.
+  ASSERT_TRUE(s.intersect(ray(centre - 50.0 * along, along), hit));
+  EXPECT_NEAR(hit.t_m, 47.0, 1e-9);
+  EXPECT_NEAR(glm::dot(hit.normal, -along), 1.0, 1e-12);
+  // From the side along body y: the side face 1 m from the centre.
+  ASSERT_TRUE(s.intersect(ray(centre + 50.0 * across, -across), hit));
+  EXPECT_NEAR(hit.t_m, 49.0, 1e-9);
+  EXPECT_NEAR(glm::dot(hit.normal, across), 1.0, 1e-12);
+  // Bounds of the yawed box: half extents (3 + 1) / sqrt(2) in x and y.
+  const double half = 4.0 / std::sqrt(2.0);
+  EXPECT_NEAR(s.objects()[0].bounds_min_m.x, 110.0 - half, 1e-5);
+  EXPECT_NEAR(s.objects()[0].bounds_max_m.y, 110.0 + half, 1e-5);
+}
+
+TEST(SceneThreads, ConcurrentQueriesMatchSerialOnes) {
+  const sc::Scene s(sc::default_scene());
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<sc::Ray> rays;
+  for (int i = 0; i < 4000; ++i) {
+    rays.push_back(
+        ray({300 * u(rng), 400 + 400 * u(rng), 200.0}, {0.3 * u(rng), 0.3 * u(rng), -1.0}));
   }
+  std::vector<sc::Hit> serial(rays.size());
+  std::vector<char> serial_hit(rays.size());
+  for (std::size_t i = 0; i < rays.size(); ++i)
+    serial_hit[i] = s.intersect(rays[i], serial[i]) ? 1 : 0;
+  std::vector<std::thread> threads;
+  std::vector<int> mismatches(4, 0);
+  for (int k = 0; k < 4; ++k) {
+    threads.emplace_back([&, k] {
+      for (std::size_t i = static_cast<std::size_t>(k); i < rays.size(); i += 4) {
+        sc::Hit h;
+        const bool got = s.intersect(rays[i], h);
+        if (got != (serial_hit[i] != 0) ||
+            (got && (h.t_m != serial[i].t_m || h.object_id != serial[i].object_id))) {
+          ++mismatches[static_cast<std::size_t>(k)];
+        }
+        if (s.occluded(rays[i]) != got)
+          ++mismatches[static_cast<std::size_t>(k)];
+      }
+    });
+  }
+  for (auto& t : threads)
+    t.join();
+  for (int m : mismatches)
+    EXPECT_EQ(m, 0);
+}
+
+TEST(SceneValidation, BrokenDescriptionsFailWithContext) {
+  auto error_of = [](sc::SceneDescription d) -> std::string {
+    try {
+      const sc::Scene s(std::move(d));
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  auto d = triangle_and_moving_box();
+  d.objects[1].mesh.triangles[3] = {0, 1, 99};
+  EXPECT_EQ(error_of(d),
+            "scene: object 'box': triangle 3 indexes vertex 99, beyond the 8 vertices");
+  d = triangle_and_moving_box();
+  d.objects[0].mesh.positions_m[1].x = std::nanf("");
+  EXPECT_EQ(error_of(d), "scene: object 'ground': vertex 1 is not finite");
+  d = triangle_and_moving_box();
+  d.objects[0].mesh.positions_m[2].z = INFINITY;
+  EXPECT_EQ(error_of(d), "scene: object 'ground': vertex 2 is not finite");
+  d = triangle_and_moving_box();
+  d.objects[1].mesh.triangle_material[5] = 7;
+  EXPECT_EQ(error_of(d),
+            "scene: object 'box': triangle 5 has material index 7 but there are only 2 materials");
+  d = triangle_and_moving_box();
+  d.objects[0].mesh.positions_m = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}};  // collinear
+  EXPECT_EQ(error_of(d), "scene: object 'ground' has only degenerate (zero-area) triangles");
+  d = triangle_and_moving_box();
+  d.objects[1].mesh.triangle_material.pop_back();
+  EXPECT_EQ(error_of(d), "scene: object 'box': 11 material indices for 12 triangles");
+  d = triangle_and_moving_box();
+  d.objects[1].motion->velocity_mps.y = std::nan("");
+  EXPECT_EQ(error_of(d),
+            "scene: object 'box': the motion's start position or velocity is not finite");
+  d = triangle_and_moving_box();
+  d.objects[0].mesh.triangles.clear();
+  d.objects[0].mesh.triangle_material.clear();
+  EXPECT_EQ(error_of(d), "scene: object 'ground' has no triangles");
+  d = triangle_and_moving_box();
+  d.materials.clear();
+  EXPECT_EQ(error_of(d), "scene: the scene has no materials");
+  EXPECT_EQ(error_of(sc::SceneDescription{}), "scene: the scene has no objects");
+}
+
+TEST(SceneValidation, DegenerateTrianglesBesideGoodOnesAreAccepted) {
+  auto d = triangle_and_moving_box();
+  d.objects[0].mesh.positions_m.push_back({5, 5, 5});
+  d.objects[0].mesh.triangles.push_back({3, 3, 3});
+  d.objects[0].mesh.triangle_material.push_back(0);
+  const sc::Scene s(std::move(d));
+  EXPECT_EQ(s.triangle_count(), 14u);
+}
+
+TEST(SceneMove, AMovedSceneStillAnswers) {
+  sc::Scene a(triangle_and_moving_box());
+  sc::Scene b(std::move(a));
+  sc::Hit hit;
+  ASSERT_TRUE(b.intersect(ray({0, 0, 10}, {0, 0, -1}), hit));
+  EXPECT_EQ(hit.object_id, 1u);  // the box's top at z = 2
+  EXPECT_NEAR(hit.t_m, 8.0, 1e-12);
+  EXPECT_EQ(b.description().objects.size(), 2u);
+  EXPECT_EQ(b.materials()[1].name, "metal");
 }
