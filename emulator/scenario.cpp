@@ -67,7 +67,7 @@ system_losses_db = 3.0
 max_range_m = 6000.0
 max_bounces = 3
 terrain_ray_spacing_deg = 0.0573   # 1 mrad
-target_ray_spacing_m = 0.05
+target_ray_spacing_m = 0.1
 max_rays_per_target = 200000
 
 [detector]
