@@ -109,8 +109,11 @@ int main(int argc, char** argv) {
                   "Scenario TOML (keys override the embedded default; see --print-scenario)")
       ->check(CLI::ExistingFile);
   run->add_option("--frames", frames, "Number of frames (overrides the scenario)")
-      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}));
-  run->add_option("--out", out, "Directory for report.json, detections.json and the bus logs");
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}))
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  // The last --out / --frames wins, so wrappers (scripts/run.sh) can set defaults.
+  run->add_option("--out", out, "Directory for report.json, detections.json and the bus logs")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   run->add_flag("--realtime", realtime,
                 "Pace frames on the monotonic wall clock (default: as fast as possible on "
                 "simulated time)");
