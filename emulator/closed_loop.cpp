@@ -76,24 +76,6 @@ io::icd::Detection to_icd(const radar::Detection& d) noexcept {
   return o;
 }
 
-void add(radar::TraceStats& a, const radar::TraceStats& b) {
-  a.rays += b.rays;
-  a.target_bundles += b.target_bundles;
-  a.coarsened_bundles += b.coarsened_bundles;
-  a.hits += b.hits;
-  a.contributions += b.contributions;
-  a.dropped_contributions += b.dropped_contributions;
-  a.grazing_skipped += b.grazing_skipped;
-}
-
-void add(radar::SensorStats& a, const radar::SensorStats& b) {
-  a.cells_touched += b.cells_touched;
-  a.cfar_crossings += b.cfar_crossings;
-  a.detections += b.detections;
-  a.truncated += b.truncated;
-  a.out_of_grid += b.out_of_grid;
-}
-
 }  // namespace
 
 struct ClosedLoop::Impl {
@@ -226,20 +208,17 @@ RunResult ClosedLoop::run() {
     std::size_t n_contrib = 0;
     {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kTrace);
-      if (valid) {
-        radar::TraceStats ts;
-        n_contrib = m.tracer.trace(pose, m.contributions, ts);
-        add(r.trace, ts);
-      }
+      if (valid)
+        n_contrib = m.tracer.trace(pose, m.contributions, r.trace);  // accumulates
     }
     // ---- sensor: cells, CFAR, detections ----
     std::size_t n_det = 0;
-    radar::SensorStats ss;
+    const std::uint64_t truncated_before = r.sensor.truncated;
     {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kSensor);
       if (valid) {
-        n_det = m.sensor.process(std::span(m.contributions.data(), n_contrib), m.detections, ss);
-        add(r.sensor, ss);
+        n_det = m.sensor.process(std::span(m.contributions.data(), n_contrib), m.detections,
+                                 r.sensor);  // accumulates
       }
     }
     // ---- output: ICD frames on the bus ----
@@ -254,7 +233,7 @@ RunResult ClosedLoop::run() {
         h.status |= io::icd::status::kOwnshipInvalid;
       if (tick.late)
         h.status |= io::icd::status::kOverrun;
-      if (ss.truncated > 0)
+      if (r.sensor.truncated > truncated_before)
         h.status |= io::icd::status::kTruncated;
       const io::icd::EncodeResult enc =
           io::icd::encode(h, std::span(m.icd_detections.data(), n_det), m.out_frames);

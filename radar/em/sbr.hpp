@@ -92,6 +92,7 @@ class SbrTracer {
   [[nodiscard]] std::size_t max_contributions() const noexcept;
   /// Shoots all rays for `pose` against the scene at its current time and writes contributions
   /// to `out` (in a deterministic order, whatever the threading). Returns the number written.
+  /// `stats` is added to, not reset, so one TraceStats can total a run.
   /// Real-time safe apart from the worker threads it uses (TBB): no allocation per call. `out`
   /// must hold max_contributions() elements (fewer: the excess is dropped and counted).
   [[nodiscard]] std::size_t trace(const RadarPose& pose, std::span<Contribution> out,

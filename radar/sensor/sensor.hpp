@@ -63,7 +63,8 @@ class Sensor {
   explicit Sensor(const SensorConfig& config);
 
   /// Processes one frame's contributions. Writes detections sorted by SNR (descending) into
-  /// `out`; returns how many. Real-time safe: no allocation, no exceptions.
+  /// `out`; returns how many. `stats` is added to, not reset. Real-time safe: no allocation, no
+  /// exceptions.
   [[nodiscard]] std::size_t process(std::span<const Contribution> contributions,
                                     std::span<Detection> out, SensorStats& stats) noexcept;
 
