@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "emulator/ownship.hpp"
+#include "emulator/plot.hpp"
 #include "io/candump.hpp"
 #include "scene/default_scene.hpp"
 #include "scene/geo.hpp"
@@ -420,9 +421,11 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                        {"pinned", r.realtime.pinned},
                        {"warnings", r.realtime.warnings}};
   }
-  rep["outputs"] = {"report.json", "detections.json", "bus_in.log", "bus_out.log"};
+  rep["outputs"] = {"report.json", "detections.json", "detections.png", "bus_in.log",
+                    "bus_out.log"};
   write_json(dir / "report.json", rep);
 
+  write_bscope_png(r, s, dir / "detections.png");
   m.rx_log.write_file(dir / "bus_in.log");
   m.tx_log.write_file(dir / "bus_out.log");
 }

@@ -51,8 +51,9 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r,
   for (const auto& w : r.realtime.warnings)
     std::printf("  warning     %s\n", w.c_str());
   if (!out_dir.empty())
-    std::printf("  outputs     %s/{report.json,detections.json,bus_in.log,bus_out.log}\n",
-                out_dir.c_str());
+    std::printf(
+        "  outputs     %s/{report.json,detections.json,detections.png,bus_in.log,bus_out.log}\n",
+        out_dir.c_str());
 }
 
 int run_command(const std::string& scenario_file, std::uint64_t frames, const std::string& out,

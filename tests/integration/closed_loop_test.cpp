@@ -5,6 +5,7 @@
 #include "emulator/closed_loop.hpp"
 
 #include <gtest/gtest.h>
+#include <stb/stb_image.h>
 
 #include <algorithm>
 #include <atomic>
@@ -19,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "emulator/plot.hpp"
 #include "emulator/scenario.hpp"
 #include "io/candump.hpp"
 #include "io/detection_icd.hpp"
@@ -402,6 +404,41 @@ TEST_F(ClosedLoopDefault, BusOutputDecodesToTheDetectionsWithinIcdQuantisation) 
     }
   }
   EXPECT_EQ(list_index, result_->records.size());
+}
+
+TEST_F(ClosedLoopDefault, PictureShowsEachDetectionWhereItIs) {
+  // Decode detections.png with stb_image (independent of the writer) and look at the pixel of
+  // the first and last frames' detections, and at an empty corner.
+  int w = 0, h = 0, channels = 0;
+  unsigned char* px = stbi_load((out_ / "detections.png").c_str(), &w, &h, &channels, 3);
+  ASSERT_NE(px, nullptr) << "detections.png missing or not a PNG";
+  EXPECT_EQ(w, emu::BScopeLayout::kWidth);
+  EXPECT_EQ(h, emu::BScopeLayout::kHeight);
+  emu::BScopeLayout layout;
+  layout.azimuth_min_deg = scenario_->sensor.azimuth_min_rad * 180.0 / std::numbers::pi;
+  layout.azimuth_max_deg = scenario_->sensor.azimuth_max_rad * 180.0 / std::numbers::pi;
+  layout.range_max_m = scenario_->sensor.max_range_m;
+  auto rgb = [&](int x, int y) {
+    const unsigned char* p = px + (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
+                                   static_cast<std::size_t>(x)) *
+                                      3;
+    return std::array<int, 3>{p[0], p[1], p[2]};
+  };
+  const std::array<int, 3> background = rgb(w - 30, emu::BScopeLayout::kTop + 30);
+  for (const emu::FrameRecord* rec : {&result_->records.front(), &result_->records.back()}) {
+    ASSERT_GT(rec->detection_count, 0u);
+    const auto& d = result_->detections[rec->first_detection];
+    const auto c = rgb(layout.x_of(d.azimuth_deg), layout.y_of(d.range_m));
+    EXPECT_NE(c, background) << "no dot at detection range " << d.range_m;
+  }
+  // The first frame is drawn blue-ish, the last red-ish (colour encodes time).
+  const auto& first = result_->detections[result_->records.front().first_detection];
+  const auto& last = result_->detections[result_->records.back().first_detection];
+  const auto cf = rgb(layout.x_of(first.azimuth_deg), layout.y_of(first.range_m));
+  const auto cl = rgb(layout.x_of(last.azimuth_deg), layout.y_of(last.range_m));
+  EXPECT_GT(cf[2], cf[0]);
+  EXPECT_GT(cl[0], cl[2]);
+  stbi_image_free(px);
 }
 
 TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {

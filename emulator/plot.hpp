@@ -1,0 +1,25 @@
+#pragma once
+// Pictures of a run, for people who would rather look than read: a B-scope (azimuth across,
+// range up) of every detection the radar sent, coloured by time.
+
+#include <filesystem>
+
+#include "emulator/closed_loop.hpp"
+#include "emulator/scenario.hpp"
+
+namespace radar_emu::emulator {
+
+/// Plot geometry, shared with tests: pixel of an (azimuth, range) point.
+struct BScopeLayout {
+  static constexpr int kWidth = 900, kHeight = 700;
+  static constexpr int kLeft = 70, kRight = 20, kTop = 40, kBottom = 50;
+  double azimuth_min_deg = -8.0, azimuth_max_deg = 8.0, range_max_m = 6000.0;
+  [[nodiscard]] int x_of(double azimuth_deg) const noexcept;
+  [[nodiscard]] int y_of(double range_m) const noexcept;
+};
+
+/// Writes the B-scope as PNG. Throws std::runtime_error naming the path on failure.
+void write_bscope_png(const RunResult& result, const Scenario& scenario,
+                      const std::filesystem::path& path);
+
+}  // namespace radar_emu::emulator
