@@ -75,7 +75,12 @@ void BM_TraceTargetSpacing(benchmark::State& state) {
   state.counters["Mrays_per_s"] = benchmark::Counter(static_cast<double>(stats.rays) * 1e-6,
                                                      benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_TraceTargetSpacing)->Arg(250)->Arg(100)->Arg(50)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_TraceTargetSpacing)
+    ->Arg(250)
+    ->Arg(100)
+    ->Arg(50)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_Sensor(benchmark::State& state) {
   Fixture& f = fixture();

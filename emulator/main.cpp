@@ -4,11 +4,16 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <iostream>
+#include <stdexcept>
 #include <string>
 
 #include "emulator/closed_loop.hpp"
 #include "emulator/scenario.hpp"
+#include "scene/gltf.hpp"
+#include "scene/mesh_io.hpp"
+#include "scene/targets.hpp"
 
 namespace emu = radar_emu::emulator;
 
@@ -93,6 +98,28 @@ int run_command(const std::string& scenario_file, std::uint64_t frames, const st
   return 0;
 }
 
+int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec spec,
+                   const std::string& out) {
+  namespace sc = radar_emu::scene;
+  const auto kind = sc::target_kind_from_name(kind_name);
+  if (!kind) {
+    throw std::runtime_error("unknown target '" + kind_name + "' (known: " + sc::target_names() +
+                             ")");
+  }
+  spec.kind = *kind;
+  const sc::SceneDescription desc = sc::make_target(spec);
+  const std::filesystem::path path(out);
+  const std::string ext = path.extension().string();
+  if (ext == ".glb" || ext == ".gltf") {
+    sc::write_gltf(desc, path);
+  } else {
+    sc::write_mesh_file(desc.objects[0].mesh, desc.materials, path);
+  }
+  std::printf("%s: %s, %zu triangles\n", out.c_str(), kind_name.c_str(),
+              desc.objects[0].mesh.triangles.size());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -125,6 +152,21 @@ int main(int argc, char** argv) {
   run->add_flag("--print-scenario", print_scenario, "Print the embedded default scenario and exit");
   run->add_flag("-q,--quiet", quiet, "No progress or summary");
 
+  CLI::App* scene_cmd = app.add_subcommand("scene", "Scene databases and canonical targets");
+  scene_cmd->require_subcommand(1);
+  CLI::App* target = scene_cmd->add_subcommand(
+      "target", "Write a canonical target mesh (conventions in scene/targets.hpp)");
+  std::string target_kind, target_out;
+  radar_emu::scene::TargetSpec spec;
+  target->add_option("kind", target_kind, radar_emu::scene::target_names())->required();
+  target->add_option("--a-m", spec.a_m,
+                     "First dimension [m]: plate/box x, fold length, trihedral edge, radius");
+  target->add_option("--b-m", spec.b_m, "Second dimension [m]: plate/box y, face width, length");
+  target->add_option("--c-m", spec.c_m, "Third dimension [m]: box z");
+  target->add_option("--facet-m", spec.facet_m,
+                     "Largest facet edge [m] (0: coarsest exact mesh, 32 segments for curves)");
+  target->add_option("--out", target_out, "Output file: .glb, .gltf, .obj or .stl")->required();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -135,6 +177,8 @@ int main(int argc, char** argv) {
       return run_command(scenario_file, frames, out, realtime, print_scenario, quiet, rt_priority,
                          lock_memory, cpu);
     }
+    if (target->parsed())
+      return target_command(target_kind, spec, target_out);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "radar-emu: error: %s\n", e.what());
     return 1;

@@ -115,7 +115,8 @@ void SbrTracer::trace_ray(const RadarPose& pose, double az, double el, double da
     // Range budget: a return counts only if half its total path is within max_range, so the
     // first segment may run max_range and later ones what is left of 2 max_range.
     ray.t_far_m = bounce == 0 ? c.max_range_m : 2.0 * c.max_range_m - path_m;
-    if (ray.t_far_m <= ray.t_near_m) return;
+    if (ray.t_far_m <= ray.t_near_m)
+      return;
     scene::Hit hit;
     if (!scene_->intersect(ray, hit))
       return;

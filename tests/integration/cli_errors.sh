@@ -27,7 +27,17 @@ expect_error "syntax.toml:1" run "$dir/syntax.toml"
 expect_error "missing.glb" run "$dir/scene.toml"
 expect_error "nope.toml" run "$dir/nope.toml"
 expect_error "frames" run --frames 0
-for sub in "" run; do
+expect_error "unknown target 'cone'" scene target cone --out "$dir/x.obj"
+expect_error "a_m must be a positive number" scene target plate --a-m -1 --out "$dir/x.obj"
+expect_error "cannot open for writing" scene target box --out "$dir/no/such/dir/x.stl"
+if ! "$exe" scene target trihedral-tri --a-m 0.3 --out "$dir/t.stl" >/dev/null; then
+  echo "FAIL: scene target trihedral-tri"; fails=$((fails+1))
+fi
+# Binary STL: 80-byte header + 4-byte count + 50 bytes per triangle (3 triangles here).
+if [ "$(stat -c %s "$dir/t.stl")" -ne $((84 + 50 * 3)) ]; then
+  echo "FAIL: t.stl size"; fails=$((fails+1))
+fi
+for sub in "" run scene "scene target"; do
   if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
 done
 [ $fails -eq 0 ] && echo "cli errors: ok"
