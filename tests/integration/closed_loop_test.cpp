@@ -188,6 +188,15 @@ Cells cells_of(const emu::Scenario& s) {
   return c;
 }
 
+// The scripted ownship's true position at scenario time t, and its antenna axes (the default
+// flies wings level, so the antenna is the body pitched by pitch - depression).
+glm::dvec3 ownship_at(const emu::Scenario& s, double t_s) {
+  return s.ownship_start_enu_m + s.ownship_velocity_enu_mps * t_s;
+}
+Antenna scenario_antenna(const emu::Scenario& s) {
+  return antenna_axes(s.ownship_heading_rad, s.ownship_pitch_rad - s.antenna_depression_rad);
+}
+
 emu::Scenario default_scenario() {
   return emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
 }
@@ -251,14 +260,13 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
   const emu::Scenario& s = *scenario_;
   const Cells cells = cells_of(s);
   const auto desc = radar_emu::scene::default_scene();
-  const Antenna ant =
-      antenna_axes(s.ownship_heading_rad, s.ownship_pitch_rad - s.antenna_depression_rad);
+  const Antenna ant = scenario_antenna(s);
   std::size_t frames_checked = 0;
   std::vector<std::size_t> detected_frames_per_object;
   std::vector<std::string> names;
   for (const emu::FrameRecord& rec : result_->records) {
     const double t = rec.time_s;
-    const glm::dvec3 radar = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * t;
+    const glm::dvec3 radar = ownship_at(s, t);
     const std::vector<TruthObject> objects = objects_at(desc, t);
     if (names.empty()) {
       for (const auto& o : objects)
@@ -329,11 +337,10 @@ TEST_F(ClosedLoopDefault, MovingVehicleRadialVelocityFromItsKnownVelocity) {
   const emu::Scenario& s = *scenario_;
   const Cells cells = cells_of(s);
   const auto desc = radar_emu::scene::default_scene();
-  const Antenna ant =
-      antenna_axes(s.ownship_heading_rad, s.ownship_pitch_rad - s.antenna_depression_rad);
+  const Antenna ant = scenario_antenna(s);
   std::size_t frames_with_vehicle = 0;
   for (const emu::FrameRecord& rec : result_->records) {
-    const glm::dvec3 radar = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * rec.time_s;
+    const glm::dvec3 radar = ownship_at(s, rec.time_s);
     for (const auto& o : objects_at(desc, rec.time_s)) {
       if (o.name != "moving_vehicle")
         continue;
