@@ -10,6 +10,7 @@
 #include <string>
 
 #include "emulator/closed_loop.hpp"
+#include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
 #include "scene/gltf.hpp"
 #include "scene/mesh_io.hpp"
@@ -167,6 +168,82 @@ int main(int argc, char** argv) {
                      "Largest facet edge [m] (0: coarsest exact mesh, 32 segments for curves)");
   target->add_option("--out", target_out, "Output file: .glb, .gltf, .obj or .stl")->required();
 
+  // rcs / profile: options are kept as text and parsed by the tool, so errors name the option.
+  struct SweepText {
+    std::string freq, freq_sweep, theta = "0", phi = "0", pol;
+  };
+  auto add_common = [](CLI::App* cmd, SweepText& t, std::string& mesh, double& scale,
+                       std::vector<std::string>& materials, int& bounces, double& rpw,
+                       bool& quiet_flag) {
+    cmd->add_option("--mesh", mesh, "Target mesh: .glb, .gltf, .obj or .stl")
+        ->required()
+        ->check(CLI::ExistingFile);
+    cmd->add_option("--scale", scale,
+                    "File units to metres (0.001 for mm, 0.0254 for inches; default 1)");
+    cmd->add_option("--freq-hz", t.freq, "One frequency [Hz]");
+    cmd->add_option("--freq-sweep-hz", t.freq_sweep, "Frequencies START:STOP:N [Hz]");
+    cmd->add_option("--theta-deg", t.theta,
+                    "Radar direction from +z: A or A:B:N [deg] (default 0)");
+    cmd->add_option("--phi-deg", t.phi, "Radar direction from +x toward +y: A or A:B:N [deg]");
+    cmd->add_option("--bounces", bounces, "Bounces: 1 = facet PO only, up to 16 (default 3)")
+        ->check(CLI::Range(1, 16));
+    cmd->add_option("--rays-per-wavelength", rpw,
+                    "Ray-tube density for bounces >= 2 at the highest frequency (default 4)")
+        ->check(CLI::PositiveNumber);
+    cmd->add_option("--material", materials,
+                    "Non-metal material: NAME=EPS_REAL,EPS_LOSS (dielectric, eps = EPS_REAL - j "
+                    "EPS_LOSS) or NAME=EPS_REAL,EPS_LOSS,THICKNESS_M (coating on metal); "
+                    "repeatable");
+    cmd->add_flag("-q,--quiet", quiet_flag, "No progress or summary");
+  };
+  auto frequencies = [](const SweepText& t) {
+    if (t.freq.empty() == t.freq_sweep.empty())
+      throw std::invalid_argument("give exactly one of --freq-hz and --freq-sweep-hz");
+    return t.freq.empty() ? emu::parse_sweep(t.freq_sweep, "--freq-sweep-hz")
+                          : emu::parse_sweep(t.freq, "--freq-hz");
+  };
+
+  CLI::App* rcs = app.add_subcommand(
+      "rcs", "Radar cross section of a mesh vs angle and frequency, polarimetric (PO + SBR)");
+  SweepText rcs_text;
+  rcs_text.pol = "HH,VV";
+  emu::RcsToolOptions rcs_opt;
+  double bistatic_theta = 0.0, bistatic_phi = 0.0;
+  add_common(rcs, rcs_text, rcs_opt.mesh, rcs_opt.scale, rcs_opt.materials, rcs_opt.bounces,
+             rcs_opt.rays_per_wavelength, rcs_opt.quiet);
+  rcs->add_option("--pol", rcs_text.pol,
+                  "Polarisations, receive letter first: HH,HV,VH,VV (default HH,VV)");
+  CLI::Option* bt = rcs->add_option("--bistatic-theta-deg", bistatic_theta,
+                                    "Receiver direction theta [deg] (bistatic)");
+  CLI::Option* bp =
+      rcs->add_option("--bistatic-phi-deg", bistatic_phi, "Receiver direction phi [deg]");
+  bt->needs(bp);
+  bp->needs(bt);
+  rcs->add_option("--out", rcs_opt.out_csv, "CSV output (default rcs.csv)");
+  rcs->add_option("--plot", rcs_opt.plot_png, "PNG plot of the sweep");
+  rcs->add_option("--window-deg", rcs_opt.window_deg,
+                  "Fluctuation statistics (mean, median, p10/p90, spread) over a sliding aspect "
+                  "window of this width [deg]")
+      ->check(CLI::PositiveNumber);
+  rcs->add_option("--stats-out", rcs_opt.stats_csv, "CSV for --window-deg (default *_stats.csv)");
+
+  CLI::App* profile = app.add_subcommand(
+      "profile", "Range profile (and ISAR image over an angle sweep) of a mesh (PO + SBR)");
+  SweepText prof_text;
+  prof_text.pol = "VV";
+  emu::ProfileToolOptions prof_opt;
+  add_common(profile, prof_text, prof_opt.mesh, prof_opt.scale, prof_opt.materials,
+             prof_opt.bounces, prof_opt.rays_per_wavelength, prof_opt.quiet);
+  profile->add_option("--pol", prof_text.pol, "One polarisation: HH, HV, VH or VV (default VV)");
+  profile->add_option("--window", prof_opt.window, "none, hann, hamming or taylor (default hann)");
+  profile->add_option("--oversample", prof_opt.oversample, "Zero-padding factor (default 4)");
+  profile->add_option("--dynamic-range-db", prof_opt.dynamic_range_db, "Plot range (default 50)")
+      ->check(CLI::PositiveNumber);
+  profile->add_option("--out", prof_opt.out_csv, "Range-profile CSV (default profile.csv)");
+  profile->add_option("--plot", prof_opt.plot_png, "Range-profile PNG");
+  profile->add_option("--isar-out", prof_opt.isar_csv, "ISAR CSV (default *_isar.csv)");
+  profile->add_option("--isar-plot", prof_opt.isar_png, "ISAR PNG (default *_isar.png)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -179,6 +256,27 @@ int main(int argc, char** argv) {
     }
     if (target->parsed())
       return target_command(target_kind, spec, target_out);
+    if (rcs->parsed()) {
+      rcs_opt.freqs_hz = frequencies(rcs_text);
+      rcs_opt.theta_deg = emu::parse_sweep(rcs_text.theta, "--theta-deg");
+      rcs_opt.phi_deg = emu::parse_sweep(rcs_text.phi, "--phi-deg");
+      rcs_opt.pols = emu::parse_pols(rcs_text.pol);
+      if (bt->count() > 0) {
+        rcs_opt.bistatic_theta_deg = bistatic_theta;
+        rcs_opt.bistatic_phi_deg = bistatic_phi;
+      }
+      return emu::run_rcs_tool(rcs_opt);
+    }
+    if (profile->parsed()) {
+      prof_opt.freqs_hz = frequencies(prof_text);
+      prof_opt.theta_deg = emu::parse_sweep(prof_text.theta, "--theta-deg");
+      prof_opt.phi_deg = emu::parse_sweep(prof_text.phi, "--phi-deg");
+      const auto pols = emu::parse_pols(prof_text.pol);
+      if (pols.size() != 1)
+        throw std::invalid_argument("--pol: a profile takes one polarisation");
+      prof_opt.pol = pols[0];
+      return emu::run_profile_tool(prof_opt);
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "radar-emu: error: %s\n", e.what());
     return 1;

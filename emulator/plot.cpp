@@ -1,8 +1,5 @@
 #include "emulator/plot.hpp"
 
-#include <stb/stb_easy_font.h>
-#include <stb/stb_image_write.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,59 +9,11 @@
 #include <stdexcept>
 #include <vector>
 
+#include "emulator/canvas.hpp"
+
 namespace radar_emu::emulator {
 
 namespace {
-
-struct Rgb {
-  std::uint8_t r, g, b;
-};
-
-class Canvas {
- public:
-  Canvas(int w, int h, Rgb background) : w_(w), h_(h), px_(static_cast<std::size_t>(w * h) * 3) {
-    for (int i = 0; i < w * h; ++i)
-      set_index(i, background);
-  }
-  void put(int x, int y, Rgb c) {
-    if (x >= 0 && y >= 0 && x < w_ && y < h_)
-      set_index(y * w_ + x, c);
-  }
-  void rect(int x0, int y0, int x1, int y1, Rgb c) {
-    for (int y = y0; y <= y1; ++y) {
-      for (int x = x0; x <= x1; ++x)
-        put(x, y, c);
-    }
-  }
-  // Text with stb_easy_font: it returns quads (4 vertices of x, y, z, colour each).
-  void text(int x, int y, const char* s, Rgb c, int scale = 1) {
-    std::array<char, 20000> buf{};
-    std::array<char, 128> str{};
-    std::strncpy(str.data(), s, str.size() - 1);
-    const int quads = stb_easy_font_print(0.0f, 0.0f, str.data(), nullptr, buf.data(),
-                                          static_cast<int>(buf.size()));
-    for (int q = 0; q < quads; ++q) {
-      // Each quad is 4 vertices of 16 bytes (x, y, z floats and an RGBA colour); vertex 0 is
-      // the top-left corner, vertex 2 the bottom-right.
-      float v[12];
-      std::memcpy(v, buf.data() + static_cast<std::size_t>(q) * 64, sizeof v);
-      const int qx0 = x + scale * static_cast<int>(v[0]), qy0 = y + scale * static_cast<int>(v[1]);
-      const int qx1 = x + scale * static_cast<int>(v[8]) - 1;
-      const int qy1 = y + scale * static_cast<int>(v[9]) - 1;
-      rect(qx0, qy0, qx1, qy1, c);
-    }
-  }
-  [[nodiscard]] const std::uint8_t* data() const { return px_.data(); }
-
- private:
-  void set_index(int i, Rgb c) {
-    px_[static_cast<std::size_t>(i) * 3 + 0] = c.r;
-    px_[static_cast<std::size_t>(i) * 3 + 1] = c.g;
-    px_[static_cast<std::size_t>(i) * 3 + 2] = c.b;
-  }
-  int w_, h_;
-  std::vector<std::uint8_t> px_;
-};
 
 // Blue (start of the run) to red (end).
 Rgb time_colour(double f) {
@@ -129,10 +78,7 @@ void write_bscope_png(const RunResult& result, const Scenario& s,
       c.rect(x - 2, y - 2, x + 2, y + 2, col);
     }
   }
-  if (stbi_write_png(path.c_str(), BScopeLayout::kWidth, BScopeLayout::kHeight, 3, c.data(),
-                     BScopeLayout::kWidth * 3) == 0) {
-    throw std::runtime_error(path.string() + ": cannot write PNG");
-  }
+  c.write_png(path);
 }
 
 }  // namespace radar_emu::emulator

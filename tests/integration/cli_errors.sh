@@ -37,7 +37,23 @@ fi
 if [ "$(stat -c %s "$dir/t.stl")" -ne $((84 + 50 * 3)) ]; then
   echo "FAIL: t.stl size"; fails=$((fails+1))
 fi
-for sub in "" run scene "scene target"; do
+# rcs / profile: every bad option is named.
+m="$dir/t.stl"
+expect_error "exactly one of --freq-hz and --freq-sweep-hz" rcs --mesh "$m"
+expect_error "--freq-sweep-hz: N must be a whole number" rcs --mesh "$m" --freq-sweep-hz 1e9:2e9:0
+expect_error "--theta-deg: 'abc' is not a finite number" rcs --mesh "$m" --freq-hz 1e10 --theta-deg abc
+expect_error "--pol: 'XY' is not one of" rcs --mesh "$m" --freq-hz 1e10 --pol HH,XY
+expect_error "--material 'glass'" rcs --mesh "$m" --freq-hz 1e10 --material glass
+expect_error "unknown mesh format" rcs --mesh "$dir/zero.toml" --freq-hz 1e10
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\n' > "$dir/glass.obj"
+expect_error "material 'glass' is not a conductor" rcs --mesh "$dir/glass.obj" --freq-hz 1e10
+expect_error "over the limit" rcs --mesh "$m" --freq-hz 1e15 -q
+expect_error "N >= 2" profile --mesh "$m" --freq-hz 1e10
+expect_error "theta or phi, not both" profile --mesh "$m" --freq-sweep-hz 9e9:1e10:8 --theta-deg 0:1:3 --phi-deg 0:1:3
+if ! "$exe" rcs --mesh "$dir/glass.obj" --freq-hz 1e10 --material glass=6,0.2 -q --out "$dir/g.csv"; then
+  echo "FAIL: rcs with a dielectric material"; fails=$((fails+1))
+fi
+for sub in "" run scene "scene target" rcs profile; do
   if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
 done
 [ $fails -eq 0 ] && echo "cli errors: ok"

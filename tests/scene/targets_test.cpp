@@ -5,13 +5,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <numbers>
 #include <stdexcept>
 
 #include "scene/mesh_io.hpp"
+#include "scene/scene.hpp"
 
 namespace sc = radar_emu::scene;
 namespace fs = std::filesystem;
@@ -91,11 +95,84 @@ TEST(Targets, ClosedTargetsAreWoundOutwardWithTheirVolume) {
   EXPECT_GT(coarse, 0.95);
 }
 
+TEST(Targets, VehicleIsTheTwentyFiveThousandFacetBenchmarkTarget) {
+  const sc::Mesh v = target(sc::TargetKind::kVehicle, 7.0, 3.5, 2.5);
+  std::cout << "vehicle: " << v.triangles.size() << " triangles, " << area(v) << " m^2\n";
+  EXPECT_GE(v.triangles.size(), 24000u);
+  EXPECT_LE(v.triangles.size(), 26000u);
+  // Overall dimensions: length a (gun included), width b, height c; wheels on z = 0 within
+  // the sagitta of their facets.
+  glm::dvec3 lo(1e9), hi(-1e9);
+  double longest = 0.0, smallest = 1e9;
+  for (const auto& t : v.triangles) {
+    const glm::dvec3 p0(v.positions_m[t.x]), p1(v.positions_m[t.y]), p2(v.positions_m[t.z]);
+    for (const glm::dvec3& p : {p0, p1, p2}) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+    longest = std::max({longest, glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
+    smallest = std::min(smallest, 0.5 * glm::length(glm::cross(p1 - p0, p2 - p0)));
+  }
+  EXPECT_NEAR(lo.x, -3.5, 1e-6);
+  EXPECT_NEAR(hi.x, 3.5, 1e-6);
+  EXPECT_NEAR(lo.y, -1.75, 1e-6);
+  EXPECT_NEAR(hi.y, 1.75, 1e-6);
+  EXPECT_NEAR(lo.z, 0.0, 0.01);
+  EXPECT_NEAR(hi.z, 2.5, 1e-6);
+  EXPECT_GT(smallest, 1e-6);  // no degenerate facet
+  // The default facet size bounds every edge (split quads: their diagonal, sqrt(2) larger).
+  EXPECT_LE(longest, std::sqrt(2.0) * 7.0 / 58.0 * (1 + 1e-6));
+  // A finer facet size is respected and refines.
+  const sc::Mesh fine = target(sc::TargetKind::kVehicle, 7.0, 3.5, 2.5, 0.08);
+  EXPECT_GT(fine.triangles.size(), v.triangles.size());
+  for (const auto& t : fine.triangles) {
+    const glm::dvec3 p0(fine.positions_m[t.x]), p1(fine.positions_m[t.y]),
+        p2(fine.positions_m[t.z]);
+    ASSERT_LE(std::max({glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)}),
+              std::sqrt(2.0) * 0.08 * (1 + 1e-6));
+  }
+  // Deterministic.
+  const sc::Mesh again = target(sc::TargetKind::kVehicle, 7.0, 3.5, 2.5);
+  ASSERT_EQ(again.positions_m.size(), v.positions_m.size());
+  EXPECT_EQ(std::memcmp(again.positions_m.data(), v.positions_m.data(),
+                        v.positions_m.size() * sizeof(glm::vec3)),
+            0);
+  // Wound outward: every surface a ray from outside meets first faces that ray (grids of rays
+  // from 26 directions around the vehicle).
+  const sc::Scene scene(sc::make_target({sc::TargetKind::kVehicle, 7.0, 3.5, 2.5, 0.0}));
+  std::size_t hits = 0, inward = 0;
+  for (int dx = -1; dx <= 1; ++dx) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dz = -1; dz <= 1; ++dz) {
+        if (dx == 0 && dy == 0 && dz == 0)
+          continue;
+        const glm::dvec3 d = -glm::normalize(glm::dvec3(dx, dy, dz) + glm::dvec3(0.01, 0.02, 0.03));
+        const glm::dvec3 e1 = glm::normalize(glm::cross(d, glm::dvec3(0.3, 0.5, 0.8)));
+        const glm::dvec3 e2 = glm::cross(d, e1);
+        for (int i = -40; i <= 40; ++i) {
+          for (int j = -40; j <= 40; ++j) {
+            sc::Ray ray;
+            ray.origin_m = glm::dvec3(0, 0, 1.2) - 20.0 * d + 0.1 * i * e1 + 0.1 * j * e2;
+            ray.direction = d;
+            sc::Hit h;
+            if (!scene.intersect(ray, h))
+              continue;
+            ++hits;
+            inward += glm::dot(h.normal, d) > 0.0;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(hits, 10000u);
+  EXPECT_EQ(inward, 0u);
+}
+
 TEST(Targets, NamesAndBadDimensions) {
   EXPECT_EQ(sc::target_kind_from_name("trihedral-tri"), sc::TargetKind::kTrihedralTriangular);
   EXPECT_FALSE(sc::target_kind_from_name("cone").has_value());
   EXPECT_EQ(sc::target_names(),
-            "plate|dihedral|trihedral-square|trihedral-tri|sphere|cylinder|box");
+            "plate|dihedral|trihedral-square|trihedral-tri|sphere|cylinder|box|vehicle");
   EXPECT_THROW(sc::make_target({sc::TargetKind::kPlate, -1.0, 1, 1, 0}), std::invalid_argument);
   EXPECT_THROW(sc::make_target({sc::TargetKind::kBox, 1, std::nan(""), 1, 0}),
                std::invalid_argument);

@@ -1,0 +1,624 @@
+#include "emulator/rcs_tool.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <stdexcept>
+
+#include "emulator/charts.hpp"
+#include "radar/constants.hpp"
+#include "radar/materials.hpp"
+#include "radar/products/fluctuation.hpp"
+#include "radar/products/range_profile.hpp"
+#include "scene/gltf.hpp"
+#include "scene/mesh_io.hpp"
+
+namespace radar_emu::emulator {
+
+namespace {
+
+constexpr double kDegToRad = radar::kPi / 180.0;
+
+double parse_number(std::string_view s, std::string_view option) {
+  // std::from_chars for double is in GCC 12's libstdc++.
+  double v = 0.0;
+  const auto* end = s.data() + s.size();
+  const auto [ptr, ec] = std::from_chars(s.data(), end, v);
+  if (ec != std::errc() || ptr != end || !std::isfinite(v)) {
+    throw std::invalid_argument(std::string(option) + ": '" + std::string(s) +
+                                "' is not a finite number");
+  }
+  return v;
+}
+
+std::vector<std::string_view> split(std::string_view s, char sep) {
+  std::vector<std::string_view> out;
+  std::size_t start = 0;
+  for (;;) {
+    const std::size_t pos = s.find(sep, start);
+    out.push_back(s.substr(start, pos == std::string_view::npos ? pos : pos - start));
+    if (pos == std::string_view::npos)
+      return out;
+    start = pos + 1;
+  }
+}
+
+std::filesystem::path sibling(const std::string& path, const std::string& suffix) {
+  std::filesystem::path p(path);
+  return p.parent_path() / (p.stem().string() + suffix);
+}
+
+FILE* open_or_throw(const std::filesystem::path& path) {
+  FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr)
+    throw std::runtime_error(path.string() + ": cannot open for writing");
+  return f;
+}
+
+struct FileCloser {
+  void operator()(FILE* f) const noexcept { std::fclose(f); }
+};
+using File = std::unique_ptr<FILE, FileCloser>;
+
+double db_of_power(double p) {
+  return p > 0.0 ? 10.0 * std::log10(p) : -400.0;
+}
+
+// Prints "\r  label i/n" to stderr at most every 0.5 s, and a newline at the end.
+class Progress {
+ public:
+  Progress(bool enabled, std::string label, std::size_t total)
+      : enabled_(enabled),
+        label_(std::move(label)),
+        total_(total),
+        start_(std::chrono::steady_clock::now()),
+        last_(start_) {}
+  void update(std::size_t done) {
+    if (!enabled_)
+      return;
+    const auto now = std::chrono::steady_clock::now();
+    if (done < total_ && now - last_ < std::chrono::milliseconds(500))
+      return;
+    last_ = now;
+    const double s = std::chrono::duration<double>(now - start_).count();
+    std::fprintf(stderr, "\r  %s %zu/%zu (%.1f s)", label_.c_str(), done, total_, s);
+    if (done == total_)
+      std::fputc('\n', stderr);
+  }
+
+ private:
+  bool enabled_;
+  std::string label_;
+  std::size_t total_;
+  std::chrono::steady_clock::time_point start_, last_;
+};
+
+// Physical optics is an asymptotic (high-frequency) method: flag small electrical sizes.
+void warn_electrical_size(const radar::RcsEngine& engine, double f_min_hz, bool quiet) {
+  const double ka =
+      2.0 * radar::kPi * f_min_hz / radar::kSpeedOfLight_mps * engine.bounding_radius_m();
+  if (ka < 10.0 && !quiet) {
+    std::fprintf(stderr,
+                 "radar-emu: warning: the target is only ka = %.2f (wavenumber times its bounding "
+                 "radius) at %.4g Hz: physical optics is a high-frequency method and its error "
+                 "grows below ka ~ 10 (a sphere against the exact Mie series: up to +-1.4 dB at "
+                 "ka 5-10, more below; docs/validation.md)\n",
+                 ka, f_min_hz);
+  }
+}
+
+void print_target(const LoadedTarget& t, const radar::RcsEngine& e, bool quiet) {
+  for (const std::string& w : t.warnings)
+    std::fprintf(stderr, "radar-emu: warning: %s\n", w.c_str());
+  if (quiet)
+    return;
+  std::printf("target: %zu facets (%zu degenerate skipped), bounding radius %.4g m\n",
+              e.facet_count(), e.degenerate_facets(), e.bounding_radius_m());
+}
+
+}  // namespace
+
+std::vector<double> parse_sweep(std::string_view text, std::string_view option) {
+  const auto parts = split(text, ':');
+  if (parts.size() == 1)
+    return {parse_number(parts[0], option)};
+  if (parts.size() != 3) {
+    throw std::invalid_argument(std::string(option) + ": expected X or START:STOP:N, got '" +
+                                std::string(text) + "'");
+  }
+  const double a = parse_number(parts[0], option), b = parse_number(parts[1], option);
+  const double n_real = parse_number(parts[2], option);
+  if (n_real < 1.0 || n_real > 1e6 || n_real != std::floor(n_real)) {
+    throw std::invalid_argument(std::string(option) +
+                                ": N must be a whole number in 1..1e6, got '" +
+                                std::string(parts[2]) + "'");
+  }
+  const auto n = static_cast<std::size_t>(n_real);
+  if (n > 1 && a == b)
+    throw std::invalid_argument(std::string(option) + ": START equals STOP with N > 1");
+  std::vector<double> out(n);
+  for (std::size_t i = 0; i < n; ++i)
+    out[i] = n == 1 ? a : a + (b - a) * static_cast<double>(i) / static_cast<double>(n - 1);
+  return out;
+}
+
+LoadedTarget load_target(const std::string& mesh_path, double scale,
+                         const std::vector<std::string>& material_definitions) {
+  if (!std::isfinite(scale) || scale <= 0.0)
+    throw std::invalid_argument("--scale must be a positive number");
+  LoadedTarget t;
+  const std::filesystem::path path(mesh_path);
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".glb" || ext == ".gltf") {
+    t.description = scene::load_gltf(path);
+    if (scale != 1.0) {
+      for (scene::ObjectDesc& o : t.description.objects) {
+        for (glm::vec3& p : o.mesh.positions_m)
+          p *= static_cast<float>(scale);
+        o.world_from_body[3] = glm::dvec4(glm::dvec3(o.world_from_body[3]) * scale, 1.0);
+      }
+    }
+  } else if (ext == ".obj" || ext == ".stl") {
+    scene::MeshFileOptions options;
+    options.scale = scale;
+    t.description = scene::load_mesh_file(path, options);
+  } else {
+    throw std::invalid_argument(mesh_path + ": unknown mesh format '" + ext +
+                                "' (expected .glb, .gltf, .obj or .stl)");
+  }
+  // Material definitions from the command line.
+  struct Def {
+    std::string name;
+    radar::SurfaceModel model;
+    bool used = false;
+  };
+  std::vector<Def> defs;
+  for (const std::string& text : material_definitions) {
+    const std::size_t eq = text.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw std::invalid_argument("--material '" + text +
+                                  "': expected NAME=EPS_REAL,EPS_LOSS[,THICKNESS_M]");
+    }
+    Def d;
+    d.name = text.substr(0, eq);
+    const auto v = split(std::string_view(text).substr(eq + 1), ',');
+    if (v.size() != 2 && v.size() != 3) {
+      throw std::invalid_argument("--material '" + text +
+                                  "': expected NAME=EPS_REAL,EPS_LOSS[,THICKNESS_M]");
+    }
+    const double re = parse_number(v[0], "--material"), loss = parse_number(v[1], "--material");
+    if (re < 1.0 || loss < 0.0) {
+      throw std::invalid_argument("--material '" + text +
+                                  "': EPS_REAL must be >= 1 and EPS_LOSS >= 0 (eps = EPS_REAL - "
+                                  "j EPS_LOSS)");
+    }
+    d.model.relative_permittivity = {re, -loss};
+    d.model.kind = radar::SurfaceModel::Kind::kDielectric;
+    if (v.size() == 3) {
+      d.model.kind = radar::SurfaceModel::Kind::kCoatedPec;
+      d.model.thickness_m = parse_number(v[2], "--material");
+      if (d.model.thickness_m <= 0.0)
+        throw std::invalid_argument("--material '" + text + "': THICKNESS_M must be > 0");
+    }
+    defs.push_back(d);
+  }
+  for (const scene::Material& m : t.description.materials) {
+    auto def =
+        std::find_if(defs.begin(), defs.end(), [&](const Def& d) { return d.name == m.name; });
+    if (def != defs.end()) {
+      def->used = true;
+      t.surfaces.push_back(def->model);
+      continue;
+    }
+    const auto catalogue = radar::material_catalogue();
+    auto known = std::find_if(catalogue.begin(), catalogue.end(),
+                              [&](const radar::RadarMaterial& r) { return r.name == m.name; });
+    if (known != catalogue.end() && known->conductor) {
+      t.surfaces.push_back(radar::SurfaceModel{});
+      continue;
+    }
+    throw std::invalid_argument(mesh_path + ": material '" + m.name +
+                                "' is not a conductor of the catalogue (metal, steel, "
+                                "aluminium); define it with --material " +
+                                m.name + "=EPS_REAL,EPS_LOSS[,THICKNESS_M]");
+  }
+  for (const Def& d : defs) {
+    if (!d.used)
+      t.warnings.push_back("--material " + d.name + ": the mesh has no material of that name");
+  }
+  return t;
+}
+
+std::vector<Pol> parse_pols(std::string_view text) {
+  std::vector<Pol> out;
+  for (std::string_view p : split(text, ',')) {
+    std::string u(p);
+    std::transform(u.begin(), u.end(), u.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+    Pol pol;
+    if (u == "HH")
+      pol = Pol::kHH;
+    else if (u == "HV")
+      pol = Pol::kHV;
+    else if (u == "VH")
+      pol = Pol::kVH;
+    else if (u == "VV")
+      pol = Pol::kVV;
+    else
+      throw std::invalid_argument("--pol: '" + std::string(p) + "' is not one of HH, HV, VH, VV");
+    if (std::find(out.begin(), out.end(), pol) == out.end())
+      out.push_back(pol);
+  }
+  return out;
+}
+
+std::string_view pol_name(Pol p) noexcept {
+  switch (p) {
+    case Pol::kHH:
+      return "HH";
+    case Pol::kHV:
+      return "HV";
+    case Pol::kVH:
+      return "VH";
+    case Pol::kVV:
+      return "VV";
+  }
+  return "?";
+}
+
+std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept {
+  switch (p) {
+    case Pol::kHH:
+      return s.hh;
+    case Pol::kHV:
+      return s.hv;
+    case Pol::kVH:
+      return s.vh;
+    case Pol::kVV:
+      return s.vv;
+  }
+  return {};
+}
+
+int run_rcs_tool(const RcsToolOptions& o) {
+  if (o.freqs_hz.empty())
+    throw std::invalid_argument("give --freq-hz F or --freq-sweep-hz START:STOP:N");
+  for (double f : o.freqs_hz) {
+    if (!(f > 0.0))
+      throw std::invalid_argument("frequencies must be > 0 Hz");
+  }
+  if (o.pols.empty())
+    throw std::invalid_argument("--pol: no polarisation");
+  if (o.bistatic_theta_deg.has_value() != o.bistatic_phi_deg.has_value())
+    throw std::invalid_argument("give both --bistatic-theta-deg and --bistatic-phi-deg");
+  const LoadedTarget target = load_target(o.mesh, o.scale, o.materials);
+  const scene::Scene scene(target.description);
+  radar::RcsConfig config;
+  config.max_bounces = o.bounces;
+  config.rays_per_wavelength = o.rays_per_wavelength;
+  const radar::RcsEngine engine(scene, target.surfaces, config);
+  print_target(target, engine, o.quiet);
+  warn_electrical_size(engine, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
+
+  const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
+  std::vector<radar::ScatteringMatrix> s(nt * np * nf);  // [theta][phi][freq]
+  radar::RcsStats stats;
+  Progress progress(!o.quiet && nt * np > 4, "direction", nt * np);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::size_t it = 0; it < nt; ++it) {
+    for (std::size_t ip = 0; ip < np; ++ip) {
+      const radar::Direction tx{o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
+      const radar::Direction rx =
+          o.bistatic_theta_deg
+              ? radar::Direction{*o.bistatic_theta_deg * kDegToRad, *o.bistatic_phi_deg * kDegToRad}
+              : tx;
+      engine.compute(tx, rx, o.freqs_hz,
+                     std::span<radar::ScatteringMatrix>(s.data() + (it * np + ip) * nf, nf), stats);
+      progress.update(it * np + ip + 1);
+    }
+  }
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  {
+    File f(open_or_throw(o.out_csv));
+    std::fprintf(f.get(), "freq_hz,theta_deg,phi_deg");
+    for (Pol p : o.pols) {
+      const std::string n(pol_name(p));
+      std::fprintf(f.get(), ",rcs_%s_dbsm,re_%s,im_%s", n.c_str(), n.c_str(), n.c_str());
+    }
+    std::fputc('\n', f.get());
+    for (std::size_t it = 0; it < nt; ++it) {
+      for (std::size_t ip = 0; ip < np; ++ip) {
+        for (std::size_t k = 0; k < nf; ++k) {
+          const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
+          std::fprintf(f.get(), "%.10g,%.10g,%.10g", o.freqs_hz[k], o.theta_deg[it], o.phi_deg[ip]);
+          for (Pol p : o.pols) {
+            const std::complex<double> a = component(m, p);
+            std::fprintf(f.get(), ",%.6f,%.9e,%.9e", radar::dbsm(a), a.real(), a.imag());
+          }
+          std::fputc('\n', f.get());
+        }
+      }
+    }
+    if (std::ferror(f.get()))
+      throw std::runtime_error(o.out_csv + ": write failed");
+  }
+
+  // Fluctuation statistics over a sliding aspect window of the swept angle.
+  const bool sweep_theta = nt > 1, sweep_phi = np > 1;
+  std::string stats_path;
+  if (o.window_deg > 0.0) {
+    if (!sweep_theta && !sweep_phi)
+      throw std::invalid_argument("--window-deg needs a sweep in theta or phi");
+    stats_path = o.stats_csv.empty() ? sibling(o.out_csv, "_stats.csv").string() : o.stats_csv;
+    File f(open_or_throw(stats_path));
+    std::fprintf(f.get(), "freq_hz,theta_deg,phi_deg");
+    for (Pol p : o.pols) {
+      const std::string n(pol_name(p));
+      std::fprintf(f.get(), ",mean_%s_dbsm,median_%s_dbsm,p10_%s_dbsm,p90_%s_dbsm,std_%s_db",
+                   n.c_str(), n.c_str(), n.c_str(), n.c_str(), n.c_str());
+    }
+    std::fputc('\n', f.get());
+    const std::size_t n_swept = sweep_theta ? nt : np, n_fixed = sweep_theta ? np : nt;
+    std::vector<double> angles(n_swept), sigma(n_swept);
+    for (std::size_t i = 0; i < n_swept; ++i)
+      angles[i] = (sweep_theta ? o.theta_deg[i] : o.phi_deg[i]) * kDegToRad;
+    for (std::size_t j = 0; j < n_fixed; ++j) {
+      for (std::size_t k = 0; k < nf; ++k) {
+        std::vector<std::vector<radar::FluctuationStats>> per_pol;
+        for (Pol p : o.pols) {
+          for (std::size_t i = 0; i < n_swept; ++i) {
+            const std::size_t it = sweep_theta ? i : j, ip = sweep_theta ? j : i;
+            sigma[i] = std::norm(component(s[(it * np + ip) * nf + k], p));
+          }
+          per_pol.push_back(
+              radar::sliding_window_stats(angles, sigma, 0.5 * o.window_deg * kDegToRad));
+        }
+        for (std::size_t i = 0; i < n_swept; ++i) {
+          const std::size_t it = sweep_theta ? i : j, ip = sweep_theta ? j : i;
+          std::fprintf(f.get(), "%.10g,%.10g,%.10g", o.freqs_hz[k], o.theta_deg[it], o.phi_deg[ip]);
+          for (const auto& st : per_pol) {
+            const radar::FluctuationStats& x = st[i];
+            std::fprintf(f.get(), ",%.4f,%.4f,%.4f,%.4f,%.4f", db_of_power(x.mean_m2),
+                         db_of_power(x.median_m2), db_of_power(x.p10_m2), db_of_power(x.p90_m2),
+                         x.std_db);
+          }
+          std::fputc('\n', f.get());
+        }
+      }
+    }
+  }
+
+  if (!o.plot_png.empty()) {
+    LineChart chart;
+    chart.y_label = "RCS [dBsm]";
+    const std::string name = std::filesystem::path(o.mesh).filename().string();
+    char title[200];
+    if (sweep_theta || sweep_phi) {
+      chart.x_label = sweep_theta ? "theta [deg]" : "phi [deg]";
+      std::snprintf(title, sizeof title, "%s: RCS at %.4g GHz%s, %s = %g deg", name.c_str(),
+                    o.freqs_hz[0] / 1e9, o.bistatic_theta_deg ? " (bistatic)" : "",
+                    sweep_theta ? "phi" : "theta", sweep_theta ? o.phi_deg[0] : o.theta_deg[0]);
+    } else {
+      chart.x_label = "frequency [GHz]";
+      std::snprintf(title, sizeof title, "%s: RCS at theta %g deg, phi %g deg", name.c_str(),
+                    o.theta_deg[0], o.phi_deg[0]);
+    }
+    chart.title = title;
+    for (Pol p : o.pols) {
+      Series ser;
+      ser.label = std::string(pol_name(p));
+      if (sweep_theta || sweep_phi) {
+        const std::size_t n = sweep_theta ? nt : np;
+        for (std::size_t i = 0; i < n; ++i) {
+          const std::size_t it = sweep_theta ? i : 0, ip = sweep_theta ? 0 : i;
+          ser.x.push_back(sweep_theta ? o.theta_deg[i] : o.phi_deg[i]);
+          ser.y.push_back(radar::dbsm(component(s[(it * np + ip) * nf], p)));
+        }
+      } else {
+        for (std::size_t k = 0; k < nf; ++k) {
+          ser.x.push_back(o.freqs_hz[k] / 1e9);
+          ser.y.push_back(radar::dbsm(component(s[k], p)));
+        }
+      }
+      chart.series.push_back(std::move(ser));
+    }
+    // Keep 60 dB under the peak: deep nulls would squash the pattern.
+    double peak = -400.0;
+    for (const Series& ser : chart.series) {
+      for (double y : ser.y)
+        peak = std::max(peak, y);
+    }
+    double low = peak;
+    for (const Series& ser : chart.series) {
+      for (double y : ser.y)
+        low = std::min(low, y);
+    }
+    chart.y_min = std::max(low, peak - 60.0);
+    write_line_chart_png(chart, o.plot_png);
+  }
+
+  if (!o.quiet) {
+    std::printf(
+        "%zu directions x %zu frequencies in %.2f s: %llu lit facets, %llu shadowed, %llu rays, "
+        "%llu multi-bounce paths\n",
+        nt * np, nf, elapsed_s, static_cast<unsigned long long>(stats.facets_lit),
+        static_cast<unsigned long long>(stats.facets_shadowed),
+        static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths));
+    std::printf("wrote %s", o.out_csv.c_str());
+    if (!stats_path.empty())
+      std::printf(", %s", stats_path.c_str());
+    if (!o.plot_png.empty())
+      std::printf(", %s", o.plot_png.c_str());
+    std::printf("\n");
+  }
+  return 0;
+}
+
+int run_profile_tool(const ProfileToolOptions& o) {
+  const std::size_t nf = o.freqs_hz.size();
+  if (nf < 2)
+    throw std::invalid_argument("a range profile needs --freq-sweep-hz START:STOP:N with N >= 2");
+  const double df = (o.freqs_hz.back() - o.freqs_hz.front()) / static_cast<double>(nf - 1);
+  if (!(df > 0.0) || !(o.freqs_hz.front() > 0.0))
+    throw std::invalid_argument("--freq-sweep-hz: frequencies must be positive and increasing");
+  const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size();
+  if (nt > 1 && np > 1)
+    throw std::invalid_argument("sweep theta or phi, not both (ISAR uses one angle)");
+  const auto window = radar::window_from_name(o.window);
+  if (!window)
+    throw std::invalid_argument("--window: '" + o.window +
+                                "' is not none, hann, hamming or taylor");
+  if (o.oversample < 1 || o.oversample > 64)
+    throw std::invalid_argument("--oversample must be in 1..64");
+  const LoadedTarget target = load_target(o.mesh, o.scale, o.materials);
+  const scene::Scene scene(target.description);
+  radar::RcsConfig config;
+  config.max_bounces = o.bounces;
+  config.rays_per_wavelength = o.rays_per_wavelength;
+  const radar::RcsEngine engine(scene, target.surfaces, config);
+  print_target(target, engine, o.quiet);
+  warn_electrical_size(engine, o.freqs_hz.front(), o.quiet);
+
+  const std::size_t na = nt * np;
+  std::vector<radar::ScatteringMatrix> s(na * nf);
+  radar::RcsStats stats;
+  Progress progress(!o.quiet && na > 4, "angle", na);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::size_t a = 0; a < na; ++a) {
+    const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
+    const radar::Direction dir{o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
+    engine.compute(dir, dir, o.freqs_hz, std::span<radar::ScatteringMatrix>(s.data() + a * nf, nf),
+                   stats);
+    progress.update(a + 1);
+  }
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  const radar::FrequencyGrid grid{o.freqs_hz.front(), df, nf};
+  std::vector<std::complex<double>> samples(na * nf);
+  for (std::size_t i = 0; i < na * nf; ++i)
+    samples[i] = component(s[i], o.pol);
+  std::vector<radar::RangeProfile> profiles;
+  for (std::size_t a = 0; a < na; ++a) {
+    profiles.push_back(
+        radar::range_profile(std::span<const std::complex<double>>(samples.data() + a * nf, nf),
+                             grid, *window, o.oversample));
+  }
+  {
+    File f(open_or_throw(o.out_csv));
+    std::fprintf(f.get(), "theta_deg,phi_deg,range_m,amplitude_dbsm,re_m,im_m\n");
+    for (std::size_t a = 0; a < na; ++a) {
+      const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
+      const radar::RangeProfile& p = profiles[a];
+      for (std::size_t i = 0; i < p.range_m.size(); ++i) {
+        std::fprintf(f.get(), "%.10g,%.10g,%.6f,%.4f,%.9e,%.9e\n", o.theta_deg[it], o.phi_deg[ip],
+                     p.range_m[i], radar::dbsm(p.amplitude_m[i]), p.amplitude_m[i].real(),
+                     p.amplitude_m[i].imag());
+      }
+    }
+  }
+  const radar::RangeProfile& centre = profiles[na / 2];
+  const std::string name = std::filesystem::path(o.mesh).filename().string();
+  if (!o.plot_png.empty()) {
+    LineChart chart;
+    char title[200];
+    std::snprintf(title, sizeof title,
+                  "%s: %s range profile, %.4g-%.4g GHz, %s window, resolution %.3g m", name.c_str(),
+                  std::string(pol_name(o.pol)).c_str(), o.freqs_hz.front() / 1e9,
+                  o.freqs_hz.back() / 1e9, o.window.c_str(), centre.resolution_m);
+    chart.title = title;
+    chart.x_label = "range from the target origin [m], + away from the radar";
+    chart.y_label = "|profile| [dBsm]";
+    Series ser;
+    ser.label = std::string(pol_name(o.pol));
+    double peak = -400.0;
+    for (std::size_t i = 0; i < centre.range_m.size(); ++i) {
+      ser.x.push_back(centre.range_m[i]);
+      ser.y.push_back(radar::dbsm(centre.amplitude_m[i]));
+      peak = std::max(peak, ser.y.back());
+    }
+    chart.series.push_back(std::move(ser));
+    chart.y_min = peak - o.dynamic_range_db;
+    chart.y_max = peak + 3.0;
+    write_line_chart_png(chart, o.plot_png);
+  }
+  std::string isar_csv, isar_png;
+  double cross_res = 0.0;
+  if (na > 1) {
+    std::vector<double> angles(na);
+    for (std::size_t a = 0; a < na; ++a)
+      angles[a] = (nt > 1 ? o.theta_deg[a] : o.phi_deg[a]) * kDegToRad;
+    double step = (angles.back() - angles.front()) / static_cast<double>(na - 1);
+    std::vector<std::complex<double>> ordered = samples;
+    if (step < 0.0) {  // descending sweep: image it in ascending angle
+      step = -step;
+      for (std::size_t a = 0; a < na; ++a) {
+        std::copy_n(samples.begin() + static_cast<std::ptrdiff_t>((na - 1 - a) * nf), nf,
+                    ordered.begin() + static_cast<std::ptrdiff_t>(a * nf));
+      }
+    }
+    const radar::IsarImage img = radar::isar_image(ordered, grid, step, na, *window, o.oversample);
+    cross_res = img.cross_range_resolution_m;
+    isar_csv = o.isar_csv.empty() ? sibling(o.out_csv, "_isar.csv").string() : o.isar_csv;
+    File f(open_or_throw(isar_csv));
+    std::fprintf(f.get(), "cross_range_m,range_m,amplitude_dbsm\n");
+    double peak = -400.0;
+    std::vector<double> values(img.pixels_m.size());
+    for (std::size_t i = 0; i < img.pixels_m.size(); ++i) {
+      values[i] = radar::dbsm(img.pixels_m[i]);
+      peak = std::max(peak, values[i]);
+    }
+    for (std::size_t r = 0; r < img.cross_range_m.size(); ++r) {
+      for (std::size_t c = 0; c < img.range_m.size(); ++c) {
+        std::fprintf(f.get(), "%.6f,%.6f,%.4f\n", img.cross_range_m[r], img.range_m[c],
+                     values[r * img.range_m.size() + c]);
+      }
+    }
+    isar_png = o.isar_png;
+    if (isar_png.empty() && !o.plot_png.empty())
+      isar_png = sibling(o.plot_png, "_isar.png").string();
+    if (!isar_png.empty()) {
+      Heatmap m;
+      char title[200];
+      std::snprintf(title, sizeof title, "%s: ISAR (%s), resolution %.3g m x %.3g m", name.c_str(),
+                    std::string(pol_name(o.pol)).c_str(), img.range_resolution_m,
+                    img.cross_range_resolution_m);
+      m.title = title;
+      m.x_label = "range [m]";
+      m.y_label = "cross-range [m]";
+      m.value_label = "dBsm";
+      m.x = img.range_m;
+      m.y = img.cross_range_m;
+      m.values = std::move(values);
+      m.value_max = peak;
+      m.value_range = o.dynamic_range_db;
+      write_heatmap_png(m, isar_png);
+    }
+  }
+  if (!o.quiet) {
+    std::printf("%zu angle(s) x %zu frequencies in %.2f s (%llu multi-bounce paths)\n", na, nf,
+                elapsed_s, static_cast<unsigned long long>(stats.paths));
+    std::printf(
+        "range resolution c/2B = %.4g m, sample spacing %.4g m, unambiguous window %.4g m\n",
+        centre.resolution_m, centre.bin_m, centre.unambiguous_m);
+    if (na > 1)
+      std::printf("cross-range resolution lambda_c/(2 Theta) = %.4g m\n", cross_res);
+    std::printf("wrote %s", o.out_csv.c_str());
+    for (const std::string& p : {o.plot_png, isar_csv, isar_png}) {
+      if (!p.empty())
+        std::printf(", %s", p.c_str());
+    }
+    std::printf("\n");
+  }
+  return 0;
+}
+
+}  // namespace radar_emu::emulator

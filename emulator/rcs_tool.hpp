@@ -1,0 +1,81 @@
+#pragma once
+// `radar-emu rcs` and `radar-emu profile`: the offline RCS tools on the PO + SBR engine
+// (radar/em/rcs.hpp). Loading, option checking, sweeps with progress, CSV and PNG outputs.
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "radar/em/rcs.hpp"
+#include "scene/scene.hpp"
+
+namespace radar_emu::emulator {
+
+/// "X" (one value) or "START:STOP:N" (N >= 1 values, both ends included). Throws
+/// std::invalid_argument naming `option` for anything else (non-numbers, N < 1, N > 1e6, NaN).
+[[nodiscard]] std::vector<double> parse_sweep(std::string_view text, std::string_view option);
+
+/// A target mesh with radar surfaces for every material it names.
+struct LoadedTarget {
+  scene::SceneDescription description;
+  std::vector<radar::SurfaceModel> surfaces;  ///< per material
+  std::vector<std::string> warnings;          ///< from the loader, for the user
+};
+
+/// Loads a glTF, OBJ or STL mesh (by extension; `scale` converts file units to metres) and maps
+/// its materials: catalogue conductors (metal, steel, aluminium) are PEC; others need a
+/// definition "NAME=EPS_REAL,EPS_LOSS" (dielectric half-space, eps = EPS_REAL - j EPS_LOSS) or
+/// "NAME=EPS_REAL,EPS_LOSS,THICKNESS_M" (that layer on a PEC). Throws std::runtime_error or
+/// std::invalid_argument with the file, material and what is expected.
+[[nodiscard]] LoadedTarget load_target(const std::string& mesh_path, double scale,
+                                       const std::vector<std::string>& material_definitions);
+
+enum class Pol { kHH, kHV, kVH, kVV };
+/// "HH,VV" -> {kHH, kVV}; receive letter first. Throws std::invalid_argument.
+[[nodiscard]] std::vector<Pol> parse_pols(std::string_view text);
+[[nodiscard]] std::string_view pol_name(Pol p) noexcept;
+[[nodiscard]] std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept;
+
+struct RcsToolOptions {
+  std::string mesh;
+  double scale = 1.0;
+  std::vector<std::string> materials;
+  std::vector<double> freqs_hz;
+  std::vector<double> theta_deg{0.0}, phi_deg{0.0};
+  std::vector<Pol> pols{Pol::kHH, Pol::kVV};
+  int bounces = 3;
+  double rays_per_wavelength = 4.0;
+  std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
+  std::string out_csv = "rcs.csv";
+  std::string plot_png;     ///< empty: no plot
+  double window_deg = 0.0;  ///< > 0: fluctuation statistics over +-window/2 of the swept angle
+  std::string stats_csv;    ///< where they go (default: next to out_csv, *_stats.csv)
+  bool quiet = false;
+};
+/// Runs the sweep and writes the outputs; prints a summary (and progress on long sweeps) unless
+/// quiet. Returns the process exit status. Throws on bad input (with context).
+int run_rcs_tool(const RcsToolOptions& options);
+
+struct ProfileToolOptions {
+  std::string mesh;
+  double scale = 1.0;
+  std::vector<std::string> materials;
+  std::vector<double> freqs_hz;                      ///< uniformly spaced, >= 2
+  std::vector<double> theta_deg{0.0}, phi_deg{0.0};  ///< several in one of them: ISAR
+  Pol pol = Pol::kVV;
+  int bounces = 3;
+  double rays_per_wavelength = 4.0;
+  std::string window = "hann";
+  std::size_t oversample = 4;
+  double dynamic_range_db = 50.0;  ///< plots
+  std::string out_csv = "profile.csv";
+  std::string plot_png;  ///< range profile(s)
+  std::string isar_csv;  ///< with an angle sweep (default: next to out_csv, *_isar.csv)
+  std::string isar_png;
+  bool quiet = false;
+};
+int run_profile_tool(const ProfileToolOptions& options);
+
+}  // namespace radar_emu::emulator

@@ -1,0 +1,186 @@
+#pragma once
+// Radar cross section of a faceted target by physical optics plus shooting and bouncing rays
+// (Ling, Chou & Lee, "Shooting and bouncing rays: calculating the RCS of an arbitrarily shaped
+// cavity", IEEE TAP 37(2), 1989), fully polarimetric, monostatic or bistatic, over any set of
+// frequencies from one trace.
+//
+//   bounce 1   The exact PO integral over every lit facet (radar/em/facet_po.hpp): no ray-density
+//              error. A facet is lit when the wave meets it (both sides of a facet can be lit:
+//              sheets such as plates are two-sided) and the ray from its centroid toward the
+//              transmitter (and, bistatic, toward the receiver) is not occluded.
+//   bounce 2+  A grid of parallel ray tubes (the incident plane wave, `rays_per_wavelength` along
+//              each axis at the highest frequency) is traced by geometrical optics; the field is
+//              carried through every reflection with its polarisation (PEC: R_perp = -1,
+//              R_par = +1; dielectric and coated surfaces: Fresnel coefficients); at every hit
+//              after the first the tube's footprint radiates by PO toward the receiver when the
+//              receiver sees the hit point. The first hit of each tube radiates nothing (bounce 1
+//              is the facets' job).
+//   sweeps     Facet geometry and ray paths do not depend on frequency: they are found once per
+//              direction and every frequency is summed from them.
+//
+// Conventions (../shared/design.md): target frame = the scene's world frame, phase reference at
+// its origin; a direction (theta, phi) is where the radar sits, theta from +z, phi from +x toward
+// +y; V = theta-hat, H = phi-hat of that direction; time convention exp(+j w t). The scattering
+// amplitude S_pq (receive p, transmit q) is in metres with sigma_pq = |S_pq|^2 [m^2]:
+//   S = sqrt(4 pi) r e^{jkr} (p . E_s) / |E_i|,
+// so a PEC plate of area A at normal incidence gives S_HH = S_VV = -j k A / sqrt(pi).
+// PO radiation: E_s = -j k e^{-jkr} / (4 pi r) integral [eta J_perp - s x M] e^{jk s.r'} dS'
+// (Balanis, Advanced Engineering Electromagnetics, 2nd ed., 2012, sec. 6.7: far fields of
+// electric and magnetic surface currents), with the
+// PO currents eta J = n x (d_i x E_i + d_r x E_r), M = (E_i + E_r) x n of the local reflection
+// (J = 2 n x H_i, M = 0 on a PEC).
+// Offline product code: allocates, uses TBB worker threads; not for the real-time frame path.
+
+#include <array>
+#include <complex>
+#include <cstdint>
+#include <functional>
+#include <glm/glm.hpp>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "scene/scene.hpp"
+
+namespace radar_emu::radar {
+
+/// How a surface reflects.
+struct SurfaceModel {
+  enum class Kind : std::uint8_t {
+    kPec,         ///< perfect electric conductor
+    kDielectric,  ///< homogeneous half-space of relative permittivity eps
+    kCoatedPec    ///< a layer of permittivity eps and thickness_m on a PEC
+  };
+  Kind kind = Kind::kPec;
+  /// eps' - j eps'' (exp(+j w t): losses have a negative imaginary part); non-magnetic.
+  std::complex<double> relative_permittivity{1.0, 0.0};
+  double thickness_m = 0.0;  ///< coating thickness (kCoatedPec) [m]
+};
+
+/// Local reflection coefficients in the basis e_perp = unit(d_i x n), e_par = e_perp x d
+/// (incident d_i, reflected d_r): E_r = R_perp (E.e_perp) e_perp + R_par (E.e_par_i) e_par_r.
+/// In this basis a PEC has R_perp = -1, R_par = +1 at every angle.
+struct ReflectionCoefficients {
+  std::complex<double> perp{-1.0, 0.0};
+  std::complex<double> par{1.0, 0.0};
+};
+
+/// Fresnel coefficients of `surface` for a wave meeting it at cos(theta_i) = cos_incidence in
+/// (0, 1] and free-space wavenumber k [rad/m] (used by coatings only):
+/// half-space: Balanis 2012, sec. 5.3 (oblique incidence, perpendicular and parallel
+/// polarisation), non-magnetic, written in the basis above,
+///   R_perp = (cos t - sqrt(eps - sin^2 t)) / (cos t + sqrt(eps - sin^2 t)),
+///   R_par  = (eps cos t - sqrt(eps - sin^2 t)) / (eps cos t + sqrt(eps - sin^2 t));
+/// coated PEC: the single-layer (Airy) sum, Orfanidis, Electromagnetic Waves and Antennas, 2016,
+/// sec. 8.1 (single dielectric slab; oblique incidence as in ch. 7) with r_12 = -1 (perp),
+/// +1 (par): R = (r01 + r12 e^{-2 j beta d}) / (1 + r01 r12 e^{-2 j beta d}),
+/// beta = k sqrt(eps - sin^2 t).
+[[nodiscard]] ReflectionCoefficients reflection_coefficients(const SurfaceModel& surface,
+                                                             double cos_incidence,
+                                                             double wavenumber_rad_per_m) noexcept;
+
+/// Where the radar is, seen from the target (design.md).
+struct Direction {
+  double theta_rad = 0.0;  ///< from +z
+  double phi_rad = 0.0;    ///< from +x toward +y
+};
+[[nodiscard]] glm::dvec3 unit_vector(const Direction& d) noexcept;
+[[nodiscard]] glm::dvec3 theta_hat(const Direction& d) noexcept;  ///< V polarisation
+[[nodiscard]] glm::dvec3 phi_hat(const Direction& d) noexcept;    ///< H polarisation
+
+/// Scattering matrix [m], receive polarisation first: hv = receive H, transmit V.
+struct ScatteringMatrix {
+  std::complex<double> hh{0.0, 0.0}, hv{0.0, 0.0}, vh{0.0, 0.0}, vv{0.0, 0.0};
+};
+
+struct RcsConfig {
+  int max_bounces = 3;  ///< 1: facet PO only; n >= 2: ray tubes carry bounces 2..n (<= 16)
+  /// Ray tubes per wavelength along each axis of the incident wavefront, at the highest
+  /// frequency of a call. May be below 1: a tube's footprint integral is exact on flat facets,
+  /// so coarse tubes lose accuracy only at edges (check convergence by doubling it).
+  double rays_per_wavelength = 4.0;
+  /// Frequency at which coatings' (frequency-dependent) reflection coefficients are evaluated
+  /// for a sweep [Hz]; 0 = the middle of the frequencies of each call. PEC and dielectric
+  /// half-spaces do not depend on frequency.
+  double coating_reference_hz = 0.0;
+  bool shadowing = true;                ///< occlusion tests for facets and ray-path exits
+  std::uint64_t max_rays = 50'000'000;  ///< per call; more is an error (say so, don't stall)
+};
+
+struct RcsStats {
+  std::uint64_t facets_lit = 0;
+  std::uint64_t facets_shadowed = 0;
+  std::uint64_t facets_edge_on = 0;  ///< |cos theta_i| < 1e-12: contribute nothing
+  std::uint64_t rays = 0;
+  std::uint64_t ray_hits = 0;
+  std::uint64_t paths = 0;          ///< tube exits radiated (bounces >= 2)
+  std::uint64_t grazing_stops = 0;  ///< tubes stopped at |cos theta_i| < 1e-6
+  std::uint64_t occlusion_queries = 0;
+  std::uint64_t segments = 0;  ///< intersection queries of the ray tubes (rays x bounces)
+  std::uint64_t paths_by_bounce[17] = {};  ///< [n]: exits after n bounces
+};
+
+/// One reflection of a ray tube (for tests of the GO tracer). Reported from worker threads.
+struct BounceEvent {
+  int bounce = 0;             ///< 1 = first hit
+  glm::dvec3 incident{0.0};   ///< unit propagation direction before
+  glm::dvec3 normal{0.0};     ///< unit normal on the side the ray meets
+  glm::dvec3 reflected{0.0};  ///< unit propagation direction after
+  double field_before = 0.0;  ///< |E| of the V-transmit field before and after
+  double field_after = 0.0;
+  bool pec = true;
+};
+
+/// The incident ray-tube grid of one call: ray (i, j) starts at origin_m + i du_m + j dv_m and
+/// travels along direction; each tube has cross-section |du x dv|.
+struct RayGrid {
+  glm::dvec3 origin_m{0.0}, du_m{0.0}, dv_m{0.0}, direction{0.0, 0.0, -1.0};
+  std::uint64_t cols = 0, rows = 0;
+};
+
+class RcsEngine {
+ public:
+  /// `surfaces[i]` models scene material i. Throws std::invalid_argument (bad config, size
+  /// mismatch, non-finite permittivity, negative thickness, no non-degenerate facet).
+  RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfaces, RcsConfig config);
+
+  /// Scattering matrix at every frequency in `freqs_hz` (out.size() == freqs_hz.size()) for
+  /// the transmitter in direction `tx` and the receiver in `rx` (monostatic: rx == tx).
+  /// `stats` is added to. `on_bounce` (may be null) sees every GO reflection, possibly from
+  /// several threads at once. Throws std::invalid_argument for empty/non-positive/non-finite
+  /// frequencies, mismatched sizes, or a ray grid over config.max_rays.
+  void compute(const Direction& tx, const Direction& rx, std::span<const double> freqs_hz,
+               std::span<ScatteringMatrix> out, RcsStats& stats,
+               const std::function<void(const BounceEvent&)>* on_bounce = nullptr) const;
+
+  /// The tube grid compute() shoots for a transmitter in `tx` when the highest frequency is
+  /// `max_freq_hz` (for benchmarks against raw ray casting on the same rays). Throws
+  /// std::invalid_argument when it exceeds config().max_rays.
+  [[nodiscard]] RayGrid ray_grid(const Direction& tx, double max_freq_hz) const;
+
+  [[nodiscard]] double bounding_radius_m() const noexcept { return radius_m_; }
+  [[nodiscard]] glm::dvec3 bounding_centre_m() const noexcept { return centre_m_; }
+  [[nodiscard]] std::size_t facet_count() const noexcept { return facets_.size(); }
+  [[nodiscard]] std::size_t degenerate_facets() const noexcept { return degenerate_; }
+  [[nodiscard]] const RcsConfig& config() const noexcept { return config_; }
+
+ private:
+  struct Facet {
+    glm::dvec3 v0, v1, v2, centroid, normal;
+    double area_m2;
+    std::uint16_t surface;
+  };
+  const scene::Scene* scene_;
+  std::vector<SurfaceModel> surfaces_;
+  RcsConfig config_;
+  std::vector<Facet> facets_;
+  std::size_t degenerate_ = 0;
+  glm::dvec3 centre_m_{0.0};
+  double radius_m_ = 0.0;
+  double epsilon_m_ = 0.0;  ///< ray offset, scaled with the target
+};
+
+/// sigma = |S|^2 in dBsm, floored at -400 dBsm for an exact zero.
+[[nodiscard]] double dbsm(std::complex<double> amplitude_m) noexcept;
+
+}  // namespace radar_emu::radar

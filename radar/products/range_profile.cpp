@@ -1,0 +1,226 @@
+#include "radar/products/range_profile.hpp"
+
+#include <fftw3.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "radar/constants.hpp"
+
+namespace radar_emu::radar {
+
+namespace {
+
+void require(bool ok, const std::string& what) {
+  if (!ok)
+    throw std::invalid_argument("range profile: " + what);
+}
+
+void check_grid(const FrequencyGrid& g, std::size_t samples, std::size_t oversample) {
+  require(g.count >= 2, "needs at least 2 frequencies");
+  require(std::isfinite(g.start_hz) && g.start_hz > 0.0, "start frequency must be > 0");
+  require(std::isfinite(g.step_hz) && g.step_hz > 0.0, "frequency step must be > 0");
+  require(samples == g.count, "number of samples differs from the frequency count");
+  require(oversample >= 1 && oversample <= 64, "oversample must be in 1..64");
+}
+
+// FFTW buffers and plans as RAII handles.
+struct FftwFree {
+  void operator()(fftw_complex* p) const noexcept { fftw_free(p); }
+};
+using Buffer = std::unique_ptr<fftw_complex[], FftwFree>;
+Buffer make_buffer(std::size_t n) {
+  auto* p = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * n));
+  if (p == nullptr)
+    throw std::bad_alloc();
+  std::memset(p, 0, sizeof(fftw_complex) * n);
+  return Buffer(p);
+}
+struct Plan {
+  fftw_plan p = nullptr;
+  explicit Plan(fftw_plan plan) : p(plan) {
+    if (p == nullptr)
+      throw std::runtime_error("range profile: FFTW could not plan the transform");
+  }
+  ~Plan() { fftw_destroy_plan(p); }
+  Plan(const Plan&) = delete;
+  Plan& operator=(const Plan&) = delete;
+};
+
+std::complex<double> at(const Buffer& b, std::size_t i) {
+  return {b[i][0], b[i][1]};
+}
+
+// Sample m of an M-point transform sits at signed index m - M/2 after the shift.
+std::vector<double> axis(std::size_t m, double spacing) {
+  std::vector<double> out(m);
+  for (std::size_t i = 0; i < m; ++i)
+    out[i] = (static_cast<double>(i) - static_cast<double>(m / 2)) * spacing;
+  return out;
+}
+
+}  // namespace
+
+std::optional<Window> window_from_name(std::string_view name) noexcept {
+  if (name == "none" || name == "rect" || name == "rectangular")
+    return Window::kRectangular;
+  if (name == "hann")
+    return Window::kHann;
+  if (name == "hamming")
+    return Window::kHamming;
+  if (name == "taylor")
+    return Window::kTaylor;
+  return std::nullopt;
+}
+
+std::vector<double> window_samples(Window window, std::size_t n) {
+  std::vector<double> w(n, 1.0);
+  if (n < 2)
+    return w;
+  const double denom = static_cast<double>(n - 1);
+  switch (window) {
+    case Window::kRectangular:
+      break;
+    case Window::kHann:  // Harris, Proc. IEEE 66(1), 1978, eq. (27a)
+      for (std::size_t i = 0; i < n; ++i)
+        w[i] = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(i) / denom);
+      break;
+    case Window::kHamming:  // Harris 1978, eq. (30b)
+      for (std::size_t i = 0; i < n; ++i)
+        w[i] = 0.54 - 0.46 * std::cos(2.0 * kPi * static_cast<double>(i) / denom);
+      break;
+    case Window::kTaylor: {
+      // Taylor weighting, nbar = 4, -35 dB (Carrara, Goodman & Majewski, Spotlight Synthetic
+      // Aperture Radar, 1995, app. D; Doerry, "Catalog of window taper functions", Sandia
+      // SAND2017-4042, sec. 2.19): w(x) = 1 + 2 sum_m F_m cos(2 pi m x), x in [-1/2, 1/2].
+      constexpr int nbar = 4;
+      const double eta = std::pow(10.0, 35.0 / 20.0);
+      const double a = std::acosh(eta) / kPi;
+      const double sigma2 = nbar * nbar / (a * a + (nbar - 0.5) * (nbar - 0.5));
+      double f[nbar] = {};
+      for (int m = 1; m < nbar; ++m) {
+        double num = 1.0, den = 1.0;
+        for (int k = 1; k < nbar; ++k) {
+          num *= 1.0 - m * m / (sigma2 * (a * a + (k - 0.5) * (k - 0.5)));
+          if (k != m)
+            den *= 1.0 - static_cast<double>(m * m) / static_cast<double>(k * k);
+        }
+        f[m] = ((m + 1) % 2 == 0 ? 0.5 : -0.5) * num / den;
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const double x = (static_cast<double>(i) - 0.5 * denom) / static_cast<double>(n);
+        double v = 1.0;
+        for (int m = 1; m < nbar; ++m)
+          v += 2.0 * f[m] * std::cos(2.0 * kPi * m * x);
+        w[i] = v;
+      }
+      break;
+    }
+  }
+  return w;
+}
+
+RangeProfile range_profile(std::span<const std::complex<double>> samples, const FrequencyGrid& g,
+                           Window window, std::size_t oversample) {
+  check_grid(g, samples.size(), oversample);
+  const std::size_t n = g.count, m = n * oversample;
+  const std::vector<double> w = window_samples(window, n);
+  double w_sum = 0.0;
+  for (double x : w)
+    w_sum += x;
+  Buffer buf = make_buffer(m);
+  for (std::size_t i = 0; i < n; ++i) {
+    require(std::isfinite(samples[i].real()) && std::isfinite(samples[i].imag()),
+            "sample " + std::to_string(i) + " is not finite");
+    buf[i][0] = w[i] * samples[i].real();
+    buf[i][1] = w[i] * samples[i].imag();
+  }
+  {
+    // FFTW_BACKWARD computes sum_n x_n exp(+j 2 pi n q / M): the exp(+j 2 k_n R) kernel.
+    Plan plan(
+        fftw_plan_dft_1d(static_cast<int>(m), buf.get(), buf.get(), FFTW_BACKWARD, FFTW_ESTIMATE));
+    fftw_execute(plan.p);
+  }
+  RangeProfile p;
+  p.resolution_m = kSpeedOfLight_mps / (2.0 * g.step_hz * static_cast<double>(n));
+  p.bin_m = kSpeedOfLight_mps / (2.0 * g.step_hz * static_cast<double>(m));
+  p.unambiguous_m = kSpeedOfLight_mps / (2.0 * g.step_hz);
+  p.range_m = axis(m, p.bin_m);
+  p.amplitude_m.resize(m);
+  const double k0 = 2.0 * kPi * g.start_hz / kSpeedOfLight_mps;
+  for (std::size_t i = 0; i < m; ++i) {
+    const std::size_t src = (i + m - m / 2) % m;  // signed index i - M/2, modulo M
+    const double carrier = 2.0 * k0 * p.range_m[i];
+    p.amplitude_m[i] = at(buf, src) * std::polar(1.0 / w_sum, carrier);
+  }
+  return p;
+}
+
+IsarImage isar_image(std::span<const std::complex<double>> samples, const FrequencyGrid& g,
+                     double angle_step_rad, std::size_t angle_count, Window window,
+                     std::size_t oversample) {
+  require(angle_count >= 2, "ISAR needs at least 2 angles");
+  require(std::isfinite(angle_step_rad) && angle_step_rad > 0.0,
+          "angle step must be > 0 (order the angles ascending)");
+  require(samples.size() == angle_count * g.count, "samples must be angle_count x frequency count");
+  check_grid(g, g.count, oversample);
+  const std::size_t nf = g.count, na = angle_count;
+  const std::size_t mf = nf * oversample, ma = na * oversample;
+  const std::vector<double> wf = window_samples(window, nf), wa = window_samples(window, na);
+  double w_sum = 0.0;
+  for (double a : wa) {
+    for (double f : wf)
+      w_sum += a * f;
+  }
+  Buffer buf = make_buffer(ma * mf);  // [angle][frequency]
+  for (std::size_t a = 0; a < na; ++a) {
+    for (std::size_t f = 0; f < nf; ++f) {
+      const std::complex<double> s = samples[a * nf + f];
+      require(std::isfinite(s.real()) && std::isfinite(s.imag()), "a sample is not finite");
+      buf[a * mf + f][0] = wa[a] * wf[f] * s.real();
+      buf[a * mf + f][1] = wa[a] * wf[f] * s.imag();
+    }
+  }
+  {
+    // Range: exp(+j 2 k_n R) along each row (only the na filled rows need it).
+    const int len = static_cast<int>(mf);
+    Plan rows(fftw_plan_many_dft(1, &len, static_cast<int>(na), buf.get(), nullptr, 1, len,
+                                 buf.get(), nullptr, 1, len, FFTW_BACKWARD, FFTW_ESTIMATE));
+    fftw_execute(rows.p);
+    // Cross-range: exp(-j 2 k_c dtheta_m y) along each column.
+    const int lena = static_cast<int>(ma);
+    Plan cols(fftw_plan_many_dft(1, &lena, len, buf.get(), nullptr, len, 1, buf.get(), nullptr, len,
+                                 1, FFTW_FORWARD, FFTW_ESTIMATE));
+    fftw_execute(cols.p);
+  }
+  IsarImage img;
+  const double bin_r = kSpeedOfLight_mps / (2.0 * g.step_hz * static_cast<double>(mf));
+  const double f_c = g.start_hz + 0.5 * g.step_hz * static_cast<double>(nf - 1);
+  const double k_c = 2.0 * kPi * f_c / kSpeedOfLight_mps;
+  // 2 k_c step dy ma = 2 pi.
+  const double bin_y = kPi / (k_c * angle_step_rad * static_cast<double>(ma));
+  img.range_resolution_m = kSpeedOfLight_mps / (2.0 * g.step_hz * static_cast<double>(nf));
+  img.cross_range_resolution_m =
+      kSpeedOfLight_mps / f_c / (2.0 * angle_step_rad * static_cast<double>(na));
+  img.range_m = axis(mf, bin_r);
+  img.cross_range_m = axis(ma, bin_y);
+  img.pixels_m.resize(ma * mf);
+  const double k0 = 2.0 * kPi * g.start_hz / kSpeedOfLight_mps;
+  const double centre = 0.5 * static_cast<double>(na - 1);
+  for (std::size_t r = 0; r < ma; ++r) {
+    const std::size_t src_r = (r + ma - ma / 2) % ma;
+    // The angle index m counts from the sweep's start; the model's offset is m - (M-1)/2.
+    const double shift = 2.0 * k_c * centre * angle_step_rad * img.cross_range_m[r];
+    for (std::size_t c = 0; c < mf; ++c) {
+      const std::size_t src_c = (c + mf - mf / 2) % mf;
+      const double carrier = 2.0 * k0 * img.range_m[c] + shift;
+      img.pixels_m[r * mf + c] = at(buf, src_r * mf + src_c) * std::polar(1.0 / w_sum, carrier);
+    }
+  }
+  return img;
+}
+
+}  // namespace radar_emu::radar
