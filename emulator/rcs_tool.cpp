@@ -156,7 +156,7 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".glb" || ext == ".gltf") {
-    t.description = scene::load_gltf(path);
+    t.description = scene::load_gltf(path, &t.warnings);
     if (scale != 1.0) {
       for (scene::ObjectDesc& o : t.description.objects) {
         for (glm::vec3& p : o.mesh.positions_m)
@@ -167,7 +167,7 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
   } else if (ext == ".obj" || ext == ".stl") {
     scene::MeshFileOptions options;
     options.scale = scale;
-    t.description = scene::load_mesh_file(path, options);
+    t.description = scene::load_mesh_file(path, options, &t.warnings);
   } else {
     throw std::invalid_argument(mesh_path + ": unknown mesh format '" + ext +
                                 "' (expected .glb, .gltf, .obj or .stl)");

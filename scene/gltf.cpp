@@ -18,6 +18,8 @@
 #include <string>
 #include <string_view>
 
+#include "scene/mesh_check.hpp"
+
 // tinygltf parses the JSON / GLB container and decodes buffers (data: URIs, .bin files, the GLB
 // BIN chunk). Everything below that (accessor and buffer-view ranges, strides, index values,
 // node graph) is checked here before a single byte is read: a broken file gives "FILE: reason",
@@ -461,7 +463,7 @@ tinygltf::Value number_array(std::initializer_list<double> xs) {
 
 }  // namespace
 
-SceneDescription load_gltf(const std::filesystem::path& path) {
+SceneDescription load_gltf(const std::filesystem::path& path, std::vector<std::string>* warnings) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     fail(path, "no such file");
@@ -518,6 +520,24 @@ SceneDescription load_gltf(const std::filesystem::path& path) {
   }
   if (desc.objects.empty())
     fail(path, "no triangle meshes in the scene");
+  // Degenerate triangles are dropped (a node with nothing else is dropped whole), reported
+  // with the node; open and non-manifold surfaces are reported (scene/mesh_check.hpp).
+  std::vector<ObjectDesc> kept;
+  for (ObjectDesc& o : desc.objects) {
+    const std::string source = path.string() + ": node " + o.name;
+    if (check_mesh(o.mesh).degenerate.size() == o.mesh.triangles.size()) {
+      if (warnings != nullptr)
+        warnings->push_back(source + ": every triangle is degenerate: node dropped");
+      continue;
+    }
+    std::vector<std::string> w = clean_loaded_mesh(o.mesh, source);
+    if (warnings != nullptr)
+      warnings->insert(warnings->end(), w.begin(), w.end());
+    kept.push_back(std::move(o));
+  }
+  if (kept.empty())
+    fail(path, "every triangle is degenerate");
+  desc.objects = std::move(kept);
   return desc;
 }
 

@@ -2,6 +2,8 @@
 // glTF 2.0 (.gltf / .glb) import and export through tinygltf.
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "scene/types.hpp"
 
@@ -21,8 +23,11 @@ namespace radar_emu::scene {
 /// {"radar_emu": {"anchor_deg_m": [lat, lon, h]}} when present (else 0, 0, 0).
 /// Throws std::runtime_error "FILE: reason" for anything broken or unsupported (sparse or
 /// out-of-bounds accessors, bad indices, other modes, missing materials, node cycles, required
-/// extensions); never reads out of bounds. Setup only.
-[[nodiscard]] SceneDescription load_gltf(const std::filesystem::path& path);
+/// extensions, only degenerate triangles); never reads out of bounds. Degenerate triangles are
+/// dropped and, like open or non-manifold surfaces, reported in `warnings` when it is given
+/// (scene/mesh_check.hpp). Setup only.
+[[nodiscard]] SceneDescription load_gltf(const std::filesystem::path& path,
+                                         std::vector<std::string>* warnings = nullptr);
 
 /// Writes `description` as glTF 2.0 (binary .glb when the extension is .glb, otherwise JSON with
 /// the buffer embedded as a data: URI), materials by name, static placements as node matrices,

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "scene/mesh_check.hpp"
+
 namespace radar_emu::scene {
 
 namespace {
@@ -40,6 +42,7 @@ struct Builder {
     material_index[name] = i;
     return i;
   }
+  std::vector<std::size_t> lines;  ///< source line per triangle (0: binary)
 };
 
 bool parse_double(std::string_view s, double& out) {
@@ -110,6 +113,7 @@ void load_obj(const std::filesystem::path& path, const MeshFileOptions& o, Build
       }
       for (std::size_t k = 1; k + 1 < idx.size(); ++k) {  // fan
         b.obj.mesh.triangles.push_back({idx[0], idx[k], idx[k + 1]});
+        b.lines.push_back(line_no);
         b.obj.mesh.triangle_material.push_back(b.current);
       }
     } else if (tok[0] == "usemtl") {
@@ -126,7 +130,8 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
   std::ifstream in(path, std::ios::binary);
   std::vector<char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const std::uint16_t mat = b.material(o.default_material);
-  auto add = [&](const glm::dvec3 v[3]) {
+  auto add = [&](const glm::dvec3 v[3], std::size_t line) {
+    b.lines.push_back(line);
     const auto base = static_cast<unsigned>(b.obj.mesh.positions_m.size());
     for (int k = 0; k < 3; ++k)
       b.obj.mesh.positions_m.emplace_back(v[k] * o.scale);
@@ -149,7 +154,7 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
         }
         v[k] = glm::dvec3(xyz[0], xyz[1], xyz[2]);
       }
-      add(v);
+      add(v, 0);
     }
     return;
   }
@@ -182,7 +187,7 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
     } else if (tok[0] == "endloop") {
       if (nv != 3)
         fail(path, line_no, "facet with " + std::to_string(nv) + " vertices");
-      add(v);
+      add(v, line_no);
       nv = 0;
     }
   }
@@ -190,7 +195,8 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
 
 }  // namespace
 
-SceneDescription load_mesh_file(const std::filesystem::path& path, const MeshFileOptions& o) {
+SceneDescription load_mesh_file(const std::filesystem::path& path, const MeshFileOptions& o,
+                                std::vector<std::string>* warnings) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     fail(path, 0, "no such file");
@@ -208,6 +214,9 @@ SceneDescription load_mesh_file(const std::filesystem::path& path, const MeshFil
   }
   if (b.obj.mesh.triangles.empty())
     fail(path, 0, "no triangles");
+  std::vector<std::string> w = clean_loaded_mesh(b.obj.mesh, path.string(), b.lines);
+  if (warnings != nullptr)
+    warnings->insert(warnings->end(), w.begin(), w.end());
   b.desc.objects.push_back(std::move(b.obj));
   return std::move(b.desc);
 }

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "scene/types.hpp"
 
@@ -18,9 +19,12 @@ struct MeshFileOptions {
 /// Reads an OBJ or STL file (by extension) into a one-object scene description (object named
 /// after the file stem). Polygons are fan-triangulated; OBJ indices may be negative (relative).
 /// Throws std::runtime_error "FILE:LINE: reason" (OBJ, ASCII STL) or "FILE: reason" (binary STL)
-/// for anything malformed: bad numbers, indices out of range, truncated files, no triangles.
+/// for anything malformed: bad numbers, indices out of range, truncated files, no triangles,
+/// only degenerate triangles. Degenerate triangles are dropped and, like an open or
+/// non-manifold surface, reported in `warnings` (scene/mesh_check.hpp) when it is given.
 [[nodiscard]] SceneDescription load_mesh_file(const std::filesystem::path& path,
-                                              const MeshFileOptions& options = {});
+                                              const MeshFileOptions& options = {},
+                                              std::vector<std::string>* warnings = nullptr);
 
 /// Writes one object's mesh (in its body frame) as OBJ (with usemtl groups) or binary STL, by
 /// extension. Throws std::runtime_error naming the path on failure.

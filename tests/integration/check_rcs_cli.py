@@ -5,7 +5,8 @@ closed forms of physics.md (computed here, independently of the C++ code):
     sigma = 4 pi (ab)^2 / lambda^2 cos^2(theta) sinc^2(k a sin theta) at 10 GHz, both
     polarisations, the CSV's complex amplitude consistent with its dBsm column, the plot a PNG;
   - fluctuation statistics written for a window;
-  - a range profile of a triangular trihedral peaks at its apex (range 0) with resolution c/2B.
+  - a range profile of a triangular trihedral peaks at its apex (range 0) with resolution c/2B;
+  - the small-ka warning, and a degenerate triangle reported with file, triangle and line.
 Usage: check_rcs_cli.py RADAR_EMU WORK_DIR"""
 import csv
 import math
@@ -90,6 +91,18 @@ bin_m = float(prow[1]["range_m"]) - float(prow[0]["range_m"])
 print(f"trihedral profile peak at {float(peak['range_m']):.4f} m, bin {bin_m:.4f} m")
 check(abs(float(peak["range_m"])) <= bin_m + 1e-9, "trihedral peak at its apex (+-1 bin)")
 check(f"{resolution:.4g}" in r.stdout, f"resolution c/2B = {resolution:.4g} m printed")
+
+# Electrically small target (sphere ka = 2.1 at 10 GHz): the CLI warns that PO fails there.
+sphere = os.path.join(work, "sphere.obj")
+run("scene", "target", "sphere", "--a-m", "0.01", "--facet-m", "0.001", "--out", sphere)
+r = run("rcs", "--mesh", sphere, "--freq-hz", "10e9", "--out", os.path.join(work, "s.csv"))
+check("ka = 2.1" in r.stderr and "physical optics" in r.stderr, "small-ka warning: " + r.stderr)
+# A degenerate triangle in an OBJ is reported with the file, triangle and line.
+bad = os.path.join(work, "degenerate.obj")
+with open(bad, "w") as f:
+    f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n")
+r = run("rcs", "--mesh", bad, "--freq-hz", "10e9", "--out", os.path.join(work, "d.csv"))
+check(f"{bad}: triangle 1 (line 6) is degenerate" in r.stderr, "degenerate report: " + r.stderr)
 
 if failures:
     sys.exit(f"{len(failures)} failure(s)")

@@ -1,0 +1,40 @@
+#pragma once
+// Mesh sanity at load: degenerate triangles (reported with file, triangle and line, then
+// dropped) and open or non-manifold surfaces (a warning: the RCS engine's shadowing and
+// two-sided facets assume closed bodies or deliberate sheets). Setup only.
+
+#include <cstddef>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "scene/types.hpp"
+
+namespace radar_emu::scene {
+
+struct MeshCheck {
+  std::size_t triangles = 0;
+  std::vector<std::size_t> degenerate;  ///< indices of degenerate triangles, ascending
+  /// Edges used by exactly one triangle / by more than two, after welding vertices at identical
+  /// positions (STL and many OBJ exports repeat vertices per triangle).
+  std::size_t boundary_edges = 0;
+  std::size_t non_manifold_edges = 0;
+  [[nodiscard]] bool closed() const noexcept {
+    return boundary_edges == 0 && non_manifold_edges == 0;
+  }
+};
+
+/// A triangle is degenerate when two of its indices are equal, an index is out of range, or its
+/// area is under 1e-12 of its longest edge squared (collinear or coincident vertices).
+[[nodiscard]] bool is_degenerate(const Mesh& mesh, std::size_t triangle) noexcept;
+[[nodiscard]] MeshCheck check_mesh(const Mesh& mesh);
+
+/// Drops the degenerate triangles of a freshly loaded mesh and returns the warnings, each
+/// starting with `source` (the file, or "file: node NAME"): one per degenerate triangle (its
+/// index in the file's triangle order and, when `lines` has an entry for it other than 0, its
+/// line) up to 10, then "... and N more"; one for an open mesh and one for non-manifold edges.
+/// Throws std::runtime_error "SOURCE: every triangle is degenerate" when nothing is left.
+[[nodiscard]] std::vector<std::string> clean_loaded_mesh(Mesh& mesh, const std::string& source,
+                                                         std::span<const std::size_t> lines = {});
+
+}  // namespace radar_emu::scene

@@ -1,0 +1,120 @@
+// Mesh checks at load: degenerate triangles reported with file, triangle and line and dropped;
+// open and non-manifold surfaces reported; a file of nothing but degenerate triangles refused.
+#include "scene/mesh_check.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "scene/gltf.hpp"
+#include "scene/mesh_io.hpp"
+#include "scene/targets.hpp"
+
+namespace sc = radar_emu::scene;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path tmp(const std::string& name) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "mesh_check";
+  fs::create_directories(dir);
+  return dir / name;
+}
+
+bool any_contains(const std::vector<std::string>& v, const std::string& needle) {
+  for (const std::string& s : v) {
+    if (s.find(needle) != std::string::npos)
+      return true;
+  }
+  return false;
+}
+
+TEST(MeshCheck, ClosedOpenAndNonManifold) {
+  // A closed box (every edge shared by two triangles once welded) and an open plate (4 edges).
+  const sc::Mesh box = sc::make_target({sc::TargetKind::kBox, 1, 2, 3, 0.5}).objects[0].mesh;
+  const sc::MeshCheck cb = sc::check_mesh(box);
+  EXPECT_TRUE(cb.closed());
+  EXPECT_TRUE(cb.degenerate.empty());
+  const sc::Mesh plate = sc::make_target({sc::TargetKind::kPlate, 1, 1, 1, 0}).objects[0].mesh;
+  EXPECT_EQ(sc::check_mesh(plate).boundary_edges, 4u);
+  // Three triangles on one edge: non-manifold.
+  sc::Mesh fan;
+  fan.positions_m = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  fan.triangles = {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
+  fan.triangle_material = {0, 0, 0};
+  EXPECT_EQ(sc::check_mesh(fan).non_manifold_edges, 1u);
+  // Degenerate: repeated index, collinear vertices, index out of range.
+  sc::Mesh bad = fan;
+  bad.triangles = {{0, 1, 2}, {0, 0, 1}, {0, 1, 1}};
+  bad.positions_m.push_back({2, 0, 0});  // collinear with 0 and 1
+  bad.triangles.push_back({0, 1, 5});
+  bad.triangles.push_back({0, 1, 99});
+  bad.triangle_material.assign(bad.triangles.size(), 0);
+  EXPECT_EQ(sc::check_mesh(bad).degenerate, (std::vector<std::size_t>{1, 2, 3, 4}));
+}
+
+TEST(MeshCheck, ObjDegenerateTriangleIsReportedWithFileTriangleAndLineThenDropped) {
+  const fs::path p = tmp("degenerate.obj");
+  std::ofstream(p) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\n"
+                   << "f 1 2 3\n"   // line 5: triangle 0, fine
+                   << "f 1 2 4\n";  // line 6: triangle 1, collinear
+  std::vector<std::string> warnings;
+  const sc::SceneDescription d = sc::load_mesh_file(p, {}, &warnings);
+  EXPECT_EQ(d.objects[0].mesh.triangles.size(), 1u);
+  EXPECT_TRUE(any_contains(warnings, p.string() + ": triangle 1 (line 6) is degenerate"))
+      << (warnings.empty() ? "" : warnings[0]);
+  EXPECT_TRUE(any_contains(warnings, "open mesh: 3 boundary edges"));
+  // Without a warnings vector the load still succeeds silently.
+  EXPECT_EQ(sc::load_mesh_file(p).objects[0].mesh.triangles.size(), 1u);
+}
+
+TEST(MeshCheck, ManyDegenerateTrianglesAreSummarised) {
+  const fs::path p = tmp("many.obj");
+  {
+    std::ofstream f(p);
+    f << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\n";
+    for (int i = 0; i < 15; ++i)
+      f << "f 1 2 4\n";
+  }
+  std::vector<std::string> warnings;
+  (void)sc::load_mesh_file(p, {}, &warnings);
+  EXPECT_TRUE(any_contains(warnings, "... and 5 more degenerate triangles dropped"));
+}
+
+TEST(MeshCheck, OnlyDegenerateTrianglesIsAnErrorNamingTheFile) {
+  const fs::path p = tmp("flat.obj");
+  std::ofstream(p) << "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n";
+  try {
+    (void)sc::load_mesh_file(p);
+    FAIL() << "expected an error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(p.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("degenerate"), std::string::npos) << e.what();
+  }
+}
+
+TEST(MeshCheck, BinaryStlIsWeldedSoAClosedBoxIsClosed) {
+  const sc::SceneDescription box = sc::make_target({sc::TargetKind::kBox, 1, 1, 1, 0});
+  const fs::path p = tmp("box.stl");
+  sc::write_mesh_file(box.objects[0].mesh, box.materials, p);
+  std::vector<std::string> warnings;
+  const sc::SceneDescription d = sc::load_mesh_file(p, {}, &warnings);
+  EXPECT_TRUE(sc::check_mesh(d.objects[0].mesh).closed());
+  EXPECT_TRUE(warnings.empty()) << warnings[0];
+}
+
+TEST(MeshCheck, GltfOpenMeshWarnsWithTheNode) {
+  const sc::SceneDescription plate = sc::make_target({sc::TargetKind::kPlate, 1, 1, 1, 0});
+  const fs::path p = tmp("plate.glb");
+  sc::write_gltf(plate, p);
+  std::vector<std::string> warnings;
+  (void)sc::load_gltf(p, &warnings);
+  EXPECT_TRUE(any_contains(warnings, p.string() + ": node plate: open mesh: 4 boundary edges"))
+      << (warnings.empty() ? "" : warnings[0]);
+}
+
+}  // namespace
