@@ -104,9 +104,9 @@ void BM_VehicleRangeProfile(benchmark::State& state) {
   state.counters["rms_db_vs_2x_rays"] = rms_change_db(profile_db(finer), profile_db(engine));
 }
 BENCHMARK(BM_VehicleRangeProfile)
-    ->Arg(1)
     ->Arg(2)
     ->Arg(4)
+    ->Arg(8)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -61,9 +61,9 @@ void draw_axes(Canvas& c, const Frame& f, const std::string& title, const std::s
   }
   c.line(kLeft, kTop, kLeft, kHeight - kBottom, kInk);
   c.line(kLeft, kHeight - kBottom, kWidth - kRight, kHeight - kBottom, kInk);
-  c.text(kLeft, 14, title, kInk, 2);
+  c.text(kLeft, 4, title, kInk, 2);
   c.text((kLeft + kWidth - kRight - Canvas::text_width(xl, 2)) / 2, kHeight - 28, xl, kInk, 2);
-  c.text(6, kTop - 22, yl, kInk, 2);
+  c.text(6, kTop - 20, yl, kInk, 2);
 }
 
 }  // namespace

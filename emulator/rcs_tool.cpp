@@ -503,6 +503,31 @@ int run_profile_tool(const ProfileToolOptions& o) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   const radar::FrequencyGrid grid{o.freqs_hz.front(), df, nf};
+  // Aliasing: the target must fit in the unambiguous windows (c / 2 df in range,
+  // lambda_c / (2 dtheta) in cross-range), or its far parts fold over.
+  const double extent_m = 2.0 * engine.bounding_radius_m();
+  const double range_window_m = radar::kSpeedOfLight_mps / (2.0 * df);
+  if (range_window_m < extent_m && !o.quiet) {
+    std::fprintf(stderr,
+                 "radar-emu: warning: the unambiguous range window c/(2 df) = %.3g m is smaller "
+                 "than the target (%.3g m across): its profile folds over; use a finer frequency "
+                 "step\n",
+                 range_window_m, extent_m);
+  }
+  if (na > 1 && !o.quiet) {
+    const double a0 = nt > 1 ? o.theta_deg.front() : o.phi_deg.front();
+    const double a1 = nt > 1 ? o.theta_deg.back() : o.phi_deg.back();
+    const double step_rad = std::abs(a1 - a0) / static_cast<double>(na - 1) * kDegToRad;
+    const double f_c = 0.5 * (o.freqs_hz.front() + o.freqs_hz.back());
+    const double cross_window_m = radar::kSpeedOfLight_mps / f_c / (2.0 * step_rad);
+    if (cross_window_m < extent_m) {
+      std::fprintf(stderr,
+                   "radar-emu: warning: the unambiguous cross-range window lambda/(2 dtheta) = "
+                   "%.3g m is smaller than the target (%.3g m across): the ISAR image folds over; "
+                   "use a finer angle step\n",
+                   cross_window_m, extent_m);
+    }
+  }
   std::vector<std::complex<double>> samples(na * nf);
   for (std::size_t i = 0; i < na * nf; ++i)
     samples[i] = component(s[i], o.pol);

@@ -2,10 +2,9 @@
 
 #include <algorithm>
 #include <array>
-#include <cstring>
+#include <limits>
 #include <map>
 #include <stdexcept>
-#include <unordered_map>
 
 namespace radar_emu::scene {
 
@@ -23,13 +22,22 @@ bool is_degenerate(const Mesh& m, std::size_t t) noexcept {
 MeshCheck check_mesh(const Mesh& m) {
   MeshCheck r;
   r.triangles = m.triangles.size();
-  // Weld by exact position (bit pattern of the three floats).
-  std::unordered_map<std::string, std::uint32_t> ids;
+  // Weld vertices that coincide to 1e-7 of the mesh's extent (exporters and generators reach
+  // the same corner by different float arithmetic; a point straddling a cell boundary of this
+  // quantisation stays unwelded, which can only over-report boundary edges).
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  for (const glm::vec3& p : m.positions_m) {
+    lo = glm::min(lo, glm::dvec3(p));
+    hi = glm::max(hi, glm::dvec3(p));
+  }
+  const double quantum = std::max(1e-7 * glm::length(hi - lo), 1e-30);
+  std::map<std::array<long long, 3>, std::uint32_t> ids;
   std::vector<std::uint32_t> welded(m.positions_m.size());
   for (std::size_t i = 0; i < m.positions_m.size(); ++i) {
-    std::string key(sizeof(glm::vec3), '\0');
-    std::memcpy(key.data(), &m.positions_m[i], sizeof(glm::vec3));
-    welded[i] = ids.emplace(std::move(key), static_cast<std::uint32_t>(ids.size())).first->second;
+    const glm::dvec3 q = glm::round((glm::dvec3(m.positions_m[i]) - lo) / quantum);
+    const std::array<long long, 3> key{static_cast<long long>(q.x), static_cast<long long>(q.y),
+                                       static_cast<long long>(q.z)};
+    welded[i] = ids.emplace(key, static_cast<std::uint32_t>(ids.size())).first->second;
   }
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edges;
   for (std::size_t t = 0; t < m.triangles.size(); ++t) {
@@ -45,11 +53,56 @@ MeshCheck check_mesh(const Mesh& m) {
       ++edges[{std::min(a, b), std::max(a, b)}];
     }
   }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
   for (const auto& [e, count] : edges) {
     if (count == 1)
-      ++r.boundary_edges;
+      boundary.push_back(e);
     else if (count > 2)
       ++r.non_manifold_edges;
+  }
+  r.boundary_edges = boundary.size();
+  // T-junctions: a surface tessellated differently on two sides of a seam is closed even though
+  // its edges do not pair up (the long edge of one side is split by the vertices of the other).
+  // Split every boundary edge at the boundary vertices lying on it and pair the pieces; only
+  // pieces left alone are real boundary. Quadratic in the boundary: skipped beyond 5000 edges.
+  if (!boundary.empty() && boundary.size() <= 5000) {
+    std::vector<glm::dvec3> pos(ids.size());
+    for (std::size_t i = 0; i < m.positions_m.size(); ++i)
+      pos[welded[i]] = glm::dvec3(m.positions_m[i]);
+    std::vector<std::uint32_t> candidates;
+    for (const auto& [a, b] : boundary) {
+      candidates.push_back(a);
+      candidates.push_back(b);
+    }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> pieces;
+    std::vector<std::pair<double, std::uint32_t>> on_edge;
+    for (const auto& [a, b] : boundary) {
+      const glm::dvec3 pa = pos[a], ab = pos[b] - pos[a];
+      const double len2 = glm::dot(ab, ab);
+      on_edge.clear();
+      for (std::uint32_t v : candidates) {
+        if (v == a || v == b)
+          continue;
+        const double t = glm::dot(pos[v] - pa, ab) / len2;
+        if (t <= 1e-9 || t >= 1.0 - 1e-9)
+          continue;
+        const glm::dvec3 off = pos[v] - (pa + t * ab);
+        if (glm::dot(off, off) <= 16.0 * quantum * quantum)  // on the edge to float precision
+          on_edge.emplace_back(t, v);
+      }
+      std::sort(on_edge.begin(), on_edge.end());
+      std::uint32_t prev = a;
+      for (const auto& [t, v] : on_edge) {
+        ++pieces[{std::min(prev, v), std::max(prev, v)}];
+        prev = v;
+      }
+      ++pieces[{std::min(prev, b), std::max(prev, b)}];
+    }
+    r.boundary_edges = 0;
+    for (const auto& [e, count] : pieces)
+      r.boundary_edges += count == 1;
   }
   return r;
 }

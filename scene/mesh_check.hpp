@@ -16,7 +16,8 @@ struct MeshCheck {
   std::size_t triangles = 0;
   std::vector<std::size_t> degenerate;  ///< indices of degenerate triangles, ascending
   /// Edges used by exactly one triangle / by more than two, after welding vertices at identical
-  /// positions (STL and many OBJ exports repeat vertices per triangle).
+  /// positions (STL and many OBJ exports repeat vertices per triangle). Boundary edges that a
+  /// T-junction closes (one side of a seam split finer than the other) are not counted.
   std::size_t boundary_edges = 0;
   std::size_t non_manifold_edges = 0;
   [[nodiscard]] bool closed() const noexcept {

@@ -57,6 +57,24 @@ TEST(MeshCheck, ClosedOpenAndNonManifold) {
   EXPECT_EQ(sc::check_mesh(bad).degenerate, (std::vector<std::size_t>{1, 2, 3, 4}));
 }
 
+TEST(MeshCheck, TJunctionsCloseASeamTessellatedDifferentlyOnEachSide) {
+  // A tetrahedron-like closed surface whose edge (0,1) is split at its midpoint on one side only:
+  // the long edge has no partner, its two halves have none either, yet the surface is closed.
+  sc::Mesh m;
+  m.positions_m = {{0, 0, 0}, {2, 0, 0}, {1, 2, 0}, {1, 1, 2}, {1, 0, 0}};
+  m.triangles = {{0, 2, 1}, {0, 4, 3}, {4, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+  m.triangle_material.assign(m.triangles.size(), 0);
+  EXPECT_TRUE(sc::check_mesh(m).closed()) << sc::check_mesh(m).boundary_edges;
+  // Removing one face opens it again: its three edges are boundary.
+  m.triangles.pop_back();
+  m.triangle_material.pop_back();
+  EXPECT_EQ(sc::check_mesh(m).boundary_edges, 3u);
+  // The generated vehicle (parts tessellated at different densities) is closed.
+  EXPECT_TRUE(
+      sc::check_mesh(sc::make_target({sc::TargetKind::kVehicle, 7, 3.5, 2.5, 0}).objects[0].mesh)
+          .closed());
+}
+
 TEST(MeshCheck, ObjDegenerateTriangleIsReportedWithFileTriangleAndLineThenDropped) {
   const fs::path p = tmp("degenerate.obj");
   std::ofstream(p) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\n"
