@@ -16,6 +16,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <vector>
 
 #include "radar/constants.hpp"
@@ -182,22 +183,13 @@ void BM_EmbreeRawThroughput(benchmark::State& state) {
   RTCScene rs = rtcNewScene(device);
   const scene::Mesh& mesh = v.desc.objects[0].mesh;
   RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
-                                                         RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                                         mesh.positions_m.size()));
-  for (std::size_t i = 0; i < mesh.positions_m.size(); ++i) {
-    vb[3 * i] = mesh.positions_m[i].x;
-    vb[3 * i + 1] = mesh.positions_m[i].y;
-    vb[3 * i + 2] = mesh.positions_m[i].z;
-  }
-  auto* ib = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
-                                                            RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                                            mesh.triangles.size()));
-  for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
-    ib[3 * i] = mesh.triangles[i].x;
-    ib[3 * i + 1] = mesh.triangles[i].y;
-    ib[3 * i + 2] = mesh.triangles[i].z;
-  }
+  // glm::vec3 and glm::uvec3 are three packed 4-byte values: Embree's FLOAT3 / UINT3 layouts.
+  std::memcpy(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                      sizeof(glm::vec3), mesh.positions_m.size()),
+              mesh.positions_m.data(), mesh.positions_m.size() * sizeof(glm::vec3));
+  std::memcpy(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                      sizeof(glm::uvec3), mesh.triangles.size()),
+              mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
   rtcCommitGeometry(geom);
   rtcAttachGeometry(rs, geom);
   rtcReleaseGeometry(geom);

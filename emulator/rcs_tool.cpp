@@ -120,6 +120,28 @@ void print_target(const LoadedTarget& t, const radar::RcsEngine& e, bool quiet) 
               e.facet_count(), e.degenerate_facets(), e.bounding_radius_m());
 }
 
+// The target as both tools set it up: loaded, built, with the engine over it (in place: the
+// engine keeps a pointer to the scene), and the loader's and the method's warnings printed.
+struct ToolTarget {
+  LoadedTarget loaded;
+  scene::Scene scene;
+  radar::RcsEngine engine;
+  ToolTarget(const std::string& mesh, double scale, const std::vector<std::string>& materials,
+             int bounces, double rays_per_wavelength, double min_freq_hz, bool quiet)
+      : loaded(load_target(mesh, scale, materials)),
+        scene(loaded.description),
+        engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength)) {
+    print_target(loaded, engine, quiet);
+    warn_electrical_size(engine, min_freq_hz, quiet);
+  }
+  static radar::RcsConfig config(int bounces, double rays_per_wavelength) {
+    radar::RcsConfig c;
+    c.max_bounces = bounces;
+    c.rays_per_wavelength = rays_per_wavelength;
+    return c;
+  }
+};
+
 }  // namespace
 
 std::vector<double> parse_sweep(std::string_view text, std::string_view option) {
@@ -297,14 +319,9 @@ int run_rcs_tool(const RcsToolOptions& o) {
     throw std::invalid_argument("--pol: no polarisation");
   if (o.bistatic_theta_deg.has_value() != o.bistatic_phi_deg.has_value())
     throw std::invalid_argument("give both --bistatic-theta-deg and --bistatic-phi-deg");
-  const LoadedTarget target = load_target(o.mesh, o.scale, o.materials);
-  const scene::Scene scene(target.description);
-  radar::RcsConfig config;
-  config.max_bounces = o.bounces;
-  config.rays_per_wavelength = o.rays_per_wavelength;
-  const radar::RcsEngine engine(scene, target.surfaces, config);
-  print_target(target, engine, o.quiet);
-  warn_electrical_size(engine, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
+  const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength,
+                          *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
+  const radar::RcsEngine& engine = target.engine;
 
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
   std::vector<radar::ScatteringMatrix> s(nt * np * nf);  // [theta][phi][freq]
@@ -478,14 +495,9 @@ int run_profile_tool(const ProfileToolOptions& o) {
                                 "' is not none, hann, hamming or taylor");
   if (o.oversample < 1 || o.oversample > 64)
     throw std::invalid_argument("--oversample must be in 1..64");
-  const LoadedTarget target = load_target(o.mesh, o.scale, o.materials);
-  const scene::Scene scene(target.description);
-  radar::RcsConfig config;
-  config.max_bounces = o.bounces;
-  config.rays_per_wavelength = o.rays_per_wavelength;
-  const radar::RcsEngine engine(scene, target.surfaces, config);
-  print_target(target, engine, o.quiet);
-  warn_electrical_size(engine, o.freqs_hz.front(), o.quiet);
+  const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength,
+                          o.freqs_hz.front(), o.quiet);
+  const radar::RcsEngine& engine = target.engine;
 
   const std::size_t na = nt * np;
   std::vector<radar::ScatteringMatrix> s(na * nf);

@@ -49,26 +49,6 @@ void add_patch(Mesh& m, glm::dvec3 origin, glm::dvec3 u, glm::dvec3 v, int nu, i
   m.triangle_material.resize(m.triangles.size(), 0);
 }
 
-// Right isosceles triangle (0, u, v) subdivided into n^2 similar triangles, normal u x v.
-void add_triangle(Mesh& m, glm::dvec3 u, glm::dvec3 v, int n) {
-  auto p = [&](int i, int j) {
-    return glm::vec3(u * (static_cast<double>(i) / n) + v * (static_cast<double>(j) / n));
-  };
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i + j < n; ++i) {
-      auto base = static_cast<unsigned>(m.positions_m.size());
-      m.positions_m.insert(m.positions_m.end(), {p(i, j), p(i + 1, j), p(i, j + 1)});
-      m.triangles.push_back({base, base + 1, base + 2});
-      if (i + j + 1 < n) {
-        base = static_cast<unsigned>(m.positions_m.size());
-        m.positions_m.insert(m.positions_m.end(), {p(i + 1, j), p(i + 1, j + 1), p(i, j + 1)});
-        m.triangles.push_back({base, base + 1, base + 2});
-      }
-    }
-  }
-  m.triangle_material.resize(m.triangles.size(), 0);
-}
-
 // Triangle (p0, p1, p2) split into n^2 similar triangles, normal along (p1-p0) x (p2-p0).
 void add_tri(Mesh& m, glm::dvec3 p0, glm::dvec3 p1, glm::dvec3 p2, int n) {
   auto p = [&](int i, int j) {
@@ -296,9 +276,9 @@ SceneDescription make_target(const TargetSpec& t) {
     }
     case TargetKind::kTrihedralTriangular: {
       const int n = divisions(a, f);
-      add_triangle(m, {a, 0, 0}, {0, a, 0}, n);
-      add_triangle(m, {0, a, 0}, {0, 0, a}, n);
-      add_triangle(m, {0, 0, a}, {a, 0, 0}, n);
+      add_tri(m, {0, 0, 0}, {a, 0, 0}, {0, a, 0}, n);
+      add_tri(m, {0, 0, 0}, {0, a, 0}, {0, 0, a}, n);
+      add_tri(m, {0, 0, 0}, {0, 0, a}, {a, 0, 0}, n);
       break;
     }
     case TargetKind::kSphere: {
