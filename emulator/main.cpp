@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "emulator/atten_tool.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
@@ -244,6 +245,23 @@ int main(int argc, char** argv) {
   profile->add_option("--isar-out", prof_opt.isar_csv, "ISAR CSV (default *_isar.csv)");
   profile->add_option("--isar-plot", prof_opt.isar_png, "ISAR PNG (default *_isar.png)");
 
+  CLI::App* atten = app.add_subcommand(
+      "atten", "Specific attenuation of gases, rain and fog vs frequency (ITU-R P.676/838/840)");
+  emu::AttenToolOptions atten_opt;
+  std::string atten_freq;
+  atten->add_option("--freq-hz", atten_freq, "Frequency [Hz]: F or START:STOP:N")->required();
+  atten->add_option("--pressure-hpa", atten_opt.dry_pressure_hpa,
+                    "Dry-air pressure [hPa] (default 1013.25)");
+  atten->add_option("--temp-c", atten_opt.temperature_c, "Temperature [C] (default 15)");
+  atten->add_option("--rho-gm3", atten_opt.water_vapour_gm3,
+                    "Water-vapour density [g/m^3] (default 7.5)");
+  atten->add_option("--rain-mmh", atten_opt.rain_mm_per_h, "Rain rate [mm/h] (default 0)");
+  atten->add_option("--fog-gm3", atten_opt.fog_gm3,
+                    "Fog or cloud liquid water [g/m^3] (default 0)");
+  atten->add_option("--out", atten_opt.out_csv, "CSV output (default atten.csv)");
+  atten->add_option("--plot", atten_opt.plot_png, "PNG chart");
+  atten->add_flag("-q,--quiet", atten_opt.quiet, "No summary");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -266,6 +284,10 @@ int main(int argc, char** argv) {
         rcs_opt.bistatic_phi_deg = bistatic_phi;
       }
       return emu::run_rcs_tool(rcs_opt);
+    }
+    if (atten->parsed()) {
+      atten_opt.freqs_hz = emu::parse_sweep(atten_freq, "--freq-hz");
+      return emu::run_atten_tool(atten_opt);
     }
     if (profile->parsed()) {
       prof_opt.freqs_hz = frequencies(prof_text);
