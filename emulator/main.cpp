@@ -13,6 +13,8 @@
 #include "emulator/closed_loop.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
+#include "emulator/sigma0_tool.hpp"
+#include "radar/clutter/terrain.hpp"
 #include "scene/gltf.hpp"
 #include "scene/mesh_io.hpp"
 #include "scene/targets.hpp"
@@ -246,7 +248,9 @@ int main(int argc, char** argv) {
   profile->add_option("--isar-plot", prof_opt.isar_png, "ISAR PNG (default *_isar.png)");
 
   CLI::App* atten = app.add_subcommand(
-      "atten", "Specific attenuation of gases, rain and fog vs frequency (ITU-R P.676/838/840)");
+      "atten",
+      "Specific attenuation of gases, rain, fog and woodland vs frequency (ITU-R "
+      "P.676/838/840/833)");
   emu::AttenToolOptions atten_opt;
   std::string atten_freq;
   atten->add_option("--freq-hz", atten_freq, "Frequency [Hz]: F or START:STOP:N")->required();
@@ -258,9 +262,36 @@ int main(int argc, char** argv) {
   atten->add_option("--rain-mmh", atten_opt.rain_mm_per_h, "Rain rate [mm/h] (default 0)");
   atten->add_option("--fog-gm3", atten_opt.fog_gm3,
                     "Fog or cloud liquid water [g/m^3] (default 0)");
+  atten->add_option("--veg-depth-m", atten_opt.veg_depth_m,
+                    "Woodland crossed [m] (ITU-R P.833 sec. 2, 1-30 GHz; default 0)");
+  atten->add_flag("--out-of-leaf", atten_opt.out_of_leaf, "Woodland without leaves (P.833)");
   atten->add_option("--out", atten_opt.out_csv, "CSV output (default atten.csv)");
   atten->add_option("--plot", atten_opt.plot_png, "PNG chart");
   atten->add_flag("-q,--quiet", atten_opt.quiet, "No summary");
+
+  CLI::App* sigma0 = app.add_subcommand(
+      "sigma0", "Terrain scattering coefficient vs angle (empirical, IEM, SPM, KA, RT, total)");
+  emu::Sigma0ToolOptions s0_opt;
+  std::string s0_theta = "0:85:86", s0_theta_s, s0_eps;
+  sigma0->add_option("--material", s0_opt.material,
+                     "Catalogue material: " + radar_emu::radar::clutter::terrain_material_names());
+  sigma0->add_option("--eps-r", s0_eps, "Custom surface permittivity RE,IM (eps = RE - j IM)");
+  sigma0->add_option("--rms-height-m", s0_opt.rms_height_m, "Custom surface rms height s [m]");
+  sigma0->add_option("--corr-length-m", s0_opt.corr_length_m, "Custom correlation length l [m]");
+  sigma0->add_option("--corr", s0_opt.correlation,
+                     "Correlation function: gaussian, exponential (default), xpower");
+  sigma0->add_option("--x-power", s0_opt.x_power, "Exponent of the x-power function (default 1.5)");
+  sigma0->add_option("--freq-hz", s0_opt.freq_hz, "Frequency [Hz]")->required();
+  sigma0->add_option("--model", s0_opt.model,
+                     "empirical, iem, spm, ka, rt or total (surface + volume; default)");
+  sigma0->add_option("--theta-deg", s0_theta, "Incidence angles A:B:N [deg] (default 0:85:86)");
+  sigma0->add_option("--theta-s-deg", s0_theta_s, "Bistatic scattering angles A:B:N [deg]");
+  sigma0->add_option("--phi-s-deg", s0_opt.phi_s_deg,
+                     "Bistatic azimuth from the plane of incidence [deg] (0: forward, 180: back)");
+  sigma0->add_option("--pol", s0_opt.pols, "Polarisations, of HH,VV,HV,VH (default HH,VV)");
+  sigma0->add_option("--out", s0_opt.out_csv, "CSV output (default sigma0.csv)");
+  sigma0->add_option("--plot", s0_opt.plot_png, "PNG chart");
+  sigma0->add_flag("-q,--quiet", s0_opt.quiet, "No summary");
 
   try {
     app.parse(argc, argv);
@@ -284,6 +315,17 @@ int main(int argc, char** argv) {
         rcs_opt.bistatic_phi_deg = bistatic_phi;
       }
       return emu::run_rcs_tool(rcs_opt);
+    }
+    if (sigma0->parsed()) {
+      s0_opt.theta_deg = emu::parse_sweep(s0_theta, "--theta-deg");
+      if (!s0_theta_s.empty())
+        s0_opt.theta_s_deg = emu::parse_sweep(s0_theta_s, "--theta-s-deg");
+      if (!s0_eps.empty()) {
+        const auto parts = emu::parse_pair(s0_eps, "--eps-r");
+        s0_opt.eps_real = parts.first;
+        s0_opt.eps_loss = parts.second;
+      }
+      return emu::run_sigma0_tool(s0_opt);
     }
     if (atten->parsed()) {
       atten_opt.freqs_hz = emu::parse_sweep(atten_freq, "--freq-hz");

@@ -144,6 +144,14 @@ struct ToolTarget {
 
 }  // namespace
 
+std::pair<double, double> parse_pair(std::string_view text, std::string_view option) {
+  const auto parts = split(text, ',');
+  if (parts.size() != 2)
+    throw std::invalid_argument(std::string(option) + ": expected two numbers A,B (got '" +
+                                std::string(text) + "')");
+  return {parse_number(parts[0], option), parse_number(parts[1], option)};
+}
+
 std::vector<double> parse_sweep(std::string_view text, std::string_view option) {
   const auto parts = split(text, ':');
   if (parts.size() == 1)

@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "radar/em/rcs.hpp"
@@ -16,6 +17,9 @@ namespace radar_emu::emulator {
 /// "X" (one value) or "START:STOP:N" (N >= 1 values, both ends included). Throws
 /// std::invalid_argument naming `option` for anything else (non-numbers, N < 1, N > 1e6, NaN).
 [[nodiscard]] std::vector<double> parse_sweep(std::string_view text, std::string_view option);
+
+/// "A,B" -> {A, B}, finite numbers; throws std::invalid_argument naming `option`.
+[[nodiscard]] std::pair<double, double> parse_pair(std::string_view text, std::string_view option);
 
 /// A target mesh with radar surfaces for every material it names.
 struct LoadedTarget {

@@ -16,6 +16,7 @@ using glm::dvec3;
 
 constexpr double kGrazingLimit_rad = 70.0 * kPi / 180.0;
 constexpr int kMaxSeriesTerms = 2000;
+constexpr double kGeometricalOpticsLambda = 100.0;  // (k s (cos t + cos t_s))^2
 
 double wavenumber(double carrier_hz) {
   return 2.0 * kPi * carrier_hz / kSpeedOfLight_mps;
@@ -259,8 +260,8 @@ void validate(const SurfaceParams& surface, double carrier_hz) {
   if (eps.imag() > 0.0)
     fail("relative permittivity must be eps' - j eps'' with eps'' >= 0 (a gain is not a surface)");
   const double ks = wavenumber(carrier_hz) * r.rms_height_m;
-  if (ks > 20.0)
-    fail("ks = " + std::to_string(ks) + " is beyond 20, where no surface model here applies");
+  if (ks > 1000.0)
+    fail("ks = " + std::to_string(ks) + " is beyond 1000: not a surface at this wavelength");
 }
 
 SurfaceScatter spm(const SurfaceParams& surface, double carrier_hz, const Geometry& g) noexcept {
@@ -352,6 +353,14 @@ SurfaceScatter iem(const SurfaceParams& surface, double carrier_hz, const Geomet
   if (k * s > 3.0)
     out.invalid |= kIemTooRough;
   const bool backscatter = g.is_backscatter();
+  if (std::pow(k * s * (f.ci + f.cs), 2) > kGeometricalOpticsLambda) {
+    // Far beyond the IEM's domain (ks cos > 5): its Kirchhoff term dominates, the transition
+    // coefficient is R(iota) and the series tends to geometrical optics, which is evaluated
+    // directly (the series would need thousands of terms).
+    SurfaceScatter go = kirchhoff(surface, carrier_hz, g);
+    go.invalid |= out.invalid;
+    return go;
+  }
 
   const dvec3 q = f.ks - f.ki;
   const double q2 = glm::dot(q, q);
@@ -511,6 +520,7 @@ SurfaceScatter rt_total(const VolumeLayer& layer, const SurfaceParams& ground, d
     const double cs = std::max(std::cos(g.theta_s_rad), 1e-6);
     const double y2 =
         std::exp(-layer.extinction_np_per_m * layer.thickness_m * (1.0 / ci + 1.0 / cs));
+    const double gh = out.coherent_hh, gv = out.coherent_vv;  // ground reflectivity G
     out.incoherent.hh *= y2;
     out.incoherent.vv *= y2;
     out.incoherent.hv *= y2;
@@ -523,7 +533,6 @@ SurfaceScatter rt_total(const VolumeLayer& layer, const SurfaceParams& ground, d
       // G the ground's coherent reflectivity.
       const double a = layer.albedo;
       const double kappa_s = a * layer.extinction_np_per_m;
-      const double gh = out.coherent_hh / y2, gv = out.coherent_vv / y2;
       auto ground_volume = [&](double refl) {
         return 0.75 * a * ci * (1.0 - y2) * refl * refl * y2 +
                6.0 * kappa_s * layer.thickness_m * refl * y2;

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <complex>
 #include <stdexcept>
 
 namespace radar_emu::radar {
@@ -222,8 +223,8 @@ double rain_specific_attenuation_db_per_km(double freq_hz, double rain_mm_per_h,
   return c.k * std::pow(rain_mm_per_h, c.alpha);
 }
 
-double liquid_water_coefficient(double freq_hz, double temperature_k) {
-  const double f = ghz_in(freq_hz, 1e-3, 200.0, "ITU-R P.840");
+std::complex<double> water_permittivity(double freq_hz, double temperature_k) {
+  const double f = ghz_in(freq_hz, 1e-3, 1000.0, "ITU-R P.840 water permittivity");
   require(std::isfinite(temperature_k) && temperature_k >= 233.0 && temperature_k <= 323.0,
           "ITU-R P.840: temperature must be in 233-323 K (liquid water)");
   // Double-Debye model of the permittivity of water, eqs. (4)-(9).
@@ -237,6 +238,13 @@ double liquid_water_coefficient(double freq_hz, double temperature_k) {
                         f * (eps1 - eps2) / (fs * (1.0 + (f / fs) * (f / fs)));
   const double eps_re = (eps0 - eps1) / (1.0 + (f / fp) * (f / fp)) +
                         (eps1 - eps2) / (1.0 + (f / fs) * (f / fs)) + eps2;
+  return {eps_re, -eps_im};
+}
+
+double liquid_water_coefficient(double freq_hz, double temperature_k) {
+  const double f = ghz_in(freq_hz, 1e-3, 200.0, "ITU-R P.840");
+  const std::complex<double> eps = water_permittivity(freq_hz, temperature_k);
+  const double eps_re = eps.real(), eps_im = -eps.imag();
   const double eta = (2.0 + eps_re) / eps_im;       // eq. (3)
   return 0.819 * f / (eps_im * (1.0 + eta * eta));  // eq. (2)
 }
@@ -246,6 +254,36 @@ double cloud_fog_specific_attenuation_db_per_km(double freq_hz, double liquid_wa
   require(std::isfinite(liquid_water_gm3) && liquid_water_gm3 >= 0.0 && liquid_water_gm3 <= 5.0,
           "ITU-R P.840: liquid water density must be in 0-5 g/m^3");
   return liquid_water_coefficient(freq_hz, temperature_k) * liquid_water_gm3;
+}
+
+}  // namespace radar_emu::radar
+
+namespace radar_emu::radar {
+
+namespace {
+void require_woodland_band(double freq_hz) {
+  if (!(freq_hz >= 1e9 && freq_hz <= 30e9))
+    throw std::invalid_argument("ITU-R P.833: woodland attenuation is given for 1-30 GHz (got " +
+                                std::to_string(freq_hz * 1e-9) + " GHz)");
+}
+}  // namespace
+
+double woodland_excess_attenuation_db(double specific_db_per_m, double max_db, double depth_m) {
+  if (!(specific_db_per_m >= 0.0) || !(max_db > 0.0) || !(depth_m >= 0.0) ||
+      !std::isfinite(depth_m))
+    throw std::invalid_argument("ITU-R P.833: need gamma >= 0, A_m > 0 and a finite depth >= 0");
+  return max_db * -std::expm1(-depth_m * specific_db_per_m / max_db);  // eq. (1)
+}
+
+double woodland_specific_attenuation_db_per_m(double freq_hz, bool in_leaf) {
+  require_woodland_band(freq_hz);
+  const double in_leaf_db_per_m = 0.19 * std::pow(freq_hz * 1e-9, 1.02);  // Figure 2 reading
+  return in_leaf ? in_leaf_db_per_m : in_leaf_db_per_m / 1.2;
+}
+
+double woodland_max_attenuation_db(double freq_hz) {
+  require_woodland_band(freq_hz);
+  return 1.15 * std::pow(freq_hz * 1e-6, 0.43);  // eq. (2), Mulhouse parameters
 }
 
 }  // namespace radar_emu::radar

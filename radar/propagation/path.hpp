@@ -18,6 +18,11 @@ struct MediumSpec {
   Atmosphere atmosphere{};        ///< gases (P.676)
   double rain_mm_per_h = 0.0;     ///< P.838 (horizontal path)
   double liquid_water_gm3 = 0.0;  ///< fog or cloud (P.840), at the atmosphere's temperature
+  /// Woodland (P.833 sec. 2): the stretch is inside trees. Its attenuation saturates with the
+  /// depth crossed, so woodland segments are summed first, then A_m [1 - exp(-sum gamma d /
+  /// A_m)] is taken (eq. (1)); 1-30 GHz.
+  bool woodland = false;
+  bool in_leaf = true;
 };
 
 /// One stretch of a ray: which medium (index into the table) and how long [m].
@@ -33,7 +38,7 @@ class PathAttenuation {
   /// std::invalid_argument (with the medium's name) for inputs outside the models' ranges.
   PathAttenuation(double carrier_hz, double tilt_rad, std::span<const MediumSpec> media);
 
-  /// One-way specific attenuation of medium i [dB/m].
+  /// One-way specific attenuation of medium i [dB/m] (for woodland: gamma, before saturation).
   [[nodiscard]] double specific_db_per_m(std::uint32_t medium) const noexcept;
   /// Two-way loss [dB] over the segments: 2 sum gamma_i L_i. Unknown media and negative or
   /// non-finite lengths count as 0 (and are counted in `rejected` when given). Real-time safe.
@@ -42,6 +47,8 @@ class PathAttenuation {
 
  private:
   std::vector<double> db_per_m_;
+  std::vector<double> woodland_db_per_m_;
+  double woodland_max_db_ = 0.0;
 };
 
 }  // namespace radar_emu::radar

@@ -53,7 +53,20 @@ expect_error "theta or phi, not both" profile --mesh "$m" --freq-sweep-hz 9e9:1e
 if ! "$exe" rcs --mesh "$dir/glass.obj" --freq-hz 1e10 --material glass=6,0.2 -q --out "$dir/g.csv"; then
   echo "FAIL: rcs with a dielectric material"; fails=$((fails+1))
 fi
-for sub in "" run scene "scene target" rcs profile; do
+# sigma0 / atten: one-line errors for bad parameters and out-of-range frequencies.
+expect_error "rms height must be finite and >= 0" sigma0 --eps-r 4,0.1 --rms-height-m -0.001 --corr-length-m 0.01 --freq-hz 35e9 --out "$dir/s.csv"
+expect_error "IM is the loss" sigma0 --eps-r 4,-0.1 --rms-height-m 0.001 --corr-length-m 0.01 --freq-hz 35e9 --out "$dir/s.csv"
+expect_error "unknown material 'lava'" sigma0 --material lava --freq-hz 35e9 --out "$dir/s.csv"
+expect_error "L, S and C band" sigma0 --material grass --model empirical --freq-hz 94e9 --out "$dir/s.csv"
+expect_error "no published empirical curve for asphalt" sigma0 --material asphalt --model empirical --freq-hz 5e9 --out "$dir/s.csv"
+expect_error "perfect conductor" sigma0 --material metal --freq-hz 35e9 --out "$dir/s.csv"
+expect_error "unknown model 'mom'" sigma0 --material grass --model mom --freq-hz 35e9 --out "$dir/s.csv"
+expect_error "incidence angles must be in" sigma0 --material grass --theta-deg 0:95:3 --freq-hz 35e9 --out "$dir/s.csv"
+expect_error "beyond 1000" sigma0 --eps-r 4,0.1 --rms-height-m 1 --corr-length-m 5 --freq-hz 94e9 --out "$dir/s.csv"
+expect_error "ITU-R P.676: frequency 0.5" atten --freq-hz 0.5e9 --out "$dir/a.csv"
+expect_error "rain rate must be in" atten --freq-hz 35e9 --rain-mmh -3 --out "$dir/a.csv"
+expect_error "--veg-depth-m must be" atten --freq-hz 10e9 --veg-depth-m -2 --out "$dir/a.csv"
+for sub in "" run scene "scene target" rcs profile sigma0 atten; do
   if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
 done
 [ $fails -eq 0 ] && echo "cli errors: ok"

@@ -149,3 +149,48 @@ TEST(Itu, RejectsOutOfRangeInput) {
 
 }  // namespace
 }  // namespace radar_emu::radar
+
+namespace radar_emu::radar {
+namespace {
+
+TEST(ItuP833, WoodlandEquationAgainstTheRecommendationsTable) {
+  // P.833-9/-10 Table 1 (measured gamma and A_m, one terminal in woodland), as transcribed in
+  // docs/notes/clutter_data_sources.md sec. 1.1; eq. (1) A_ev = A_m [1 - exp(-d gamma / A_m)].
+  // 949 MHz: gamma 0.17 dB/m, A_m 26.5 dB, d = 50 m -> 26.5 (1 - exp(-8.5/26.5)) = 7.27 dB.
+  EXPECT_NEAR(woodland_excess_attenuation_db(0.17, 26.5, 50.0), 7.27, 0.005);
+  // Limits of eq. (1): gamma d for a thin stand, A_m for a deep one.
+  EXPECT_NEAR(woodland_excess_attenuation_db(0.30, 29.0, 0.01), 0.003, 1e-6);
+  EXPECT_NEAR(woodland_excess_attenuation_db(0.30, 29.0, 1e5), 29.0, 1e-9);
+  // A_m = 1.15 f_MHz^0.43 (Mulhouse) against the Table 1 values at 1852.2 and 2117.5 MHz (the
+  // rows inside the Mulhouse campaign's band): 29.0 and 34.1 dB, within 10 %.
+  EXPECT_NEAR(woodland_max_attenuation_db(1.8522e9) / 29.0, 1.0, 0.10);
+  EXPECT_NEAR(woodland_max_attenuation_db(2.1175e9) / 34.1, 1.0, 0.10);
+  // Figure 2 readings: about 0.2 dB/m at 1 GHz, 6 dB/m at 30 GHz (in leaf); out of leaf 1/1.2.
+  EXPECT_NEAR(woodland_specific_attenuation_db_per_m(1e9, true), 0.2, 0.02);
+  EXPECT_NEAR(woodland_specific_attenuation_db_per_m(30e9, true), 6.0, 0.3);
+  EXPECT_NEAR(woodland_specific_attenuation_db_per_m(10e9, false) * 1.2,
+              woodland_specific_attenuation_db_per_m(10e9, true), 1e-12);
+  EXPECT_THROW((void)woodland_specific_attenuation_db_per_m(35e9, true), std::invalid_argument);
+  EXPECT_THROW((void)woodland_excess_attenuation_db(0.2, 20.0, -1.0), std::invalid_argument);
+}
+
+TEST(PathAttenuation, WoodlandSaturatesOverTheDepthCrossed) {
+  // 10 GHz: 200 m clear air, 30 m of forest, 100 m clear, 20 m of forest: the woodland loss is
+  // eq. (1) over the 50 m crossed in all (not per stand), on top of the gases everywhere.
+  const Atmosphere air{1013.25, 288.15, 7.5};
+  MediumSpec forest{"forest", air, 0.0, 0.0};
+  forest.woodland = true;
+  const MediumSpec media[] = {{"clear", air, 0.0, 0.0}, forest};
+  const PathAttenuation table(10e9, 0.0, media);
+  const PathSegment path[] = {{0, 200.0}, {1, 30.0}, {0, 100.0}, {1, 20.0}};
+  const double gas = gaseous_specific_attenuation(10e9, air).total_db_per_km() * 1e-3;
+  const double gamma = woodland_specific_attenuation_db_per_m(10e9, true);
+  const double a_m = woodland_max_attenuation_db(10e9);
+  const double expected = 2.0 * (gas * 350.0 + woodland_excess_attenuation_db(gamma, a_m, 50.0));
+  EXPECT_NEAR(table.two_way_loss_db(path), expected, 1e-9 * expected);
+  EXPECT_LT(table.two_way_loss_db(path), 2.0 * (gas * 350.0 + gamma * 50.0));
+  EXPECT_THROW(PathAttenuation(94e9, 0.0, media), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace radar_emu::radar

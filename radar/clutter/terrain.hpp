@@ -1,0 +1,120 @@
+#pragma once
+// The terrain material catalogue and sigma0 per (material, frequency, polarisation, angle):
+// physical parameters with their sources, the empirical curves where published coefficients
+// exist, the model choice, and the table built once at setup that the frame path interpolates.
+// Pure computation; every value's source is named beside it in terrain.cpp, and the values we
+// had to assume are marked "assumed" there and in docs/validation.md.
+
+#include <array>
+#include <complex>
+#include <cstdint>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "radar/clutter/surface.hpp"
+
+namespace radar_emu::radar::clutter {
+
+enum class PermittivityModel : std::uint8_t {
+  kFixed,     ///< one measured value, used at every frequency (flagged outside its band)
+  kWater,     ///< ITU-R P.840-9 double-Debye water at 15 C
+  kSoil,      ///< Dobson et al. (1985) mixing model with P.840 free water
+  kDrySnow,   ///< Matzler's dry-snow formula (Ulaby & Long 2014, sec. 4-6)
+  kConductor  ///< perfect conductor: specular only (the SBR engine handles it)
+};
+
+/// Ulaby & Dobson (1989) handbook classes with published regression coefficients.
+enum class EmpiricalClass : std::uint8_t {
+  kNone,
+  kSoil,
+  kGrass,
+  kShortVegetation,
+  kShrubs,
+  kDrySnow,
+  kWetSnow
+};
+
+struct TerrainMaterial {
+  std::string_view name;
+  std::string_view description;
+  PermittivityModel permittivity_model = PermittivityModel::kFixed;
+  std::complex<double> fixed_permittivity{1.0, 0.0};  ///< kFixed (eps' - j eps'')
+  double moisture = 0.0;                              ///< kSoil: volumetric moisture m_v [m^3/m^3]
+  double snow_density_gcm3 = 0.0;                     ///< kDrySnow
+  std::string_view permittivity_source;
+  Roughness roughness;
+  std::string_view roughness_source;
+  bool has_volume = false;
+  VolumeLayer volume;                        ///< extinction: see volume_extinction_np_per_m()
+  bool canopy_extinction_from_p833 = false;  ///< extinction = P.833 woodland gamma
+  std::string_view volume_source;
+  EmpiricalClass empirical = EmpiricalClass::kNone;
+};
+
+[[nodiscard]] std::span<const TerrainMaterial> terrain_catalogue() noexcept;
+/// nullptr when unknown.
+[[nodiscard]] const TerrainMaterial* find_terrain_material(std::string_view name) noexcept;
+/// "asphalt, concrete, ..." for error messages and --help.
+[[nodiscard]] std::string terrain_material_names();
+
+/// Relative permittivity of the material at `freq_hz` (eps' - j eps''). Throws
+/// std::invalid_argument for a conductor.
+[[nodiscard]] std::complex<double> permittivity(const TerrainMaterial& m, double freq_hz);
+/// Extinction of the material's volume layer at `freq_hz` [Np/m].
+[[nodiscard]] double volume_extinction_np_per_m(const TerrainMaterial& m, double freq_hz);
+
+enum class Sigma0Model : std::uint8_t { kEmpirical, kIem, kSpm, kKirchhoff, kRt, kTotal };
+[[nodiscard]] const char* to_string(Sigma0Model m) noexcept;
+/// Parses empirical|iem|spm|ka|rt|total; throws std::invalid_argument otherwise.
+[[nodiscard]] Sigma0Model parse_sigma0_model(std::string_view text);
+
+/// Ulaby & Dobson regression sigma0(dB) = P1 + P2 exp(-P3 t) + P4 cos(P5 t + P6), t the
+/// incidence angle [rad]. nullopt when no published row covers (class, band, polarisation).
+struct EmpiricalRow {
+  double p[6];
+};
+[[nodiscard]] std::optional<EmpiricalRow> empirical_row(EmpiricalClass c, double freq_hz,
+                                                        int pol /*0 hh 1 vv 2 hv*/) noexcept;
+[[nodiscard]] double empirical_sigma0_db(const EmpiricalRow& row, double theta_rad) noexcept;
+
+/// Everything the models need about a surface at one frequency, resolved at setup.
+struct SurfaceSpec {
+  SurfaceParams surface;
+  bool has_volume = false;
+  VolumeLayer volume;
+  EmpiricalClass empirical = EmpiricalClass::kNone;
+  bool conductor = false;
+};
+/// Resolve a catalogue material at `freq_hz` (throws for unknown ranges with a one-line reason).
+[[nodiscard]] SurfaceSpec resolve_surface(const TerrainMaterial& m, double freq_hz);
+
+/// sigma0 of `spec` under `model` (linear; `invalid` as in surface.hpp, plus kEmpiricalOutside
+/// when the empirical curve has no row there). Setup and offline use.
+inline constexpr std::uint32_t kEmpiricalOutside = 1u << 9;
+[[nodiscard]] SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model,
+                                             double freq_hz, const Geometry& g);
+
+/// sigma0 per (material, polarisation) against incidence angle, sampled every 0.05 deg over
+/// 0-90 deg at setup; lookup() interpolates linearly (real-time safe, no allocation).
+class Sigma0Table {
+ public:
+  enum Pol : std::uint8_t { kHH = 0, kVV = 1, kHV = 2, kVH = 3 };
+  static constexpr int kSamples = 1801;
+
+  Sigma0Table() = default;
+  /// One row per spec (conductors: zero diffuse clutter).
+  Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, double freq_hz);
+
+  [[nodiscard]] std::size_t materials() const noexcept { return values_.size() / (4 * kSamples); }
+  /// Linear sigma0 of material `index` for incidence cos(theta) in [0, 1]; out-of-range index
+  /// or non-finite input gives 0.
+  [[nodiscard]] float lookup(std::size_t index, Pol pol, double cos_incidence) const noexcept;
+
+ private:
+  std::vector<float> values_;
+};
+
+}  // namespace radar_emu::radar::clutter
