@@ -434,7 +434,7 @@ SurfaceScatter iem(const SurfaceParams& surface, double carrier_hz, const Geomet
   out.incoherent.vv = copol(fk.vv, fbar_vv);
   if (backscatter) {
     // Single scattering gives no cross-polarised backscatter (Fung 1994, sec. 4); the
-    // multiple-scattering term is iem_cross_pol_backscatter().
+    // multiple-scattering term that does is not implemented yet (flagged).
     out.invalid |= kCrossPolNotModelled;
   } else {
     // Bistatic cross-polarisation: the n = 1 term from SPM (exact there) plus the Kirchhoff
@@ -450,11 +450,6 @@ SurfaceScatter iem(const SurfaceParams& surface, double carrier_hz, const Geomet
   out.coherent_hh = std::norm(at_incidence.h) * loss;
   out.coherent_vv = std::norm(at_incidence.v) * loss;
   return out;
-}
-
-double iem_cross_pol_backscatter(const SurfaceParams& /*surface*/, double /*carrier_hz*/,
-                                 double /*theta_rad*/) noexcept {
-  return 0.0;
 }
 
 Sigma0 rt_volume(const VolumeLayer& layer, const SurfaceParams& ground, double /*carrier_hz*/,

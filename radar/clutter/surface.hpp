@@ -103,11 +103,6 @@ void validate(const SurfaceParams& surface, double carrier_hz);
 [[nodiscard]] SurfaceScatter iem(const SurfaceParams& surface, double carrier_hz,
                                  const Geometry& g) noexcept;
 
-/// Cross-polarised backscatter of the IEM's multiple-scattering term (Fung 1994, ch. 4, as in
-/// Ulaby & Long 2014 sec. 10-5), by numerical quadrature: slow (milliseconds), setup only.
-[[nodiscard]] double iem_cross_pol_backscatter(const SurfaceParams& surface, double carrier_hz,
-                                               double theta_rad) noexcept;
-
 /// A layer of Rayleigh (small spherical) scatterers of thickness d, extinction kappa_e and
 /// single-scattering albedo a = kappa_s / kappa_e. Either a canopy in air above the rough ground
 /// (grass, crops, forest), or inclusions inside the ground material under its rough surface
