@@ -288,7 +288,7 @@ int main(int argc, char** argv) {
   sigma0->add_option("--theta-s-deg", s0_theta_s, "Bistatic scattering angles A:B:N [deg]");
   sigma0->add_option("--phi-s-deg", s0_opt.phi_s_deg,
                      "Bistatic azimuth from the plane of incidence [deg] (0: forward, 180: back)");
-  sigma0->add_option("--pol", s0_opt.pols, "Polarisations, of HH,VV,HV,VH (default HH,VV)");
+  sigma0->add_option("--pol", s0_opt.pols, "Polarisations, of HH,VV,HV,VH (default all four)");
   sigma0->add_option("--out", s0_opt.out_csv, "CSV output (default sigma0.csv)");
   sigma0->add_option("--plot", s0_opt.plot_png, "PNG chart");
   sigma0->add_flag("-q,--quiet", s0_opt.quiet, "No summary");

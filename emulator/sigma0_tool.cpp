@@ -172,10 +172,21 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     chart.y_label = "sigma0 [dB]";
     chart.y_min = -60.0;
     const double theta0 = rows.front().theta;
+    // In backscatter HV = VH (reciprocity): one curve, labelled HV=VH, instead of two on top of
+    // each other.
+    const bool has_hv = std::find(pols.begin(), pols.end(), Pol::kHV) != pols.end();
+    const bool has_vh = std::find(pols.begin(), pols.end(), Pol::kVH) != pols.end();
+    const bool reciprocal = !bistatic && std::all_of(rows.begin(), rows.end(), [](const Row& r) {
+      return r.s.incoherent.hv == r.s.incoherent.vh;
+    });
     for (Pol p : pols) {
+      if (p == Pol::kVH && has_hv && reciprocal)
+        continue;
+      const std::string name =
+          p == Pol::kHV && reciprocal && has_vh ? "HV=VH" : std::string(pol_name(p));
       Series inside, outside;
-      inside.label = std::string(pol_name(p));
-      outside.label = std::string(pol_name(p)) + " (invalid)";
+      inside.label = name;
+      outside.label = name + " (invalid)";
       for (const Row& r : rows) {
         if (bistatic && r.theta != theta0)
           continue;  // one incidence angle per chart

@@ -20,7 +20,7 @@ struct Sigma0ToolOptions {
   std::vector<double> theta_deg;    ///< incidence angles
   std::vector<double> theta_s_deg;  ///< bistatic scattering angles (empty: backscatter)
   double phi_s_deg = 0.0;
-  std::string pols = "HH,VV";
+  std::string pols = "HH,VV,HV,VH";
   std::string out_csv = "sigma0.csv";
   std::string plot_png;
   bool quiet = false;

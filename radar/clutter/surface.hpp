@@ -8,10 +8,14 @@
 //   KA    Kirchhoff approximation: the physical-optics series of the Kirchhoff field (the
 //         f_qp term of the IEM alone) below ks cos(theta) = 1.58, the geometrical-optics
 //         (stationary-phase) limit above it;
-//   IEM   integral-equation model, single scattering (Fung, Li & Chen 1992), with the
-//         transition reflection coefficient of Wu, Chen & Fung (2001) (the "I2EM" of Ulaby &
-//         Long 2014, sec. 10-5); Gaussian, exponential and x-power spectra; coherent and
-//         incoherent parts; bistatic;
+//   IEM   the improved integral-equation model (I2EM: Fung, Li & Chen 1992; Fung, Liu, Chen &
+//         Tsay 2002; Ulaby & Long 2014, sec. 10-3.9): single-scattering co-polarised terms with
+//         the transition reflection coefficient of Wu, Chen & Fung (2001) and Smith (1967)
+//         shadowing, the multiple-scattering cross-polarised backscatter term (Fung 1994,
+//         ch. 4; "IEMX"); Gaussian, exponential and x-power spectra; coherent and incoherent
+//         parts; bistatic (co-pol anchored to SPM at first order, cross-pol single
+//         scattering). Checked against the published I2EM/IEMX code (tests/data/
+//         iem_reference.md);
 //   RT    first-order radiative transfer in a layer of Rayleigh scatterers over the rough
 //         ground (Ulaby & Long 2014, sec. 11-2, eq. 11.23), bistatic by the same first-order
 //         solution (Ulaby, Moore & Fung 1986, vol. III, ch. 13).
@@ -71,9 +75,11 @@ enum Invalid : std::uint32_t {
   kKaNoSlope = 1u << 3,            ///< KA geometrical optics with an exponential spectrum
                                    ///< (infinite slope variance): Gaussian-equivalent slope used
   kIemTooRough = 1u << 4,          ///< IEM: ks > 3
-  kGrazing = 1u << 5,              ///< incidence or scattering beyond 70 deg: no shadowing
+  kGrazing = 1u << 5,              ///< incidence or scattering beyond 70 deg: shadowing and
+                                   ///< multiple bounces not (or, IEM, only roughly) modelled
   kSeriesTruncated = 1u << 6,      ///< spectrum series stopped before convergence
-  kCrossPolNotModelled = 1u << 7,  ///< HV/VH asked where the model gives none (see notes)
+  kCrossPolNotModelled = 1u << 7,  ///< backscatter HV/VH from a model that has none (SPM and
+                                   ///< KA first order, RT volume of spheres)
   kAlbedoHigh = 1u << 8,           ///< RT: albedo > 0.2, multiple volume scattering ignored
 };
 /// One line naming every condition set in `flags` ("valid" when none).
@@ -100,8 +106,22 @@ void validate(const SurfaceParams& surface, double carrier_hz);
                                  const Geometry& g) noexcept;
 [[nodiscard]] SurfaceScatter kirchhoff(const SurfaceParams& surface, double carrier_hz,
                                        const Geometry& g) noexcept;
-[[nodiscard]] SurfaceScatter iem(const SurfaceParams& surface, double carrier_hz,
-                                 const Geometry& g) noexcept;
+/// Where published IEM implementations differ in detail (each within the model's accuracy).
+enum class IemConventions : std::uint8_t {
+  /// The papers' equations: transition function F = 8 R(0)^2 sin^2(theta) ... (Wu, Chen &
+  /// Fung 2001; Fung & Chen 2009, p. 164) with its weight kept in [0, 1]; the cross-polarised
+  /// integral over the whole propagating spectrum (q = sqrt(1 - u^2)).
+  kPublishedEquations,
+  /// As Ulaby & Long's distributed I2EM/IEMX MATLAB code (2014, Codes 10.1/10.3): sin(theta)
+  /// in F, the weight unclamped, q = sqrt(1.0001 - u^2). For comparisons with that code.
+  kUlabyLongCode,
+};
+
+/// `cross_pol_backscatter` false skips the multiple-scattering HV/VH double integral (about
+/// 0.5 ms; HV = VH = 0 then): for callers that sample it on a coarser grid (Sigma0Table).
+[[nodiscard]] SurfaceScatter iem(const SurfaceParams& surface, double carrier_hz, const Geometry& g,
+                                 IemConventions conventions = IemConventions::kPublishedEquations,
+                                 bool cross_pol_backscatter = true) noexcept;
 
 /// A layer of Rayleigh (small spherical) scatterers of thickness d, extinction kappa_e and
 /// single-scattering albedo a = kappa_s / kappa_e. Either a canopy in air above the rough ground
@@ -125,6 +145,7 @@ struct VolumeLayer {
 /// contributions are summed up"): the ground's IEM sigma0 seen through the layer (two-way
 /// loss Y^2), the volume term, and in backscatter the ground-volume term of eq. 11.23.
 [[nodiscard]] SurfaceScatter rt_total(const VolumeLayer& layer, const SurfaceParams& ground,
-                                      double carrier_hz, const Geometry& g) noexcept;
+                                      double carrier_hz, const Geometry& g,
+                                      bool cross_pol_backscatter = true) noexcept;
 
 }  // namespace radar_emu::radar::clutter

@@ -1,5 +1,7 @@
 #include "radar/clutter/terrain.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -516,7 +518,7 @@ SurfaceSpec resolve_surface(const TerrainMaterial& m, double freq_hz) {
 }
 
 SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model, double freq_hz,
-                               const Geometry& g) {
+                               const Geometry& g, bool cross_pol_backscatter) {
   if (spec.conductor)
     return {};
   switch (model) {
@@ -542,7 +544,8 @@ SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model, doubl
       return out;
     }
     case Sigma0Model::kIem:
-      return iem(spec.surface, freq_hz, g);
+      return iem(spec.surface, freq_hz, g, IemConventions::kPublishedEquations,
+                 cross_pol_backscatter);
     case Sigma0Model::kSpm:
       return spm(spec.surface, freq_hz, g);
     case Sigma0Model::kKirchhoff:
@@ -554,24 +557,53 @@ SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model, doubl
       return out;
     }
     case Sigma0Model::kTotal:
-      return spec.has_volume ? rt_total(spec.volume, spec.surface, freq_hz, g)
-                             : iem(spec.surface, freq_hz, g);
+      return spec.has_volume
+                 ? rt_total(spec.volume, spec.surface, freq_hz, g, cross_pol_backscatter)
+                 : iem(spec.surface, freq_hz, g, IemConventions::kPublishedEquations,
+                       cross_pol_backscatter);
   }
   return {};
 }
 
 Sigma0Table::Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, double freq_hz) {
   values_.assign(specs.size() * 4 * kSamples, 0.0f);
+  // Co-polarised sigma0 at every sample. The cross-polarised backscatter (the IEM's
+  // multiple-scattering double integral, ~0.5 ms an angle) is evaluated every
+  // kCrossPolStride samples (0.5 deg) and interpolated linearly in dB in between: the curves are
+  // smooth on that scale (Terrain.Sigma0TableInterpolatesTheModels checks HV too). Angles are
+  // spread over the cores; setup only.
+  constexpr int kCrossPolStride = 10;
+  static_assert((kSamples - 1) % kCrossPolStride == 0);
+  auto theta_of = [](int i) {
+    // Sample at most 89.95 deg: the models are finite there and the table stays continuous.
+    return std::min(i * (kPi / 2.0) / (kSamples - 1), 89.95 * kPi / 180.0);
+  };
   for (std::size_t m = 0; m < specs.size(); ++m) {
-    for (int i = 0; i < kSamples; ++i) {
-      // Sample at most 89.95 deg: the models are finite there and the table stays continuous.
-      const double theta = std::min(i * (kPi / 2.0) / (kSamples - 1), 89.95 * kPi / 180.0);
+    float* row[4];
+    for (std::size_t p = 0; p < 4; ++p)
+      row[p] = values_.data() + (m * 4 + p) * kSamples;
+    tbb::parallel_for(0, kSamples, [&](int i) {
+      const bool node = i % kCrossPolStride == 0;
       const SurfaceScatter s =
-          evaluate_sigma0(specs[m], model, freq_hz, Geometry::backscatter(theta));
-      const double v[4] = {s.incoherent.hh, s.incoherent.vv, s.incoherent.hv, s.incoherent.vh};
-      for (int p = 0; p < 4; ++p)
-        values_[(m * 4 + static_cast<std::size_t>(p)) * kSamples + static_cast<std::size_t>(i)] =
-            static_cast<float>(v[p]);
+          evaluate_sigma0(specs[m], model, freq_hz, Geometry::backscatter(theta_of(i)), node);
+      const auto at = static_cast<std::size_t>(i);
+      row[kHH][at] = static_cast<float>(s.incoherent.hh);
+      row[kVV][at] = static_cast<float>(s.incoherent.vv);
+      if (node) {
+        row[kHV][at] = static_cast<float>(s.incoherent.hv);
+        row[kVH][at] = static_cast<float>(s.incoherent.vh);
+      }
+    });
+    for (std::size_t p : {std::size_t{kHV}, std::size_t{kVH}}) {
+      for (int node = 0; node + kCrossPolStride < kSamples; node += kCrossPolStride) {
+        const double a = row[p][node], b = row[p][node + kCrossPolStride];
+        for (int j = 1; j < kCrossPolStride; ++j) {
+          const double w = static_cast<double>(j) / kCrossPolStride;
+          // Geometric (dB-linear) where both ends carry power, linear otherwise.
+          const double v = (a > 0.0 && b > 0.0) ? a * std::pow(b / a, w) : a + w * (b - a);
+          row[p][node + j] = static_cast<float>(v);
+        }
+      }
     }
   }
 }

@@ -92,10 +92,12 @@ struct SurfaceSpec {
 [[nodiscard]] SurfaceSpec resolve_surface(const TerrainMaterial& m, double freq_hz);
 
 /// sigma0 of `spec` under `model` (linear; `invalid` as in surface.hpp, plus kEmpiricalOutside
-/// when the empirical curve has no row there). Setup and offline use.
+/// when the empirical curve has no row there). Setup and offline use. `cross_pol_backscatter`
+/// as in iem().
 inline constexpr std::uint32_t kEmpiricalOutside = 1u << 9;
 [[nodiscard]] SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model,
-                                             double freq_hz, const Geometry& g);
+                                             double freq_hz, const Geometry& g,
+                                             bool cross_pol_backscatter = true);
 
 /// sigma0 per (material, polarisation) against incidence angle, sampled every 0.05 deg over
 /// 0-90 deg at setup; lookup() interpolates linearly (real-time safe, no allocation).

@@ -6,7 +6,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <iostream>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "radar/clutter/speckle.hpp"
@@ -189,8 +192,14 @@ SurfaceParams surface(std::complex<double> eps, double ks, double kl, Correlatio
 
 TEST(RoughSurface, IemReducesToSpmForSmallRoughness) {
   // Acceptance: IEM within 1 dB of SPM for ks <= 0.2 (kl <= 3, SPM's own domain), backscatter
-  // and bistatic, both spectra, two permittivities.
-  double worst = 0.0;
+  // and bistatic, both spectra, two permittivities. SPM is the first-order term of the spectral
+  // series; where the second-order term is more than 10% of it (Gaussian spectra far into their
+  // tail, (ks (cos + cos_s))^2 / 2 W2(K) / W1(K) > 0.1) the IEM rightly parts from SPM and the
+  // case is counted, not compared. At ks = 0.2 and 60 deg incidence the I2EM's complementary
+  // terms of order two reach 1-2 dB, as in the published code (IemMatchesThePublishedI2em
+  // shows it there): that edge is held to 2.5 dB and printed.
+  double worst = 0.0, worst_edge = 0.0;
+  int compared = 0, beyond_first_order = 0;
   for (std::complex<double> eps : {std::complex<double>(4.0, -0.1), {15.0, -3.0}}) {
     for (Correlation c : {Correlation::kGaussian, Correlation::kExponential}) {
       for (double ks : {0.05, 0.1, 0.2}) {
@@ -199,32 +208,124 @@ TEST(RoughSurface, IemReducesToSpmForSmallRoughness) {
                {Geometry::backscatter(deg(th)), Geometry{deg(th), deg(25.0), deg(60.0)},
                 Geometry{deg(th), deg(45.0), deg(160.0)}}) {
             const SurfaceParams p = surface(eps, ks, 2.5, c, 35e9);
+            const double k = wavenumber(35e9);
+            const double kx =
+                std::sin(g.theta_s_rad) * std::cos(g.phi_s_rad) - std::sin(g.theta_i_rad);
+            const double ky = std::sin(g.theta_s_rad) * std::sin(g.phi_s_rad);
+            const double big_k = k * std::hypot(kx, ky);
+            const double lambda =
+                std::pow(ks * (std::cos(g.theta_i_rad) + std::cos(g.theta_s_rad)), 2);
+            if (0.5 * lambda * roughness_spectrum(p.roughness, 2, big_k) >
+                0.1 * roughness_spectrum(p.roughness, 1, big_k)) {
+              ++beyond_first_order;
+              continue;
+            }
+            ++compared;
             const SurfaceScatter a = iem(p, 35e9, g), b = spm(p, 35e9, g);
             for (auto [x, y] : {std::pair{a.incoherent.hh, b.incoherent.hh},
                                 std::pair{a.incoherent.vv, b.incoherent.vv}}) {
               const double d = std::abs(db(x) - db(y));
-              worst = std::max(worst, d);
-              EXPECT_LT(d, 1.0) << "eps " << eps << " ks " << ks << " theta " << th;
+              const bool edge = ks > 0.15 && th > 55.0;
+              (edge ? worst_edge : worst) = std::max(edge ? worst_edge : worst, d);
+              EXPECT_LT(d, edge ? 2.5 : 1.0)
+                  << "eps " << eps << " ks " << ks << " theta " << th << " corr "
+                  << static_cast<int>(c) << " theta_s " << g.theta_s_rad << " phi_s " << g.phi_s_rad
+                  << " iem " << db(x) << " spm " << db(y);
             }
           }
         }
       }
     }
   }
-  std::cout << "IEM vs SPM, ks <= 0.2: worst co-pol difference " << worst << " dB\n";
+  std::cout << "IEM vs SPM, ks <= 0.2: worst co-pol difference " << worst << " dB (" << worst_edge
+            << " dB at ks 0.2, 60 deg) over " << compared << " cases (" << beyond_first_order
+            << " where the second-order term exceeds 10% of the first)\n";
+  EXPECT_GT(compared, 4 * beyond_first_order);
 }
 
-TEST(RoughSurface, BistaticComplementaryFieldMeetsTheBackscatterClosedForm) {
-  // The bistatic IEM's complementary field is fixed by the SPM limit; approaching the
-  // backscatter direction it must meet Fung, Li & Chen's closed-form backscatter coefficients
-  // (where the transition coefficient is nearly R(theta), i.e. for small ks: the backscatter
-  // form carries the transition coefficient into F, the SPM anchor does not, 0.07 dB here).
-  for (double th : {10.0, 35.0, 55.0}) {
-    const SurfaceParams p = surface({6.0, -0.8}, 0.1, 2.0, Correlation::kExponential, 10e9);
-    const SurfaceScatter back = iem(p, 10e9, Geometry::backscatter(deg(th)));
-    const SurfaceScatter near = iem(p, 10e9, Geometry{deg(th), deg(th), kPi - 1e-5});
-    EXPECT_NEAR(db(near.incoherent.hh), db(back.incoherent.hh), 0.1) << th;
-    EXPECT_NEAR(db(near.incoherent.vv), db(back.incoherent.vv), 0.1) << th;
+TEST(RoughSurface, BistaticIemMeetsBackscatterContinuously) {
+  // Backscatter uses the closed forms that match the published I2EM; the bistatic directions
+  // next to it must give the same sigma0 (the first-order anchor vanishes in backscatter), for
+  // smooth and rough surfaces alike.
+  for (Correlation c : {Correlation::kGaussian, Correlation::kExponential}) {
+    for (double ks : {0.1, 0.5, 1.5}) {
+      for (double th : {10.0, 35.0, 55.0}) {
+        const SurfaceParams p = surface({6.0, -0.8}, ks, 6.0, c, 10e9);
+        const SurfaceScatter back = iem(p, 10e9, Geometry::backscatter(deg(th)));
+        const SurfaceScatter near = iem(p, 10e9, Geometry{deg(th), deg(th) + 1e-6, kPi - 1e-6});
+        EXPECT_NEAR(db(near.incoherent.hh), db(back.incoherent.hh), 0.01) << ks << " " << th;
+        EXPECT_NEAR(db(near.incoherent.vv), db(back.incoherent.vv), 0.01) << ks << " " << th;
+      }
+    }
+  }
+}
+
+struct ReferenceRow {
+  double freq_hz, eps_re, eps_im, ks, kl, theta_deg, vv_db, hh_db, hv_db;
+  Correlation correlation;
+};
+
+std::vector<ReferenceRow> read_iem_reference() {
+  const std::string path = std::string(RADAR_EMU_TEST_DATA_DIR) + "/iem_reference.csv";
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << "cannot read " << path;
+  std::vector<ReferenceRow> rows;
+  std::string line;
+  std::getline(in, line);  // header
+  while (std::getline(in, line)) {
+    std::stringstream fields(line);
+    std::string f[10];
+    for (auto& x : f)
+      std::getline(fields, x, ',');
+    rows.push_back({std::stod(f[0]), std::stod(f[1]), std::stod(f[2]), std::stod(f[3]),
+                    std::stod(f[4]), std::stod(f[6]), std::stod(f[7]), std::stod(f[8]),
+                    std::stod(f[9]),
+                    f[5] == "gaussian" ? Correlation::kGaussian : Correlation::kExponential});
+  }
+  return rows;
+}
+
+TEST(RoughSurface, IemMatchesThePublishedI2em) {
+  // Independent implementation: Ulaby & Long (2014) I2EM (co-pol, Code 10.3) and IEMX
+  // (cross-pol) MATLAB codes, run under GNU Octave at exact angles (tests/data/iem_reference.md):
+  // 720 rows, eps 4-j0.1 and 15-j3, ks 0.1-2, kl 5 and 10, Gaussian and exponential, 10-60 deg,
+  // 10/35/94 GHz (s = ks/k at each frequency). Acceptance: within 1 dB. With that code's own
+  // conventions (IemConventions::kUlabyLongCode: sin instead of sin^2 in the transition
+  // function, its weight unclamped, q = sqrt(1.0001 - u^2) in the cross-polarised integral) the
+  // two must agree to the quadrature's accuracy: the same model, term by term.
+  const std::vector<ReferenceRow> rows = read_iem_reference();
+  ASSERT_EQ(rows.size(), 720u);
+  double worst[2][3] = {};  // [conventions][vv, hh, hv]
+  for (const ReferenceRow& r : rows) {
+    const SurfaceParams p = surface({r.eps_re, -r.eps_im}, r.ks, r.kl, r.correlation, r.freq_hz);
+    for (int c = 0; c < 2; ++c) {
+      const SurfaceScatter s =
+          iem(p, r.freq_hz, Geometry::backscatter(deg(r.theta_deg)),
+              c == 0 ? IemConventions::kPublishedEquations : IemConventions::kUlabyLongCode);
+      const double d[3] = {db(s.incoherent.vv) - r.vv_db, db(s.incoherent.hh) - r.hh_db,
+                           db(s.incoherent.hv) - r.hv_db};
+      for (int q = 0; q < 3; ++q) {
+        worst[c][q] = std::max(worst[c][q], std::abs(d[q]));
+        EXPECT_LT(std::abs(d[q]), c == 0 ? 1.0 : (q == 2 ? 0.1 : 0.01))
+            << "pol " << q << " conventions " << c << " f " << r.freq_hz << " ks " << r.ks << " kl "
+            << r.kl << " theta " << r.theta_deg;
+      }
+      EXPECT_DOUBLE_EQ(s.incoherent.hv, s.incoherent.vh);  // reciprocity
+    }
+  }
+  std::cout << "IEM vs published I2EM/IEMX (720 rows), worst |difference| VV/HH/HV: " << worst[0][0]
+            << " / " << worst[0][1] << " / " << worst[0][2] << " dB; with the code's conventions "
+            << worst[1][0] << " / " << worst[1][1] << " / " << worst[1][2] << " dB\n";
+  // The published I2EM itself leaves SPM at ks 0.2, 60 deg (exponential, kl 5, eps 15-j3): the
+  // second-order complementary terms (IemReducesToSpmForSmallRoughness's edge).
+  for (const ReferenceRow& r : rows) {
+    if (r.freq_hz == 10e9 && r.ks == 0.2 && r.theta_deg == 60.0 && r.eps_re == 15.0 &&
+        r.correlation == Correlation::kExponential) {
+      const SurfaceParams p = surface({r.eps_re, -r.eps_im}, r.ks, r.kl, r.correlation, 10e9);
+      const double d = r.hh_db - db(spm(p, 10e9, Geometry::backscatter(deg(60.0))).incoherent.hh);
+      std::cout << "published I2EM minus SPM, HH, ks 0.2, 60 deg: " << d << " dB\n";
+      EXPECT_GT(d, 1.0);
+    }
   }
 }
 
@@ -455,17 +556,26 @@ TEST(Terrain, Sigma0TableInterpolatesTheModels) {
     specs.push_back(resolve_surface(*find_terrain_material(name), 94e9));
   const Sigma0Table table(specs, Sigma0Model::kTotal, 94e9);
   ASSERT_EQ(table.materials(), 3u);
-  double worst = 0.0;
+  double worst = 0.0, worst_hv = 0.0;
   for (std::size_t m = 0; m < 2; ++m) {
     for (double th = 0.013; th < 85.0; th += 1.37) {
       const SurfaceScatter s =
           evaluate_sigma0(specs[m], Sigma0Model::kTotal, 94e9, Geometry::backscatter(deg(th)));
       const double got = table.lookup(m, Sigma0Table::kVV, std::cos(deg(th)));
       worst = std::max(worst, std::abs(db(got) - db(s.incoherent.vv)));
+      // HV is sampled every 0.5 deg and interpolated in dB (its double integral is costly).
+      const double got_hv = table.lookup(m, Sigma0Table::kHV, std::cos(deg(th)));
+      if (s.incoherent.hv > 0.0)
+        worst_hv = std::max(worst_hv, std::abs(db(got_hv) - db(s.incoherent.hv)));
+      else
+        EXPECT_EQ(got_hv, 0.0f) << th;
+      EXPECT_EQ(table.lookup(m, Sigma0Table::kVH, std::cos(deg(th))), static_cast<float>(got_hv));
     }
   }
-  std::cout << "table vs direct evaluation: worst " << worst << " dB\n";
+  std::cout << "table vs direct evaluation: worst " << worst << " dB (VV), " << worst_hv
+            << " dB (HV)\n";
   EXPECT_LT(worst, 0.01);
+  EXPECT_LT(worst_hv, 0.05);
   EXPECT_EQ(table.lookup(2, Sigma0Table::kHH, 0.5), 0.0f);  // the conductor: no diffuse term
   EXPECT_EQ(table.lookup(7, Sigma0Table::kHH, 0.5), 0.0f);  // unknown material
   EXPECT_EQ(table.lookup(0, Sigma0Table::kHH, std::nan("")), 0.0f);
