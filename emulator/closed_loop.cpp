@@ -77,6 +77,14 @@ io::icd::Detection to_icd(const radar::Detection& d) noexcept {
   return o;
 }
 
+// The scenario's sensor, sized for every contribution the tracer can produce.
+radar::SensorConfig sensor_config(const Scenario& s, const radar::SbrTracer& tracer) {
+  radar::SensorConfig c = s.sensor;
+  // Up to 2^19 a frame (the tracer's worst case can be far larger); the rest is counted.
+  c.max_contributions = std::clamp<std::size_t>(tracer.max_contributions(), 1, 1u << 19);
+  return c;
+}
+
 }  // namespace
 
 struct ClosedLoop::Impl {
@@ -86,7 +94,7 @@ struct ClosedLoop::Impl {
         scene(scene_description(s)),
         enu(scene.anchor()),
         tracer(scene, s.sbr),
-        sensor(s.sensor),
+        sensor(sensor_config(s, tracer)),
         ins(bus.add_endpoint("ins", 1 << 16)),
         faulty_ep(bus.add_endpoint("faulty", 16)),
         radar_ep(bus.add_endpoint("radar", 1 << 16)),
@@ -400,15 +408,37 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                   {"contributions", r.trace.contributions},
                   {"dropped_contributions", r.trace.dropped_contributions},
                   {"grazing_skipped", r.trace.grazing_skipped}};
-  rep["sensor"] = {{"range_cell_m", m.sensor.range_cell_m()},
-                   {"doppler_cell_mps", m.sensor.doppler_cell_mps()},
-                   {"unambiguous_velocity_mps", m.sensor.unambiguous_velocity_mps()},
-                   {"azimuth_cell_deg", s.sensor.azimuth_cell_rad * kDegPerRad},
-                   {"cells_touched", r.sensor.cells_touched},
-                   {"cfar_crossings", r.sensor.cfar_crossings},
-                   {"detections", r.sensor.detections},
-                   {"truncated", r.sensor.truncated},
-                   {"out_of_grid", r.sensor.out_of_grid}};
+  const radar::Waveform& wf = s.sensor.processing.waveform;
+  rep["sensor"] = {
+      {"waveform", radar::waveform_name(wf.kind)},
+      {"range_bin_m", m.sensor.range_cell_m()},
+      {"range_resolution_m", radar::range_resolution_m(wf)},
+      {"range_bins", wf.range_bins},
+      {"swath_start_m", radar::first_range_m(wf)},
+      {"unambiguous_range_m", m.sensor.unambiguous_range_m()},
+      {"velocity_bin_mps", m.sensor.doppler_cell_mps()},
+      {"unambiguous_velocity_mps", m.sensor.unambiguous_velocity_mps()},
+      {"beams", m.sensor.antenna().beams()},
+      {"sum_beamwidth_az_deg", m.sensor.antenna().sum_beamwidth_az_rad() * kDegPerRad},
+      {"sum_beamwidth_el_deg", m.sensor.antenna().sum_beamwidth_el_rad() * kDegPerRad},
+      {"antenna_gain_db", 10.0 * std::log10(s.sensor.antenna.peak_gain)},
+      {"processing_gain_db", 10.0 * std::log10(m.sensor.processor().processing_gain())},
+      {"cfar", s.sensor.cfar.kind == radar::CfarKind::kCellAveraging ? "ca" : "os"},
+      {"cfar_training_cells", m.sensor.cfar_training_cells()},
+      {"noise_seed", s.sensor.noise_seed},
+      {"cells_processed", r.sensor.cells_touched},
+      {"cfar_crossings", r.sensor.cfar_crossings},
+      {"false_alarm_rate_upper_bound", r.sensor.cells_touched
+                                           ? static_cast<double>(r.sensor.cfar_crossings) /
+                                                 static_cast<double>(r.sensor.cells_touched)
+                                           : 0.0},
+      {"merged_across_beams", r.sensor.merged},
+      {"detections", r.sensor.detections},
+      {"truncated", r.sensor.truncated},
+      {"out_of_swath", r.sensor.out_of_grid},
+      {"hits_overflowed", r.sensor.hits_overflowed},
+      {"rejected_input", r.sensor.rejected_input},
+      {"dropped_input", r.sensor.dropped_input}};
   rep["bus"] = {{"frames_in", r.bus_frames_in},
                 {"frames_out", r.bus_frames_out},
                 {"rx_overflows", r.bus_rx_overflows},

@@ -39,8 +39,8 @@ void write_bscope_png(const RunResult& result, const Scenario& s,
                       const std::filesystem::path& path) {
   constexpr double kDeg = 180.0 / std::numbers::pi;
   BScopeLayout L;
-  L.azimuth_min_deg = s.sensor.azimuth_min_rad * kDeg;
-  L.azimuth_max_deg = s.sensor.azimuth_max_rad * kDeg;
+  L.azimuth_min_deg = s.sbr.azimuth_min_rad * kDeg;
+  L.azimuth_max_deg = s.sbr.azimuth_max_rad * kDeg;
   L.range_max_m = s.sensor.max_range_m;
   const Rgb bg{16, 20, 28}, grid{55, 62, 78}, ink{210, 215, 225};
   Canvas c(BScopeLayout::kWidth, BScopeLayout::kHeight, bg);

@@ -52,30 +52,42 @@ azimuth_min_deg = -8.0
 azimuth_max_deg = 8.0
 elevation_min_deg = -4.0
 elevation_max_deg = 4.0
-azimuth_cell_deg = 1.0      # azimuth resolution (beam positions across the field of view)
-gain_db = 45.0
+azimuth_cell_deg = 1.0      # beam spacing: the scan's beam positions across the field of view
+pattern = "gaussian"        # uniform | cosine | gaussian | table (pattern_file, CSV angle_deg,gain_db)
+azimuth_beamwidth_deg = 1.0 # one-way 3 dB, each squinted monopulse beam
+elevation_beamwidth_deg = 8.0
+monopulse = true            # amplitude-comparison sum and difference channels
+squint_fraction = 0.5       # squint of the monopulse beams, in beamwidths
+efficiency = 0.6            # gain = efficiency x 4 pi / (beamwidth_az x beamwidth_el) unless gain_db
 
 [radar]
+waveform = "pulsed_lfm"     # pulsed_lfm | fmcw
 carrier_hz = 94.0e9
-bandwidth_hz = 50.0e6       # range cell c/2B = 3.0 m
-prf_hz = 100.0e3            # chirp repetition: unambiguous velocity +-79.7 m/s
-pulses = 64                 # Doppler cell 2.49 m/s
-pulse_width_s = 10.0e-6
-tx_power_w = 20.0
+bandwidth_hz = 50.0e6       # range resolution c/2B = 3.0 m
+prf_hz = 20.0e3             # unambiguous range 7.5 km, unambiguous velocity +-15.9 m/s
+pulses = 32                 # per beam position: velocity bin 1.0 m/s; 16 beams x 1.6 ms = 25.6 ms
+pulse_width_s = 2.0e-6      # B T = 100; blind range 300 m
+tx_power_w = 500.0          # peak (4 % duty: 20 W mean)
 noise_figure_db = 5.0
 system_losses_db = 3.0
-max_range_m = 6000.0
+max_range_m = 6000.0        # swath from the blind range to here
+range_window = "hann"       # rectangular | hann | hamming | blackman | taylor
+doppler_window = "hann"
 max_bounces = 3
 terrain_ray_spacing_deg = 0.0573   # 1 mrad
 target_ray_spacing_m = 0.1
 max_rays_per_target = 200000
 
 [detector]
-cfar_training_cells = 16
-cfar_guard_cells = 4
+cfar = "ca"                 # ca | os
+cfar_training_cells = 12    # per side, along range
+cfar_guard_cells = 2
+cfar_velocity_training_cells = 0   # range-only: ground clutter is a ridge in velocity, and a 2-D
+cfar_velocity_guard_cells = 0      # window would average it with the empty velocity bins
 cfar_pfa = 1.0e-6
 min_snr_db = 13.0
 max_detections = 64
+noise_seed = 20261123       # receiver noise and clutter speckle; fixed for reproducible runs
 
 [faults]
 malformed_every_n_frames = 0  # >0: a faulty node sends a malformed CANaerospace frame this often
@@ -146,6 +158,15 @@ class TableReader {
       fail(key, os.str());
     }
     out = static_cast<Int>(v);
+  }
+
+  void boolean(std::string_view key, bool& out) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    if (!n->is_boolean())
+      fail(key, "expected true or false");
+    out = *n->value<bool>();
   }
 
   void string(std::string_view key, std::string& out) const {
@@ -252,52 +273,117 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
 
   const TableReader ant(root, "antenna", origin,
                         {"depression_deg", "azimuth_min_deg", "azimuth_max_deg",
-                         "elevation_min_deg", "elevation_max_deg", "azimuth_cell_deg", "gain_db"});
+                         "elevation_min_deg", "elevation_max_deg", "azimuth_cell_deg", "gain_db",
+                         "pattern", "pattern_file", "azimuth_beamwidth_deg",
+                         "elevation_beamwidth_deg", "monopulse", "squint_fraction", "efficiency"});
   ant.degrees("depression_deg", s.antenna_depression_rad, -90.0, 90.0);
   ant.degrees("azimuth_min_deg", s.sbr.azimuth_min_rad, -89.0, 89.0);
   ant.degrees("azimuth_max_deg", s.sbr.azimuth_max_rad, -89.0, 89.0);
   ant.degrees("elevation_min_deg", s.sbr.elevation_min_rad, -89.0, 89.0);
   ant.degrees("elevation_max_deg", s.sbr.elevation_max_rad, -89.0, 89.0);
-  ant.degrees("azimuth_cell_deg", s.sensor.azimuth_cell_rad, 0.01, 90.0);
-  ant.decibels("gain_db", s.sensor.antenna_gain, 0.0, 80.0);
+  ant.degrees("azimuth_cell_deg", s.beam_spacing_rad, 0.01, 90.0);
+  ant.degrees("azimuth_beamwidth_deg", s.azimuth_beamwidth_rad, 0.01, 60.0);
+  ant.degrees("elevation_beamwidth_deg", s.elevation_beamwidth_rad, 0.01, 60.0);
+  ant.decibels("gain_db", s.antenna_gain, 0.0, 80.0);
+  ant.number("efficiency", s.aperture_efficiency, 0.01, 1.0);
+  ant.string("pattern", s.pattern);
+  std::string pattern_file;
+  ant.string("pattern_file", pattern_file);
+  if (!pattern_file.empty())
+    s.pattern_file = pattern_file;
+  ant.boolean("monopulse", s.sensor.antenna.monopulse);
+  ant.number("squint_fraction", s.sensor.antenna.squint_fraction, 0.05, 0.95);
+  radar::PatternKind kind{};
+  if (!radar::parse_pattern_kind(s.pattern, kind))
+    ant.fail("pattern", "unknown pattern '" + s.pattern + "' (uniform, cosine, gaussian, table)");
+  if (kind == radar::PatternKind::kTable && s.pattern_file.empty())
+    ant.fail("pattern_file", "is required with pattern = \"table\"");
   if (!(s.sbr.azimuth_min_rad < s.sbr.azimuth_max_rad)) {
     ant.fail("azimuth_max_deg", "must be greater than azimuth_min_deg");
   }
   if (!(s.sbr.elevation_min_rad < s.sbr.elevation_max_rad)) {
     ant.fail("elevation_max_deg", "must be greater than elevation_min_deg");
   }
-  s.sensor.azimuth_min_rad = s.sbr.azimuth_min_rad;
-  s.sensor.azimuth_max_rad = s.sbr.azimuth_max_rad;
 
-  const TableReader rad(
-      root, "radar", origin,
-      {"carrier_hz", "bandwidth_hz", "prf_hz", "pulses", "pulse_width_s", "tx_power_w",
-       "noise_figure_db", "system_losses_db", "max_range_m", "max_bounces",
-       "terrain_ray_spacing_deg", "target_ray_spacing_m", "max_rays_per_target"});
-  rad.number("carrier_hz", s.sensor.carrier_hz, 1e8, 1e12);
-  s.sbr.carrier_hz = s.sensor.carrier_hz;
-  rad.number("bandwidth_hz", s.sensor.bandwidth_hz, 1e3, 1e10);
-  rad.number("prf_hz", s.sensor.prf_hz, 1.0, 1e8);
-  rad.integer("pulses", s.sensor.pulses, 1, 65536);
-  rad.number("pulse_width_s", s.sensor.pulse_width_s, 1e-10, 1.0);
+  radar::Waveform& w = s.sensor.processing.waveform;
+  const TableReader rad(root, "radar", origin,
+                        {"waveform",
+                         "carrier_hz",
+                         "bandwidth_hz",
+                         "prf_hz",
+                         "pulses",
+                         "pulse_width_s",
+                         "sample_rate_hz",
+                         "swath_start_m",
+                         "tx_power_w",
+                         "noise_figure_db",
+                         "system_losses_db",
+                         "max_range_m",
+                         "range_window",
+                         "doppler_window",
+                         "taylor_sidelobe_db",
+                         "taylor_nbar",
+                         "max_speed_mps",
+                         "max_bounces",
+                         "terrain_ray_spacing_deg",
+                         "target_ray_spacing_m",
+                         "max_rays_per_target"});
+  std::string waveform = radar::waveform_name(w.kind);
+  rad.string("waveform", waveform);
+  if (!radar::parse_waveform_kind(waveform, w.kind))
+    rad.fail("waveform", "unknown waveform '" + waveform + "' (pulsed_lfm, fmcw)");
+  rad.number("carrier_hz", w.carrier_hz, 1e8, 1e12);
+  s.sbr.carrier_hz = w.carrier_hz;
+  rad.number("bandwidth_hz", w.bandwidth_hz, 1e3, 1e10);
+  rad.number("prf_hz", s.prf_hz, 1.0, 1e8);
+  rad.integer("pulses", w.pulses, 1, 65536);
+  rad.number("pulse_width_s", w.pulse_width_s, 1e-10, 1.0);
+  rad.number("sample_rate_hz", w.sample_rate_hz, 0.0, 1e11);
+  rad.number("swath_start_m", s.swath_start_m, 0.0, 1e7);
   rad.number("tx_power_w", s.sensor.tx_power_w, 1e-6, 1e7);
   rad.decibels("noise_figure_db", s.sensor.noise_figure, 0.0, 30.0);
   rad.decibels("system_losses_db", s.sensor.system_losses, 0.0, 60.0);
   rad.number("max_range_m", s.sensor.max_range_m, 1.0, 1e6);
   s.sbr.max_range_m = s.sensor.max_range_m;
+  rad.number("max_speed_mps", s.sensor.processing.max_speed_mps, 1.0, 1e4);
+  for (auto [key, spec] : {std::pair{"range_window", &s.sensor.processing.range_window},
+                           std::pair{"doppler_window", &s.sensor.processing.doppler_window}}) {
+    std::string name = radar::window_name(spec->kind);
+    rad.string(key, name);
+    const auto kind_w = radar::parse_window_kind(name);
+    if (!kind_w)
+      rad.fail(key, "unknown window '" + name + "' (rectangular, hann, hamming, blackman, taylor)");
+    spec->kind = *kind_w;
+    rad.number("taylor_sidelobe_db", spec->taylor_sidelobe_db, 13.3, 120.0);
+    rad.integer("taylor_nbar", spec->taylor_nbar, 1, 63);
+  }
   rad.integer("max_bounces", s.sbr.max_bounces, 1, 16);
   rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, 1e-4, 10.0);
   rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, 1e-4, 100.0);
   rad.integer("max_rays_per_target", s.sbr.max_rays_per_target, 1, 100'000'000);
 
-  const TableReader det(
-      root, "detector", origin,
-      {"cfar_training_cells", "cfar_guard_cells", "cfar_pfa", "min_snr_db", "max_detections"});
-  det.integer("cfar_training_cells", s.sensor.cfar_training_cells, 1, 1024);
-  det.integer("cfar_guard_cells", s.sensor.cfar_guard_cells, 0, 1024);
-  det.number("cfar_pfa", s.sensor.cfar_pfa, 1e-15, 0.5);
+  radar::CfarConfig& cf = s.sensor.cfar;
+  const TableReader det(root, "detector", origin,
+                        {"cfar", "cfar_training_cells", "cfar_guard_cells",
+                         "cfar_velocity_training_cells", "cfar_velocity_guard_cells", "cfar_pfa",
+                         "os_rank", "min_snr_db", "max_detections", "noise_seed", "thermal_noise"});
+  std::string cfar = cf.kind == radar::CfarKind::kCellAveraging ? "ca" : "os";
+  det.string("cfar", cfar);
+  if (cfar != "ca" && cfar != "os")
+    det.fail("cfar", "unknown CFAR '" + cfar + "' (ca, os)");
+  cf.kind = cfar == "ca" ? radar::CfarKind::kCellAveraging : radar::CfarKind::kOrderStatistic;
+  det.integer("cfar_training_cells", cf.range_training, 0, 1024);
+  det.integer("cfar_guard_cells", cf.range_guard, 0, 1024);
+  det.integer("cfar_velocity_training_cells", cf.velocity_training, 0, 1024);
+  det.integer("cfar_velocity_guard_cells", cf.velocity_guard, 0, 1024);
+  det.number("cfar_pfa", cf.pfa, 1e-15, 0.5);
+  det.number("os_rank", cf.os_rank, 0.01, 1.0);
   det.number("min_snr_db", s.sensor.min_snr_db, -50.0, 200.0);
   det.integer("max_detections", s.sensor.max_detections, 0, 255);
+  std::int64_t seed = static_cast<std::int64_t>(s.sensor.noise_seed & 0x7fffffffffffffffull);
+  det.integer("noise_seed", seed, 0, std::numeric_limits<std::int64_t>::max());
+  s.sensor.noise_seed = static_cast<std::uint64_t>(seed);
+  det.boolean("thermal_noise", s.sensor.thermal_noise);
 
   const TableReader faults(root, "faults", origin, {"malformed_every_n_frames"});
   faults.integer("malformed_every_n_frames", s.malformed_every_n_frames, 0, 1'000'000'000);
@@ -309,12 +395,117 @@ std::string_view default_scenario_toml() noexcept {
   return kDefaultScenario;
 }
 
-Scenario parse_scenario(std::string_view toml_text, const std::string& origin) {
+namespace {
+
+// Azimuth pattern table: CSV rows "angle_deg,gain_db" (one-way gain relative to the peak), '#'
+// comments and one optional header line.
+void read_pattern_csv(const std::filesystem::path& path, const std::string& origin,
+                      radar::PatternCut& cut) {
+  std::ifstream in(path);
+  if (!in)
+    throw std::runtime_error(origin + ": [antenna] pattern_file: cannot open " + path.string());
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty() || line[0] == '#')
+      continue;
+    std::istringstream row(line);
+    double angle = 0.0, gain = 0.0;
+    char comma = 0;
+    if (!(row >> angle >> comma >> gain) || comma != ',' || !std::isfinite(angle) ||
+        !std::isfinite(gain)) {
+      if (cut.table_angle_rad.empty() && line_no == 1)
+        continue;  // header
+      throw std::runtime_error(path.string() + ":" + std::to_string(line_no) +
+                               ": expected 'angle_deg,gain_db'");
+    }
+    cut.table_angle_rad.push_back(angle * kRadPerDeg);
+    cut.table_gain_db.push_back(gain);
+  }
+}
+
+// The sensor's configuration from the scenario's edge units, once both TOML layers are read.
+void derive_sensor(Scenario& s, const std::string& origin) {
+  radar::SensorConfig& c = s.sensor;
+  radar::Waveform& w = c.processing.waveform;
+  w.pri_s = 1.0 / s.prf_hz;
+  try {
+    if (w.kind == radar::WaveformKind::kPulsedLfm) {
+      w.swath_start_m = s.swath_start_m >= 0.0 ? s.swath_start_m : radar::blind_range_m(w);
+      const double bins =
+          std::ceil((c.max_range_m - w.swath_start_m) / radar::range_bin_m(w) - 1e-9);
+      if (!(bins >= 2.0))
+        throw std::invalid_argument("max_range_m must exceed the swath start by two range bins");
+      w.range_bins = static_cast<int>(std::min(bins, 1048576.0));
+    } else if (w.sample_rate_hz > 0.0) {
+      w.range_bins = static_cast<int>(std::lround(w.pulse_width_s * w.sample_rate_hz));
+    } else {
+      w.range_bins = static_cast<int>(
+          std::min(std::ceil(c.max_range_m / radar::range_resolution_m(w) - 1e-9), 1048576.0));
+    }
+    radar::validate(w);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(origin + ": [radar] " + e.what());
+  }
+  radar::AntennaConfig& a = c.antenna;
+  radar::PatternKind kind{};
+  if (!radar::parse_pattern_kind(s.pattern, kind))
+    throw std::runtime_error(origin + ": [antenna] pattern: unknown '" + s.pattern + "'");
+  a.azimuth = {};
+  a.azimuth.kind = kind;
+  a.azimuth.beamwidth_rad =
+      s.azimuth_beamwidth_rad > 0.0 ? s.azimuth_beamwidth_rad : s.beam_spacing_rad;
+  if (kind == radar::PatternKind::kTable)
+    read_pattern_csv(s.pattern_file, origin, a.azimuth);
+  a.elevation = {};
+  a.elevation.kind = kind == radar::PatternKind::kTable ? radar::PatternKind::kGaussian : kind;
+  a.elevation.beamwidth_rad = s.elevation_beamwidth_rad > 0.0
+                                  ? s.elevation_beamwidth_rad
+                                  : s.sbr.elevation_max_rad - s.sbr.elevation_min_rad;
+  const double field = s.sbr.azimuth_max_rad - s.sbr.azimuth_min_rad;
+  const auto beams =
+      static_cast<std::size_t>(std::max(1.0, std::round(field / s.beam_spacing_rad)));
+  const double spacing = field / static_cast<double>(beams);
+  a.beam_azimuth_rad.clear();
+  for (std::size_t i = 0; i < beams; ++i)
+    a.beam_azimuth_rad.push_back(s.sbr.azimuth_min_rad + (static_cast<double>(i) + 0.5) * spacing);
+  a.beam_elevation_rad = 0.5 * (s.sbr.elevation_min_rad + s.sbr.elevation_max_rad);
+  try {
+    if (s.antenna_gain > 0.0) {
+      a.peak_gain = s.antenna_gain;
+    } else {
+      // Gain of the sum beam from its own 3-dB widths (Kraus), times the aperture efficiency.
+      radar::AntennaConfig probe = a;
+      probe.peak_gain = 1.0;
+      const radar::Antenna ant(probe);
+      a.peak_gain = radar::gain_from_beamwidths(ant.sum_beamwidth_az_rad(),
+                                                ant.sum_beamwidth_el_rad(), s.aperture_efficiency);
+    }
+    const radar::Antenna check(a);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(origin + ": [antenna] " + e.what());
+  }
+}
+
+Scenario parse_impl(std::string_view toml_text, const std::string& origin,
+                    const std::filesystem::path& base_dir) {
   Scenario s;
   apply_toml(s, kDefaultScenario, "<default scenario>");
   if (origin != "<default scenario>")
     apply_toml(s, toml_text, origin);
+  if (!s.scene_file.empty() && s.scene_file.is_relative() && !base_dir.empty())
+    s.scene_file = base_dir / s.scene_file;  // relative to the scenario file
+  if (!s.pattern_file.empty() && s.pattern_file.is_relative() && !base_dir.empty())
+    s.pattern_file = base_dir / s.pattern_file;
+  derive_sensor(s, origin);
   return s;
+}
+
+}  // namespace
+
+Scenario parse_scenario(std::string_view toml_text, const std::string& origin) {
+  return parse_impl(toml_text, origin, {});
 }
 
 Scenario load_scenario(const std::filesystem::path& path) {
@@ -323,11 +514,7 @@ Scenario load_scenario(const std::filesystem::path& path) {
     throw std::runtime_error(path.string() + ": cannot open scenario file");
   std::ostringstream text;
   text << in.rdbuf();
-  Scenario s = parse_scenario(text.str(), path.string());
-  if (!s.scene_file.empty() && s.scene_file.is_relative()) {
-    s.scene_file = path.parent_path() / s.scene_file;  // relative to the scenario file
-  }
-  return s;
+  return parse_impl(text.str(), path.string(), path.parent_path());
 }
 
 }  // namespace radar_emu::emulator

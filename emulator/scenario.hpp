@@ -34,10 +34,19 @@ struct Scenario {
   double attitude_rate_hz = 80.0;
   double navigation_rate_hz = 10.0;
   // [antenna]
-  double antenna_depression_rad = 0.0;  ///< boresight below the body x axis
+  double antenna_depression_rad = 0.0;   ///< boresight below the body x axis
+  double beam_spacing_rad = 0.0175;      ///< azimuth step of the scan's beam positions
+  double azimuth_beamwidth_rad = 0.0;    ///< 0: the beam spacing
+  double elevation_beamwidth_rad = 0.0;  ///< 0: the elevation field of view
+  double antenna_gain = 0.0;             ///< one-way, linear; 0: from beamwidths and efficiency
+  double aperture_efficiency = 0.6;
+  std::string pattern = "gaussian";    ///< uniform, cosine, gaussian, table
+  std::filesystem::path pattern_file;  ///< table: CSV "angle_deg,gain_db" (azimuth cut)
   // [radar]
+  double prf_hz = 20e3;
+  double swath_start_m = -1.0;  ///< pulsed: first range bin; < 0: the blind range c T / 2
   radar::SbrConfig sbr{};
-  radar::SensorConfig sensor{};
+  radar::SensorConfig sensor{};  ///< derived from the tables above once the file is read
   // [faults]
   std::uint64_t malformed_every_n_frames = 0;  ///< 0 = no malformed-frame injection
 };

@@ -1,276 +1,576 @@
 #include "radar/sensor/sensor.hpp"
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "radar/constants.hpp"
+#include "radar/sensor/noise.hpp"
 
 namespace radar_emu::radar {
 
 namespace {
 
-constexpr std::size_t kMaxTouchedCells = 1u << 18;
-
-void require(bool ok, const char* field, const char* what) {
+void require(bool ok, const char* field, const std::string& rule) {
   if (!ok)
-    throw std::invalid_argument(std::string("sensor config: ") + field + " " + what);
+    throw std::invalid_argument(std::string("sensor: ") + field + " " + rule);
 }
 
-double wavelength(const SensorConfig& c) {
-  return kSpeedOfLight_mps / c.carrier_hz;
+// Log-parabolic (Gaussian) interpolation of a peak from three powers: offset of the vertex in
+// bins, clamped to +-0.5.
+double vertex(double pm, double p0, double pp) noexcept {
+  if (!(pm > 0.0 && p0 > 0.0 && pp > 0.0))
+    return 0.0;
+  const double a = std::log(pm), b = std::log(p0), c = std::log(pp);
+  const double den = a - 2.0 * b + c;
+  if (!(den < 0.0))
+    return 0.0;
+  return std::clamp(0.5 * (a - c) / den, -0.5, 0.5);
+}
+
+constexpr std::uint64_t kChannelSum = 0, kChannelDeltaAz = 1, kChannelDeltaEl = 2,
+                        kChannelSpeckle = 3;
+
+bool finite(const Contribution& c) noexcept {
+  return std::isfinite(c.amplitude.real()) && std::isfinite(c.amplitude.imag()) &&
+         std::isfinite(c.range_m) && std::isfinite(c.range_spread_m) &&
+         std::isfinite(c.radial_velocity_mps) && std::isfinite(c.azimuth_rad) &&
+         std::isfinite(c.elevation_rad);
 }
 
 }  // namespace
 
-Sensor::Sensor(const SensorConfig& config) : config_(config) {
-  const SensorConfig& c = config;
-  require(c.carrier_hz > 0 && std::isfinite(c.carrier_hz), "carrier_hz", "must be > 0");
-  require(c.bandwidth_hz > 0, "bandwidth_hz", "must be > 0");
-  require(c.prf_hz > 0, "prf_hz", "must be > 0");
-  require(c.pulses >= 1, "pulses", "must be >= 1");
-  require(c.pulse_width_s > 0, "pulse_width_s", "must be > 0");
-  require(c.tx_power_w > 0, "tx_power_w", "must be > 0");
-  require(c.antenna_gain > 0, "antenna_gain", "must be > 0");
-  require(c.noise_figure >= 1, "noise_figure", "must be >= 1 (linear)");
-  require(c.system_losses >= 1, "system_losses", "must be >= 1 (linear)");
-  require(c.azimuth_min_rad < c.azimuth_max_rad, "azimuth_min/max_rad", "must satisfy min < max");
-  require(c.azimuth_cell_rad > 0, "azimuth_cell_rad", "must be > 0");
-  require(c.max_range_m > 0, "max_range_m", "must be > 0");
-  require(c.cfar_training_cells >= 1, "cfar_training_cells", "must be >= 1");
-  require(c.cfar_guard_cells >= 0, "cfar_guard_cells", "must be >= 0");
-  require(c.cfar_pfa > 0 && c.cfar_pfa < 1, "cfar_pfa", "must be in (0, 1)");
-  n_range_ = static_cast<std::size_t>(std::ceil(c.max_range_m / range_cell_m()));
-  n_doppler_ = static_cast<std::size_t>(c.pulses);
-  n_az_ = static_cast<std::size_t>(
-      std::ceil((c.azimuth_max_rad - c.azimuth_min_rad) / c.azimuth_cell_rad - 1e-9));
-  const std::size_t cells = n_range_ * n_doppler_ * n_az_;
-  require(cells <= (1u << 30), "grid", "has more than 2^30 cells");
-  slot_of_cell_.assign(cells, 0);
-  slots_.resize(std::min(cells, kMaxTouchedCells));
-  candidates_.reserve(slots_.size());
-  // CA-CFAR threshold factor alpha = N (Pfa^(-1/N) - 1) for N training cells (Richards,
-  // Principles of Modern Radar, 2010, eq. 16.37), for every N that can occur at grid edges.
-  cfar_alpha_.resize(2 * static_cast<std::size_t>(c.cfar_training_cells) + 1, 0.0);
-  for (std::size_t n = 1; n < cfar_alpha_.size(); ++n) {
-    const double nd = static_cast<double>(n);
-    cfar_alpha_[n] = nd * (std::pow(c.cfar_pfa, -1.0 / nd) - 1.0);
-  }
-  // Radar equation, Skolnik, Introduction to Radar Systems, 3rd ed., eq. 2.1 form:
-  // P_r = Pt G^2 lambda^2 sigma / ((4 pi)^3 R^4 L).
-  const double lambda = wavelength(c);
-  amplitude_scale_ = std::sqrt(c.tx_power_w * c.antenna_gain * c.antenna_gain * lambda * lambda /
-                               (std::pow(4.0 * kPi, 3) * c.system_losses));
-  snr_per_watt_ =
-      static_cast<double>(c.pulses) * c.pulse_width_s * c.bandwidth_hz / noise_power_w();
+struct Sensor::Workspace {
+  Workspace(const CfarConfig& cfar_config, const RangeDopplerProcessor& p, std::size_t max_hits)
+      : image(p.image_cells()),
+        clutter((p.range_bins() + 1) * p.velocity_bins()),
+        power(p.image_cells()),
+        cfar(cfar_config, p.range_bins(), p.velocity_bins()),
+        hits(max_hits) {}
+  std::vector<std::complex<double>> image;  ///< coherent signal, then the Sigma channel
+  std::vector<double> clutter;              ///< mean clutter power a cell, N_r + 1 a row
+  std::vector<double> power;
+  Cfar2d cfar;
+  std::vector<CfarHit> hits;
+  std::uint64_t crossings = 0, overflowed = 0, outside = 0;
+};
+
+Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.antenna) {
+  const SensorConfig& c = config_;
+  require(std::isfinite(c.tx_power_w) && c.tx_power_w > 0, "tx_power_w", "must be > 0");
+  require(std::isfinite(c.noise_figure) && c.noise_figure >= 1, "noise_figure",
+          "must be >= 1 (linear)");
+  require(std::isfinite(c.system_losses) && c.system_losses >= 1, "system_losses",
+          "must be >= 1 (linear)");
+  require(std::isfinite(c.min_snr_db), "min_snr_db", "must be finite");
+  require(c.beam_floor_db < 0 && c.beam_floor_db > -200, "beam_floor_db", "must be in (-200, 0)");
+  require(c.max_hits_per_beam >= 1 && c.max_hits_per_beam <= (1u << 22), "max_hits_per_beam",
+          "must be in [1, 2^22]");
+  require(std::isfinite(c.max_range_m) && c.max_range_m > 0, "max_range_m", "must be > 0");
+  require(c.max_contributions >= 1 && c.max_contributions <= (1u << 26), "max_contributions",
+          "must be in [1, 2^26]");
+  require(c.processing.kernel_half_width_bins >= 0 &&
+              c.processing.kernel_half_width_bins <= (Footprint::kMaxBins - 1) / 2,
+          "kernel_half_width_bins", "must be in [0, 32] for the sensor");
+  processor_ = std::make_unique<RangeDopplerProcessor>(c.processing);
+  // One workspace per beam (the beams of a scan are accumulated together); workers take beams
+  // w, w + W, ...
+  // As many workers as threads TBB may run (the result does not depend on it: every beam adds
+  // the items in the same order and draws from its own random streams).
+  n_workers_ = std::clamp<std::size_t>(
+      static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1, antenna_.beams());
+  gain_floor_ = std::pow(10.0, c.beam_floor_db / 10.0);
+  for (std::size_t i = 0; i < antenna_.beams(); ++i)
+    workspaces_.push_back(std::make_unique<Workspace>(c.cfar, *processor_, c.max_hits_per_beam));
+  items_.resize(c.max_contributions);
+  by_range_.resize(c.max_contributions);
+  range_start_.resize(processor_->range_bins() + 2);
+  range_energy_ = processor_->range_energy();
+  per_beam_capacity_ = c.max_hits_per_beam;
+  candidates_.resize(antenna_.beams() * per_beam_capacity_);
+  beam_first_.resize(antenna_.beams());
+  beam_count_.resize(antenna_.beams());
+  for (std::size_t b = 0; b < antenna_.beams(); ++b)
+    beam_first_[b] = b * per_beam_capacity_;
+  order_.reserve(candidates_.size());
+  kept_power_.resize(c.max_detections);
+  // Radar equation per fast-time sample (Richards 2014, eq. 2.84):
+  // SNR = Pt G^2 lambda^2 sigma / ((4 pi)^3 R^4 L k T0 F fs); amplitude_scale_^2 is its value
+  // for sigma = 1 m^2 at R = 1 m on boresight.
+  const double lambda = wavelength_m(c.processing.waveform);
+  const double g = c.antenna.peak_gain;
+  amplitude_scale_ = std::sqrt(c.tx_power_w * g * g * lambda * lambda /
+                               (std::pow(4.0 * kPi, 3) * c.system_losses) / noise_power_w());
+  // A beam considers returns where its two-way gain is above the floor.
+  az_extent_rad_ = antenna_.extent_az_rad(0.5 * c.beam_floor_db);
+}
+
+Sensor::~Sensor() = default;
+
+std::size_t Sensor::cfar_training_cells() const noexcept {
+  return workspaces_.empty() ? 0 : workspaces_.front()->cfar.training_cells();
 }
 
 double Sensor::range_cell_m() const noexcept {
-  return kSpeedOfLight_mps / (2.0 * config_.bandwidth_hz);
-}
-double Sensor::unambiguous_velocity_mps() const noexcept {
-  return wavelength(config_) * config_.prf_hz / 4.0;
+  return range_bin_m(config_.processing.waveform);
 }
 double Sensor::doppler_cell_mps() const noexcept {
-  return 2.0 * unambiguous_velocity_mps() / static_cast<double>(config_.pulses);
+  return velocity_bin_mps(config_.processing.waveform);
 }
-std::size_t Sensor::range_cells() const noexcept {
-  return n_range_;
+double Sensor::unambiguous_velocity_mps() const noexcept {
+  return radar::unambiguous_velocity_mps(config_.processing.waveform);
 }
-std::size_t Sensor::azimuth_cells() const noexcept {
-  return n_az_;
-}
-std::size_t Sensor::doppler_cells() const noexcept {
-  return n_doppler_;
-}
-
-std::uint32_t Sensor::range_cell_of(double range_m) const noexcept {
-  const double cell = std::floor(range_m / range_cell_m());
-  return cell <= 0.0 ? 0u : static_cast<std::uint32_t>(std::min(cell, 4.0e9));
-}
-std::uint32_t Sensor::doppler_cell_of(double v_mps) const noexcept {
-  // A coherent interval of N pulses at the PRF resolves N Doppler cells of width dv centred on
-  // multiples of dv (an FFT's bins), periodic in 2 v_ua: cell = round(v / dv) mod N, stored with
-  // zero velocity at index N/2 so that indices increase with velocity from -v_ua.
-  if (!std::isfinite(v_mps))
-    return 0;
-  const auto n = static_cast<std::int64_t>(n_doppler_);
-  const double dv = doppler_cell_mps();
-  const auto bin =
-      static_cast<std::int64_t>(std::llround(std::fmod(v_mps / dv, static_cast<double>(n))));
-  return static_cast<std::uint32_t>(((bin + n / 2) % n + n) % n);
-}
-std::uint32_t Sensor::azimuth_cell_of(double az_rad) const noexcept {
-  const double cell = std::floor((az_rad - config_.azimuth_min_rad) / config_.azimuth_cell_rad);
-  return cell <= 0.0 ? 0u : static_cast<std::uint32_t>(std::min(cell, 4.0e9));
+double Sensor::unambiguous_range_m() const noexcept {
+  return radar::unambiguous_range_m(config_.processing.waveform);
 }
 double Sensor::noise_power_w() const noexcept {
-  return kBoltzmann_jpk * kReferenceTemperature_k * config_.noise_figure * config_.bandwidth_hz;
+  return kBoltzmann_jpk * kReferenceTemperature_k * config_.noise_figure *
+         fast_sample_rate_hz(config_.processing.waveform);
 }
 double Sensor::received_power_w(double rcs_m2, double range_m) const noexcept {
-  return amplitude_scale_ * amplitude_scale_ * rcs_m2 / std::pow(range_m, 4);
+  return amplitude_scale_ * amplitude_scale_ * noise_power_w() * rcs_m2 / std::pow(range_m, 4);
+}
+double Sensor::expected_snr(double rcs_m2, double range_m) const noexcept {
+  return received_power_w(rcs_m2, range_m) / noise_power_w() * processor_->processing_gain();
+}
+double Sensor::two_way_gain(double az_off_rad, double el_off_rad) const noexcept {
+  const double v = antenna_.sum_az(az_off_rad) * antenna_.sum_el(el_off_rad);
+  return v * v * v * v;
 }
 
-Sensor::Cell* Sensor::cell_for(std::uint32_t index, SensorStats& stats) noexcept {
-  std::uint32_t& slot = slot_of_cell_[index];
-  if (slot == 0) {
-    if (used_slots_ == slots_.size()) {
-      ++stats.cells_overflowed;
-      return nullptr;
-    }
-    slots_[used_slots_] = Cell{};
-    slots_[used_slots_].index = index;
-    slot = static_cast<std::uint32_t>(++used_slots_);
-  }
-  return &slots_[slot - 1];
+bool Sensor::gains_of(const Item& item, std::size_t beam, Gains& g) const noexcept {
+  const double off_az = item.azimuth_rad - config_.antenna.beam_azimuth_rad[beam];
+  if (std::abs(off_az) > az_extent_rad_)
+    return false;
+  double s_az = 0.0, d_az = 0.0;
+  antenna_.channels_az(off_az, s_az, d_az);
+  const double tx = s_az * item.sum_el;  // transmit on the sum beam, receive on each channel
+  const double two_way = tx * tx;
+  if (!(two_way * two_way >= gain_floor_))
+    return false;
+  g.sum = two_way;
+  g.daz = tx * d_az * item.sum_el;
+  g.del = tx * s_az * item.delta_el;
+  return true;
 }
 
-double Sensor::snr_of_index(std::uint32_t index) const noexcept {
-  const std::uint32_t slot = slot_of_cell_[index];
-  if (slot == 0)
+double Sensor::range_share(const Item& item, long l) const noexcept {
+  if (item.half_bins <= 0.0)
+    return std::lround(item.pos.range_bin) == l ? 1.0 : 0.0;
+  const double lo = item.pos.range_bin - item.half_bins, hi = item.pos.range_bin + item.half_bins;
+  const auto ld = static_cast<double>(l);
+  return std::max(0.0, std::min(hi, ld + 0.5) - std::max(lo, ld - 0.5)) / (hi - lo);
+}
+
+double Sensor::velocity_weight(const Item& item, long j) const noexcept {
+  const auto nv = static_cast<long>(processor_->velocity_bins());
+  const long k = processor_->config().kernel_half_width_bins;
+  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  const long jc = std::lround(item.pos.velocity_bin);
+  long d = ((j - jc) % nv + nv) % nv;
+  if (d > dj1)
+    d -= nv;
+  if (d < dj0 || d > dj1)
     return 0.0;
-  const Cell& c = slots_[slot - 1];
-  return (std::norm(c.coherent) + c.incoherent_w) * snr_per_watt_;
+  return processor_->velocity_power(static_cast<double>(jc + d) - item.pos.velocity_bin);
+}
+
+void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
+  const RangeDopplerProcessor& proc = *processor_;
+  const std::size_t n_beams = antenna_.beams();
+  const std::size_t nr = proc.range_bins();
+  const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
+  const long k = proc.config().kernel_half_width_bins;
+  const long dj0 = std::max<long>(-k, -nvl / 2), dj1 = std::min<long>(k, nvl - nvl / 2 - 1);
+  const std::size_t stride = nr + 1;
+  for (std::size_t b = w; b < n_beams; b += n_workers) {
+    std::fill(workspaces_[b]->image.begin(), workspaces_[b]->image.end(),
+              std::complex<double>{0.0, 0.0});
+    std::fill(workspaces_[b]->clutter.begin(), workspaces_[b]->clutter.end(), 0.0);
+  }
+  // Each return's response is prepared once and added to every beam of this worker that sees it
+  // with that beam's two-way gain. Targets: exact response (coherent). Clutter: mean power a
+  // cell, its range footprint by a difference array along range, its Doppler leakage through the
+  // taper; the speckle is drawn per cell afterwards.
+  Footprint fp;
+  double taps[Footprint::kMaxBins];
+  std::uint32_t tap_rows[Footprint::kMaxBins];
+  for (std::size_t i = 0; i < item_count_; ++i) {
+    const Item& item = items_[i];
+    if (!item.usable)
+      continue;
+    bool prepared = false;
+    int n_taps = 0;
+    for (std::size_t b = w; b < n_beams; b += n_workers) {
+      Gains g;
+      if (!gains_of(item, b, g))
+        continue;
+      Workspace& ws = *workspaces_[b];
+      if (item.coherent) {
+        if (!prepared && !proc.footprint(item.amplitude, item.pos, item.radial_velocity_mps, fp))
+          break;
+        prepared = true;
+        proc.add_footprint(fp, g.sum, ws.image);
+        continue;
+      }
+      const long jc = std::lround(item.pos.velocity_bin);
+      if (!prepared) {
+        proc.velocity_power_taps(item.pos.velocity_bin, dj0, dj1, taps);
+        for (long dj = dj0; dj <= dj1; ++dj)
+          tap_rows[n_taps++] = static_cast<std::uint32_t>(((jc + dj) % nvl + nvl) % nvl);
+        prepared = true;
+      }
+      const double p = std::norm(item.amplitude) * g.sum * g.sum * range_energy_;
+      const double lo = item.pos.range_bin - item.half_bins,
+                   hi = item.pos.range_bin + item.half_bins;
+      const long l0 = std::lround(lo), l1 = std::lround(hi);
+      for (int t = 0; t < n_taps; ++t) {
+        double* row = ws.clutter.data() + static_cast<std::size_t>(tap_rows[t]) * stride;
+        auto add = [&](long a, long c, double v) {  // v on bins a..c (clipped)
+          a = std::max<long>(a, 0);
+          c = std::min<long>(c, nrl - 1);
+          if (a > c)
+            return;
+          row[a] += v;
+          row[c + 1] -= v;
+        };
+        if (item.half_bins <= 0.0 || l0 == l1) {
+          add(l0, l0, p * taps[t]);
+          continue;
+        }
+        const double density = p * taps[t] / (hi - lo);
+        add(l0, l0, density * (static_cast<double>(l0) + 0.5 - lo));
+        add(l1, l1, density * (hi - (static_cast<double>(l1) - 0.5)));
+        add(l0 + 1, l1 - 1, density);
+      }
+    }
+  }
+  for (std::size_t b = w; b < n_beams; b += n_workers)
+    detect_beam(b, *workspaces_[b]);
+}
+
+void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
+  const RangeDopplerProcessor& proc = *processor_;
+  const std::size_t nr = proc.range_bins(), nv = proc.velocity_bins();
+  const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(nv);
+  const std::size_t stride = nr + 1;
+  for (std::size_t j = 0; j < nv; ++j) {
+    double* row = ws.clutter.data() + j * stride;
+    double run = 0.0;
+    for (std::size_t l = 0; l < nr; ++l) {
+      run += row[l];
+      row[l] = std::max(run, 0.0);  // rounding of the running sum must not go negative
+    }
+  }
+
+  // 2. Receiver noise and clutter speckle (a complex Gaussian of variance 1 + clutter a cell).
+  // Where no target adds a coherent signal only the power is needed: it is exponential.
+  NoiseRng rng(stream_key(config_.noise_seed, frame_, kChannelSum, beam));
+  const double floor_var = config_.thermal_noise ? 1.0 : 0.0;
+  for (std::size_t j = 0; j < nv; ++j) {
+    const double* clutter = ws.clutter.data() + j * stride;
+    std::complex<double>* image = ws.image.data() + j * nr;
+    double* power = ws.power.data() + j * nr;
+    for (std::size_t l = 0; l < nr; ++l) {
+      const double var = floor_var + clutter[l];
+      if (image[l] == std::complex<double>{0.0, 0.0}) {
+        power[l] = var > 0.0 ? -var * std::log(rng.uniform()) : 0.0;
+      } else {
+        if (var > 0.0)
+          image[l] += std::sqrt(var) * rng.complex_normal();
+        power[l] = std::norm(image[l]);
+      }
+    }
+  }
+
+  // 3. CFAR, then keep local maxima over the 8 neighbours (velocity wraps; ties by index).
+  std::uint64_t overflow = 0;
+  const std::size_t n_hits = ws.cfar.detect(ws.power, ws.hits, overflow);
+  ws.crossings += n_hits + overflow;
+  ws.overflowed += overflow;
+  std::size_t n_cand = 0;
+  Candidate* out = candidates_.data() + beam_first_[beam];
+  for (std::size_t h = 0; h < n_hits; ++h) {
+    const CfarHit& hit = ws.hits[h];
+    const auto l = static_cast<long>(hit.range_bin), j = static_cast<long>(hit.velocity_bin);
+    const std::size_t idx = static_cast<std::size_t>(j) * nr + static_cast<std::size_t>(l);
+    bool peak = true;
+    for (long dj = -1; dj <= 1 && peak; ++dj) {
+      const long jj = ((j + dj) % nvl + nvl) % nvl;
+      for (long dl = -1; dl <= 1; ++dl) {
+        const long ll = l + dl;
+        if (ll < 0 || ll >= nrl || (dj == 0 && dl == 0))
+          continue;
+        const std::size_t o = static_cast<std::size_t>(jj) * nr + static_cast<std::size_t>(ll);
+        if (ws.power[o] > hit.power || (ws.power[o] == hit.power && o < idx)) {
+          peak = false;
+          break;
+        }
+      }
+    }
+    if (!peak || n_cand >= per_beam_capacity_)
+      continue;
+    Candidate& cand = out[n_cand++];
+    cand.power = hit.power;
+    cand.noise = hit.noise;
+    cand.beam = static_cast<std::uint32_t>(beam);
+    cand.range_bin = hit.range_bin;
+    cand.velocity_bin = hit.velocity_bin;
+    // The Sigma value: drawn above where a target adds signal; elsewhere only its power was
+    // needed, and its phase is uniform and independent of it.
+    if (ws.image[idx] != std::complex<double>{0.0, 0.0}) {
+      cand.sum = ws.image[idx];
+    } else {
+      NoiseRng phase(stream_key(config_.noise_seed, frame_, kChannelSpeckle, beam, idx));
+      cand.sum = std::polar(std::sqrt(hit.power), 2.0 * kPi * phase.uniform());
+    }
+    const double pm = l > 0 ? ws.power[idx - 1] : 0.0;
+    const double pp = l + 1 < nrl ? ws.power[idx + 1] : 0.0;
+    const std::size_t jm = static_cast<std::size_t>((j + nvl - 1) % nvl);
+    const std::size_t jp = static_cast<std::size_t>((j + 1) % nvl);
+    cand.delta_r = vertex(pm, hit.power, pp);
+    cand.delta_v = vertex(ws.power[jm * nr + static_cast<std::size_t>(l)], hit.power,
+                          ws.power[jp * nr + static_cast<std::size_t>(l)]);
+  }
+  beam_count_[beam] = n_cand;
+}
+
+void Sensor::monopulse(const Candidate& c, double& az_ratio, double& el_ratio) const noexcept {
+  az_ratio = el_ratio = 0.0;
+  if (!config_.antenna.monopulse)
+    return;
+  const RangeDopplerProcessor& proc = *processor_;
+  const auto l = static_cast<long>(c.range_bin), j = static_cast<long>(c.velocity_bin);
+  // Coherent parts of the three channels, and the covariances of their Gaussian parts (clutter
+  // from the same patches in all three; receiver noise independent in each).
+  std::complex<double> s_coh{0.0, 0.0}, d_az{0.0, 0.0}, d_el{0.0, 0.0};
+  const double n0 = config_.thermal_noise ? 1.0 : 0.0;
+  double c_ss = n0, c_as = 0.0, c_aa = n0, c_es = 0.0, c_ee = n0;
+  const double reach = proc.config().kernel_half_width_bins + max_half_bins_ + 1.0;
+  const auto nr = static_cast<long>(proc.range_bins());
+  const long b0 = std::max<long>(0, static_cast<long>(std::floor(static_cast<double>(l) - reach)));
+  const long b1 =
+      std::min<long>(nr - 1, static_cast<long>(std::ceil(static_cast<double>(l) + reach)));
+  for (std::uint32_t q = range_start_[static_cast<std::size_t>(b0)];
+       q < range_start_[static_cast<std::size_t>(b1) + 1]; ++q) {
+    const Item& item = items_[by_range_[q]];
+    Gains g;
+    if (!gains_of(item, c.beam, g))
+      continue;
+    if (item.coherent) {
+      const std::complex<double> r = proc.response_at(
+          {item.amplitude, item.range_m, item.radial_velocity_mps}, c.range_bin, c.velocity_bin);
+      s_coh += r * g.sum;
+      d_az += r * g.daz;
+      d_el += r * g.del;
+    } else {
+      const double p = std::norm(item.amplitude) * range_energy_ * range_share(item, l) *
+                       velocity_weight(item, j);
+      c_ss += p * g.sum * g.sum;
+      c_as += p * g.sum * g.daz;
+      c_aa += p * g.daz * g.daz;
+      c_es += p * g.sum * g.del;
+      c_ee += p * g.del * g.del;
+    }
+  }
+  // Difference channel given the sum: jointly Gaussian, so Delta | Sigma is Gaussian with mean
+  // (C_ds / C_ss) (Sigma - Sigma_coh) and variance C_dd - C_ds^2 / C_ss.
+  const std::complex<double> x = c.sum - s_coh;
+  const std::uint64_t cell = static_cast<std::uint64_t>(j) * proc.range_bins() + c.range_bin;
+  auto draw = [&](std::complex<double> coh, double c_ds, double c_dd, std::uint64_t channel) {
+    std::complex<double> d = coh;
+    if (c_ss > 0.0) {
+      d += (c_ds / c_ss) * x;
+      const double var = std::max(0.0, c_dd - c_ds * c_ds / c_ss);
+      NoiseRng rng(stream_key(config_.noise_seed, frame_, channel, c.beam, cell));
+      d += std::sqrt(var) * rng.complex_normal();
+    }
+    return d;
+  };
+  const std::complex<double> daz = draw(d_az, c_as, c_aa, kChannelDeltaAz);
+  const std::complex<double> del = draw(d_el, c_es, c_ee, kChannelDeltaEl);
+  const double s2 = std::norm(c.sum);
+  if (s2 > 0.0) {
+    az_ratio = (daz * std::conj(c.sum)).real() / s2;
+    el_ratio = (del * std::conj(c.sum)).real() / s2;
+  }
 }
 
 std::size_t Sensor::process(std::span<const Contribution> contributions, std::span<Detection> out,
                             SensorStats& stats) noexcept {
-  // Clear only what the previous frame touched.
-  for (std::size_t i = 0; i < used_slots_; ++i)
-    slot_of_cell_[slots_[i].index] = 0;
-  used_slots_ = 0;
-  const double dr = range_cell_m();
-  const auto nr = static_cast<std::int64_t>(n_range_);
-  for (const Contribution& c : contributions) {
-    const double az_cells = (c.azimuth_rad - config_.azimuth_min_rad) / config_.azimuth_cell_rad;
-    if (!(c.range_m >= 0.0 && c.range_m < config_.max_range_m) || !(az_cells >= 0.0) ||
-        az_cells >= static_cast<double>(n_az_)) {
+  const RangeDopplerProcessor& proc = *processor_;
+  const std::size_t n_beams = antenna_.beams();
+  const std::size_t nr = proc.range_bins();
+  if (contributions.size() > items_.size()) {
+    stats.dropped_input += contributions.size() - items_.size();
+    contributions = contributions.first(items_.size());
+  }
+  // The frame's returns: position on the image and amplitude, once for all beams; then bucket
+  // them by range bin (counting sort) for the monopulse look-ups.
+  const double bin_m = range_cell_m();
+  item_count_ = contributions.size();
+  max_half_bins_ = 0.0;
+  std::fill(range_start_.begin(), range_start_.end(), 0u);
+  auto bucket_of = [&](const Item& it) {
+    return static_cast<std::size_t>(
+        std::clamp<long>(std::lround(it.pos.range_bin), 0, static_cast<long>(nr) - 1));
+  };
+  for (std::size_t i = 0; i < contributions.size(); ++i) {
+    const Contribution& c = contributions[i];
+    Item& it = items_[i];
+    it.usable = false;
+    if (!finite(c) || !(c.range_m > 0.0)) {
+      ++stats.rejected_input;
+      continue;
+    }
+    it.amplitude = c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
+    it.pos = proc.position_of(c.range_m, c.radial_velocity_mps);
+    it.coherent = c.coherent;
+    it.half_bins = c.coherent ? 0.0 : 0.5 * std::max(c.range_spread_m, 0.0) / bin_m;
+    it.range_m = c.range_m;
+    it.radial_velocity_mps = c.radial_velocity_mps;
+    it.azimuth_rad = c.azimuth_rad;
+    it.elevation_rad = c.elevation_rad;
+    antenna_.channels_el(c.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
+                         it.delta_el);
+    const double lo = it.pos.range_bin - it.half_bins, hi = it.pos.range_bin + it.half_bins;
+    const bool visible = it.coherent ? it.pos.in_swath
+                                     : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5 &&
+                                           (proc.config().waveform.kind == WaveformKind::kFmcw ||
+                                            it.pos.in_swath || it.half_bins > 0.0);
+    if (!visible) {
       ++stats.out_of_grid;
       continue;
     }
-    const auto ia = static_cast<std::uint32_t>(az_cells);
-    const std::uint32_t id = doppler_cell_of(c.radial_velocity_mps);
-    const std::size_t line = (static_cast<std::size_t>(ia) * n_doppler_ + id) * n_range_;
-    const double scale = amplitude_scale_ / (c.range_m * c.range_m);
-    if (c.coherent) {
-      const auto ir = static_cast<std::size_t>(c.range_m / dr);
-      Cell* cell = cell_for(static_cast<std::uint32_t>(line + ir), stats);
-      if (!cell)
-        continue;
-      const std::complex<double> a = c.amplitude * scale;
-      const double p = std::norm(a);
-      cell->coherent += a;
-      cell->weight += p;
-      cell->elevation_weight += p * c.elevation_rad;
-    } else {
-      // Diffuse power spread uniformly over the range cells its footprint covers.
-      const double p = std::norm(c.amplitude) * scale * scale;
-      const double r0 = c.range_m - 0.5 * c.range_spread_m, r1 = c.range_m + 0.5 * c.range_spread_m;
-      const std::int64_t i0 =
-          std::max<std::int64_t>(0, static_cast<std::int64_t>(std::floor(r0 / dr)));
-      const std::int64_t i1 =
-          std::min<std::int64_t>(nr - 1, static_cast<std::int64_t>(std::floor(r1 / dr)));
-      for (std::int64_t i = i0; i <= i1; ++i) {
-        const double lo = std::max(r0, static_cast<double>(i) * dr);
-        const double hi = std::min(r1, static_cast<double>(i + 1) * dr);
-        const double share =
-            c.range_spread_m > 0.0 ? std::max(0.0, hi - lo) / c.range_spread_m : 1.0;
-        if (share <= 0.0)
-          continue;
-        Cell* cell =
-            cell_for(static_cast<std::uint32_t>(line + static_cast<std::size_t>(i)), stats);
-        if (!cell)
-          continue;
-        cell->incoherent_w += p * share;
-        cell->weight += p * share;
-        cell->elevation_weight += p * share * c.elevation_rad;
-      }
-    }
+    it.usable = true;
+    max_half_bins_ = std::max(max_half_bins_, it.half_bins);
+    ++range_start_[bucket_of(it) + 1];
   }
-  stats.cells_touched += used_slots_;
+  for (std::size_t b = 0; b + 1 < range_start_.size(); ++b)
+    range_start_[b + 1] += range_start_[b];
+  for (std::size_t i = 0; i < item_count_; ++i)
+    if (items_[i].usable)
+      by_range_[range_start_[bucket_of(items_[i])]++] = static_cast<std::uint32_t>(i);
+  for (std::size_t b = range_start_.size() - 1; b > 0; --b)  // restore the starts
+    range_start_[b] = range_start_[b - 1];
+  range_start_[0] = 0;
 
-  // CA-CFAR along range, then keep local maxima over the 3x3x3 neighbourhood.
-  const double min_snr = std::pow(10.0, config_.min_snr_db / 10.0);
-  const auto guard = static_cast<std::int64_t>(config_.cfar_guard_cells);
-  const auto train = static_cast<std::int64_t>(config_.cfar_training_cells);
-  candidates_.clear();
-  for (std::size_t s = 0; s < used_slots_; ++s) {
-    const Cell& cell = slots_[s];
-    const double snr = (std::norm(cell.coherent) + cell.incoherent_w) * snr_per_watt_;
-    if (snr < min_snr)
-      continue;
-    const std::uint32_t index = cell.index;
-    const auto ir = static_cast<std::int64_t>(index % n_range_);
-    const std::uint32_t line_start = index - static_cast<std::uint32_t>(ir);
-    double sum = 0.0;
-    std::size_t n = 0;
-    for (std::int64_t k = guard + 1; k <= guard + train; ++k) {
-      if (ir - k >= 0) {
-        sum += snr_of_index(line_start + static_cast<std::uint32_t>(ir - k));
-        ++n;
-      }
-      if (ir + k < nr) {
-        sum += snr_of_index(line_start + static_cast<std::uint32_t>(ir + k));
-        ++n;
-      }
-    }
-    const double mean = n > 0 ? sum / static_cast<double>(n) : 0.0;
-    const double alpha = n > 0 ? cfar_alpha_[n] : cfar_alpha_.back();
-    if (!(snr + 1.0 > alpha * (mean + 1.0)))
-      continue;
-    ++stats.cfar_crossings;
-    // Peak grouping: strictly greatest in its neighbourhood (ties broken by cell index).
-    const auto ia = static_cast<std::int64_t>(index / (n_range_ * n_doppler_));
-    const auto id = static_cast<std::int64_t>((index / n_range_) % n_doppler_);
-    bool peak = true;
-    for (std::int64_t da = -1; da <= 1 && peak; ++da) {
-      const std::int64_t a = ia + da;
-      if (a < 0 || a >= static_cast<std::int64_t>(n_az_))
-        continue;
-      for (std::int64_t dd = -1; dd <= 1 && peak; ++dd) {
-        const auto nd = static_cast<std::int64_t>(n_doppler_);
-        const std::int64_t d = ((id + dd) % nd + nd) % nd;  // Doppler is circular
-        for (std::int64_t drr = -1; drr <= 1; ++drr) {
-          const std::int64_t r = ir + drr;
-          if (r < 0 || r >= nr || (da == 0 && dd == 0 && drr == 0))
-            continue;
-          const auto other = static_cast<std::uint32_t>(
-              (static_cast<std::size_t>(a) * n_doppler_ + static_cast<std::size_t>(d)) * n_range_ +
-              static_cast<std::size_t>(r));
-          const double o = snr_of_index(other);
-          if (o > snr || (o == snr && other < index)) {
-            peak = false;
-            break;
-          }
-        }
-      }
-    }
-    if (peak)
-      candidates_.push_back({snr, static_cast<std::uint32_t>(s)});
+  for (auto& ws : workspaces_)
+    ws->crossings = ws->overflowed = ws->outside = 0;
+  // Beams are independent; worker w handles beams w, w + W, ... Every random stream is keyed by
+  // (seed, frame, beam, ...), so the result does not depend on the schedule.
+  tbb::parallel_for(std::size_t{0}, n_workers_,
+                    [&](std::size_t w) { process_worker(w, n_workers_); });
+  for (auto& ws : workspaces_) {
+    stats.cfar_crossings += ws->crossings;
+    stats.hits_overflowed += ws->overflowed;
   }
-  std::sort(candidates_.begin(), candidates_.end(), [&](const Candidate& a, const Candidate& b) {
-    return a.snr != b.snr ? a.snr > b.snr : slots_[a.slot].index < slots_[b.slot].index;
+  stats.cells_touched += n_beams * proc.image_cells();
+
+  // Group across adjacent beams: strongest first; a peak within one range and one velocity bin
+  // of a stronger kept peak in the next beam is the same return seen by that beam's skirt.
+  order_.clear();
+  for (std::size_t b = 0; b < n_beams; ++b)
+    for (std::size_t q = 0; q < beam_count_[b]; ++q)
+      order_.push_back(static_cast<std::uint32_t>(beam_first_[b] + q));
+  auto snr_of = [&](const Candidate& c) { return c.noise > 0.0 ? c.power / c.noise : c.power; };
+  std::sort(order_.begin(), order_.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const double sa = snr_of(candidates_[a]), sb = snr_of(candidates_[b]);
+    return sa != sb ? sa > sb : a < b;
   });
-  const std::size_t n_out = std::min({candidates_.size(), out.size(), config_.max_detections});
-  stats.truncated += candidates_.size() - n_out;
-  for (std::size_t i = 0; i < n_out; ++i) {
-    const Cell& cell = slots_[candidates_[i].slot];
-    Detection& d = out[i];
-    d.range_cell = cell.index % static_cast<std::uint32_t>(n_range_);
-    d.doppler_cell = (cell.index / static_cast<std::uint32_t>(n_range_)) %
-                     static_cast<std::uint32_t>(n_doppler_);
-    d.azimuth_cell = cell.index / static_cast<std::uint32_t>(n_range_ * n_doppler_);
-    d.range_m = (d.range_cell + 0.5) * dr;
-    d.azimuth_rad = config_.azimuth_min_rad + (d.azimuth_cell + 0.5) * config_.azimuth_cell_rad;
-    d.radial_velocity_mps =
-        (static_cast<double>(d.doppler_cell) - static_cast<double>(n_doppler_ / 2)) *
-        doppler_cell_mps();
-    d.elevation_rad = cell.weight > 0.0 ? cell.elevation_weight / cell.weight : 0.0;
-    d.snr = candidates_[i].snr;
-    d.rcs_m2 = d.snr / snr_per_watt_ / received_power_w(1.0, d.range_m);
+  const auto nv = static_cast<long>(proc.velocity_bins());
+  std::size_t n_out = 0;
+  const double min_snr = std::pow(10.0, config_.min_snr_db / 10.0);
+  const Waveform& wf = config_.processing.waveform;
+  const double lambda = wavelength_m(wf);
+  const double k_chirp = chirp_rate_hz_per_s(wf);
+  const double v_ua = unambiguous_velocity_mps();
+  const double bw_az = antenna_.sum_beamwidth_az_rad(), bw_el = antenna_.sum_beamwidth_el_rad();
+  for (std::size_t oi = 0; oi < order_.size(); ++oi) {
+    const Candidate& c = candidates_[order_[oi]];
+    // A weaker peak in the same range and velocity cell (+-1) of another beam is the same return
+    // seen through that beam's skirt when its power is no more than the stronger detection's
+    // power times the two-way pattern ratio of the two beams at the detection's angle (+10 dB
+    // for noise and speckle).
+    bool merged = false;
+    const double beam_az = config_.antenna.beam_azimuth_rad[c.beam];
+    for (std::size_t q = 0; q < n_out && !merged; ++q) {
+      const Detection& k = out[q];
+      if (k.azimuth_cell == c.beam)
+        continue;
+      const long dr = static_cast<long>(k.range_cell) - static_cast<long>(c.range_bin);
+      long dv = (static_cast<long>(k.doppler_cell) - static_cast<long>(c.velocity_bin)) % nv;
+      dv = std::min((dv + nv) % nv, (nv - dv) % nv);
+      if (std::labs(dr) > 1 || dv > 1)
+        continue;
+      const double off_here = k.azimuth_rad - beam_az;
+      if (std::abs(off_here) > az_extent_rad_)
+        continue;
+      const double off_there = k.azimuth_rad - config_.antenna.beam_azimuth_rad[k.azimuth_cell];
+      const double el_off = k.elevation_rad - config_.antenna.beam_elevation_rad;
+      const double ratio =
+          two_way_gain(off_here, el_off) / std::max(two_way_gain(off_there, el_off), 1e-300);
+      merged = c.power <= 10.0 * kept_power_[q] * ratio;
+    }
+    if (merged) {
+      ++stats.merged;
+      continue;
+    }
+    // Measured SNR: (signal + noise) / noise estimate - 1. Without receiver noise the image is
+    // still in units of the noise power the radar would have, so its power is the SNR.
+    const double snr_meas =
+        config_.thermal_noise ? std::max(snr_of(c) - 1.0, 1e-3 * snr_of(c)) : c.power;
+    if (snr_meas < min_snr)
+      continue;
+    if (n_out >= out.size() || n_out >= config_.max_detections) {
+      ++stats.truncated;
+      continue;
+    }
+    kept_power_[n_out] = c.power;
+    Detection& d = out[n_out++];
+    const double v_meas = proc.velocity_of_bin(c.velocity_bin + c.delta_v);
+    // Range-Doppler coupling moved the peak by -c f_d / (2 k); undo it with the measured
+    // (folded) Doppler (Richards 2014, eqs. 4.105-4.106).
+    const double fd = -2.0 * v_meas / lambda;
+    d.range_m =
+        proc.range_of_bin(c.range_bin + c.delta_r) + kSpeedOfLight_mps * fd / (2.0 * k_chirp);
+    d.radial_velocity_mps = v_meas;
+    double az_ratio = 0.0, el_ratio = 0.0;
+    monopulse(c, az_ratio, el_ratio);
+    const double off_az = config_.antenna.monopulse ? antenna_.offset_from_ratio_az(az_ratio) : 0.0;
+    const double off_el = config_.antenna.monopulse ? antenna_.offset_from_ratio_el(el_ratio) : 0.0;
+    d.azimuth_rad = config_.antenna.beam_azimuth_rad[c.beam] + off_az;
+    d.elevation_rad = config_.antenna.beam_elevation_rad + off_el;
+    d.snr = snr_meas;
+    // RCS: the SNR the peak would have on the grid and on boresight, through the radar equation.
+    const double straddle = proc.straddle_gain(c.delta_r, c.delta_v);
+    const double gain = two_way_gain(off_az, off_el);
+    const double per_m2 = expected_snr(1.0, std::max(d.range_m, 1e-3));
+    d.rcs_m2 = snr_meas / (std::max(straddle, 1e-6) * std::max(gain, 1e-12) * per_m2);
+    // Thermal-noise accuracy, sigma = resolution / (k sqrt(2 SNR)) with k = pi / sqrt(3) for a
+    // rectangular spectrum or envelope (Skolnik 2001, sec. 6.3: delta_T = 1 / (beta sqrt(2E/N0)),
+    // beta = pi B / sqrt(3)); angle sigma = theta_3 / (k_m sqrt(2 SNR)), k_m the monopulse slope
+    // (Sherman and Barton 2011). Without monopulse: the beam's width / sqrt(12).
+    const double root = std::sqrt(2.0 * snr_meas);
+    const double kr = kPi / std::sqrt(3.0);
+    d.range_std_m = range_resolution_m(wf) / (kr * root);
+    d.velocity_std_mps = velocity_bin_mps(wf) / (kr * root);
+    const double km_az = antenna_.monopulse_slope_az(), km_el = antenna_.monopulse_slope_el();
+    d.azimuth_std_rad = km_az > 0.0 ? bw_az / (km_az * root) : bw_az / std::sqrt(12.0);
+    d.elevation_std_rad = km_el > 0.0 ? bw_el / (km_el * root) : bw_el / std::sqrt(12.0);
+    d.range_ambiguous =
+        wf.kind == WaveformKind::kPulsedLfm && unambiguous_range_m() < config_.max_range_m;
+    d.velocity_ambiguous = v_ua < config_.processing.max_speed_mps;
+    d.range_cell = c.range_bin;
+    d.doppler_cell = c.velocity_bin;
+    d.azimuth_cell = c.beam;
   }
   stats.detections += n_out;
+  ++frame_;
   return n_out;
 }
 

@@ -1,113 +1,160 @@
 #pragma once
-// First radar sensor: bins SBR contributions into range x Doppler x azimuth cells (coherent sum
-// for targets, power sum for diffuse clutter), applies the radar equation and noise, and detects
-// with a cell-averaging CFAR along range plus peak grouping. Issue 5 replaces it with waveform
-// synthesis and matched filtering; this stage keeps the same inputs and outputs.
+// The radar sensor: turns one frame's scattering contributions into a detection list, as a
+// scanning pulse-Doppler (or FMCW) radar with amplitude-comparison monopulse would.
+//
+// For each beam position of the scan: every contribution inside the beam's pattern is weighted by
+// the two-way gain of the sum channel (and of the azimuth and elevation difference channels) and
+// the radar equation, added to the range-velocity image with the waveform's exact response
+// (RangeDopplerProcessor's direct path; diffuse clutter as speckle, a complex Gaussian of the
+// footprint's mean power), receiver noise is added, and a 2-D CFAR finds the crossings. Peaks are
+// grouped within the beam and across adjacent beams; each detection gets interpolated range and
+// velocity, a monopulse angle, measured SNR, an RCS estimate from the radar equation, one-sigma
+// uncertainties and ambiguity flags.
 
 #include <complex>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
+#include "radar/antenna/antenna.hpp"
 #include "radar/em/sbr.hpp"
+#include "radar/sensor/cfar.hpp"
+#include "radar/sensor/range_doppler.hpp"
 
 namespace radar_emu::radar {
 
 struct SensorConfig {
-  double carrier_hz = 94e9;
-  double bandwidth_hz = 50e6;  ///< range cell c / (2 B)
-  double prf_hz = 100e3;       ///< pulse repetition frequency
-  int pulses = 64;             ///< pulses per coherent interval (Doppler cells)
-  double pulse_width_s = 2e-6;
-  double tx_power_w = 10.0;
-  double antenna_gain = 3162.0;      ///< two-way gain G (linear) used as G^2
-  double noise_figure = 5.0;         ///< linear
-  double system_losses = 2.0;        ///< linear, >= 1
-  double azimuth_min_rad = -0.1745;  ///< azimuth cells span the field of view
-  double azimuth_max_rad = 0.1745;
-  double azimuth_cell_rad = 0.01745;
-  double max_range_m = 6000.0;
-  int cfar_training_cells = 16;  ///< per side, along range
-  int cfar_guard_cells = 4;      ///< per side
-  double cfar_pfa = 1e-6;        ///< design false-alarm probability
-  double min_snr_db = 13.0;
+  ProcessingConfig processing;  ///< waveform, windows, direct-path support
+  AntennaConfig antenna;
+  double tx_power_w = 20.0;    ///< peak
+  double noise_figure = 3.16;  ///< linear
+  double system_losses = 2.0;  ///< linear, >= 1
+  CfarConfig cfar;
+  double min_snr_db = 0.0;  ///< detections must also measure at least this SNR
   std::size_t max_detections = 64;
+  bool thermal_noise = true;
+  std::uint64_t noise_seed = 20261123;
+  double beam_floor_db = -50.0;  ///< two-way sum gain below which a beam ignores a return
+  double max_range_m = 6000.0;   ///< farthest return of interest: sets the range-ambiguity flag
+  std::size_t max_hits_per_beam = 4096;
+  std::size_t max_contributions = 1u << 18;  ///< per frame; beyond it returns are counted, dropped
 };
 
-/// One detection in SI units.
+/// One detection in SI units, antenna frame.
 struct Detection {
   double range_m = 0.0;
   double azimuth_rad = 0.0;
-  double elevation_rad = 0.0;        ///< power-weighted mean elevation of the cell's returns
-  double radial_velocity_mps = 0.0;  ///< Doppler cell centre, folded: (cell - N/2) * dv
-  double snr = 0.0;                  ///< linear
-  double rcs_m2 = 0.0;               ///< from the radar equation at the cell's range
+  double elevation_rad = 0.0;
+  double radial_velocity_mps = 0.0;  ///< positive receding, folded into [-v_ua, v_ua)
+  double snr = 0.0;                  ///< measured, linear
+  double rcs_m2 = 0.0;               ///< from the radar equation at the measured range and angle
+  double range_std_m = 0.0;          ///< one-sigma thermal-noise accuracy
+  double velocity_std_mps = 0.0;
+  double azimuth_std_rad = 0.0;
+  double elevation_std_rad = 0.0;
+  bool range_ambiguous = false;     ///< the waveform folds ranges shorter than max_range_m
+  bool velocity_ambiguous = false;  ///< |v| may exceed v_ua: the velocity may be folded
   std::uint32_t range_cell = 0;
   std::uint32_t doppler_cell = 0;
-  std::uint32_t azimuth_cell = 0;
+  std::uint32_t azimuth_cell = 0;  ///< beam position
 };
 
 struct SensorStats {
-  std::uint64_t cells_touched = 0;
+  std::uint64_t cells_touched = 0;  ///< image cells processed (beams x range x velocity)
   std::uint64_t cfar_crossings = 0;
   std::uint64_t detections = 0;
-  std::uint64_t truncated = 0;         ///< detections beyond max_detections or the output span
-  std::uint64_t out_of_grid = 0;       ///< contributions beyond max range or azimuth
-  std::uint64_t cells_overflowed = 0;  ///< power lost: more touched cells than reserved
+  std::uint64_t truncated = 0;        ///< detections beyond max_detections or the output span
+  std::uint64_t out_of_grid = 0;      ///< contributions outside every beam or outside the swath
+  std::uint64_t hits_overflowed = 0;  ///< CFAR crossings beyond max_hits_per_beam
+  std::uint64_t merged = 0;           ///< peaks merged into a stronger one in an adjacent beam
+  std::uint64_t rejected_input = 0;   ///< contributions with non-finite fields
+  std::uint64_t dropped_input = 0;    ///< contributions beyond max_contributions
 };
 
 class Sensor {
  public:
-  /// Setup: validates (throws std::invalid_argument naming the field) and allocates the grid.
+  /// Setup: validates (throws std::invalid_argument naming the field), plans and allocates.
   explicit Sensor(const SensorConfig& config);
+  ~Sensor();
 
-  /// Processes one frame's contributions. Writes detections sorted by SNR (descending) into
-  /// `out`; returns how many. `stats` is added to, not reset. Real-time safe: no allocation, no
-  /// exceptions.
+  /// Processes one frame. Writes detections sorted by SNR (descending) into `out`; returns how
+  /// many. `stats` is added to, not reset. Real-time safe: no allocation, no exceptions.
   [[nodiscard]] std::size_t process(std::span<const Contribution> contributions,
                                     std::span<Detection> out, SensorStats& stats) noexcept;
 
   [[nodiscard]] const SensorConfig& config() const noexcept { return config_; }
+  [[nodiscard]] const Antenna& antenna() const noexcept { return antenna_; }
+  [[nodiscard]] const RangeDopplerProcessor& processor() const noexcept { return *processor_; }
+  [[nodiscard]] std::size_t cfar_training_cells() const noexcept;
   [[nodiscard]] double range_cell_m() const noexcept;
   [[nodiscard]] double doppler_cell_mps() const noexcept;
-  [[nodiscard]] double unambiguous_velocity_mps() const noexcept;  ///< v_ua = lambda PRF / 4
-  [[nodiscard]] std::size_t range_cells() const noexcept;
-  [[nodiscard]] std::size_t azimuth_cells() const noexcept;
-  [[nodiscard]] std::size_t doppler_cells() const noexcept;
-  /// Cell indices of a point (tests and the emulator's ground truth use the same binning).
-  [[nodiscard]] std::uint32_t range_cell_of(double range_m) const noexcept;
-  [[nodiscard]] std::uint32_t doppler_cell_of(double radial_velocity_mps) const noexcept;
-  [[nodiscard]] std::uint32_t azimuth_cell_of(double azimuth_rad) const noexcept;
-  /// Thermal noise power k T0 F B [W].
+  [[nodiscard]] double unambiguous_velocity_mps() const noexcept;
+  [[nodiscard]] double unambiguous_range_m() const noexcept;
+  /// Thermal noise power k T0 F fs of one fast-time sample [W].
   [[nodiscard]] double noise_power_w() const noexcept;
-  /// Received power of a point target of RCS sigma at range R, radar equation [W].
+  /// Received power of a point target on the sum beam's boresight (radar equation) [W].
   [[nodiscard]] double received_power_w(double rcs_m2, double range_m) const noexcept;
+  /// SNR in the range-velocity image of an on-grid point target on boresight.
+  [[nodiscard]] double expected_snr(double rcs_m2, double range_m) const noexcept;
+  /// Two-way sum gain relative to boresight of a return at (az, el) off a beam's boresight.
+  [[nodiscard]] double two_way_gain(double az_off_rad, double el_off_rad) const noexcept;
 
  private:
-  SensorConfig config_;
-  // Grid storage, allocated once (see sensor.cpp).
-  struct Cell {
-    std::complex<double> coherent{0.0, 0.0};  ///< sum of received complex amplitudes [sqrt(W)]
-    double incoherent_w = 0.0;                ///< diffuse power [W]
-    double elevation_weight = 0.0;            ///< sum of power x elevation
-    double weight = 0.0;                      ///< sum of power
-    std::uint32_t index = 0;                  ///< flat cell index
+  struct Workspace;
+  /// A contribution as this frame sees it: computed once, shared by the beams.
+  struct Item {
+    std::complex<double> amplitude;  ///< at the receiver, noise units, before the patterns
+    ImagePosition pos;
+    double half_bins = 0.0;  ///< diffuse: half the footprint's extent along range [bins]
+    double range_m = 0.0;
+    double radial_velocity_mps = 0.0;
+    double azimuth_rad = 0.0, elevation_rad = 0.0;
+    double sum_el = 0.0, delta_el = 0.0;  ///< elevation channels (one beam elevation per scan)
+    bool coherent = true;
+    bool usable = false;
   };
-  std::vector<std::uint32_t> slot_of_cell_;  ///< 0 = untouched, else slot + 1
-  std::vector<Cell> slots_;
-  std::size_t used_slots_ = 0;
   struct Candidate {
-    double snr;
-    std::uint32_t slot;
+    std::complex<double> sum{0.0, 0.0};  ///< Sigma channel at the cell (signal + clutter + noise)
+    double power = 0, noise = 0;
+    std::uint32_t beam = 0, range_bin = 0, velocity_bin = 0;
+    double delta_r = 0, delta_v = 0;  ///< interpolated offsets [bins]
   };
-  std::vector<Candidate> candidates_;
-  std::vector<double> cfar_alpha_;  ///< threshold factor by number of training cells
-  std::size_t n_range_ = 0, n_doppler_ = 0, n_az_ = 0;
-  double amplitude_scale_ = 0.0;  ///< sqrt(Pt G^2 lambda^2 / ((4 pi)^3 L)) [sqrt(W) m]
-  double snr_per_watt_ = 0.0;     ///< processing gain / noise power [1/W]
-  Cell* cell_for(std::uint32_t index, SensorStats& stats) noexcept;
-  [[nodiscard]] double snr_of_index(std::uint32_t index) const noexcept;
+  struct Gains {
+    double sum = 0, daz = 0, del = 0;  ///< two-way amplitude factors of the three channels
+  };
+  bool gains_of(const Item& item, std::size_t beam, Gains& g) const noexcept;
+  /// Worker w: accumulates every item into its beams (w, w + W, ...), then detects in them.
+  void process_worker(std::size_t w, std::size_t n_workers) noexcept;
+  void detect_beam(std::size_t beam, Workspace& ws) noexcept;
+  /// Share of a diffuse item's power in range bin l, and its velocity-leakage weight in bin j.
+  [[nodiscard]] double range_share(const Item& item, long l) const noexcept;
+  [[nodiscard]] double velocity_weight(const Item& item, long j) const noexcept;
+  /// Monopulse ratios at a detection: the difference channels drawn jointly with the sum.
+  void monopulse(const Candidate& c, double& az_ratio, double& el_ratio) const noexcept;
+
+  SensorConfig config_;
+  Antenna antenna_;
+  std::unique_ptr<RangeDopplerProcessor> processor_;  ///< const after setup: shared by workers
+  std::vector<std::unique_ptr<Workspace>> workspaces_;
+  std::vector<Item> items_;                 ///< this frame's contributions
+  std::vector<std::uint32_t> by_range_;     ///< item indices sorted by nearest range bin
+  std::vector<std::uint32_t> range_start_;  ///< by_range_ offset of each range bin (+1 entry)
+  std::size_t item_count_ = 0;
+  double max_half_bins_ = 0.0;
+  std::vector<Candidate> candidates_;    ///< all beams, after in-beam grouping
+  std::vector<std::size_t> beam_first_;  ///< per beam: first slot in candidates_
+  std::vector<std::size_t> beam_count_;  ///< per beam: candidates found
+  std::vector<std::uint32_t> order_;     ///< candidate indices by SNR
+  std::vector<double> kept_power_;  ///< per output detection: its peak power
+  std::size_t per_beam_capacity_ = 0;
+  double amplitude_scale_ = 0.0;  ///< sqrt(Pt G^2 lambda^2 / ((4 pi)^3 L) / (k T0 F fs))
+  double az_extent_rad_ = 0.0;
+  double gain_floor_ = 0.0;  ///< beam_floor_db as a linear two-way power ratio
+  std::size_t n_workers_ = 1;
+  double range_energy_ = 1.0;
+  std::uint64_t frame_ = 0;
 };
 
 }  // namespace radar_emu::radar

@@ -178,13 +178,14 @@ struct Cells {
 
 Cells cells_of(const emu::Scenario& s) {
   Cells c{};
-  c.range_cell_m = kC_mps / (2.0 * s.sensor.bandwidth_hz);
-  c.az_min_rad = s.sensor.azimuth_min_rad;
-  c.az_cell_rad = s.sensor.azimuth_cell_rad;
-  const double lambda = kC_mps / s.sensor.carrier_hz;
-  c.v_ua_mps = lambda * s.sensor.prf_hz / 4.0;
-  c.n_doppler = s.sensor.pulses;
-  c.doppler_cell_mps = 2.0 * c.v_ua_mps / s.sensor.pulses;
+  const auto& w = s.sensor.processing.waveform;
+  c.range_cell_m = kC_mps / (2.0 * w.bandwidth_hz);
+  c.az_min_rad = s.sbr.azimuth_min_rad;
+  c.az_cell_rad = s.beam_spacing_rad;
+  const double lambda = kC_mps / w.carrier_hz;
+  c.v_ua_mps = lambda * s.prf_hz / 4.0;
+  c.n_doppler = w.pulses;
+  c.doppler_cell_mps = 2.0 * c.v_ua_mps / w.pulses;
   return c;
 }
 
@@ -261,7 +262,7 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
   const Cells cells = cells_of(s);
   const auto desc = radar_emu::scene::default_scene();
   const Antenna ant = scenario_antenna(s);
-  std::size_t frames_checked = 0;
+  std::size_t frames_checked = 0, unmatched = 0;
   std::vector<std::size_t> detected_frames_per_object;
   std::vector<std::string> names;
   for (const emu::FrameRecord& rec : result_->records) {
@@ -304,10 +305,11 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
           detected[k] = true;
         }
       }
-      EXPECT_TRUE(matched) << "frame " << rec.header.frame_counter << " t=" << t
-                           << " s: detection at range " << d.range_m << " m, az " << d.azimuth_deg
-                           << " deg, vr " << d.radial_velocity_mps
-                           << " m/s matches no object inside the beam";
+      if (!matched && ++unmatched <= 10) {
+        std::cout << "  frame " << rec.header.frame_counter << ": unmatched detection at "
+                  << d.range_m << " m, az " << d.azimuth_deg << " deg, vr " << d.radial_velocity_mps
+                  << " m/s, SNR " << d.snr_db << " dB\n";
+      }
       EXPECT_LE(std::abs(d.azimuth_deg * kDeg), s.sbr.azimuth_max_rad + 1e-9);
     }
     for (std::size_t k = 0; k < objects.size(); ++k) {
@@ -325,6 +327,25 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
     ++frames_checked;
   }
   EXPECT_EQ(frames_checked, s.frames);
+  // Detections that match no object are false alarms (receiver noise, clutter speckle). Their
+  // number must agree with detection theory: a noise cell crosses when its power exceeds
+  // max(alpha, 1 + min SNR) times the mean of N training cells, probability
+  // (1 + T / N)^-N (Richards 2014, eq. 6.134); allow twice the expectation plus Poisson slack.
+  const auto& cf = s.sensor.cfar;
+  const double n_train =
+      2.0 * cf.range_training * (2 * cf.velocity_training + 2 * cf.velocity_guard + 1) +
+      2.0 * cf.velocity_training * (2 * cf.range_guard + 1);
+  const double alpha = n_train * (std::pow(cf.pfa, -1.0 / n_train) - 1.0);
+  const double t = std::max(alpha, 1.0 + std::pow(10.0, s.sensor.min_snr_db / 10.0));
+  const double pfa_eff = std::pow(1.0 + t / n_train, -n_train);
+  const auto& w = s.sensor.processing.waveform;
+  const double image_cells = static_cast<double>(frames_checked) * w.range_bins * w.pulses *
+                             static_cast<double>(s.sensor.antenna.beam_azimuth_rad.size());
+  const double expected = image_cells * pfa_eff;
+  std::cout << "  unmatched detections: " << unmatched << " in " << frames_checked
+            << " frames; false alarms expected " << expected << " (" << image_cells
+            << " cells, Pfa " << pfa_eff << ")\n";
+  EXPECT_LE(static_cast<double>(unmatched), 2.0 * expected + 3.0 * std::sqrt(expected) + 5.0);
   for (std::size_t k = 0; k < names.size(); ++k) {
     std::cout << "  " << names[k] << ": detected in " << detected_frames_per_object[k] << "/"
               << frames_checked << " frames\n";
@@ -422,8 +443,8 @@ TEST_F(ClosedLoopDefault, PictureShowsEachDetectionWhereItIs) {
   EXPECT_EQ(w, emu::BScopeLayout::kWidth);
   EXPECT_EQ(h, emu::BScopeLayout::kHeight);
   emu::BScopeLayout layout;
-  layout.azimuth_min_deg = scenario_->sensor.azimuth_min_rad * 180.0 / std::numbers::pi;
-  layout.azimuth_max_deg = scenario_->sensor.azimuth_max_rad * 180.0 / std::numbers::pi;
+  layout.azimuth_min_deg = scenario_->sbr.azimuth_min_rad * 180.0 / std::numbers::pi;
+  layout.azimuth_max_deg = scenario_->sbr.azimuth_max_rad * 180.0 / std::numbers::pi;
   layout.range_max_m = scenario_->sensor.max_range_m;
   auto rgb = [&](int x, int y) {
     const unsigned char* p = px + (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +

@@ -28,11 +28,16 @@ TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
   const emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
   EXPECT_EQ(s.frames, 200u);
   EXPECT_DOUBLE_EQ(s.rate_hz, 20.0);
-  EXPECT_DOUBLE_EQ(s.sensor.carrier_hz, 94e9);
-  EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, s.sensor.carrier_hz);
+  EXPECT_DOUBLE_EQ(s.sensor.processing.waveform.carrier_hz, 94e9);
+  EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, s.sensor.processing.waveform.carrier_hz);
   EXPECT_NEAR(s.sensor.noise_figure, std::pow(10.0, 0.5), 1e-12);  // 5 dB
   EXPECT_NEAR(s.antenna_depression_rad, 5.0 * kDeg, 1e-15);
-  EXPECT_DOUBLE_EQ(s.sbr.azimuth_min_rad, s.sensor.azimuth_min_rad);
+  // 16 beams of 1 deg across -8..8 deg; PRI from the PRF; swath from the blind range c T / 2.
+  ASSERT_EQ(s.sensor.antenna.beam_azimuth_rad.size(), 16u);
+  EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), -7.5 * kDeg, 1e-12);
+  EXPECT_NEAR(s.sensor.processing.waveform.pri_s, 50e-6, 1e-15);
+  EXPECT_NEAR(s.sensor.processing.waveform.swath_start_m, 299792458.0 * 2e-6 / 2, 1e-9);
+  EXPECT_EQ(s.sensor.processing.waveform.range_bins, 1902);  // ceil((6000 - 299.8) / 2.998)
   EXPECT_DOUBLE_EQ(s.ownship_start_enu_m.y, -4000.0);
   EXPECT_EQ(s.scene_builtin, "default");
   EXPECT_TRUE(s.scene_file.empty());
@@ -42,7 +47,7 @@ TEST(Scenario, UserFileOverridesOnlyWhatItNames) {
   const emu::Scenario s =
       emu::parse_scenario("[run]\nframes = 7\n[radar]\ncarrier_hz = 35.0e9\n", "user.toml");
   EXPECT_EQ(s.frames, 7u);
-  EXPECT_DOUBLE_EQ(s.sensor.carrier_hz, 35e9);
+  EXPECT_DOUBLE_EQ(s.sensor.processing.waveform.carrier_hz, 35e9);
   EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, 35e9);
   EXPECT_DOUBLE_EQ(s.rate_hz, 20.0);  // from the default
 }
@@ -62,6 +67,12 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
       std::string::npos);
   EXPECT_NE(error_of("[scene]\nbuiltin = \"moon\"\n").find("unknown built-in scene"),
             std::string::npos);
+  EXPECT_NE(error_of("[radar]\nwaveform = \"cw\"\n").find("[radar] waveform: unknown"),
+            std::string::npos);
+  EXPECT_NE(error_of("[radar]\nrange_window = \"kaiser\"\n").find("unknown window"),
+            std::string::npos);
+  EXPECT_NE(error_of("[antenna]\npattern = \"table\"\n").find("pattern_file"), std::string::npos);
+  EXPECT_NE(error_of("[radar]\npulse_width_s = 60e-6\n").find("[radar]"), std::string::npos);
   // Syntax errors carry line and column.
   EXPECT_NE(error_of("[run]\nframes = = 3\n").find("test.toml:2:"), std::string::npos);
 }

@@ -1,0 +1,581 @@
+#include "radar/sensor/range_doppler.hpp"
+
+#include <fftw3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "radar/constants.hpp"
+
+namespace radar_emu::radar {
+
+namespace {
+
+constexpr int kSteps = 64;  // table entries a bin
+
+// FFTW's planner is not thread-safe; setup may run on several threads (tests, tools).
+std::mutex& planner_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+fftw_complex* as_fftw(std::complex<double>* p) {
+  return reinterpret_cast<fftw_complex*>(p);
+}
+
+// Smallest 2^a 3^b 5^c 7^d >= n: sizes FFTW transforms fastest.
+std::size_t good_fft_size(std::size_t n) {
+  for (std::size_t m = n;; ++m) {
+    std::size_t r = m;
+    for (std::size_t p : {2u, 3u, 5u, 7u})
+      while (r % p == 0)
+        r /= p;
+    if (r == 1)
+      return m;
+  }
+}
+
+std::complex<double> lerp(const std::complex<double>& a, const std::complex<double>& b, double t) {
+  return a + (b - a) * t;
+}
+
+}  // namespace
+
+struct RangeDopplerProcessor::Plans {
+  std::complex<double>* fast = nullptr;    // n_fft
+  std::complex<double>* filter = nullptr;  // n_fft, conj(FFT(h)) / n_fft (pulsed)
+  std::complex<double>* slow = nullptr;    // M x N_r, [pulse][range]
+  fftw_plan fast_forward = nullptr, fast_backward = nullptr, doppler = nullptr;
+  ~Plans() {
+    std::lock_guard lock(planner_mutex());
+    for (fftw_plan p : {fast_forward, fast_backward, doppler})
+      if (p)
+        fftw_destroy_plan(p);
+    for (auto* b : {fast, filter, slow})
+      if (b)
+        fftw_free(b);
+  }
+};
+
+RangeDopplerProcessor::RangeDopplerProcessor(const ProcessingConfig& config) : config_(config) {
+  const Waveform& w = config.waveform;
+  validate(w);
+  if (config.kernel_half_width_bins < 0 || config.kernel_half_width_bins > 4096)
+    throw std::invalid_argument("processing: kernel_half_width_bins must be in [0, 4096]");
+  if (!(config.max_speed_mps > 0.0) || !std::isfinite(config.max_speed_mps))
+    throw std::invalid_argument("processing: max_speed_mps must be a finite number > 0");
+  for (const WindowSpec* s : {&config.range_window, &config.doppler_window}) {
+    if (s->kind == WindowKind::kTaylor &&
+        (!(s->taylor_sidelobe_db >= 13.3 && s->taylor_sidelobe_db <= 120.0) || s->taylor_nbar < 1 ||
+         s->taylor_nbar > 63))
+      throw std::invalid_argument(
+          "processing: Taylor window needs sidelobe level in [13.3, 120] dB and nbar in [1, 63]");
+  }
+  pulsed_ = w.kind == WaveformKind::kPulsedLfm;
+  n_range_ = static_cast<std::size_t>(w.range_bins);
+  n_pulses_ = static_cast<std::size_t>(w.pulses);
+  n_pulse_samples_ = pulse_samples(w);
+  n_fast_ = pulsed_ ? n_range_ + n_pulse_samples_ - 1 : n_range_;
+  n_fft_ = pulsed_ ? good_fft_size(n_fast_) : n_range_;
+  range_bin_m_ = range_bin_m(w);
+  first_range_m_ = first_range_m(w);
+  unamb_range_m_ = unambiguous_range_m(w);
+  fs_hz_ = fast_sample_rate_hz(w);
+  pri_s_ = w.pri_s;
+  dv_mps_ = velocity_bin_mps(w);
+  lambda_m_ = wavelength_m(w);
+  chirp_rate_ = chirp_rate_hz_per_s(w);
+
+  // Windows: the range taper weights the matched filter's reference (pulsed) or the beat samples
+  // (FMCW); the Doppler taper weights the pulses.
+  w_range_.resize(n_pulse_samples_);
+  w_doppler_.resize(n_pulses_);
+  fill_window(config.range_window, w_range_);
+  fill_window(config.doppler_window, w_doppler_);
+  double sr = 0, sr2 = 0, sd = 0, sd2 = 0;
+  for (double v : w_range_) {
+    sr += v;
+    sr2 += v * v;
+  }
+  for (double v : w_doppler_) {
+    sd += v;
+    sd2 += v * v;
+  }
+  processing_gain_ = (sr * sr / sr2) * (sd * sd / sd2);
+  const double noise_norm = 1.0 / std::sqrt(sr2 * sd2);
+  out_scale_ = pulsed_ ? noise_norm / static_cast<double>(n_fft_) : noise_norm;
+
+  plans_ = std::make_unique<Plans>();
+  {
+    std::lock_guard lock(planner_mutex());
+    plans_->fast =
+        static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n_fft_));
+    plans_->filter =
+        static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n_fft_));
+    plans_->slow = static_cast<std::complex<double>*>(
+        fftw_malloc(sizeof(std::complex<double>) * n_pulses_ * n_range_));
+    if (!plans_->fast || !plans_->filter || !plans_->slow)
+      throw std::runtime_error("processing: out of memory for FFT buffers");
+    const int nfft = static_cast<int>(n_fft_);
+    plans_->fast_forward = fftw_plan_dft_1d(nfft, as_fftw(plans_->fast), as_fftw(plans_->fast),
+                                            FFTW_FORWARD, FFTW_ESTIMATE);
+    plans_->fast_backward = fftw_plan_dft_1d(nfft, as_fftw(plans_->fast), as_fftw(plans_->fast),
+                                             FFTW_BACKWARD, FFTW_ESTIMATE);
+    // Doppler: one length-M transform per range bin, stride N_r, in place on `slow`.
+    const int m = static_cast<int>(n_pulses_);
+    const int howmany = static_cast<int>(n_range_);
+    plans_->doppler = fftw_plan_many_dft(1, &m, howmany, as_fftw(plans_->slow), nullptr, howmany, 1,
+                                         as_fftw(plans_->slow), nullptr, howmany, 1, FFTW_BACKWARD,
+                                         FFTW_ESTIMATE);
+    if (!plans_->fast_forward || !plans_->fast_backward || !plans_->doppler)
+      throw std::runtime_error("processing: FFTW could not plan the transforms");
+  }
+  if (pulsed_) {
+    // Matched filter reference h[i] = w_r[i] u(i / fs); store conj(FFT(h)).
+    std::fill(plans_->fast, plans_->fast + n_fft_, std::complex<double>{0.0, 0.0});
+    const double t_pulse = w.pulse_width_s;
+    for (std::size_t i = 0; i < n_pulse_samples_; ++i) {
+      const double x = (static_cast<double>(i) + 0.5) / fs_hz_ - 0.5 * t_pulse;
+      plans_->fast[i] = w_range_[i] * std::polar(1.0, kPi * chirp_rate_ * x * x);
+    }
+    fftw_execute(plans_->fast_forward);
+    for (std::size_t i = 0; i < n_fft_; ++i)
+      plans_->filter[i] = std::conj(plans_->fast[i]);
+  }
+
+  // Velocity kernel table: W_d(x) = sum_m w_d[m] exp(j 2 pi x m / M) at x = i / kSteps over one
+  // period, by a zero-padded FFT of the taper.
+  const double nd = 1.0 / std::sqrt(sd2), nr = 1.0 / std::sqrt(sr2);
+  range_norm_ = nr;
+  auto periodic_table = [](const std::vector<double>& taper, std::size_t period, double scale) {
+    const std::size_t n = period * kSteps;
+    std::vector<std::complex<double>> table(n + 1);
+    std::lock_guard lock(planner_mutex());
+    auto* buf = static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n));
+    if (!buf)
+      throw std::runtime_error("processing: out of memory for kernel tables");
+    fftw_plan p = fftw_plan_dft_1d(static_cast<int>(n), as_fftw(buf), as_fftw(buf), FFTW_BACKWARD,
+                                   FFTW_ESTIMATE);
+    std::fill(buf, buf + n, std::complex<double>{0.0, 0.0});
+    for (std::size_t i = 0; i < taper.size(); ++i)
+      buf[i] = taper[i];
+    fftw_execute(p);
+    for (std::size_t i = 0; i < n; ++i)
+      table[i] = buf[i] * scale;
+    table[n] = table[0];  // closes the period for interpolation
+    fftw_destroy_plan(p);
+    fftw_free(buf);
+    return table;
+  };
+  table_v_ = periodic_table(w_doppler_, n_pulses_, nd);
+  if (!pulsed_) {
+    table_r_ = periodic_table(w_range_, n_range_, nr);
+    range_energy_ = static_cast<double>(n_range_);  // Parseval
+  } else {
+    range_energy_ = 0.0;
+    const auto np = static_cast<long>(n_pulse_samples_);
+    for (long x = -np; x <= np; ++x)
+      range_energy_ += std::norm(pulse_mf_exact(static_cast<double>(x), 0.0) * nr);
+    // Pulsed: G on offsets x in [-(K+1), K+1] from the coupled peak, for Doppler rows spanning
+    // +-2 v_max / lambda.
+    const auto k = static_cast<std::size_t>(config.kernel_half_width_bins) + 1;
+    table_r_span_ = 2 * k * kSteps + 1;
+    const double fd_max = 2.0 * config.max_speed_mps / lambda_m_;
+    n_fd_rows_ = std::clamp<std::size_t>(
+        static_cast<std::size_t>(std::ceil(2.0 * fd_max * w.pulse_width_s * kSteps)) + 1, 3, 4097);
+    fd_min_hz_ = -fd_max;
+    fd_row_step_hz_ = 2.0 * fd_max / static_cast<double>(n_fd_rows_ - 1);
+    table_r_.resize(table_r_span_ * n_fd_rows_);
+    for (std::size_t row = 0; row < n_fd_rows_; ++row) {
+      const double fd = fd_min_hz_ + fd_row_step_hz_ * static_cast<double>(row);
+      for (std::size_t i = 0; i < table_r_span_; ++i) {
+        const double x = (static_cast<double>(i) - static_cast<double>(k * kSteps)) / kSteps;
+        table_r_[row * table_r_span_ + i] = pulse_mf_exact(x - fd * fs_hz_ / chirp_rate_, fd) * nr;
+      }
+    }
+  }
+}
+
+RangeDopplerProcessor::~RangeDopplerProcessor() = default;
+
+void RangeDopplerProcessor::add_diffuse(std::complex<double> b, std::size_t range_bin,
+                                        double radial_velocity_mps,
+                                        std::span<std::complex<double>> image) const noexcept {
+  if (range_bin >= n_range_ || image.size() < image_cells() || !std::isfinite(radial_velocity_mps))
+    return;
+  const double nu = radial_velocity_mps / dv_mps_;
+  const double p = nu + static_cast<double>(n_pulses_ / 2);
+  const auto m = static_cast<double>(n_pulses_);
+  const std::complex<double> a = b * std::polar(1.0, kPi * nu * (m - 1.0) / m);
+  const auto jc = static_cast<long>(std::lround(p));
+  const auto nv = static_cast<long>(n_pulses_);
+  const long k = config_.kernel_half_width_bins;
+  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  for (long dj = dj0; dj <= dj1; ++dj) {
+    const long j = ((jc + dj) % nv + nv) % nv;
+    image[static_cast<std::size_t>(j) * n_range_ + range_bin] +=
+        a * velocity_kernel(static_cast<double>(jc + dj) - p);
+  }
+}
+
+std::complex<double> RangeDopplerProcessor::diffuse_response_at(
+    std::complex<double> b, double radial_velocity_mps, std::size_t velocity_bin) const noexcept {
+  const double nu = radial_velocity_mps / dv_mps_;
+  const double p = nu + static_cast<double>(n_pulses_ / 2);
+  const auto nv = static_cast<long>(n_pulses_);
+  const long k = config_.kernel_half_width_bins;
+  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  const auto jc = static_cast<long>(std::lround(p));
+  long d = ((static_cast<long>(velocity_bin) - jc) % nv + nv) % nv;  // [0, nv)
+  if (d > dj1)
+    d -= nv;
+  if (d < dj0 || d > dj1)
+    return {0.0, 0.0};
+  const auto m = static_cast<double>(n_pulses_);
+  return b * std::polar(1.0, kPi * nu * (m - 1.0) / m) *
+         velocity_kernel(static_cast<double>(jc + d) - p);
+}
+
+double RangeDopplerProcessor::range_of_bin(double bin) const noexcept {
+  return first_range_m_ + bin * range_bin_m_;
+}
+double RangeDopplerProcessor::velocity_of_bin(double bin) const noexcept {
+  return (bin - static_cast<double>(n_pulses_ / 2)) * dv_mps_;
+}
+
+// G(x; f_d) = sum_i w_r[i] u(t_i + x/fs) conj(u(t_i)) exp(j 2 pi f_d (t_i + x/fs - T/2)),
+// t_i = (i + 1/2)/fs: the matched filter's output x samples after the echo's start
+// (unnormalised). Sampling mid-interval keeps the pulse's samples symmetric about T/2.
+std::complex<double> RangeDopplerProcessor::pulse_mf_exact(double x, double fd_hz) const noexcept {
+  const double t_pulse = config_.waveform.pulse_width_s;
+  std::complex<double> acc{0.0, 0.0};
+  for (std::size_t i = 0; i < n_pulse_samples_; ++i) {
+    const double t_echo = (static_cast<double>(i) + 0.5 + x) / fs_hz_;
+    if (t_echo < 0.0 || t_echo >= t_pulse)
+      continue;
+    const double a = t_echo - 0.5 * t_pulse;
+    const double b = (static_cast<double>(i) + 0.5) / fs_hz_ - 0.5 * t_pulse;
+    acc +=
+        w_range_[i] * std::polar(1.0, kPi * chirp_rate_ * (a * a - b * b) + 2.0 * kPi * fd_hz * a);
+  }
+  return acc;
+}
+
+std::complex<double> RangeDopplerProcessor::velocity_kernel(double x) const noexcept {
+  const auto period = static_cast<double>(n_pulses_);
+  double u = x - period * std::floor(x / period);
+  if (!(u >= 0.0 && u < period))
+    u = 0.0;
+  const double f = u * kSteps;
+  auto i = static_cast<std::size_t>(f);
+  if (i >= n_pulses_ * kSteps)
+    i = n_pulses_ * kSteps - 1;
+  return lerp(table_v_[i], table_v_[i + 1], f - static_cast<double>(i));
+}
+
+std::complex<double> RangeDopplerProcessor::range_kernel(double x, double fd_hz) const noexcept {
+  if (!pulsed_) {
+    const auto period = static_cast<double>(n_range_);
+    double u = std::fmod(x, period);
+    if (u < 0.0)
+      u += period;
+    const double f = u * kSteps;
+    auto i = static_cast<std::size_t>(f);
+    if (i >= n_range_ * kSteps)
+      i = n_range_ * kSteps - 1;
+    return lerp(table_r_[i], table_r_[i + 1], f - static_cast<double>(i));
+  }
+  // Pulsed: x is the offset from the coupled peak; the echo starts at x + f_d fs / k.
+  const auto k = static_cast<double>(config_.kernel_half_width_bins + 1);
+  if (std::abs(x) >= k)  // outside the table: the exact sum (tests with wide supports)
+    return pulse_mf_exact(x - fd_hz * fs_hz_ / chirp_rate_, fd_hz) * range_norm_;
+  double row = (fd_hz - fd_min_hz_) / fd_row_step_hz_;
+  row = std::clamp(row, 0.0, static_cast<double>(n_fd_rows_ - 1) - 1e-9);
+  const auto r0 = static_cast<std::size_t>(row);
+  const double tr = row - static_cast<double>(r0);
+  const double f = (x + k) * kSteps;
+  auto i = static_cast<std::size_t>(f);
+  if (i >= table_r_span_ - 1)
+    i = table_r_span_ - 2;
+  const double ti = f - static_cast<double>(i);
+  const std::complex<double>* a = &table_r_[r0 * table_r_span_];
+  const std::complex<double>* b = a + table_r_span_;
+  return lerp(lerp(a[i], a[i + 1], ti), lerp(b[i], b[i + 1], ti), tr);
+}
+
+ImagePosition RangeDopplerProcessor::position_of(double range_m,
+                                                 double radial_velocity_mps) const noexcept {
+  ImagePosition p;
+  const double fd = -2.0 * radial_velocity_mps / lambda_m_;
+  p.velocity_bin = radial_velocity_mps / dv_mps_ + static_cast<double>(n_pulses_ / 2);
+  if (!std::isfinite(range_m) || !std::isfinite(radial_velocity_mps) || range_m < 0.0)
+    return p;
+  if (pulsed_) {
+    // Echoes fold modulo the unambiguous range (second-time-around returns).
+    const double r_fold = std::fmod(range_m, unamb_range_m_);
+    const double start_bin = (r_fold - first_range_m_) / range_bin_m_;
+    p.range_bin = start_bin - fd * fs_hz_ / chirp_rate_;
+    p.in_swath = start_bin >= 0.0 && start_bin <= static_cast<double>(n_range_ - 1);
+  } else {
+    const double tau = 2.0 * range_m / kSpeedOfLight_mps;
+    p.range_bin = static_cast<double>(n_range_) * (chirp_rate_ * tau - fd) / fs_hz_;
+    p.in_swath = p.range_bin >= 0.0 && p.range_bin < static_cast<double>(n_range_);
+  }
+  return p;
+}
+
+void RangeDopplerProcessor::synthesize_cube(std::span<const PointScatterer> scatterers,
+                                            std::span<std::complex<double>> cube) const noexcept {
+  if (cube.size() < cube_samples())
+    return;
+  const double t_pulse = config_.waveform.pulse_width_s;
+  const double t0 = 2.0 * first_range_m_ / kSpeedOfLight_mps;
+  for (const PointScatterer& s : scatterers) {
+    if (!position_of(s.range_m, s.radial_velocity_mps).in_swath)
+      continue;
+    const double fd = -2.0 * s.radial_velocity_mps / lambda_m_;
+    for (std::size_t m = 0; m < n_pulses_; ++m) {
+      const double tm =
+          (static_cast<double>(m) - 0.5 * static_cast<double>(n_pulses_ - 1)) * pri_s_;
+      const double tau = 2.0 * (s.range_m + s.radial_velocity_mps * tm) / kSpeedOfLight_mps;
+      const std::complex<double> a = s.amplitude * std::polar(1.0, 2.0 * kPi * fd * tm);
+      std::complex<double>* row = cube.data() + m * n_fast_;
+      if (pulsed_) {
+        const double tau_f = std::fmod(tau, pri_s_);
+        for (std::size_t n = 0; n < n_fast_; ++n) {
+          // The receiver samples mid-interval, t0 + (n + 1/2) / fs, as the reference does.
+          const double te = t0 + (static_cast<double>(n) + 0.5) / fs_hz_ - tau_f;
+          if (te < 0.0 || te >= t_pulse)
+            continue;
+          const double x = te - 0.5 * t_pulse;
+          row[n] += a * std::polar(1.0, kPi * chirp_rate_ * x * x + 2.0 * kPi * fd * x);
+        }
+      } else {
+        // Dechirped beat rx conj(tx): frequency f_d - k tau, phase of `a` at n = 0.
+        const double f_beat = fd - chirp_rate_ * tau;
+        for (std::size_t n = 0; n < n_fast_; ++n)
+          row[n] += a * std::polar(1.0, 2.0 * kPi * f_beat * static_cast<double>(n) / fs_hz_);
+      }
+    }
+  }
+}
+
+void RangeDopplerProcessor::process_cube(std::span<const std::complex<double>> cube,
+                                         std::span<std::complex<double>> image) noexcept {
+  if (cube.size() < cube_samples() || image.size() < image_cells())
+    return;
+  Plans& p = *plans_;
+  for (std::size_t m = 0; m < n_pulses_; ++m) {
+    const std::complex<double>* row = cube.data() + m * n_fast_;
+    if (pulsed_) {
+      std::copy(row, row + n_fast_, p.fast);
+      std::fill(p.fast + n_fast_, p.fast + n_fft_, std::complex<double>{0.0, 0.0});
+      fftw_execute(p.fast_forward);
+      for (std::size_t i = 0; i < n_fft_; ++i)
+        p.fast[i] *= p.filter[i];
+      fftw_execute(p.fast_backward);  // correlation: y[l] = sum_i x[l + i] conj(h[i]) * n_fft
+    } else {
+      for (std::size_t n = 0; n < n_fast_; ++n)
+        p.fast[n] = row[n] * w_range_[n];
+      fftw_execute(p.fast_backward);
+    }
+    const double wd = w_doppler_[m] * out_scale_;
+    std::complex<double>* slow_row = p.slow + m * n_range_;
+    for (std::size_t l = 0; l < n_range_; ++l)
+      slow_row[l] = p.fast[l] * wd;
+  }
+  fftw_execute(p.doppler);
+  // FFT bin k holds velocity k dv (mod M); image row j = (k + M/2) mod M.
+  const std::size_t half = n_pulses_ / 2;
+  for (std::size_t k = 0; k < n_pulses_; ++k) {
+    const std::size_t j = (k + half) % n_pulses_;
+    std::copy(p.slow + k * n_range_, p.slow + (k + 1) * n_range_, image.data() + j * n_range_);
+  }
+}
+
+bool RangeDopplerProcessor::add_direct(const PointScatterer& s,
+                                       std::span<std::complex<double>> image,
+                                       int half_width_bins) const noexcept {
+  const ImagePosition pos = position_of(s.range_m, s.radial_velocity_mps);
+  return add_direct_at(s.amplitude, pos, s.radial_velocity_mps, image, half_width_bins);
+}
+
+bool RangeDopplerProcessor::add_direct_at(std::complex<double> amplitude, const ImagePosition& pos,
+                                          double radial_velocity_mps,
+                                          std::span<std::complex<double>> image,
+                                          int half_width_bins) const noexcept {
+  if (!pos.in_swath || image.size() < image_cells())
+    return false;
+  const int k = half_width_bins < 0 ? config_.kernel_half_width_bins : half_width_bins;
+  const double fd = -2.0 * radial_velocity_mps / lambda_m_;
+  const double nu = radial_velocity_mps / dv_mps_;
+  const auto m = static_cast<double>(n_pulses_);
+  const std::complex<double> a = amplitude * std::polar(1.0, kPi * nu * (m - 1.0) / m);
+  const auto lc = static_cast<long>(std::lround(pos.range_bin));
+  const auto jc = static_cast<long>(std::lround(pos.velocity_bin));
+  const auto nr = static_cast<long>(n_range_);
+  const auto nv = static_cast<long>(n_pulses_);
+  const long l0 = std::max<long>(0, lc - k), l1 = std::min<long>(nr - 1, lc + k);
+  // The range response once per bin (it does not depend on the velocity bin).
+  constexpr long kCached = 65;
+  std::complex<double> range_values[kCached];
+  const bool cached = l1 - l0 + 1 <= kCached;
+  if (cached)
+    for (long l = l0; l <= l1; ++l)
+      range_values[l - l0] = range_kernel(static_cast<double>(l) - pos.range_bin, fd);
+  // +-K bins, or every bin once when K reaches half the period.
+  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  for (long dj = dj0; dj <= dj1; ++dj) {
+    const long j = ((jc + dj) % nv + nv) % nv;
+    const std::complex<double> kv =
+        a * velocity_kernel(static_cast<double>(jc + dj) - pos.velocity_bin);
+    std::complex<double>* row = image.data() + static_cast<std::size_t>(j) * n_range_;
+    for (long l = l0; l <= l1; ++l)
+      row[l] += kv * (cached ? range_values[l - l0]
+                             : range_kernel(static_cast<double>(l) - pos.range_bin, fd));
+  }
+  return true;
+}
+
+bool RangeDopplerProcessor::footprint(std::complex<double> amplitude, const ImagePosition& pos,
+                                      double radial_velocity_mps, Footprint& f) const noexcept {
+  f.n_rows = 0;
+  f.l1 = f.l0 - 1;
+  if (!pos.in_swath)
+    return false;
+  const long k = std::min<long>(config_.kernel_half_width_bins, (Footprint::kMaxBins - 1) / 2);
+  const double fd = -2.0 * radial_velocity_mps / lambda_m_;
+  const double nu = radial_velocity_mps / dv_mps_;
+  const auto m = static_cast<double>(n_pulses_);
+  const std::complex<double> a = amplitude * std::polar(1.0, kPi * nu * (m - 1.0) / m);
+  const long lc = std::lround(pos.range_bin), jc = std::lround(pos.velocity_bin);
+  const auto nr = static_cast<long>(n_range_), nv = static_cast<long>(n_pulses_);
+  f.l0 = std::max<long>(0, lc - k);
+  f.l1 = std::min<long>(nr - 1, lc + k);
+  // Successive bins are one bin apart: one fractional position, then steps of kSteps entries
+  // through the tables (the same interpolation weight for every bin).
+  const double x0 = static_cast<double>(f.l0) - pos.range_bin;
+  if (!pulsed_) {
+    const std::size_t period = n_range_ * kSteps;
+    const auto pr = static_cast<double>(n_range_);
+    double u = x0 - pr * std::floor(x0 / pr);
+    double fi = u * kSteps;
+    auto i = std::min(static_cast<std::size_t>(fi), period - 1);
+    const double t = fi - static_cast<double>(i);
+    for (long l = f.l0; l <= f.l1; ++l) {
+      f.range[l - f.l0] = lerp(table_r_[i], table_r_[i + 1], t);
+      i += kSteps;
+      if (i >= period)
+        i -= period;
+    }
+  } else {
+    const auto kk = static_cast<double>(config_.kernel_half_width_bins + 1);
+    double row = (fd - fd_min_hz_) / fd_row_step_hz_;
+    row = std::clamp(row, 0.0, static_cast<double>(n_fd_rows_ - 1) - 1e-9);
+    const auto r0 = static_cast<std::size_t>(row);
+    const double tr = row - static_cast<double>(r0);
+    const std::complex<double>* ra = &table_r_[r0 * table_r_span_];
+    const std::complex<double>* rb = ra + table_r_span_;
+    const double fi = (x0 + kk) * kSteps;
+    const double base = std::floor(fi);
+    const double t = fi - base;
+    auto i = static_cast<long>(base);
+    for (long l = f.l0; l <= f.l1; ++l, i += kSteps) {
+      if (i >= 0 && i + 1 < static_cast<long>(table_r_span_)) {
+        const auto u = static_cast<std::size_t>(i);
+        f.range[l - f.l0] = lerp(lerp(ra[u], ra[u + 1], t), lerp(rb[u], rb[u + 1], t), tr);
+      } else {
+        f.range[l - f.l0] = range_kernel(static_cast<double>(l) - pos.range_bin, fd);
+      }
+    }
+  }
+  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  const std::size_t period_v = n_pulses_ * kSteps;
+  const double xv = static_cast<double>(jc + dj0) - pos.velocity_bin;
+  const double uv = xv - m * std::floor(xv / m);
+  const double fv = uv * kSteps;
+  auto iv = std::min(static_cast<std::size_t>(fv), period_v - 1);
+  const double tv = fv - static_cast<double>(iv);
+  for (long dj = dj0; dj <= dj1; ++dj) {
+    f.rows[f.n_rows] = static_cast<std::uint32_t>(((jc + dj) % nv + nv) % nv);
+    f.velocity[f.n_rows] = a * lerp(table_v_[iv], table_v_[iv + 1], tv);
+    ++f.n_rows;
+    iv += kSteps;
+    if (iv >= period_v)
+      iv -= period_v;
+  }
+  return true;
+}
+
+void RangeDopplerProcessor::add_footprint(const Footprint& f, double gain,
+                                          std::span<std::complex<double>> image) const noexcept {
+  if (image.size() < image_cells())
+    return;
+  const long n = f.l1 - f.l0 + 1;
+  for (int r = 0; r < f.n_rows; ++r) {
+    const std::complex<double> kv = f.velocity[r] * gain;
+    std::complex<double>* row = image.data() + static_cast<std::size_t>(f.rows[r]) * n_range_ +
+                                static_cast<std::size_t>(f.l0);
+    for (long i = 0; i < n; ++i)
+      row[i] += kv * f.range[i];
+  }
+}
+
+void RangeDopplerProcessor::velocity_power_taps(double velocity_bin, long dj0, long dj1,
+                                                double* out) const noexcept {
+  const auto m = static_cast<double>(n_pulses_);
+  const std::size_t period = n_pulses_ * kSteps;
+  const double x = static_cast<double>(std::lround(velocity_bin) + dj0) - velocity_bin;
+  const double fv = (x - m * std::floor(x / m)) * kSteps;
+  auto i = std::min(static_cast<std::size_t>(fv), period - 1);
+  const double t = fv - static_cast<double>(i);
+  for (long dj = dj0; dj <= dj1; ++dj) {
+    *out++ = std::norm(lerp(table_v_[i], table_v_[i + 1], t));
+    i += kSteps;
+    if (i >= period)
+      i -= period;
+  }
+}
+
+double RangeDopplerProcessor::velocity_power(double x) const noexcept {
+  return std::norm(velocity_kernel(x));
+}
+
+std::complex<double> RangeDopplerProcessor::response_at(const PointScatterer& s,
+                                                        std::size_t range_bin,
+                                                        std::size_t velocity_bin) const noexcept {
+  // The same support as add_direct: +-K bins around the nearest bin in range and velocity.
+  const ImagePosition pos = position_of(s.range_m, s.radial_velocity_mps);
+  const long k = config_.kernel_half_width_bins;
+  if (!pos.in_swath || std::labs(static_cast<long>(range_bin) - std::lround(pos.range_bin)) > k)
+    return {0.0, 0.0};
+  const auto nv = static_cast<long>(n_pulses_);
+  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  const auto jc = static_cast<long>(std::lround(pos.velocity_bin));
+  long d = ((static_cast<long>(velocity_bin) - jc) % nv + nv) % nv;
+  if (d > dj1)
+    d -= nv;
+  if (d < dj0 || d > dj1)
+    return {0.0, 0.0};
+  const double fd = -2.0 * s.radial_velocity_mps / lambda_m_;
+  const double nu = s.radial_velocity_mps / dv_mps_;
+  const auto m = static_cast<double>(n_pulses_);
+  const std::complex<double> a = s.amplitude * std::polar(1.0, kPi * nu * (m - 1.0) / m);
+  return a * velocity_kernel(static_cast<double>(jc + d) - pos.velocity_bin) *
+         range_kernel(static_cast<double>(range_bin) - pos.range_bin, fd);
+}
+
+double RangeDopplerProcessor::straddle_gain(double range_offset_bins,
+                                            double velocity_offset_bins) const noexcept {
+  const double r0 = std::norm(range_kernel(0.0, 0.0));
+  const double v0 = std::norm(velocity_kernel(0.0));
+  if (r0 == 0.0 || v0 == 0.0)
+    return 0.0;
+  return std::norm(range_kernel(range_offset_bins, 0.0)) / r0 *
+         std::norm(velocity_kernel(velocity_offset_bins)) / v0;
+}
+
+}  // namespace radar_emu::radar

@@ -1,0 +1,160 @@
+#pragma once
+// Signal synthesis and range-Doppler processing for one receive channel and one beam position.
+//
+// Two paths give the same range-Doppler image:
+//  * exact: synthesise the baseband data cube (slow time x fast time) sample by sample from point
+//    scatterers, then compress in range (pulsed: matched filter by FFT fast convolution; FMCW:
+//    windowed FFT of the dechirped beat) and FFT across pulses (FFTW);
+//  * direct: add each scatterer's response to the image from kernel tables computed at setup from
+//    the same processing, over +-K bins around its peak. Exact inside that support up to the
+//    tables' interpolation (64 steps a bin, linear: < 1e-3 relative); what it neglects is listed
+//    in docs/architecture.md (sidelobes beyond K bins, range walk during the CPI, echoes that
+//    straddle the swath's edges).
+// Images are [velocity bin][range bin], range contiguous, scaled so that receiver noise of unit
+// variance per fast-time sample gives unit mean power per cell: |cell|^2 is an SNR.
+
+#include <complex>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "radar/sensor/waveform.hpp"
+#include "radar/sensor/window.hpp"
+
+namespace radar_emu::radar {
+
+struct PointScatterer {
+  /// Complex amplitude of the echo at the receiver, in units of the noise standard deviation of
+  /// one fast-time sample (|a|^2 = single-sample SNR), phase at the centre of the CPI.
+  std::complex<double> amplitude{0.0, 0.0};
+  double range_m = 0.0;              ///< at the centre of the CPI
+  double radial_velocity_mps = 0.0;  ///< positive receding
+};
+
+/// A point scatterer's direct response, prepared once and added to several images with
+/// different gains (the beams of a scan): range values on bins l0..l1, velocity values on `rows`.
+struct Footprint {
+  static constexpr int kMaxBins = 65;  ///< 2 K + 1 with K <= 32
+  long l0 = 0, l1 = -1;
+  int n_rows = 0;
+  std::complex<double> range[kMaxBins];
+  std::complex<double> velocity[kMaxBins];
+  std::uint32_t rows[kMaxBins];
+};
+
+struct ProcessingConfig {
+  Waveform waveform;
+  WindowSpec range_window{WindowKind::kHann};
+  WindowSpec doppler_window{WindowKind::kHann};
+  int kernel_half_width_bins = 4;  ///< direct path support, +-K bins in range and in velocity
+  double max_speed_mps = 700.0;    ///< direct path (pulsed): largest |v| its coupling table covers
+};
+
+/// Where a scatterer's response peaks on the image, in fractional bins (before folding the
+/// velocity bin into [0, M)), and whether it lands on the image at all.
+struct ImagePosition {
+  double range_bin = 0.0;     ///< includes range folding (pulsed) and range-Doppler coupling
+  double velocity_bin = 0.0;  ///< v / dv + M/2
+  bool in_swath = false;
+};
+
+class RangeDopplerProcessor {
+ public:
+  /// Setup: validates, builds windows, FFTW plans (FFTW_ESTIMATE: deterministic) and tables.
+  explicit RangeDopplerProcessor(const ProcessingConfig& config);
+  ~RangeDopplerProcessor();
+  RangeDopplerProcessor(const RangeDopplerProcessor&) = delete;
+  RangeDopplerProcessor& operator=(const RangeDopplerProcessor&) = delete;
+
+  [[nodiscard]] const ProcessingConfig& config() const noexcept { return config_; }
+  [[nodiscard]] std::size_t range_bins() const noexcept { return n_range_; }
+  [[nodiscard]] std::size_t velocity_bins() const noexcept { return n_pulses_; }
+  [[nodiscard]] std::size_t image_cells() const noexcept { return n_range_ * n_pulses_; }
+  /// Fast-time samples per pulse in the raw cube: the swath plus one pulse (pulsed), N (FMCW).
+  [[nodiscard]] std::size_t cube_fast_samples() const noexcept { return n_fast_; }
+  [[nodiscard]] std::size_t cube_samples() const noexcept { return n_fast_ * n_pulses_; }
+
+  [[nodiscard]] double range_of_bin(double bin) const noexcept;
+  [[nodiscard]] double velocity_of_bin(double bin) const noexcept;
+  /// Peak SNR gain of the processing for an on-grid scatterer: |peak|^2 / |a|^2 =
+  /// (sum w_r)^2 / sum w_r^2 * (sum w_d)^2 / sum w_d^2 (pulse samples x pulses / ENBWs).
+  [[nodiscard]] double processing_gain() const noexcept { return processing_gain_; }
+  [[nodiscard]] ImagePosition position_of(double range_m,
+                                          double radial_velocity_mps) const noexcept;
+
+  /// Exact path, step 1: adds the scatterers' echoes to a raw cube [pulse][fast sample].
+  void synthesize_cube(std::span<const PointScatterer> scatterers,
+                       std::span<std::complex<double>> cube) const noexcept;
+  /// Exact path, step 2: range compression and Doppler FFT of a raw cube into an image. Uses this
+  /// object's scratch buffers: one call at a time per object. Real-time safe.
+  void process_cube(std::span<const std::complex<double>> cube,
+                    std::span<std::complex<double>> image) noexcept;
+
+  /// Direct path: adds the scatterer's response times `gain` to the image (+-K bins; velocity
+  /// wraps). Returns false (adds nothing) when the scatterer is outside the swath.
+  bool add_direct(const PointScatterer& s, std::span<std::complex<double>> image,
+                  int half_width_bins = -1) const noexcept;
+  /// add_direct with the position already computed by position_of (amplitude as in
+  /// PointScatterer).
+  bool add_direct_at(std::complex<double> amplitude, const ImagePosition& pos,
+                     double radial_velocity_mps, std::span<std::complex<double>> image,
+                     int half_width_bins = -1) const noexcept;
+  /// Prepares the direct response (support K <= 32); false outside the swath.
+  bool footprint(std::complex<double> amplitude, const ImagePosition& pos,
+                 double radial_velocity_mps, Footprint& f) const noexcept;
+  /// Adds a prepared response times `gain`.
+  void add_footprint(const Footprint& f, double gain,
+                     std::span<std::complex<double>> image) const noexcept;
+  /// |velocity response|^2 at x bins from its peak (periodic): the Doppler taper's leakage of
+  /// clutter power.
+  [[nodiscard]] double velocity_power(double x) const noexcept;
+  /// velocity_power at the bins jc + dj, dj = dj0..dj1, jc = round(velocity_bin), into `out`.
+  void velocity_power_taps(double velocity_bin, long dj0, long dj1, double* out) const noexcept;
+  /// The direct response of `s` at one cell (zero outside add_direct's support), without
+  /// touching an image: for channels that are needed only at detections.
+  [[nodiscard]] std::complex<double> response_at(const PointScatterer& s, std::size_t range_bin,
+                                                 std::size_t velocity_bin) const noexcept;
+
+  /// Diffuse clutter: a patch's speckle amplitude `b` (already drawn) spread over range bin
+  /// `range_bin` only and over +-K velocity bins through the Doppler taper. `b` should carry
+  /// sqrt(range_energy()) so that homogeneous clutter has the right mean power per cell.
+  void add_diffuse(std::complex<double> b, std::size_t range_bin, double radial_velocity_mps,
+                   std::span<std::complex<double>> image) const noexcept;
+  [[nodiscard]] std::complex<double> diffuse_response_at(std::complex<double> b,
+                                                         double radial_velocity_mps,
+                                                         std::size_t velocity_bin) const noexcept;
+  /// sum over range bins of |range response|^2 for a unit scatterer (Parseval: N for FMCW).
+  [[nodiscard]] double range_energy() const noexcept { return range_energy_; }
+
+  /// |response|^2 at fractional offsets from the peak, normalised to 1 at the peak: the
+  /// straddle loss an interpolating detector corrects (no coupling term).
+  [[nodiscard]] double straddle_gain(double range_offset_bins,
+                                     double velocity_offset_bins) const noexcept;
+
+ private:
+  ProcessingConfig config_;
+  std::size_t n_range_ = 0, n_pulses_ = 0, n_fast_ = 0, n_fft_ = 0, n_pulse_samples_ = 0;
+  bool pulsed_ = true;
+  double range_bin_m_ = 0, first_range_m_ = 0, unamb_range_m_ = 0, fs_hz_ = 0, pri_s_ = 0;
+  double dv_mps_ = 0, lambda_m_ = 0, chirp_rate_ = 0, processing_gain_ = 1, out_scale_ = 1;
+  double range_norm_ = 1;  ///< 1 / sqrt(sum w_r^2)
+  double range_energy_ = 1;
+  std::vector<double> w_range_, w_doppler_;
+  // Kernel tables, kSteps entries a bin. Velocity: W_d(x) over one period [0, M). Range: FMCW
+  // W_r(x) over one period [0, N); pulsed: G(x; f_d) on +-(K+1) bins around the coupled peak, for
+  // a grid of f_d.
+  std::vector<std::complex<double>> table_v_, table_r_;
+  std::size_t table_r_span_ = 0;  ///< pulsed: entries per Doppler row
+  std::size_t n_fd_rows_ = 0;
+  double fd_row_step_hz_ = 0, fd_min_hz_ = 0;
+  // FFT scratch and plans (opaque FFTW types).
+  struct Plans;
+  std::unique_ptr<Plans> plans_;
+  std::complex<double> velocity_kernel(double x) const noexcept;
+  std::complex<double> range_kernel(double x, double fd_hz) const noexcept;
+  std::complex<double> pulse_mf_exact(double x, double fd_hz) const noexcept;
+};
+
+}  // namespace radar_emu::radar
