@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "emulator/ambiguity_tool.hpp"
 #include "emulator/atten_tool.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/rcs_tool.hpp"
@@ -247,6 +248,27 @@ int main(int argc, char** argv) {
   profile->add_option("--isar-out", prof_opt.isar_csv, "ISAR CSV (default *_isar.csv)");
   profile->add_option("--isar-plot", prof_opt.isar_png, "ISAR PNG (default *_isar.png)");
 
+  CLI::App* ambiguity = app.add_subcommand(
+      "ambiguity",
+      "Ambiguity function of the configured waveform (heat map, cuts, measured figures)");
+  emu::AmbiguityToolOptions amb_opt;
+  ambiguity->add_option("scenario", amb_opt.scenario,
+                        "Scenario TOML whose [radar] waveform to use (default: the embedded one)");
+  ambiguity->add_option("--bandwidth-hz", amb_opt.bandwidth_hz, "Override the swept bandwidth");
+  ambiguity->add_option("--pulse-width-s", amb_opt.pulse_width_s, "Override the pulse length");
+  ambiguity->add_option("--prf-hz", amb_opt.prf_hz, "Override the PRF (with --train)");
+  ambiguity->add_option("--pulses", amb_opt.pulses, "Override the pulses a CPI (with --train)");
+  ambiguity->add_flag("--train", amb_opt.train,
+                      "The coherent pulse train (closed form) over +-2 PRI instead of one pulse");
+  ambiguity->add_option("--delay-span", amb_opt.delay_span, "+- delay in pulse widths (default 1)");
+  ambiguity->add_option("--doppler-span", amb_opt.doppler_span,
+                        "+- Doppler in 1/T (single pulse) or PRFs (train) (default 8)");
+  ambiguity->add_option("--points", amb_opt.points, "Grid points an axis (default 201)");
+  ambiguity->add_option("--oversample", amb_opt.oversample, "Samples per 1/B (default 8)");
+  ambiguity->add_option("--dynamic-range-db", amb_opt.dynamic_range_db, "Plot range (default 40)");
+  ambiguity->add_option("--out", amb_opt.out_dir, "Output directory (default ./ambiguity)");
+  ambiguity->add_flag("-q,--quiet", amb_opt.quiet, "No summary");
+
   CLI::App* atten = app.add_subcommand(
       "atten",
       "Specific attenuation of gases, rain, fog and woodland vs frequency (ITU-R "
@@ -327,6 +349,8 @@ int main(int argc, char** argv) {
       }
       return emu::run_sigma0_tool(s0_opt);
     }
+    if (ambiguity->parsed())
+      return emu::run_ambiguity_tool(amb_opt);
     if (atten->parsed()) {
       atten_opt.freqs_hz = emu::parse_sweep(atten_freq, "--freq-hz");
       return emu::run_atten_tool(atten_opt);

@@ -121,30 +121,55 @@ std::size_t Cfar2d::detect(std::span<const double> power, std::span<CfarHit> hit
     return count;
   }
 
-  // Order statistic: gather, select the k-th smallest.
+  // Order statistic. The cell crosses when x_(k) < P / alpha, i.e. when at least k training
+  // cells lie below P / alpha: count, and stop as soon as the answer is known (a noise cell is
+  // settled after about N - k + 1 cells). The k-th smallest itself is selected only for
+  // crossings (the noise estimate).
   for (long j = 0; j < nv; ++j) {
     const double* row = power.data() + static_cast<std::size_t>(j) * n_range_;
     for (long l = 0; l < nr; ++l) {
-      std::size_t n = 0;
+      const long l0 = std::max<long>(0, l - tr - grd), l1 = std::min<long>(nr - 1, l + tr + grd);
+      const long g0 = std::max<long>(0, l - grd), g1 = std::min<long>(nr - 1, l + grd);
+      const auto n = static_cast<std::size_t>((l1 - l0 + 1) * (2 * pad + 1) -
+                                              (g1 - g0 + 1) * (2 * gv + 1));
+      if (n == 0)
+        continue;
+      const std::size_t k = os_k_[n];
+      const double t = row[l] / alpha_[n];
+      std::size_t below = 0, above = 0;
+      bool decided = false, crosses = false;
+      for (long dj = -pad; dj <= pad && !decided; ++dj) {
+        const long jj = ((j + dj) % nv + nv) % nv;
+        const double* src = power.data() + static_cast<std::size_t>(jj) * n_range_;
+        const bool guard_row = dj >= -gv && dj <= gv;
+        for (long ll = l0; ll <= l1; ++ll) {
+          if (guard_row && ll >= g0 && ll <= g1)
+            continue;
+          if (src[ll] < t) {
+            if (++below >= k) {
+              decided = crosses = true;
+              break;
+            }
+          } else if (++above > n - k) {
+            decided = true;
+            break;
+          }
+        }
+      }
+      if (!crosses)
+        continue;
+      std::size_t m = 0;
       for (long dj = -pad; dj <= pad; ++dj) {
         const long jj = ((j + dj) % nv + nv) % nv;
         const double* src = power.data() + static_cast<std::size_t>(jj) * n_range_;
         const bool guard_row = dj >= -gv && dj <= gv;
-        const long l0 = std::max<long>(0, l - tr - grd), l1 = std::min<long>(nr - 1, l + tr + grd);
-        for (long ll = l0; ll <= l1; ++ll) {
-          if (guard_row && ll >= l - grd && ll <= l + grd)
-            continue;
-          scratch_[n++] = src[ll];
-        }
+        for (long ll = l0; ll <= l1; ++ll)
+          if (!(guard_row && ll >= g0 && ll <= g1))
+            scratch_[m++] = src[ll];
       }
-      if (n == 0)
-        continue;
-      const std::size_t k = os_k_[n];
       std::nth_element(scratch_.begin(), scratch_.begin() + static_cast<long>(k - 1),
-                       scratch_.begin() + static_cast<long>(n));
-      const double xk = scratch_[k - 1];
-      if (row[l] > alpha_[n] * xk)
-        emit(j, l, row[l], xk / os_scale_[n]);
+                       scratch_.begin() + static_cast<long>(m));
+      emit(j, l, row[l], scratch_[k - 1] / os_scale_[n]);
     }
   }
   return count;

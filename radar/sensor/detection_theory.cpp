@@ -67,6 +67,10 @@ double pd_swerling1_ca(double snr, std::size_t n_training, double pfa) noexcept 
   return std::pow(1.0 + ca_cfar_alpha(n_training, pfa) / (n * (1.0 + snr)), -n);
 }
 
+double pd_swerling1_os(double snr, std::size_t n_training, std::size_t k, double pfa) noexcept {
+  return os_cfar_pfa(n_training, k, os_cfar_alpha(n_training, k, pfa) / (1.0 + snr));
+}
+
 double pd_swerling0_ca(double snr, std::size_t n_training, double pfa) noexcept {
   // y = mean of N unit exponentials ~ Gamma(shape N, scale 1/N); threshold T = alpha y.
   const auto n = static_cast<double>(n_training);

@@ -34,6 +34,10 @@ namespace radar_emu::radar {
 /// Swerling 1 with CA-CFAR over N cells: Pd = (1 + alpha / (N (1 + SNR)))^(-N) (Richards 2014,
 /// eq. 6.137).
 [[nodiscard]] double pd_swerling1_ca(double snr, std::size_t n_training, double pfa) noexcept;
+/// Swerling 1 with OS-CFAR (k-th of N): Pd = prod_{i<k} (N - i) / (N - i + alpha / (1 + SNR))
+/// (Rohling 1983; Richards 2014, sec. 6.5.6).
+[[nodiscard]] double pd_swerling1_os(double snr, std::size_t n_training, std::size_t k,
+                                     double pfa) noexcept;
 /// Swerling 0 with CA-CFAR over N cells: Pd averaged over the Gamma(N, 1/N)-distributed noise
 /// estimate, E_y[Q1(sqrt(2 SNR), sqrt(2 alpha y))], by Gauss-Laguerre-free trapezoid quadrature on
 /// y (the estimate is the mean of N unit exponentials).

@@ -200,6 +200,55 @@ TEST(Cfar, ProbabilityOfDetectionFollowsSwerling0And1AtPfa1e6) {
   }
 }
 
+TEST(Cfar, OrderStatisticProbabilityOfDetectionFollowsSwerling1) {
+  const std::size_t nr = 256, nv = 64;
+  rd::CfarConfig cfg;
+  cfg.kind = rd::CfarKind::kOrderStatistic;
+  cfg.pfa = 1e-6;
+  cfg.range_training = 6;
+  cfg.range_guard = 1;
+  cfg.velocity_training = 2;
+  cfg.velocity_guard = 1;
+  rd::Cfar2d cfar(cfg, nr, nv);
+  const std::size_t n = cfar.training_cells();
+  const auto k = static_cast<std::size_t>(std::lround(0.75 * static_cast<double>(n)));
+  std::vector<double> power(nr * nv);
+  std::vector<rd::CfarHit> hits(4096);
+  std::printf("seed 515, OS-CFAR N = %zu, k = %zu\n", n, k);
+  for (double snr_db : {15.0, 20.0, 25.0}) {
+    rd::NoiseRng rng(rd::stream_key(515, static_cast<std::uint64_t>(snr_db)));
+    int trials = 0, detected = 0;
+    for (int image = 0; image < 40; ++image) {
+      std::vector<std::complex<double>> field(nr * nv);
+      for (auto& x : field)
+        x = rng.complex_normal();
+      std::vector<std::size_t> targets;
+      for (std::size_t j = 4; j < nv; j += 8)
+        for (std::size_t l = 8; l + 8 < nr; l += 16) {
+          field[j * nr + l] += rng.complex_normal() * std::sqrt(from_db(snr_db));
+          targets.push_back(j * nr + l);
+        }
+      for (std::size_t i = 0; i < field.size(); ++i)
+        power[i] = std::norm(field[i]);
+      std::uint64_t overflow = 0;
+      const std::size_t h = cfar.detect(power, hits, overflow);
+      for (std::size_t t : targets) {
+        ++trials;
+        for (std::size_t i = 0; i < h; ++i)
+          if (hits[i].velocity_bin * nr + hits[i].range_bin == t) {
+            ++detected;
+            break;
+          }
+      }
+    }
+    const double pd = static_cast<double>(detected) / trials;
+    const double theory = rd::pd_swerling1_os(from_db(snr_db), n, k, 1e-6);
+    std::printf("OS, Swerling 1, SNR %4.1f dB: Pd %.3f over %d trials, theory %.3f\n", snr_db, pd,
+                trials, theory);
+    EXPECT_NEAR(pd, theory, 0.05) << snr_db;
+  }
+}
+
 TEST(Ambiguity, NumericalMatchesTheLinearFmClosedFormAndItsRidge) {
   rd::Waveform w;
   w.bandwidth_hz = 20e6;

@@ -1,0 +1,92 @@
+// The sensor's frame path must not allocate (style.md: nothing in the frame path allocates):
+// count every operator new over 300 frames of targets, clutter, noise, CFAR and monopulse, in
+// both CFAR kinds and both waveforms. Its own executable: it replaces the global operator new.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <complex>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "radar/sensor/noise.hpp"
+#include "radar/sensor/sensor.hpp"
+
+namespace {
+std::atomic<long> g_news{0};
+}  // namespace
+
+void* operator new(std::size_t n) {
+  g_news.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(n == 0 ? 1 : n))
+    return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t n) {
+  return operator new(n);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace rd = radar_emu::radar;
+
+TEST(SensorAllocation, NoHeapAllocationOverManyFrames) {
+  for (rd::WaveformKind wk : {rd::WaveformKind::kPulsedLfm, rd::WaveformKind::kFmcw}) {
+    for (rd::CfarKind ck : {rd::CfarKind::kCellAveraging, rd::CfarKind::kOrderStatistic}) {
+      rd::SensorConfig c;
+      rd::Waveform& w = c.processing.waveform;
+      w.kind = wk;
+      w.pulses = 32;
+      w.range_bins = 128;
+      if (wk == rd::WaveformKind::kFmcw) {
+        w.carrier_hz = 77e9;
+        w.bandwidth_hz = 100e6;
+        w.pulse_width_s = 12.8e-6;
+        w.pri_s = 15e-6;
+      } else {
+        w.swath_start_m = 400.0;
+      }
+      c.cfar.kind = ck;
+      c.antenna.beam_azimuth_rad = {-0.02, 0.0, 0.02};
+      c.antenna.azimuth = {rd::PatternKind::kGaussian, 0.02, {}, {}};
+      c.max_contributions = 4096;
+      rd::Sensor sensor(c);
+      std::vector<rd::Contribution> in;
+      rd::NoiseRng rng(11);
+      const auto& p = sensor.processor();
+      for (int i = 0; i < 300; ++i) {
+        rd::Contribution x;
+        x.coherent = i % 3 == 0;
+        x.range_m = p.range_of_bin(120.0 * rng.uniform());
+        x.range_spread_m = x.coherent ? 0.0 : 5.0 + 20.0 * rng.uniform();
+        x.amplitude = std::polar(std::sqrt(1e-3 + rng.uniform()), 6.283 * rng.uniform());
+        x.radial_velocity_mps = (rng.uniform() - 0.5) * 10.0;
+        x.azimuth_rad = (rng.uniform() - 0.5) * 0.06;
+        in.push_back(x);
+      }
+      std::vector<rd::Detection> out(64);
+      rd::SensorStats stats;
+      for (int f = 0; f < 5; ++f)  // warm-up: TBB's worker threads start on first use
+        (void)sensor.process(in, out, stats);
+      const long before = g_news.load();
+      std::size_t detections = 0;
+      for (int f = 0; f < 300; ++f)
+        detections += sensor.process(in, out, stats);
+      EXPECT_EQ(g_news.load() - before, 0)
+          << rd::waveform_name(wk) << (ck == rd::CfarKind::kCellAveraging ? " CA" : " OS");
+      EXPECT_GT(detections, 0u);
+    }
+  }
+}
