@@ -70,7 +70,8 @@ pulse_width_s = 2.0e-6      # B T = 100; blind range 300 m
 tx_power_w = 500.0          # peak (4 % duty: 20 W mean)
 noise_figure_db = 5.0
 system_losses_db = 3.0
-max_range_m = 6000.0        # swath from the blind range to here
+swath_start_m = 1500.0      # range gate: the beam's lowest edge meets the ground at 1.9 km
+max_range_m = 6000.0        # swath end: 1502 range bins of 3 m
 range_window = "hann"       # rectangular | hann | hamming | blackman | taylor
 doppler_window = "hann"
 max_bounces = 3

@@ -130,8 +130,8 @@ std::size_t Cfar2d::detect(std::span<const double> power, std::span<CfarHit> hit
     for (long l = 0; l < nr; ++l) {
       const long l0 = std::max<long>(0, l - tr - grd), l1 = std::min<long>(nr - 1, l + tr + grd);
       const long g0 = std::max<long>(0, l - grd), g1 = std::min<long>(nr - 1, l + grd);
-      const auto n = static_cast<std::size_t>((l1 - l0 + 1) * (2 * pad + 1) -
-                                              (g1 - g0 + 1) * (2 * gv + 1));
+      const auto n =
+          static_cast<std::size_t>((l1 - l0 + 1) * (2 * pad + 1) - (g1 - g0 + 1) * (2 * gv + 1));
       if (n == 0)
         continue;
       const std::size_t k = os_k_[n];

@@ -36,7 +36,7 @@ struct SensorConfig {
   std::size_t max_detections = 64;
   bool thermal_noise = true;
   std::uint64_t noise_seed = 20261123;
-  double beam_floor_db = -50.0;  ///< two-way sum gain below which a beam ignores a return
+  double beam_floor_db = -40.0;  ///< two-way sum gain below which a beam ignores a return
   double max_range_m = 6000.0;   ///< farthest return of interest: sets the range-ambiguity flag
   std::size_t max_hits_per_beam = 4096;
   std::size_t max_contributions = 1u << 18;  ///< per frame; beyond it returns are counted, dropped
@@ -147,7 +147,7 @@ class Sensor {
   std::vector<std::size_t> beam_first_;  ///< per beam: first slot in candidates_
   std::vector<std::size_t> beam_count_;  ///< per beam: candidates found
   std::vector<std::uint32_t> order_;     ///< candidate indices by SNR
-  std::vector<double> kept_power_;  ///< per output detection: its peak power
+  std::vector<double> kept_power_;       ///< per output detection: its peak power
   std::size_t per_beam_capacity_ = 0;
   double amplitude_scale_ = 0.0;  ///< sqrt(Pt G^2 lambda^2 / ((4 pi)^3 L) / (k T0 F fs))
   double az_extent_rad_ = 0.0;

@@ -32,12 +32,12 @@ TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
   EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, s.sensor.processing.waveform.carrier_hz);
   EXPECT_NEAR(s.sensor.noise_figure, std::pow(10.0, 0.5), 1e-12);  // 5 dB
   EXPECT_NEAR(s.antenna_depression_rad, 5.0 * kDeg, 1e-15);
-  // 16 beams of 1 deg across -8..8 deg; PRI from the PRF; swath from the blind range c T / 2.
+  // 16 beams of 1 deg across -8..8 deg; PRI from the PRF; the range gate from 1500 m.
   ASSERT_EQ(s.sensor.antenna.beam_azimuth_rad.size(), 16u);
   EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), -7.5 * kDeg, 1e-12);
   EXPECT_NEAR(s.sensor.processing.waveform.pri_s, 50e-6, 1e-15);
-  EXPECT_NEAR(s.sensor.processing.waveform.swath_start_m, 299792458.0 * 2e-6 / 2, 1e-9);
-  EXPECT_EQ(s.sensor.processing.waveform.range_bins, 1902);  // ceil((6000 - 299.8) / 2.998)
+  EXPECT_NEAR(s.sensor.processing.waveform.swath_start_m, 1500.0, 1e-9);
+  EXPECT_EQ(s.sensor.processing.waveform.range_bins, 1502);  // ceil(4500 / 2.9979) = ceil(1501.04)
   EXPECT_DOUBLE_EQ(s.ownship_start_enu_m.y, -4000.0);
   EXPECT_EQ(s.scene_builtin, "default");
   EXPECT_TRUE(s.scene_file.empty());
