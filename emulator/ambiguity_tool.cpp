@@ -99,12 +99,12 @@ int run_ambiguity_tool(const AmbiguityToolOptions& o) {
   }
   // Fine cuts through the origin (the surface's grid is too coarse for the main lobe): zero
   // Doppler over +-8/B (or +-T/2 for the train), zero delay over +-8/T (or +-2 PRF).
-  const int nc = o.train ? 4001 : 801;
+  const std::size_t nc = o.train ? 4001 : 801;
   std::vector<double> cut_delays(nc), cut_dopplers(nc), cut_d(nc), cut_f(nc);
-  for (int i = 0; i < nc; ++i) {
-    const double u = -1.0 + 2.0 * i / (nc - 1);
-    cut_delays[static_cast<std::size_t>(i)] = u * (o.train ? 0.5 * t : 8.0 / w.bandwidth_hz);
-    cut_dopplers[static_cast<std::size_t>(i)] = u * (o.train ? 2.0 / w.pri_s : 8.0 / t);
+  for (std::size_t i = 0; i < nc; ++i) {
+    const double u = -1.0 + 2.0 * static_cast<double>(i) / static_cast<double>(nc - 1);
+    cut_delays[i] = u * (o.train ? 0.5 * t : 8.0 / w.bandwidth_hz);
+    cut_dopplers[i] = u * (o.train ? 2.0 / w.pri_s : 8.0 / t);
   }
   const double zero = 0.0;
   if (o.train) {

@@ -449,6 +449,12 @@ void derive_sensor(Scenario& s, const std::string& origin) {
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(origin + ": [radar] " + e.what());
   }
+  try {
+    const radar::Cfar2d probe(c.cfar, static_cast<std::size_t>(w.range_bins),
+                              static_cast<std::size_t>(w.pulses));
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(origin + ": [detector] " + e.what());
+  }
   radar::AntennaConfig& a = c.antenna;
   radar::PatternKind kind{};
   if (!radar::parse_pattern_kind(s.pattern, kind))

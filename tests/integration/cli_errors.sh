@@ -53,6 +53,15 @@ expect_error "theta or phi, not both" profile --mesh "$m" --freq-sweep-hz 9e9:1e
 if ! "$exe" rcs --mesh "$dir/glass.obj" --freq-hz 1e10 --material glass=6,0.2 -q --out "$dir/g.csv"; then
   echo "FAIL: rcs with a dielectric material"; fails=$((fails+1))
 fi
+# ambiguity / the sensor's scenario keys: one-line errors naming the option or key.
+expect_error "--points must be in" ambiguity --points 3 --out "$dir/amb"
+expect_error "--train needs PRI >= 2 T" ambiguity --train --prf-hz 400e3 --out "$dir/amb"
+printf '[radar]\nwaveform = "cw"\n' > "$dir/wave.toml"
+expect_error "wave.toml: \[radar\] waveform: unknown waveform 'cw'" run "$dir/wave.toml"
+printf '[radar]\nswath_start_m = 100.0\n' > "$dir/blind.toml"
+expect_error "swath_start_m must be >= the blind range" run "$dir/blind.toml"
+printf '[detector]\ncfar_training_cells = 900\n' > "$dir/cfar.toml"
+expect_error "cfar.toml: \\[detector\\] cfar: range_training" run "$dir/cfar.toml"
 # sigma0 / atten: one-line errors for bad parameters and out-of-range frequencies.
 expect_error "rms height must be finite and >= 0" sigma0 --eps-r 4,0.1 --rms-height-m -0.001 --corr-length-m 0.01 --freq-hz 35e9 --out "$dir/s.csv"
 expect_error "IM is the loss" sigma0 --eps-r 4,-0.1 --rms-height-m 0.001 --corr-length-m 0.01 --freq-hz 35e9 --out "$dir/s.csv"

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -84,4 +86,30 @@ TEST(Scenario, MissingFileNamesThePath) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/s.toml"), std::string::npos);
   }
+}
+
+TEST(Scenario, TabulatedAntennaPatternFromCsvBesideTheScenario) {
+  const auto dir = std::filesystem::temp_directory_path() / "radar_emu_pattern_test";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream csv(dir / "az.csv");
+    csv << "angle_deg,gain_db\n# a 2 deg beam: -3 dB at +-1 deg\n-5,-30\n-1,-3\n0,0\n1,-3\n5,-30\n";
+    std::ofstream toml(dir / "s.toml");
+    toml << "[antenna]\npattern = \"table\"\npattern_file = \"az.csv\"\nmonopulse = false\n";
+  }
+  const emu::Scenario s = emu::load_scenario(dir / "s.toml");
+  ASSERT_EQ(s.sensor.antenna.azimuth.table_angle_rad.size(), 5u);
+  EXPECT_NEAR(s.sensor.antenna.azimuth.table_angle_rad[1], -kDeg, 1e-15);
+  EXPECT_DOUBLE_EQ(s.sensor.antenna.azimuth.table_gain_db[1], -3.0);
+  {
+    std::ofstream csv(dir / "az.csv");
+    csv << "angle_deg,gain_db\n-5,-30\n-1;-3\n";
+  }
+  try {
+    (void)emu::load_scenario(dir / "s.toml");
+    FAIL() << "accepted a malformed row";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("az.csv:3"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }
