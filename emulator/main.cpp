@@ -239,7 +239,7 @@ int main(int argc, char** argv) {
   add_common(profile, prof_text, prof_opt.mesh, prof_opt.scale, prof_opt.materials,
              prof_opt.bounces, prof_opt.rays_per_wavelength, prof_opt.quiet);
   profile->add_option("--pol", prof_text.pol, "One polarisation: HH, HV, VH or VV (default VV)");
-  profile->add_option("--window", prof_opt.window, "none, hann, hamming or taylor (default hann)");
+  profile->add_option("--window", prof_opt.window, "none, hann, hamming, blackman or taylor (default hann)");
   profile->add_option("--oversample", prof_opt.oversample, "Zero-padding factor (default 4)");
   profile->add_option("--dynamic-range-db", prof_opt.dynamic_range_db, "Plot range (default 50)")
       ->check(CLI::PositiveNumber);

@@ -497,10 +497,10 @@ int run_profile_tool(const ProfileToolOptions& o) {
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size();
   if (nt > 1 && np > 1)
     throw std::invalid_argument("sweep theta or phi, not both (ISAR uses one angle)");
-  const auto window = radar::window_from_name(o.window);
+  const auto window = radar::parse_window_kind(o.window);
   if (!window)
     throw std::invalid_argument("--window: '" + o.window +
-                                "' is not none, hann, hamming or taylor");
+                                "' is not none, hann, hamming, blackman or taylor");
   if (o.oversample < 1 || o.oversample > 64)
     throw std::invalid_argument("--oversample must be in 1..64");
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength,

@@ -62,66 +62,14 @@ std::vector<double> axis(std::size_t m, double spacing) {
   return out;
 }
 
-}  // namespace
-
-std::optional<Window> window_from_name(std::string_view name) noexcept {
-  if (name == "none" || name == "rect" || name == "rectangular")
-    return Window::kRectangular;
-  if (name == "hann")
-    return Window::kHann;
-  if (name == "hamming")
-    return Window::kHamming;
-  if (name == "taylor")
-    return Window::kTaylor;
-  return std::nullopt;
-}
-
+// The taper's n samples (symmetric, peak 1; the transforms divide by their sum).
 std::vector<double> window_samples(Window window, std::size_t n) {
   std::vector<double> w(n, 1.0);
-  if (n < 2)
-    return w;
-  const double denom = static_cast<double>(n - 1);
-  switch (window) {
-    case Window::kRectangular:
-      break;
-    case Window::kHann:  // Harris, Proc. IEEE 66(1), 1978, eq. (27a)
-      for (std::size_t i = 0; i < n; ++i)
-        w[i] = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(i) / denom);
-      break;
-    case Window::kHamming:  // Harris 1978, eq. (30b)
-      for (std::size_t i = 0; i < n; ++i)
-        w[i] = 0.54 - 0.46 * std::cos(2.0 * kPi * static_cast<double>(i) / denom);
-      break;
-    case Window::kTaylor: {
-      // Taylor weighting, nbar = 4, -35 dB (Carrara, Goodman & Majewski, Spotlight Synthetic
-      // Aperture Radar, 1995, app. D; Doerry, "Catalog of window taper functions", Sandia
-      // SAND2017-4042, sec. 2.19): w(x) = 1 + 2 sum_m F_m cos(2 pi m x), x in [-1/2, 1/2].
-      constexpr int nbar = 4;
-      const double eta = std::pow(10.0, 35.0 / 20.0);
-      const double a = std::acosh(eta) / kPi;
-      const double sigma2 = nbar * nbar / (a * a + (nbar - 0.5) * (nbar - 0.5));
-      double f[nbar] = {};
-      for (int m = 1; m < nbar; ++m) {
-        double num = 1.0, den = 1.0;
-        for (int k = 1; k < nbar; ++k) {
-          num *= 1.0 - m * m / (sigma2 * (a * a + (k - 0.5) * (k - 0.5)));
-          if (k != m)
-            den *= 1.0 - static_cast<double>(m * m) / static_cast<double>(k * k);
-        }
-        f[m] = ((m + 1) % 2 == 0 ? 0.5 : -0.5) * num / den;
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        const double x = (static_cast<double>(i) - 0.5 * denom) / static_cast<double>(n);
-        double v = 1.0;
-        for (int m = 1; m < nbar; ++m)
-          v += 2.0 * f[m] * std::cos(2.0 * kPi * m * x);
-        w[i] = v;
-      }
-      break;
-    }
-  }
+  fill_window(WindowSpec{window, 35.0, 4}, w);
   return w;
 }
+
+}  // namespace
 
 RangeProfile range_profile(std::span<const std::complex<double>> samples, const FrequencyGrid& g,
                            Window window, std::size_t oversample) {

@@ -33,18 +33,13 @@
 #include <string_view>
 #include <vector>
 
+#include "radar/sensor/window.hpp"
+
 namespace radar_emu::radar {
 
-enum class Window {
-  kRectangular,
-  kHann,     ///< 0.5 - 0.5 cos, peak sidelobe -31.5 dB
-  kHamming,  ///< 0.54 - 0.46 cos, -42.7 dB
-  kTaylor    ///< nbar = 4, -35 dB design sidelobes
-};
-/// "none"/"rect", "hann", "hamming", "taylor".
-[[nodiscard]] std::optional<Window> window_from_name(std::string_view name) noexcept;
-/// The window's n samples (symmetric).
-[[nodiscard]] std::vector<double> window_samples(Window window, std::size_t n);
+/// The profile and ISAR tapers are the sensor's (radar/sensor/window.hpp); Taylor here is the
+/// -35 dB, nbar = 4 design.
+using Window = WindowKind;
 
 struct FrequencyGrid {
   double start_hz = 0.0;

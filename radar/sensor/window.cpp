@@ -123,7 +123,7 @@ WindowMetrics window_metrics(std::span<const double> w) noexcept {
 }
 
 std::optional<WindowKind> parse_window_kind(std::string_view name) noexcept {
-  if (name == "rectangular" || name == "none")
+  if (name == "rectangular" || name == "rect" || name == "none")
     return WindowKind::kRectangular;
   if (name == "hann")
     return WindowKind::kHann;

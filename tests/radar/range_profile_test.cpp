@@ -170,8 +170,8 @@ TEST(RangeProfile, RejectsBadInput) {
   bad[3] = {std::nan(""), 0.0};
   EXPECT_THROW((void)range_profile(bad, kGrid, Window::kHann), std::invalid_argument);
   EXPECT_THROW((void)isar_image(s, kGrid, 0.01, 1, Window::kHann), std::invalid_argument);
-  EXPECT_FALSE(window_from_name("kaiser").has_value());
-  EXPECT_EQ(window_from_name("taylor"), Window::kTaylor);
+  EXPECT_FALSE(parse_window_kind("kaiser").has_value());
+  EXPECT_EQ(parse_window_kind("taylor"), Window::kTaylor);
 }
 
 }  // namespace
