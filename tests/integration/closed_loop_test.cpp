@@ -8,12 +8,10 @@
 #include <stb/stb_image.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <new>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
@@ -25,32 +23,10 @@
 #include "io/candump.hpp"
 #include "io/detection_icd.hpp"
 #include "scene/default_scene.hpp"
+#include "tests/alloc_counter.hpp"
 
 namespace emu = radar_emu::emulator;
 namespace fs = std::filesystem;
-
-// ---- allocation counter for the frame path (style.md item 10) ------------------------------
-namespace {
-std::atomic<bool> g_count_allocations{false};
-std::atomic<std::uint64_t> g_allocations{0};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  if (g_count_allocations.load(std::memory_order_relaxed)) {
-    g_allocations.fetch_add(1, std::memory_order_relaxed);
-    if (std::getenv("RADAR_EMU_ABORT_ON_ALLOCATION") != nullptr)
-      std::abort();  // for gdb
-  }
-  if (void* p = std::malloc(n == 0 ? 1 : n))
-    return p;
-  throw std::bad_alloc();
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
 
 namespace {
 
@@ -212,16 +188,14 @@ class ClosedLoopDefault : public ::testing::Test {
     emu::RunOptions options;
     // Count heap allocations between frame 5 and the end: the frame path must not allocate.
     options.progress = [](std::uint64_t done, std::uint64_t total) {
-      if (done == 5) {
-        g_allocations = 0;
-        g_count_allocations = true;
-      }
+      if (done == 5)
+        radar_emu::test::start_counting_allocations();
       if (done == total)
-        g_count_allocations = false;
+        (void)radar_emu::test::stop_counting_allocations();
     };
     loop_ = new emu::ClosedLoop(*scenario_, options);
     result_ = new emu::RunResult(loop_->run());
-    allocations_ = g_allocations.load();
+    allocations_ = radar_emu::test::stop_counting_allocations();  // the count frozen at the end
     out_ = temp_dir("default");
     loop_->write_outputs(*result_, out_);
   }

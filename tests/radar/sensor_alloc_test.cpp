@@ -1,44 +1,17 @@
 // The sensor's frame path must not allocate (style.md: nothing in the frame path allocates):
 // count every operator new over 300 frames of targets, clutter, noise, CFAR and monopulse, in
-// both CFAR kinds and both waveforms. Its own executable: it replaces the global operator new.
+// both CFAR kinds and both waveforms. Its own executable: tests/alloc_counter.cpp replaces the
+// global operator new.
 
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
 #include <complex>
-#include <cstdlib>
-#include <new>
 #include <vector>
 
 #include "radar/sensor/noise.hpp"
 #include "radar/sensor/sensor.hpp"
-
-namespace {
-std::atomic<long> g_news{0};
-}  // namespace
-
-void* operator new(std::size_t n) {
-  g_news.fetch_add(1, std::memory_order_relaxed);
-  if (void* p = std::malloc(n == 0 ? 1 : n))
-    return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) {
-  return operator new(n);
-}
-void operator delete(void* p) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p) noexcept {
-  std::free(p);
-}
-void operator delete(void* p, std::size_t) noexcept {
-  std::free(p);
-}
-void operator delete[](void* p, std::size_t) noexcept {
-  std::free(p);
-}
+#include "tests/alloc_counter.hpp"
 
 namespace rd = radar_emu::radar;
 
@@ -80,11 +53,11 @@ TEST(SensorAllocation, NoHeapAllocationOverManyFrames) {
       rd::SensorStats stats;
       for (int f = 0; f < 5; ++f)  // warm-up: TBB's worker threads start on first use
         (void)sensor.process(in, out, stats);
-      const long before = g_news.load();
+      radar_emu::test::start_counting_allocations();
       std::size_t detections = 0;
       for (int f = 0; f < 300; ++f)
         detections += sensor.process(in, out, stats);
-      EXPECT_EQ(g_news.load() - before, 0)
+      EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u)
           << rd::waveform_name(wk) << (ck == rd::CfarKind::kCellAveraging ? " CA" : " OS");
       EXPECT_GT(detections, 0u);
     }
