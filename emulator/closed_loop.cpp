@@ -80,8 +80,9 @@ io::icd::Detection to_icd(const radar::Detection& d) noexcept {
 // The scenario's sensor, sized for every contribution the tracer can produce.
 radar::SensorConfig sensor_config(const Scenario& s, const radar::SbrTracer& tracer) {
   radar::SensorConfig c = s.sensor;
-  // Up to 2^19 a frame (the tracer's worst case can be far larger); the rest is counted.
-  c.max_contributions = std::clamp<std::size_t>(tracer.max_contributions(), 1, 1u << 19);
+  // Up to 2^18 a frame (the default traces 43 k; the tracer's worst case, 2.5 M, would cost the
+  // sensor 260 MB of per-return state); beyond it returns are counted as dropped_input.
+  c.max_contributions = std::clamp<std::size_t>(tracer.max_contributions(), 1, 1u << 18);
   return c;
 }
 
@@ -162,6 +163,7 @@ RunResult ClosedLoop::run() {
   RunResult r;
   r.records.reserve(static_cast<std::size_t>(m.recorded_frames));
   r.detections.reserve(static_cast<std::size_t>(m.recorded_frames) * s.sensor.max_detections);
+  r.sensor_detections.reserve(r.detections.capacity());
   r.detections_min = std::numeric_limits<std::uint64_t>::max();
 
   timing::MonotonicClock wall;
@@ -267,6 +269,8 @@ RunResult ClosedLoop::run() {
         r.records.push_back(rec);
         r.detections.insert(r.detections.end(), m.icd_detections.begin(),
                             m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
+        r.sensor_detections.insert(r.sensor_detections.end(), m.detections.begin(),
+                                   m.detections.begin() + static_cast<std::ptrdiff_t>(n_det));
       }
     }
     const std::int64_t frame_ns = wall.now_ns() - frame_start_wall;
@@ -324,12 +328,16 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
   // detections.json: what the radar sent, frame by frame (values before ICD quantisation).
   nlohmann::ordered_json dets;
   dets["scenario"] = s.name;
-  dets["units"] = {{"range", "m"},
-                   {"azimuth", "deg, positive right of boresight"},
-                   {"elevation", "deg, positive up"},
-                   {"radial_velocity", "m/s, positive receding"},
-                   {"snr", "dB"},
-                   {"rcs", "dBsm"}};
+  dets["units"] = {
+      {"range", "m"},
+      {"azimuth", "deg, positive right of boresight"},
+      {"elevation", "deg, positive up"},
+      {"radial_velocity", "m/s, positive receding"},
+      {"snr", "dB"},
+      {"rcs", "dBsm"},
+      {"*_std", "one-sigma thermal-noise accuracy, same unit as the value"},
+      {"range_ambiguous / velocity_ambiguous",
+       "the waveform may have folded this value (unambiguous interval in report.json)"}};
   nlohmann::ordered_json frames = nlohmann::ordered_json::array();
   for (const FrameRecord& rec : r.records) {
     nlohmann::ordered_json f;
@@ -339,12 +347,19 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
       const io::icd::Detection& d = r.detections[rec.first_detection + i];
+      const radar::Detection& q = r.sensor_detections[rec.first_detection + i];
       list.push_back({{"range_m", d.range_m},
                       {"azimuth_deg", d.azimuth_deg},
                       {"elevation_deg", d.elevation_deg},
                       {"radial_velocity_mps", d.radial_velocity_mps},
                       {"snr_db", d.snr_db},
-                      {"rcs_dbsm", d.rcs_dbsm}});
+                      {"rcs_dbsm", d.rcs_dbsm},
+                      {"range_std_m", q.range_std_m},
+                      {"azimuth_std_deg", q.azimuth_std_rad * kDegPerRad},
+                      {"elevation_std_deg", q.elevation_std_rad * kDegPerRad},
+                      {"radial_velocity_std_mps", q.velocity_std_mps},
+                      {"range_ambiguous", q.range_ambiguous},
+                      {"velocity_ambiguous", q.velocity_ambiguous}});
     }
     f["detections"] = std::move(list);
     frames.push_back(std::move(f));

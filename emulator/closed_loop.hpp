@@ -64,6 +64,9 @@ struct RunResult {
   double wall_time_s = 0.0;
   std::vector<FrameRecord> records;            ///< first record_frames_max frames
   std::vector<io::icd::Detection> detections;  ///< as sent (before ICD quantisation)
+  /// The sensor's own view of each recorded detection (same index as `detections`): its
+  /// one-sigma accuracies and ambiguity flags, which the ICD does not carry.
+  std::vector<radar::Detection> sensor_detections;
 };
 
 class ClosedLoop {

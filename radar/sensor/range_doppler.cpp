@@ -105,6 +105,20 @@ RangeDopplerProcessor::RangeDopplerProcessor(const ProcessingConfig& config) : c
     sd2 += v * v;
   }
   processing_gain_ = (sr * sr / sr2) * (sd * sd / sd2);
+  // Effective (RMS) bandwidth and CPI duration of the weighted signal: both waveforms map fast
+  // time linearly onto the swept band, and slow time onto the CPI.
+  auto rms_position = [](const std::vector<double>& taper) {
+    double num = 0.0, den = 0.0;
+    const auto n = static_cast<double>(taper.size());
+    for (std::size_t i = 0; i < taper.size(); ++i) {
+      const double x = (static_cast<double>(i) + 0.5) / n - 0.5;
+      num += x * x * taper[i] * taper[i];
+      den += taper[i] * taper[i];
+    }
+    return den > 0.0 ? std::sqrt(num / den) : 0.0;
+  };
+  rms_bandwidth_ = 2.0 * kPi * w.bandwidth_hz * rms_position(w_range_);
+  rms_duration_ = 2.0 * kPi * static_cast<double>(w.pulses) * w.pri_s * rms_position(w_doppler_);
   const double noise_norm = 1.0 / std::sqrt(sr2 * sd2);
   out_scale_ = pulsed_ ? noise_norm / static_cast<double>(n_fft_) : noise_norm;
 

@@ -125,6 +125,11 @@ class RangeDopplerProcessor {
   [[nodiscard]] std::complex<double> diffuse_response_at(std::complex<double> b,
                                                          double radial_velocity_mps,
                                                          std::size_t velocity_bin) const noexcept;
+  /// RMS bandwidth beta [rad/s] of the range-weighted spectrum and RMS duration alpha [s] of the
+  /// Doppler-weighted CPI: 2 pi B sqrt(sum x_n^2 w_n^2 / sum w_n^2), x_n the sample's position
+  /// in the band (or CPI) from -1/2 to 1/2 (Skolnik 2001, sec. 6.3; pi B / sqrt(3) unweighted).
+  [[nodiscard]] double rms_bandwidth_rad_s() const noexcept { return rms_bandwidth_; }
+  [[nodiscard]] double rms_duration_rad() const noexcept { return rms_duration_; }
   /// sum over range bins of |range response|^2 for a unit scatterer (Parseval: N for FMCW).
   [[nodiscard]] double range_energy() const noexcept { return range_energy_; }
 
@@ -141,6 +146,7 @@ class RangeDopplerProcessor {
   double dv_mps_ = 0, lambda_m_ = 0, chirp_rate_ = 0, processing_gain_ = 1, out_scale_ = 1;
   double range_norm_ = 1;  ///< 1 / sqrt(sum w_r^2)
   double range_energy_ = 1;
+  double rms_bandwidth_ = 0, rms_duration_ = 0;
   std::vector<double> w_range_, w_doppler_;
   // Kernel tables, kSteps entries a bin. Velocity: W_d(x) over one period [0, M). Range: FMCW
   // W_r(x) over one period [0, N); pulsed: G(x; f_d) on +-(K+1) bins around the coupled peak, for

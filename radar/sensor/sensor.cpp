@@ -56,7 +56,7 @@ struct Sensor::Workspace {
   std::vector<double> power;
   Cfar2d cfar;
   std::vector<CfarHit> hits;
-  std::uint64_t crossings = 0, overflowed = 0, outside = 0;
+  std::uint64_t crossings = 0, overflowed = 0;
 };
 
 Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.antenna) {
@@ -438,10 +438,8 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     antenna_.channels_el(c.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
                          it.delta_el);
     const double lo = it.pos.range_bin - it.half_bins, hi = it.pos.range_bin + it.half_bins;
-    const bool visible = it.coherent ? it.pos.in_swath
-                                     : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5 &&
-                                           (proc.config().waveform.kind == WaveformKind::kFmcw ||
-                                            it.pos.in_swath || it.half_bins > 0.0);
+    const bool visible =
+        it.coherent ? it.pos.in_swath : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5;
     if (!visible) {
       ++stats.out_of_grid;
       continue;
@@ -460,7 +458,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   range_start_[0] = 0;
 
   for (auto& ws : workspaces_)
-    ws->crossings = ws->overflowed = ws->outside = 0;
+    ws->crossings = ws->overflowed = 0;
   // Beams are independent; worker w handles beams w, w + W, ... Every random stream is keyed by
   // (seed, frame, beam, ...), so the result does not depend on the schedule.
   tbb::parallel_for(std::size_t{0}, n_workers_,
@@ -551,14 +549,14 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     const double gain = two_way_gain(off_az, off_el);
     const double per_m2 = expected_snr(1.0, std::max(d.range_m, 1e-3));
     d.rcs_m2 = snr_meas / (std::max(straddle, 1e-6) * std::max(gain, 1e-12) * per_m2);
-    // Thermal-noise accuracy, sigma = resolution / (k sqrt(2 SNR)) with k = pi / sqrt(3) for a
-    // rectangular spectrum or envelope (Skolnik 2001, sec. 6.3: delta_T = 1 / (beta sqrt(2E/N0)),
-    // beta = pi B / sqrt(3)); angle sigma = theta_3 / (k_m sqrt(2 SNR)), k_m the monopulse slope
-    // (Sherman and Barton 2011). Without monopulse: the beam's width / sqrt(12).
+    // Thermal-noise accuracy (Skolnik 2001, sec. 6.3): delay sigma = 1 / (beta sqrt(2 E/N0)),
+    // Doppler sigma = 1 / (alpha sqrt(2 E/N0)), with the RMS bandwidth beta and RMS duration
+    // alpha of the weighted signal (a Hann taper doubles them against pi B / sqrt(3)); angle
+    // sigma = theta_3 / (k_m sqrt(2 SNR)), k_m the monopulse slope (Sherman and Barton 2011).
+    // Without monopulse: the beam's width / sqrt(12).
     const double root = std::sqrt(2.0 * snr_meas);
-    const double kr = kPi / std::sqrt(3.0);
-    d.range_std_m = range_resolution_m(wf) / (kr * root);
-    d.velocity_std_mps = velocity_bin_mps(wf) / (kr * root);
+    d.range_std_m = kSpeedOfLight_mps / (2.0 * proc.rms_bandwidth_rad_s() * root);
+    d.velocity_std_mps = lambda / (2.0 * proc.rms_duration_rad() * root);
     const double km_az = antenna_.monopulse_slope_az(), km_el = antenna_.monopulse_slope_el();
     d.azimuth_std_rad = km_az > 0.0 ? bw_az / (km_az * root) : bw_az / std::sqrt(12.0);
     d.elevation_std_rad = km_el > 0.0 ? bw_el / (km_el * root) : bw_el / std::sqrt(12.0);

@@ -367,19 +367,30 @@ TEST(Sensor, MeasuredSnrMatchesTheRadarEquationInNoise) {
   const rd::Contribution t = point(s20, r);
   std::vector<rd::Detection> out(8);
   rd::SensorStats stats;
-  double sum = 0.0;
+  double sum = 0.0, r_err2 = 0.0, r_std = 0.0, v_err2 = 0.0, v_std = 0.0;
   int n = 0;
   for (int frame = 0; frame < 200; ++frame) {
     const std::size_t k = sensor.process(std::span(&t, 1), out, stats);
     for (std::size_t i = 0; i < k; ++i)
       if (out[i].range_cell == 64 && out[i].doppler_cell == 16) {
         sum += out[i].snr;
+        r_err2 += (out[i].range_m - r) * (out[i].range_m - r);
+        r_std += out[i].range_std_m;
+        v_err2 += out[i].radial_velocity_mps * out[i].radial_velocity_mps;
+        v_std += out[i].velocity_std_mps;
         ++n;
       }
   }
   ASSERT_GT(n, 190);
-  std::printf("measured SNR %.2f dB over %d frames (radar equation 20.00 dB)\n", db(sum / n), n);
+  std::printf(
+      "measured SNR %.2f dB over %d frames (radar equation 20.00 dB); range error rms "
+      "%.3f m, reported sigma %.3f m; velocity error rms %.4f m/s, reported %.4f m/s\n",
+      db(sum / n), n, std::sqrt(r_err2 / n), r_std / n, std::sqrt(v_err2 / n), v_std / n);
   EXPECT_NEAR(db(sum / n), 20.0, 0.5);
+  // The reported one-sigma accuracies (RMS bandwidth and duration of the Hann-weighted signal)
+  // match the scatter of the estimates.
+  EXPECT_NEAR(std::sqrt(r_err2 / n) / (r_std / n), 1.0, 0.3);
+  EXPECT_NEAR(std::sqrt(v_err2 / n) / (v_std / n), 1.0, 0.3);
 }
 
 TEST(Sensor, RadialVelocityWithinACellAndTwoPercentAndFoldsAsTheoryPredicts) {
@@ -454,6 +465,8 @@ TEST(Sensor, MonopulseAngleWithinATenthOfABeamwidthAt20dB) {
       bw * 180 / kPi, sum / n, rms, n, out[0].azimuth_std_rad / bw);
   EXPECT_LT(rms, 0.1);
   EXPECT_LT(std::abs(sum / n), 0.03);
+  // The reported one-sigma accuracy theta_3 / (k_m sqrt(2 SNR)) matches the scatter.
+  EXPECT_NEAR(rms / (out[0].azimuth_std_rad / bw), 1.0, 0.5);
 }
 
 TEST(Sensor, TwoTargetsResolveAtOneAndAHalfCellsAndMergeAtHalfACell) {
