@@ -144,6 +144,47 @@ TEST(Cfar, WindowedDataCubeNoiseKeepsTheFalseAlarmRate) {
   EXPECT_GT(rate, 0.5e-4);
 }
 
+namespace {
+// Monte-Carlo Pd: 40 images of unit complex noise with targets of one SNR on a grid (steps
+// step_l x step_j, so that no target is in another's training window); the fraction of targets
+// whose own cell the CFAR reports. Swerling 0: fixed amplitude, random phase; 1: Rayleigh.
+struct PdEstimate {
+  double pd = 0.0;
+  int trials = 0;
+};
+PdEstimate monte_carlo_pd(rd::Cfar2d& cfar, std::size_t nr, std::size_t nv, std::size_t step_l,
+                          std::size_t step_j, int swerling, double snr, rd::NoiseRng& rng) {
+  std::vector<double> power(nr * nv);
+  std::vector<rd::CfarHit> hits(4096);
+  int detected = 0, trials = 0;
+  for (int image = 0; image < 40; ++image) {
+    std::vector<std::complex<double>> field(nr * nv);
+    for (auto& x : field)
+      x = rng.complex_normal();
+    std::vector<std::size_t> targets;
+    for (std::size_t j = step_j / 2; j < nv; j += step_j)
+      for (std::size_t l = step_l / 2; l + step_l / 2 < nr; l += step_l) {
+        field[j * nr + l] += swerling == 0 ? std::polar(std::sqrt(snr), 2 * kPi * rng.uniform())
+                                           : rng.complex_normal() * std::sqrt(snr);
+        targets.push_back(j * nr + l);
+      }
+    for (std::size_t k = 0; k < field.size(); ++k)
+      power[k] = std::norm(field[k]);
+    std::uint64_t overflow = 0;
+    const std::size_t h = cfar.detect(power, hits, overflow);
+    for (std::size_t t : targets) {
+      ++trials;
+      for (std::size_t i = 0; i < h; ++i)
+        if (hits[i].velocity_bin * nr + hits[i].range_bin == t) {
+          ++detected;
+          break;
+        }
+    }
+  }
+  return {static_cast<double>(detected) / trials, trials};
+}
+}  // namespace
+
 TEST(Cfar, ProbabilityOfDetectionFollowsSwerling0And1AtPfa1e6) {
   // Targets of known SNR on a grid of independent cells; CA-CFAR at Pfa 1e-6; Pd against the
   // closed forms with the same number of training cells.
@@ -154,8 +195,6 @@ TEST(Cfar, ProbabilityOfDetectionFollowsSwerling0And1AtPfa1e6) {
   const std::size_t n = cfar.training_cells();
   const std::uint64_t seed = 4242;
   std::printf("seed %llu, CA-CFAR N = %zu\n", static_cast<unsigned long long>(seed), n);
-  std::vector<double> power(nr * nv);
-  std::vector<rd::CfarHit> hits(4096);
   for (int swerling : {0, 1}) {
     const std::vector<double> snrs_db = swerling == 0 ? std::vector<double>{10, 11, 12, 13, 14}
                                                       : std::vector<double>{10, 15, 20, 25};
@@ -163,34 +202,7 @@ TEST(Cfar, ProbabilityOfDetectionFollowsSwerling0And1AtPfa1e6) {
       rd::NoiseRng rng(rd::stream_key(seed, static_cast<std::uint64_t>(swerling),
                                       static_cast<std::uint64_t>(snr_db * 10)));
       const double snr = from_db(snr_db);
-      int trials = 0, detected = 0;
-      for (int image = 0; image < 40; ++image) {
-        std::vector<std::complex<double>> field(nr * nv);
-        for (auto& x : field)
-          x = rng.complex_normal();
-        std::vector<std::size_t> targets;
-        for (std::size_t j = 6; j < nv; j += 12)
-          for (std::size_t l = 12; l + 12 < nr; l += 24) {
-            const std::complex<double> a = swerling == 0
-                                               ? std::polar(std::sqrt(snr), 2 * kPi * rng.uniform())
-                                               : rng.complex_normal() * std::sqrt(snr);
-            field[j * nr + l] += a;
-            targets.push_back(j * nr + l);
-          }
-        for (std::size_t k = 0; k < field.size(); ++k)
-          power[k] = std::norm(field[k]);
-        std::uint64_t overflow = 0;
-        const std::size_t h = cfar.detect(power, hits, overflow);
-        for (std::size_t t : targets) {
-          ++trials;
-          for (std::size_t i = 0; i < h; ++i)
-            if (hits[i].velocity_bin * nr + hits[i].range_bin == t) {
-              ++detected;
-              break;
-            }
-        }
-      }
-      const double pd = static_cast<double>(detected) / trials;
+      const auto [pd, trials] = monte_carlo_pd(cfar, nr, nv, 24, 12, swerling, snr, rng);
       const double theory =
           swerling == 0 ? rd::pd_swerling0_ca(snr, n, 1e-6) : rd::pd_swerling1_ca(snr, n, 1e-6);
       std::printf("Swerling %d, SNR %4.1f dB: Pd %.3f over %d trials, theory %.3f\n", swerling,
@@ -212,36 +224,10 @@ TEST(Cfar, OrderStatisticProbabilityOfDetectionFollowsSwerling1) {
   rd::Cfar2d cfar(cfg, nr, nv);
   const std::size_t n = cfar.training_cells();
   const auto k = static_cast<std::size_t>(std::lround(0.75 * static_cast<double>(n)));
-  std::vector<double> power(nr * nv);
-  std::vector<rd::CfarHit> hits(4096);
   std::printf("seed 515, OS-CFAR N = %zu, k = %zu\n", n, k);
   for (double snr_db : {15.0, 20.0, 25.0}) {
     rd::NoiseRng rng(rd::stream_key(515, static_cast<std::uint64_t>(snr_db)));
-    int trials = 0, detected = 0;
-    for (int image = 0; image < 40; ++image) {
-      std::vector<std::complex<double>> field(nr * nv);
-      for (auto& x : field)
-        x = rng.complex_normal();
-      std::vector<std::size_t> targets;
-      for (std::size_t j = 4; j < nv; j += 8)
-        for (std::size_t l = 8; l + 8 < nr; l += 16) {
-          field[j * nr + l] += rng.complex_normal() * std::sqrt(from_db(snr_db));
-          targets.push_back(j * nr + l);
-        }
-      for (std::size_t i = 0; i < field.size(); ++i)
-        power[i] = std::norm(field[i]);
-      std::uint64_t overflow = 0;
-      const std::size_t h = cfar.detect(power, hits, overflow);
-      for (std::size_t t : targets) {
-        ++trials;
-        for (std::size_t i = 0; i < h; ++i)
-          if (hits[i].velocity_bin * nr + hits[i].range_bin == t) {
-            ++detected;
-            break;
-          }
-      }
-    }
-    const double pd = static_cast<double>(detected) / trials;
+    const auto [pd, trials] = monte_carlo_pd(cfar, nr, nv, 16, 8, 1, from_db(snr_db), rng);
     const double theory = rd::pd_swerling1_os(from_db(snr_db), n, k, 1e-6);
     std::printf("OS, Swerling 1, SNR %4.1f dB: Pd %.3f over %d trials, theory %.3f\n", snr_db, pd,
                 trials, theory);
