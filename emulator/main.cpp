@@ -39,6 +39,18 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r,
       static_cast<unsigned long long>(r.detections_min),
       static_cast<unsigned long long>(r.detections_max),
       static_cast<unsigned long long>(r.detections_total));
+  {
+    const auto& w = s.sensor.processing.waveform;
+    const double cells = static_cast<double>(r.sensor.cells_touched);
+    std::printf(
+        "  sensor      %s %.4g GHz, %zu beams x %d range bins x %d pulses; CFAR %s Pfa %.0e: "
+        "%.3g crossings a cell (%llu peaks merged across beams)\n",
+        radar_emu::radar::waveform_name(w.kind), w.carrier_hz * 1e-9,
+        s.sensor.antenna.beam_azimuth_rad.size(), w.range_bins, w.pulses,
+        s.sensor.cfar.kind == radar_emu::radar::CfarKind::kCellAveraging ? "CA" : "OS",
+        s.sensor.cfar.pfa, cells > 0.0 ? static_cast<double>(r.sensor.cfar_crossings) / cells : 0.0,
+        static_cast<unsigned long long>(r.sensor.merged));
+  }
   std::printf("  stage times [ms]      p50      p99      max\n");
   for (Stage st : {Stage::kInput, Stage::kSceneUpdate, Stage::kTrace, Stage::kSensor,
                    Stage::kOutput, Stage::kFrame}) {
@@ -239,7 +251,8 @@ int main(int argc, char** argv) {
   add_common(profile, prof_text, prof_opt.mesh, prof_opt.scale, prof_opt.materials,
              prof_opt.bounces, prof_opt.rays_per_wavelength, prof_opt.quiet);
   profile->add_option("--pol", prof_text.pol, "One polarisation: HH, HV, VH or VV (default VV)");
-  profile->add_option("--window", prof_opt.window, "none, hann, hamming, blackman or taylor (default hann)");
+  profile->add_option("--window", prof_opt.window,
+                      "none, hann, hamming, blackman or taylor (default hann)");
   profile->add_option("--oversample", prof_opt.oversample, "Zero-padding factor (default 4)");
   profile->add_option("--dynamic-range-db", prof_opt.dynamic_range_db, "Plot range (default 50)")
       ->check(CLI::PositiveNumber);
