@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -112,4 +113,21 @@ TEST(Scenario, TabulatedAntennaPatternFromCsvBesideTheScenario) {
     EXPECT_NE(std::string(e.what()).find("az.csv:3"), std::string::npos) << e.what();
   }
   std::filesystem::remove_all(dir);
+}
+
+TEST(Scenario, TheSeedsEnhancedVisionRadarExampleLoads) {
+  // examples/ev_radar_94ghz.toml: the seed's 30 x 10 deg field of 0.15 x 10 deg beams.
+  const char* root = std::getenv("RADAR_EMU_SOURCE_DIR");
+  if (root == nullptr)
+    GTEST_SKIP() << "RADAR_EMU_SOURCE_DIR is not set (ctest sets it)";
+  const emu::Scenario s =
+      emu::load_scenario(std::filesystem::path(root) / "examples" / "ev_radar_94ghz.toml");
+  ASSERT_EQ(s.sensor.antenna.beam_azimuth_rad.size(), 200u);
+  EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), (-15.0 + 0.075) * kDeg, 1e-12);
+  EXPECT_NEAR(s.sensor.antenna.azimuth.beamwidth_rad, 0.15 * kDeg, 1e-15);
+  EXPECT_NEAR(s.sensor.antenna.elevation.beamwidth_rad, 10.0 * kDeg, 1e-15);
+  EXPECT_FALSE(s.sensor.antenna.monopulse);
+  // The scan fits the frame: 200 beams x 8 pulses x 50 us = 80 ms of radar time at 10 Hz.
+  EXPECT_LE(200.0 * s.sensor.processing.waveform.pulses * s.sensor.processing.waveform.pri_s,
+            1.0 / s.rate_hz);
 }
