@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -215,42 +216,23 @@ RangeDopplerProcessor::RangeDopplerProcessor(const ProcessingConfig& config) : c
 
 RangeDopplerProcessor::~RangeDopplerProcessor() = default;
 
-void RangeDopplerProcessor::add_diffuse(std::complex<double> b, std::size_t range_bin,
-                                        double radial_velocity_mps,
-                                        std::span<std::complex<double>> image) const noexcept {
-  if (range_bin >= n_range_ || image.size() < image_cells() || !std::isfinite(radial_velocity_mps))
-    return;
-  const double nu = radial_velocity_mps / dv_mps_;
-  const double p = nu + static_cast<double>(n_pulses_ / 2);
-  const auto m = static_cast<double>(n_pulses_);
-  const std::complex<double> a = b * std::polar(1.0, kPi * nu * (m - 1.0) / m);
-  const auto jc = static_cast<long>(std::lround(p));
+std::pair<long, long> RangeDopplerProcessor::velocity_support(long half_width) const noexcept {
+  // +-K bins, or every bin once when K reaches half the period.
   const auto nv = static_cast<long>(n_pulses_);
-  const long k = config_.kernel_half_width_bins;
-  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
-  for (long dj = dj0; dj <= dj1; ++dj) {
-    const long j = ((jc + dj) % nv + nv) % nv;
-    image[static_cast<std::size_t>(j) * n_range_ + range_bin] +=
-        a * velocity_kernel(static_cast<double>(jc + dj) - p);
-  }
+  return {std::max<long>(-half_width, -nv / 2), std::min<long>(half_width, nv - nv / 2 - 1)};
 }
 
-std::complex<double> RangeDopplerProcessor::diffuse_response_at(
-    std::complex<double> b, double radial_velocity_mps, std::size_t velocity_bin) const noexcept {
-  const double nu = radial_velocity_mps / dv_mps_;
-  const double p = nu + static_cast<double>(n_pulses_ / 2);
+std::optional<long> RangeDopplerProcessor::velocity_offset(std::size_t velocity_bin,
+                                                           double peak_bin) const noexcept {
   const auto nv = static_cast<long>(n_pulses_);
-  const long k = config_.kernel_half_width_bins;
-  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
-  const auto jc = static_cast<long>(std::lround(p));
+  const auto [dj0, dj1] = velocity_support(config_.kernel_half_width_bins);
+  const long jc = std::lround(peak_bin);
   long d = ((static_cast<long>(velocity_bin) - jc) % nv + nv) % nv;  // [0, nv)
   if (d > dj1)
     d -= nv;
   if (d < dj0 || d > dj1)
-    return {0.0, 0.0};
-  const auto m = static_cast<double>(n_pulses_);
-  return b * std::polar(1.0, kPi * nu * (m - 1.0) / m) *
-         velocity_kernel(static_cast<double>(jc + d) - p);
+    return std::nullopt;
+  return d;
 }
 
 double RangeDopplerProcessor::range_of_bin(double bin) const noexcept {
@@ -414,13 +396,8 @@ bool RangeDopplerProcessor::add_direct(const PointScatterer& s,
                                        std::span<std::complex<double>> image,
                                        int half_width_bins) const noexcept {
   const ImagePosition pos = position_of(s.range_m, s.radial_velocity_mps);
-  return add_direct_at(s.amplitude, pos, s.radial_velocity_mps, image, half_width_bins);
-}
-
-bool RangeDopplerProcessor::add_direct_at(std::complex<double> amplitude, const ImagePosition& pos,
-                                          double radial_velocity_mps,
-                                          std::span<std::complex<double>> image,
-                                          int half_width_bins) const noexcept {
+  const double radial_velocity_mps = s.radial_velocity_mps;
+  const std::complex<double> amplitude = s.amplitude;
   if (!pos.in_swath || image.size() < image_cells())
     return false;
   const int k = half_width_bins < 0 ? config_.kernel_half_width_bins : half_width_bins;
@@ -440,8 +417,7 @@ bool RangeDopplerProcessor::add_direct_at(std::complex<double> amplitude, const 
   if (cached)
     for (long l = l0; l <= l1; ++l)
       range_values[l - l0] = range_kernel(static_cast<double>(l) - pos.range_bin, fd);
-  // +-K bins, or every bin once when K reaches half the period.
-  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  const auto [dj0, dj1] = velocity_support(k);
   for (long dj = dj0; dj <= dj1; ++dj) {
     const long j = ((jc + dj) % nv + nv) % nv;
     const std::complex<double> kv =
@@ -506,7 +482,7 @@ bool RangeDopplerProcessor::footprint(std::complex<double> amplitude, const Imag
       }
     }
   }
-  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
+  const auto [dj0, dj1] = velocity_support(k);
   const std::size_t period_v = n_pulses_ * kSteps;
   const double xv = static_cast<double>(jc + dj0) - pos.velocity_bin;
   const double uv = xv - m * std::floor(xv / m);
@@ -566,19 +542,15 @@ std::complex<double> RangeDopplerProcessor::response_at(const PointScatterer& s,
   const long k = config_.kernel_half_width_bins;
   if (!pos.in_swath || std::labs(static_cast<long>(range_bin) - std::lround(pos.range_bin)) > k)
     return {0.0, 0.0};
-  const auto nv = static_cast<long>(n_pulses_);
-  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
-  const auto jc = static_cast<long>(std::lround(pos.velocity_bin));
-  long d = ((static_cast<long>(velocity_bin) - jc) % nv + nv) % nv;
-  if (d > dj1)
-    d -= nv;
-  if (d < dj0 || d > dj1)
+  const std::optional<long> d = velocity_offset(velocity_bin, pos.velocity_bin);
+  if (!d)
     return {0.0, 0.0};
+  const long jc = std::lround(pos.velocity_bin);
   const double fd = -2.0 * s.radial_velocity_mps / lambda_m_;
   const double nu = s.radial_velocity_mps / dv_mps_;
   const auto m = static_cast<double>(n_pulses_);
   const std::complex<double> a = s.amplitude * std::polar(1.0, kPi * nu * (m - 1.0) / m);
-  return a * velocity_kernel(static_cast<double>(jc + d) - pos.velocity_bin) *
+  return a * velocity_kernel(static_cast<double>(jc + *d) - pos.velocity_bin) *
          range_kernel(static_cast<double>(range_bin) - pos.range_bin, fd);
 }
 

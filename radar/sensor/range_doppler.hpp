@@ -17,7 +17,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "radar/sensor/waveform.hpp"
@@ -96,11 +98,6 @@ class RangeDopplerProcessor {
   /// wraps). Returns false (adds nothing) when the scatterer is outside the swath.
   bool add_direct(const PointScatterer& s, std::span<std::complex<double>> image,
                   int half_width_bins = -1) const noexcept;
-  /// add_direct with the position already computed by position_of (amplitude as in
-  /// PointScatterer).
-  bool add_direct_at(std::complex<double> amplitude, const ImagePosition& pos,
-                     double radial_velocity_mps, std::span<std::complex<double>> image,
-                     int half_width_bins = -1) const noexcept;
   /// Prepares the direct response (support K <= 32); false outside the swath.
   bool footprint(std::complex<double> amplitude, const ImagePosition& pos,
                  double radial_velocity_mps, Footprint& f) const noexcept;
@@ -112,19 +109,18 @@ class RangeDopplerProcessor {
   [[nodiscard]] double velocity_power(double x) const noexcept;
   /// velocity_power at the bins jc + dj, dj = dj0..dj1, jc = round(velocity_bin), into `out`.
   void velocity_power_taps(double velocity_bin, long dj0, long dj1, double* out) const noexcept;
+  /// The direct path's velocity support for a half width K: bin offsets dj0..dj1 around the
+  /// nearest bin (+-K, or every bin once when K reaches half the period).
+  [[nodiscard]] std::pair<long, long> velocity_support(long half_width) const noexcept;
+  /// Offset of `velocity_bin` from the bin nearest `peak_bin` when it lies in the configured
+  /// support (wrapping); nothing otherwise.
+  [[nodiscard]] std::optional<long> velocity_offset(std::size_t velocity_bin,
+                                                    double peak_bin) const noexcept;
   /// The direct response of `s` at one cell (zero outside add_direct's support), without
   /// touching an image: for channels that are needed only at detections.
   [[nodiscard]] std::complex<double> response_at(const PointScatterer& s, std::size_t range_bin,
                                                  std::size_t velocity_bin) const noexcept;
 
-  /// Diffuse clutter: a patch's speckle amplitude `b` (already drawn) spread over range bin
-  /// `range_bin` only and over +-K velocity bins through the Doppler taper. `b` should carry
-  /// sqrt(range_energy()) so that homogeneous clutter has the right mean power per cell.
-  void add_diffuse(std::complex<double> b, std::size_t range_bin, double radial_velocity_mps,
-                   std::span<std::complex<double>> image) const noexcept;
-  [[nodiscard]] std::complex<double> diffuse_response_at(std::complex<double> b,
-                                                         double radial_velocity_mps,
-                                                         std::size_t velocity_bin) const noexcept;
   /// RMS bandwidth beta [rad/s] of the range-weighted spectrum and RMS duration alpha [s] of the
   /// Doppler-weighted CPI: 2 pi B sqrt(sum x_n^2 w_n^2 / sum w_n^2), x_n the sample's position
   /// in the band (or CPI) from -1/2 to 1/2 (Skolnik 2001, sec. 6.3; pi B / sqrt(3) unweighted).

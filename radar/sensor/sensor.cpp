@@ -167,16 +167,12 @@ double Sensor::range_share(const Item& item, long l) const noexcept {
 }
 
 double Sensor::velocity_weight(const Item& item, long j) const noexcept {
-  const auto nv = static_cast<long>(processor_->velocity_bins());
-  const long k = processor_->config().kernel_half_width_bins;
-  const long dj0 = std::max<long>(-k, -nv / 2), dj1 = std::min<long>(k, nv - nv / 2 - 1);
-  const long jc = std::lround(item.pos.velocity_bin);
-  long d = ((j - jc) % nv + nv) % nv;
-  if (d > dj1)
-    d -= nv;
-  if (d < dj0 || d > dj1)
+  const std::optional<long> d =
+      processor_->velocity_offset(static_cast<std::size_t>(j), item.pos.velocity_bin);
+  if (!d)
     return 0.0;
-  return processor_->velocity_power(static_cast<double>(jc + d) - item.pos.velocity_bin);
+  return processor_->velocity_power(static_cast<double>(std::lround(item.pos.velocity_bin) + *d) -
+                                    item.pos.velocity_bin);
 }
 
 void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
@@ -184,8 +180,7 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
   const std::size_t n_beams = antenna_.beams();
   const std::size_t nr = proc.range_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
-  const long k = proc.config().kernel_half_width_bins;
-  const long dj0 = std::max<long>(-k, -nvl / 2), dj1 = std::min<long>(k, nvl - nvl / 2 - 1);
+  const auto [dj0, dj1] = proc.velocity_support(proc.config().kernel_half_width_bins);
   const std::size_t stride = nr + 1;
   for (std::size_t b = w; b < n_beams; b += n_workers) {
     std::fill(workspaces_[b]->image.begin(), workspaces_[b]->image.end(),
