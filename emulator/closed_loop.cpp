@@ -98,6 +98,7 @@ struct ClosedLoop::Impl {
         sensor(sensor_config(s, tracer)),
         ins(bus.add_endpoint("ins", 1 << 16)),
         faulty_ep(bus.add_endpoint("faulty", 16)),
+        replay_ep(bus.add_endpoint("replay", 16)),
         radar_ep(bus.add_endpoint("radar", 1 << 16)),
         avionics(bus.add_endpoint("avionics", 1 << 16)),
         player(ownship_trajectory(s, enu),
@@ -132,6 +133,8 @@ struct ClosedLoop::Impl {
   sim_bus::LoopbackCanBus bus;
   sim_bus::LoopbackEndpoint& ins;
   sim_bus::LoopbackEndpoint& faulty_ep;
+  sim_bus::LoopbackEndpoint& replay_ep;
+  std::size_t replay_next = 0;  ///< next frame of options.replay_input to put on the bus
   sim_bus::LoopbackEndpoint& radar_ep;
   sim_bus::LoopbackEndpoint& avionics;
   sim_bus::AircraftStatePlayer player;
@@ -165,6 +168,8 @@ RunResult ClosedLoop::run() {
   r.detections.reserve(static_cast<std::size_t>(m.recorded_frames) * s.sensor.max_detections);
   r.sensor_detections.reserve(r.detections.capacity());
   r.detections_min = std::numeric_limits<std::uint64_t>::max();
+  r.field_age_max_s.fill(0.0);
+  r.field_stale_frames.fill(0);
 
   timing::MonotonicClock wall;
   timing::SimulatedClock simulated(s.epoch_unix_ns);
@@ -190,10 +195,20 @@ RunResult ClosedLoop::run() {
       m.profiler.record(timing::Stage::kWakeLatency, tick.wake_ns - tick.deadline_ns);
     }
 
-    // Peers on the software bus act first: the INS publishes what is due by now.
-    (void)m.player.publish_until(t_s, m.ins);
-    if (s.malformed_every_n_frames > 0 && done % s.malformed_every_n_frames == 0) {
-      m.faulty.send_next(m.faulty_ep, bus_now_ns);
+    // Peers on the software bus act first: the INS publishes what is due by now, or, in a
+    // replay, the recorded frames the radar had received by now.
+    if (m.options.replay) {
+      const std::vector<io::CanFrame>& log = m.options.replay_input;
+      while (m.replay_next < log.size() && log[m.replay_next].timestamp_ns <= bus_now_ns) {
+        if (m.replay_ep.send(log[m.replay_next]))
+          ++r.replay_frames_fed;
+        ++m.replay_next;
+      }
+    } else {
+      (void)m.player.publish_until(t_s, m.ins);
+      if (s.malformed_every_n_frames > 0 && done % s.malformed_every_n_frames == 0) {
+        m.faulty.send_next(m.faulty_ep, bus_now_ns);
+      }
     }
 
     // ---- input: decode the bus into the ownship state ----
@@ -209,6 +224,13 @@ RunResult ClosedLoop::run() {
       }
       valid = radar_pose_from_state(m.decoder.state(), bus_now_ns, timeout_ns, m.enu,
                                     s.antenna_depression_rad, pose);
+      const io::canas::OwnshipState& st = m.decoder.state();
+      for (std::size_t k = 0; k < io::canas::kFieldCount; ++k) {
+        const auto field = static_cast<io::canas::Field>(k);
+        r.field_age_max_s[k] = std::max(r.field_age_max_s[k], st.age_s(field, bus_now_ns));
+        if (!st.fresh(field, bus_now_ns, timeout_ns))
+          ++r.field_stale_frames[k];
+      }
     }
     // ---- scene update: moving objects to frame time ----
     {
@@ -246,8 +268,14 @@ RunResult ClosedLoop::run() {
         h.status |= io::icd::status::kOverrun;
       if (r.sensor.truncated > truncated_before)
         h.status |= io::icd::status::kTruncated;
-      const io::icd::EncodeResult enc =
-          io::icd::encode(h, std::span(m.icd_detections.data(), n_det), m.out_frames);
+      // A stale state sends an empty list flagged OWNSHIP_INVALID, or nothing ("silent").
+      const bool send_list = valid || !s.stale_output_silent;
+      io::icd::EncodeResult enc{};
+      if (send_list) {
+        enc = io::icd::encode(h, std::span(m.icd_detections.data(), n_det), m.out_frames);
+      } else {
+        ++r.lists_suppressed;
+      }
       r.icd_dropped += enc.dropped;
       r.icd_truncated += enc.truncated;
       for (std::size_t i = 0; i < enc.frames; ++i) {
@@ -266,6 +294,7 @@ RunResult ClosedLoop::run() {
         rec.first_detection = static_cast<std::uint32_t>(r.detections.size());
         rec.detection_count = static_cast<std::uint32_t>(n_det);
         rec.late = tick.late;
+        rec.sent = send_list;
         r.records.push_back(rec);
         r.detections.insert(r.detections.end(), m.icd_detections.begin(),
                             m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
@@ -295,6 +324,8 @@ RunResult ClosedLoop::run() {
   r.overruns = scheduler.overruns();
   r.missed_periods = scheduler.missed_periods();
   r.decoder = m.decoder.counters();
+  if (m.options.replay)
+    r.replay_frames_left = m.options.replay_input.size() - m.replay_next;
   r.bus_rx_overflows = m.radar_ep.rx_overflows() + m.avionics.rx_overflows();
   r.record_overflows = m.rx_log.overflowed() + m.tx_log.overflowed();
   r.sink_lists = m.sink.lists_completed();
@@ -344,6 +375,8 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
     f["frame_counter"] = rec.header.frame_counter;
     f["time_s"] = rec.time_s;
     f["status"] = rec.header.status;
+    if (!rec.sent)
+      f["sent"] = false;  // stale_output = "silent": nothing went on the bus
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
       const io::icd::Detection& d = r.detections[rec.first_detection + i];
@@ -374,6 +407,7 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
   rep["rate_hz"] = s.rate_hz;
   rep["frames"] = r.frames;
   rep["frames_valid"] = r.frames_valid;
+  rep["input_source"] = m.options.replay ? "replay" : "sim";
   rep["wall_time_s"] = r.wall_time_s;
   rep["detections"] = {
       {"total", r.detections_total},
@@ -412,6 +446,29 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                     {"unpaired_double", c.unpaired_double},
                     {"extended_id", c.extended_id}}},
                   {"message_code_gaps", c.message_code_gaps}};
+  {
+    // Validity: each field's worst age at a frame's time and how many frames found it stale.
+    static constexpr std::array<const char*, io::canas::kFieldCount> kFieldNames{
+        "pitch",  "roll",     "true_heading", "latitude", "longitude",
+        "height", "vel_east", "vel_north",    "vel_up"};
+    nlohmann::ordered_json ages;
+    for (std::size_t k = 0; k < io::canas::kFieldCount; ++k) {
+      const double age = r.field_age_max_s[k];
+      ages[kFieldNames[k]] = {{"age_max_s", std::isfinite(age) ? nlohmann::ordered_json(age)
+                                                               : nlohmann::ordered_json(nullptr)},
+                              {"stale_frames", r.field_stale_frames[k]}};
+    }
+    rep["validity"] = {{"state_timeout_s", s.state_timeout_s},
+                       {"stale_output", s.stale_output_silent ? "silent" : "flag"},
+                       {"frames_invalid", r.frames - r.frames_valid},
+                       {"lists_suppressed", r.lists_suppressed},
+                       {"fields", std::move(ages)}};
+  }
+  if (m.options.replay) {
+    rep["replay"] = {{"log_frames", m.options.replay_input.size()},
+                     {"frames_fed", r.replay_frames_fed},
+                     {"frames_after_last_radar_frame", r.replay_frames_left}};
+  }
   rep["faults_injected"] = {{"short_dlc", r.injected_malformed[0]},
                             {"unknown_data_type", r.injected_malformed[1]},
                             {"not_a_number", r.injected_malformed[2]},

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "emulator/scenario.hpp"
+#include "io/can_frame.hpp"
 #include "io/canaerospace.hpp"
 #include "io/detection_icd.hpp"
 #include "radar/em/sbr.hpp"
@@ -26,6 +27,12 @@ struct RunOptions {
   std::uint64_t record_frames_max = 20'000;  ///< frames kept for logs and detections.json
   /// Called between frames (outside every timed stage) with (frames done, frames total).
   std::function<void(std::uint64_t, std::uint64_t)> progress;
+  /// Replay: input frames recorded by an earlier run (its bus_in.log, in reception order). When
+  /// set, they replace the scripted INS and the faulty node: each frame is put on the bus at the
+  /// first radar frame whose bus time has reached its time stamp, which is when the recording
+  /// run received it, so the radar decodes the same frames at the same frames (deterministic).
+  std::vector<io::CanFrame> replay_input;
+  bool replay = false;  ///< use replay_input (even when it is empty)
 };
 
 /// What one frame put on the bus.
@@ -36,11 +43,13 @@ struct FrameRecord {
   std::uint32_t first_detection = 0;  ///< index into RunResult::detections
   std::uint32_t detection_count = 0;
   bool late = false;
+  bool sent = true;  ///< false: stale state with stale_output "silent", nothing was sent
 };
 
 struct RunResult {
   std::uint64_t frames = 0;
   std::uint64_t frames_valid = 0;        ///< frames with a fresh ownship state
+  std::uint64_t lists_suppressed = 0;    ///< stale frames that sent nothing (stale_output "silent")
   std::uint64_t frames_over_budget = 0;  ///< compute time of the frame exceeded the period
   std::uint64_t overruns = 0;            ///< scheduler: frames started late
   std::uint64_t missed_periods = 0;      ///< scheduler: periods skipped
@@ -48,6 +57,12 @@ struct RunResult {
   std::uint64_t detections_min = 0;
   std::uint64_t detections_max = 0;
   io::canas::DecoderCounters decoder{};
+  /// Per ownship field (io::canas::Field order): the largest age seen at a frame's time [s]
+  /// (+inf when never received) and the frames at which the field was older than the timeout.
+  std::array<double, io::canas::kFieldCount> field_age_max_s{};
+  std::array<std::uint64_t, io::canas::kFieldCount> field_stale_frames{};
+  std::uint64_t replay_frames_fed = 0;   ///< replay: log frames put on the bus
+  std::uint64_t replay_frames_left = 0;  ///< replay: log frames after the last radar frame
   std::uint64_t icd_dropped = 0;
   std::uint64_t icd_truncated = 0;
   radar::TraceStats trace{};         ///< summed over frames

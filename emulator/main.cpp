@@ -2,6 +2,7 @@
 // libraries (style.md item 1).
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
 #include "emulator/sigma0_tool.hpp"
+#include "io/candump.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "scene/gltf.hpp"
 #include "scene/mesh_io.hpp"
@@ -70,6 +72,16 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r,
       static_cast<unsigned long long>(r.decoder.rejected()),
       static_cast<unsigned long long>(r.bus_frames_out),
       static_cast<unsigned long long>(r.sink_lists));
+  if (r.frames_valid < r.frames) {
+    std::printf("  validity    %llu frames with a stale ownship state (older than %.3g s): %s\n",
+                static_cast<unsigned long long>(r.frames - r.frames_valid), s.state_timeout_s,
+                s.stale_output_silent ? "no list sent" : "empty lists flagged OWNSHIP_INVALID");
+  }
+  if (r.replay_frames_fed > 0 || r.replay_frames_left > 0) {
+    std::printf("  replay      %llu log frames fed, %llu after the last frame\n",
+                static_cast<unsigned long long>(r.replay_frames_fed),
+                static_cast<unsigned long long>(r.replay_frames_left));
+  }
   for (const auto& w : r.realtime.warnings)
     std::printf("  warning     %s\n", w.c_str());
   if (!out_dir.empty())
@@ -78,23 +90,15 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r,
         out_dir.c_str());
 }
 
-int run_command(const std::string& scenario_file, std::uint64_t frames, const std::string& out,
-                bool realtime, bool print_scenario, bool quiet, int rt_priority, bool lock_memory,
-                int cpu) {
-  if (print_scenario) {
-    std::cout << emu::default_scenario_toml();
-    return 0;
-  }
-  emu::Scenario scenario = scenario_file.empty() ? emu::parse_scenario(emu::default_scenario_toml(),
-                                                                       "<default scenario>")
-                                                 : emu::load_scenario(scenario_file);
-  if (frames > 0)
-    scenario.frames = frames;
-  emu::RunOptions options;
-  options.realtime = realtime;
-  options.rt.fifo_priority = rt_priority;
-  options.rt.lock_memory = lock_memory;
-  options.rt.cpu = cpu;
+emu::Scenario load_scenario_or_default(const std::string& scenario_file) {
+  return scenario_file.empty()
+             ? emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>")
+             : emu::load_scenario(scenario_file);
+}
+
+// Runs the loop, writes the outputs and prints the summary (run and replay).
+int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const std::string& out,
+                 bool quiet) {
   const bool show_progress = !quiet && scenario.frames >= 100;
   if (show_progress) {
     options.progress = [](std::uint64_t done, std::uint64_t total) {
@@ -113,6 +117,62 @@ int run_command(const std::string& scenario_file, std::uint64_t frames, const st
   if (!quiet)
     print_summary(loop, result, out);
   return 0;
+}
+
+int run_command(const std::string& scenario_file, std::uint64_t frames, const std::string& out,
+                bool realtime, bool print_scenario, bool quiet, int rt_priority, bool lock_memory,
+                int cpu) {
+  if (print_scenario) {
+    std::cout << emu::default_scenario_toml();
+    return 0;
+  }
+  emu::Scenario scenario = load_scenario_or_default(scenario_file);
+  if (frames > 0)
+    scenario.frames = frames;
+  emu::RunOptions options;
+  options.realtime = realtime;
+  options.rt.fifo_priority = rt_priority;
+  options.rt.lock_memory = lock_memory;
+  options.rt.cpu = cpu;
+  return execute_loop(scenario, std::move(options), out, quiet);
+}
+
+// Replays a recorded input log (a run's bus_in.log, or any candump log of CANaerospace input)
+// through the loop on the simulated clock: deterministic, whatever the machine's load.
+int replay_command(const std::string& log_file, const std::string& scenario_file,
+                   std::uint64_t frames, const std::string& out, bool quiet) {
+  emu::Scenario scenario = load_scenario_or_default(scenario_file);
+  std::vector<radar_emu::io::CandumpLine> lines = radar_emu::io::read_candump_file(log_file);
+  emu::RunOptions options;
+  options.replay = true;
+  options.replay_input.reserve(lines.size());
+  for (const auto& line : lines)
+    options.replay_input.push_back(line.frame);
+  if (options.replay_input.empty())
+    throw std::runtime_error(log_file + ": no frames to replay");
+  // The log's time stamps are bus times: scenario time 0 is the scenario's epoch. A log recorded
+  // elsewhere (a real bus: CLOCK_REALTIME of another day) is aligned on its first whole second.
+  const std::int64_t first_ns = options.replay_input.front().timestamp_ns;
+  const std::int64_t last_ns = options.replay_input.back().timestamp_ns;
+  constexpr std::int64_t kDay_ns = 86'400'000'000'000LL;
+  if (first_ns < scenario.epoch_unix_ns || first_ns - scenario.epoch_unix_ns > kDay_ns) {
+    scenario.epoch_unix_ns = first_ns - first_ns % 1'000'000'000LL;
+    if (!quiet) {
+      std::fprintf(stderr,
+                   "radar-emu replay: log starts at %.6f s, not within a day of the "
+                   "scenario's epoch: epoch set to %lld s\n",
+                   static_cast<double>(first_ns) * 1e-9,
+                   static_cast<long long>(scenario.epoch_unix_ns / 1'000'000'000LL));
+    }
+  }
+  if (frames > 0) {
+    scenario.frames = frames;
+  } else {
+    // Enough frames to consume the whole log: frame k runs at epoch + k / rate.
+    const double span_s = static_cast<double>(last_ns - scenario.epoch_unix_ns) * 1e-9;
+    scenario.frames = static_cast<std::uint64_t>(std::ceil(span_s * scenario.rate_hz - 1e-9)) + 1;
+  }
+  return execute_loop(scenario, std::move(options), out, quiet);
 }
 
 int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec spec,
@@ -168,6 +228,25 @@ int main(int argc, char** argv) {
   run->add_option("--cpu", cpu, "Pin the frame loop to this CPU with --realtime");
   run->add_flag("--print-scenario", print_scenario, "Print the embedded default scenario and exit");
   run->add_flag("-q,--quiet", quiet, "No progress or summary");
+
+  CLI::App* replay = app.add_subcommand(
+      "replay",
+      "Replay a recorded input log (candump format, e.g. a run's bus_in.log) through "
+      "the closed loop, deterministically");
+  std::string replay_log, replay_scenario, replay_out = "out/replay";
+  std::uint64_t replay_frames = 0;
+  bool replay_quiet = false;
+  replay->add_option("log", replay_log, "Input log in candump -L format")
+      ->required()
+      ->check(CLI::ExistingFile);
+  replay
+      ->add_option("scenario", replay_scenario,
+                   "Scenario TOML of the recording run (default: the embedded one)")
+      ->check(CLI::ExistingFile);
+  replay->add_option("--frames", replay_frames, "Number of frames (default: the log's span)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}));
+  replay->add_option("--out", replay_out, "Output directory (default out/replay)");
+  replay->add_flag("-q,--quiet", replay_quiet, "No progress or summary");
 
   CLI::App* scene_cmd = app.add_subcommand("scene", "Scene databases and canonical targets");
   scene_cmd->require_subcommand(1);
@@ -338,6 +417,8 @@ int main(int argc, char** argv) {
       return run_command(scenario_file, frames, out, realtime, print_scenario, quiet, rt_priority,
                          lock_memory, cpu);
     }
+    if (replay->parsed())
+      return replay_command(replay_log, replay_scenario, replay_frames, replay_out, replay_quiet);
     if (target->parsed())
       return target_command(target_kind, spec, target_out);
     if (rcs->parsed()) {

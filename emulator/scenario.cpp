@@ -30,6 +30,7 @@ frames = 200                # bounded run (10 s at 20 Hz)
 rate_hz = 20.0              # radar frame rate
 epoch_unix_s = 1767225600   # bus time stamp of scenario time 0 (2026-01-01T00:00:00Z)
 state_timeout_s = 0.5       # older ownship data marks the output invalid
+stale_output = "flag"       # while stale: "flag" (empty list, OWNSHIP_INVALID) or "silent"
 
 [scene]
 builtin = "default"         # or: file = "scene.glb"
@@ -242,13 +243,18 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   top.string("name", s.name);
 
   const TableReader run(root, "run", origin,
-                        {"frames", "rate_hz", "epoch_unix_s", "state_timeout_s"});
+                        {"frames", "rate_hz", "epoch_unix_s", "state_timeout_s", "stale_output"});
   run.integer("frames", s.frames, 1, 100'000'000);
   run.number("rate_hz", s.rate_hz, 0.1, 10'000.0);
   std::int64_t epoch_s = s.epoch_unix_ns / 1'000'000'000LL;
   run.integer("epoch_unix_s", epoch_s, 0, 4'000'000'000LL);
   s.epoch_unix_ns = epoch_s * 1'000'000'000LL;
   run.number("state_timeout_s", s.state_timeout_s, 0.001, 3600.0);
+  std::string stale_output = s.stale_output_silent ? "silent" : "flag";
+  run.string("stale_output", stale_output);
+  if (stale_output != "flag" && stale_output != "silent")
+    run.fail("stale_output", "expected \"flag\" or \"silent\", got \"" + stale_output + "\"");
+  s.stale_output_silent = stale_output == "silent";
 
   const TableReader scene(root, "scene", origin, {"builtin", "file"});
   scene.string("builtin", s.scene_builtin);

@@ -21,6 +21,9 @@ struct Scenario {
   double rate_hz = 20.0;
   std::int64_t epoch_unix_ns = 1'767'225'600LL * 1'000'000'000LL;  ///< bus time of t = 0
   double state_timeout_s = 0.5;  ///< ownship fields older than this make the output invalid
+  /// What the radar sends while its ownship state is stale (docs/icd/detections.md): "flag"
+  /// (an empty list whose header has OWNSHIP_INVALID set) or "silent" (no list at all).
+  bool stale_output_silent = false;
   // [scene]
   std::string scene_builtin = "default";  ///< used when scene_file is empty
   std::filesystem::path scene_file;

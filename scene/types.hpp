@@ -40,6 +40,16 @@ struct ObjectDesc {
   glm::dmat4 world_from_body{1.0};
   /// Moving objects are instanced: moving them never rebuilds the static geometry.
   std::optional<LinearMotion> motion;
+  /// Database area the object belongs to ("central", "surround", "airport", ...; "" if none).
+  /// Carried in glTF node extras; `radar-emu scene info` counts polygons per area.
+  std::string area{};
+  /// Level of detail: objects sharing a group (>= 0) are alternative meshes of one terrain tile,
+  /// level 0 the finest; at most one level of a group is active per frame (scene culling picks it
+  /// by range so that facets stay below the range cell). -1: not part of a group (always active).
+  std::int32_t lod_group = -1;
+  std::uint8_t lod_level = 0;
+  /// Longest facet edge of this mesh [m] (what LOD selection compares with the range cell).
+  double lod_facet_m = 0.0;
 };
 
 /// WGS84 point at the origin of the world ENU frame.
