@@ -3,6 +3,8 @@
 #include <array>
 #include <stdexcept>
 
+#include "radar/clutter/terrain.hpp"
+
 namespace radar_emu::radar {
 
 namespace {
@@ -34,6 +36,14 @@ std::vector<RadarMaterial> resolve_materials(std::span<const scene::Material> sc
   out.reserve(scene_materials.size());
   for (std::size_t i = 0; i < scene_materials.size(); ++i) {
     const std::string& name = scene_materials[i].name;
+    if (const clutter::TerrainMaterial* t = clutter::find_terrain_material(name)) {
+      RadarMaterial m;
+      m.name = name;
+      m.conductor = t->permittivity_model == clutter::PermittivityModel::kConductor;
+      m.terrain_catalogue = !m.conductor;
+      out.push_back(std::move(m));
+      continue;
+    }
     const RadarMaterial* found = nullptr;
     for (const RadarMaterial& m : catalogue()) {
       if (m.name == name) {
@@ -42,8 +52,10 @@ std::vector<RadarMaterial> resolve_materials(std::span<const scene::Material> sc
       }
     }
     if (found == nullptr) {
-      std::string known;
+      std::string known = clutter::terrain_material_names();
       for (const RadarMaterial& m : catalogue()) {
+        if (clutter::find_terrain_material(m.name) != nullptr)
+          continue;
         known += known.empty() ? "" : ", ";
         known += m.name;
       }

@@ -21,13 +21,20 @@ struct RadarMaterial {
   std::string name;
   bool conductor = false;  ///< perfect electric conductor: specular GO bounce + PO
   double gamma = 0.0;      ///< constant-gamma clutter coefficient (linear) for non-conductors
+  /// Non-conductors of the terrain catalogue (radar/clutter/terrain.hpp) get their sigma0 from
+  /// the physical models through a setup-time Sigma0Table instead of `gamma`.
+  bool terrain_catalogue = false;
 };
 
 /// The catalogue of known material names.
 [[nodiscard]] std::span<const RadarMaterial> material_catalogue() noexcept;
 
-/// Radar properties for each scene material, in the scene's material order. Throws
-/// std::invalid_argument naming the material and the known names when one is unknown (setup).
+/// Radar properties for each scene material, in the scene's material order. A name of the
+/// terrain catalogue (radar/clutter/terrain.hpp: asphalt, concrete, grass, crops, forest, ...,
+/// metal) takes precedence: "metal" is a conductor, the others are terrain_catalogue materials.
+/// The remaining names of the first catalogue ("steel", "aluminium", "soil") keep their constant
+/// gamma. Throws std::invalid_argument naming the material and the known names when one is
+/// unknown (setup).
 [[nodiscard]] std::vector<RadarMaterial> resolve_materials(
     std::span<const scene::Material> scene_materials);
 

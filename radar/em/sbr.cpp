@@ -67,6 +67,21 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
       std::ceil((c.elevation_max_rad - c.elevation_min_rad) / c.terrain_ray_spacing_rad - 1e-9));
   require(n_az_ * n_el_ <= 50'000'000, "terrain_ray_spacing_rad", "gives more than 5e7 rays");
 
+  // Terrain-catalogue materials: their sigma0 tables at the carrier (setup only).
+  {
+    std::vector<clutter::SurfaceSpec> specs;
+    sigma0_row_.assign(materials_.size(), -1);
+    for (std::size_t i = 0; i < materials_.size(); ++i) {
+      if (!materials_[i].terrain_catalogue)
+        continue;
+      const clutter::TerrainMaterial* t = clutter::find_terrain_material(materials_[i].name);
+      sigma0_row_[i] = static_cast<int>(specs.size());
+      specs.push_back(clutter::resolve_surface(*t, c.carrier_hz));
+    }
+    if (!specs.empty())
+      sigma0_ = clutter::Sigma0Table(specs, clutter::Sigma0Model::kTotal, c.carrier_hz);
+  }
+
   const auto& desc = scene.description();
   is_target_.assign(desc.objects.size(), 0);
   for (std::size_t i = 0; i < desc.objects.size(); ++i) {
@@ -146,11 +161,21 @@ void SbrTracer::trace_ray(const RadarPose& pose, double az, double el, double da
     const glm::dvec3 vp_m = vv - d * (glm::dot(n, vv) / n_dot_d);
     if (!mat.conductor) {
       if (bounce == 0 && terrain) {
-        // Constant-gamma clutter: sigma = sigma0 * footprint = gamma cos(theta_i) * dA_perp /
-        // cos(theta_i) = gamma * dA_perp, dA_perp = L^2 dOmega (Richards 2010, sec. 5.3).
+        // sigma = sigma0(theta_i) * footprint area, footprint = dA_perp / cos(theta_i) with
+        // dA_perp = L^2 dOmega. Terrain-catalogue materials take sigma0 (VV, the tracer's
+        // polarisation) from their setup-time table (radar/clutter/terrain.hpp); the others
+        // are constant gamma, sigma0 = gamma cos(theta_i), so sigma = gamma dA_perp
+        // (Richards 2010, sec. 5.3).
         const double d_omega = glm::length(glm::cross(u, v));
+        const double cos_i = -n_dot_d;
+        const int row = sigma0_row_[hit.material_id];
+        const double sigma_m2 =
+            row >= 0 ? static_cast<double>(sigma0_.lookup(static_cast<std::size_t>(row),
+                                                          clutter::Sigma0Table::kVV, cos_i)) *
+                           path_m * path_m * d_omega / cos_i
+                     : mat.gamma * path_m * path_m * d_omega;
         Contribution& out = slot[count++];
-        out.amplitude = {std::sqrt(mat.gamma * path_m * path_m * d_omega), 0.0};
+        out.amplitude = {std::sqrt(sigma_m2), 0.0};
         out.range_m = path_m;
         out.range_spread_m = std::abs(glm::dot(up_m, d)) + std::abs(glm::dot(vp_m, d));
         out.radial_velocity_mps = path_rate;  // out and back along the same line

@@ -12,6 +12,7 @@
 #include <span>
 #include <vector>
 
+#include "radar/clutter/terrain.hpp"
 #include "radar/materials.hpp"
 #include "scene/scene.hpp"
 
@@ -104,6 +105,10 @@ class SbrTracer {
   const scene::Scene* scene_;
   SbrConfig config_;
   std::vector<RadarMaterial> materials_;
+  /// sigma0 of the terrain-catalogue materials at the carrier (issue 4's models, model "total":
+  /// surface + volume), built once here; row per scene material in sigma0_row_ (-1: none).
+  clutter::Sigma0Table sigma0_;
+  std::vector<int> sigma0_row_;
   struct Bundle {
     std::uint32_t object_id = 0;
     double az0_rad = 0, el0_rad = 0, daz_rad = 0, del_rad = 0;
