@@ -3,6 +3,8 @@
 #include <bit>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 namespace radar_emu::io::canas {
 
@@ -42,30 +44,11 @@ CanFrame header_frame(std::uint16_t can_id, std::uint8_t node_id, DataType type,
   return f;
 }
 
-// Field of an identifier, or kCount when radar-emu does not consume it.
-Field field_of(std::uint32_t can_id) noexcept {
-  switch (can_id) {
-    case id::kPitchAngle:
-      return Field::kPitch;
-    case id::kRollAngle:
-      return Field::kRoll;
-    case id::kTrueHeading:
-      return Field::kTrueHeading;
-    case id::kGpsLatitude:
-      return Field::kLatitude;
-    case id::kGpsLongitude:
-      return Field::kLongitude;
-    case id::kGpsHeight:
-      return Field::kHeight;
-    case id::kTrueEastVelocity:
-      return Field::kVelEast;
-    case id::kTrueNorthVelocity:
-      return Field::kVelNorth;
-    case id::kTrueUpVelocity:
-      return Field::kVelUp;
-    default:
-      return Field::kCount;
-  }
+// 11-bit identifiers (spec sec. 3: CAN 2.0A).
+constexpr std::uint32_t kMaxStandardId = 0x7FF;
+
+std::string quoted(Field f) {
+  return "'" + std::string(field_name(f)) + "'";
 }
 
 // Physical validity limits on the bus units (deg, m, m/s).
@@ -129,6 +112,100 @@ std::uint16_t can_id_of(Field field) noexcept {
   return 0;
 }
 
+std::string_view field_name(Field field) noexcept {
+  switch (field) {
+    case Field::kPitch:
+      return "pitch";
+    case Field::kRoll:
+      return "roll";
+    case Field::kTrueHeading:
+      return "true_heading";
+    case Field::kLatitude:
+      return "latitude";
+    case Field::kLongitude:
+      return "longitude";
+    case Field::kHeight:
+      return "height";
+    case Field::kVelEast:
+      return "vel_east";
+    case Field::kVelNorth:
+      return "vel_north";
+    case Field::kVelUp:
+      return "vel_up";
+    case Field::kCount:
+      break;
+  }
+  return "";
+}
+
+std::optional<Field> field_from_name(std::string_view name) noexcept {
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    if (field_name(static_cast<Field>(i)) == name)
+      return static_cast<Field>(i);
+  }
+  return std::nullopt;
+}
+
+std::array<FieldInput, kFieldCount> DecoderConfig::default_fields() noexcept {
+  std::array<FieldInput, kFieldCount> t{};
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    t[i].can_id = can_id_of(static_cast<Field>(i));
+    t[i].accepted = accept::kFloat | accept::kDouble;
+  }
+  // Latitude/longitude also as LONG in 1e-7 deg (a common vendor practice; see buses notes in
+  // docs/icd/canaerospace_input.md).
+  for (Field f : {Field::kLatitude, Field::kLongitude}) {
+    t[static_cast<std::size_t>(f)].accepted |= accept::kLong;
+    t[static_cast<std::size_t>(f)].long_lsb = 1e-7;
+  }
+  return t;
+}
+
+void validate(const DecoderConfig& config) {
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    const auto f = static_cast<Field>(i);
+    const FieldInput& in = config.fields[i];
+    if (in.can_id > kMaxStandardId) {
+      throw std::invalid_argument("canaerospace input: field " + quoted(f) + " identifier " +
+                                  std::to_string(in.can_id) +
+                                  " is outside the 11-bit range 0..2047");
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (config.fields[j].can_id == in.can_id) {
+        throw std::invalid_argument("canaerospace input: field " + quoted(f) + " identifier " +
+                                    std::to_string(in.can_id) + " is already used by field " +
+                                    quoted(static_cast<Field>(j)));
+      }
+    }
+    if (in.accepted == 0 || (in.accepted & ~accept::kAll) != 0) {
+      throw std::invalid_argument("canaerospace input: field " + quoted(f) +
+                                  " must accept one or more of FLOAT, DOUBLE, LONG");
+    }
+    if ((in.accepted & accept::kLong) != 0 && !(in.long_lsb > 0.0 && std::isfinite(in.long_lsb))) {
+      throw std::invalid_argument("canaerospace input: field " + quoted(f) +
+                                  " accepts LONG but long_lsb is not a positive number");
+    }
+  }
+}
+
+Decoder::Decoder() noexcept {
+  index_identifiers();
+}
+
+Decoder::Decoder(const DecoderConfig& config) : config_(config) {
+  validate(config_);
+  index_identifiers();
+}
+
+void Decoder::index_identifiers() noexcept {
+  field_by_id_.fill(kNoField);
+  for (std::size_t i = 0; i < kFieldCount; ++i) {
+    const std::uint16_t can_id = config_.fields[i].can_id;
+    if (can_id <= kMaxStandardId)
+      field_by_id_[can_id] = static_cast<std::uint8_t>(i);
+  }
+}
+
 double OwnshipState::age_s(Field f, std::int64_t now_ns) const noexcept {
   const FieldSample& s = (*this)[f];
   if (!s.received)
@@ -155,14 +232,20 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
     ++counters_.extended_id;
     return DecodeStatus::kExtendedId;
   }
-  const Field field = field_of(frame.id);
-  if (field == Field::kCount) {
+  const std::uint8_t index = frame.id <= kMaxStandardId ? field_by_id_[frame.id] : kNoField;
+  if (index == kNoField) {
     ++counters_.ignored_id;
     return DecodeStatus::kIgnoredId;
   }
+  const auto field = static_cast<Field>(index);
+  const FieldInput& input = config_.fields[index];
   if (frame.len < kHeaderBytes) {
     ++counters_.short_frame;
     return DecodeStatus::kShortFrame;
+  }
+  if (config_.node_id && frame.data[kNodeIdByte] != *config_.node_id) {
+    ++counters_.other_node;
+    return DecodeStatus::kOtherNode;
   }
   const std::uint8_t type_code = frame.data[kDataTypeByte];
   if (type_code > static_cast<std::uint8_t>(DataType::kDoubleL)) {
@@ -170,9 +253,10 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
     return DecodeStatus::kUnknownDataType;
   }
   const auto type = static_cast<DataType>(type_code);
-  const bool lat_lon = field == Field::kLatitude || field == Field::kLongitude;
-  const bool accepted_type = type == DataType::kFloat || type == DataType::kDoubleH ||
-                             type == DataType::kDoubleL || (lat_lon && type == DataType::kLong);
+  const bool accepted_type = (type == DataType::kFloat && (input.accepted & accept::kFloat) != 0) ||
+                             ((type == DataType::kDoubleH || type == DataType::kDoubleL) &&
+                              (input.accepted & accept::kDouble) != 0) ||
+                             (type == DataType::kLong && (input.accepted & accept::kLong) != 0);
   if (!accepted_type) {
     ++counters_.unsupported_data_type;
     return DecodeStatus::kUnsupportedDataType;
@@ -183,10 +267,11 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
   }
 
   // Message-code tracking (spec sec. 4.1.4: incremented by one per message, wraps at 255).
-  IdTrack& track = track_[static_cast<std::size_t>(field)];
+  IdTrack& track = track_[index];
   const std::uint8_t code = frame.data[kMessageCodeByte];
   if (track.seen && code != static_cast<std::uint8_t>(track.last_message_code + 1)) {
     ++counters_.message_code_gaps;
+    ++counters_.message_code_gaps_by_field[index];
   }
   track.seen = true;
   track.last_message_code = code;
@@ -214,7 +299,7 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
       value = static_cast<double>(std::bit_cast<float>(bits));
       break;
     case DataType::kLong:
-      value = static_cast<double>(std::bit_cast<std::int32_t>(bits)) * 1e-7;  // 1e-7 deg
+      value = static_cast<double>(std::bit_cast<std::int32_t>(bits)) * input.long_lsb;
       break;
     default:
       ++counters_.unsupported_data_type;
@@ -240,6 +325,9 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
     si = std::fmod(si, 2.0 * std::numbers::pi);
     if (si < 0.0)
       si += 2.0 * std::numbers::pi;
+    // A tiny negative angle rounds to exactly 2 pi when 2 pi is added: keep [0, 2 pi).
+    if (si >= 2.0 * std::numbers::pi)
+      si = 0.0;
   }
   FieldSample& sample = state_.fields[static_cast<std::size_t>(field)];
   sample.value = si;

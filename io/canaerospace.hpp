@@ -6,6 +6,8 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <optional>
+#include <string_view>
 #include <utility>
 
 #include "io/can_frame.hpp"
@@ -78,8 +80,53 @@ enum class Field : std::uint8_t {
 };
 inline constexpr std::size_t kFieldCount = static_cast<std::size_t>(Field::kCount);
 
-/// CAN identifier carrying `field`.
+/// CAN identifier carrying `field` in the default configuration (the id:: constants).
 [[nodiscard]] std::uint16_t can_id_of(Field field) noexcept;
+
+/// Name of `field` in configuration files and errors: "pitch", "roll", "true_heading",
+/// "latitude", "longitude", "height", "vel_east", "vel_north", "vel_up".
+[[nodiscard]] std::string_view field_name(Field field) noexcept;
+
+/// The field named `name` (see field_name()), or nullopt.
+[[nodiscard]] std::optional<Field> field_from_name(std::string_view name) noexcept;
+
+/// Encodings a field accepts (bit set; docs/icd/canaerospace_input.md).
+namespace accept {
+inline constexpr std::uint8_t kFloat = 0x01;   ///< FLOAT (2): IEEE-754 single
+inline constexpr std::uint8_t kDouble = 0x02;  ///< DOUBLEH (30) + DOUBLEL (31) pair, high first
+inline constexpr std::uint8_t kLong = 0x04;    ///< LONG (3): signed 32-bit x FieldInput::long_lsb
+inline constexpr std::uint8_t kAll = kFloat | kDouble | kLong;
+}  // namespace accept
+
+/// Where one field comes from on the bus.
+struct FieldInput {
+  std::uint16_t can_id = 0;  ///< 11-bit identifier carrying the field (0..2047)
+  std::uint8_t accepted = accept::kFloat | accept::kDouble;  ///< accept:: bits, at least one
+  double long_lsb = 0.0;  ///< bus units [deg, m or m/s] per LSB of a LONG; > 0 if LONG accepted
+};
+
+/// Per-field identifiers and encodings, and the node-ID filter. Default-constructed, it is the
+/// table radar-emu has always used: the id:: identifiers, FLOAT and DOUBLE everywhere, LONG in
+/// 1e-7 deg for latitude and longitude, frames from any node.
+struct DecoderConfig {
+  std::array<FieldInput, kFieldCount> fields = default_fields();
+  /// Accept only frames whose node-ID (byte 0) equals this; any node when empty. Frames of a
+  /// consumed identifier from another node are counted as `other_node`, not as errors.
+  std::optional<std::uint8_t> node_id;
+
+  [[nodiscard]] FieldInput& operator[](Field f) noexcept {
+    return fields[static_cast<std::size_t>(f)];
+  }
+  [[nodiscard]] const FieldInput& operator[](Field f) const noexcept {
+    return fields[static_cast<std::size_t>(f)];
+  }
+  [[nodiscard]] static std::array<FieldInput, kFieldCount> default_fields() noexcept;
+};
+
+/// Checks `config` at setup. Throws std::invalid_argument with one line naming the field for an
+/// identifier outside 11 bits, an identifier used by two fields, no accepted encoding (or
+/// unknown accept:: bits), or LONG accepted without a positive, finite long_lsb.
+void validate(const DecoderConfig& config);
 
 /// Latest value of one field.
 struct FieldSample {
@@ -115,6 +162,7 @@ enum class DecodeStatus : std::uint8_t {
   kOutOfRange,           ///< physically impossible value for the field
   kUnpairedDouble,       ///< DOUBLEL without a preceding DOUBLEH on the same identifier
   kExtendedId,           ///< CANaerospace uses 11-bit identifiers only
+  kOtherNode,            ///< consumed identifier, but not from the configured node (not an error)
 };
 
 /// Rejection and bookkeeping counters (reported in report.json).
@@ -130,21 +178,30 @@ struct DecoderCounters {
   std::uint64_t unpaired_double = 0;
   std::uint64_t extended_id = 0;
   std::uint64_t message_code_gaps = 0;  ///< message code did not follow the previous one + 1
+  /// message_code_gaps split by field (indexed by Field).
+  std::array<std::uint64_t, kFieldCount> message_code_gaps_by_field{};
+  std::uint64_t other_node = 0;  ///< frames of a consumed identifier from another node-ID
   [[nodiscard]] std::uint64_t rejected() const noexcept {
     return short_frame + unknown_data_type + unsupported_data_type + not_a_number + out_of_range +
            unpaired_double + extended_id;
   }
 };
 
-/// Decodes CANaerospace frames into an OwnshipState. Setup-free; decode() is real-time safe.
-/// Accepted encodings per field: FLOAT; a DOUBLEH + DOUBLEL pair on the same identifier (high
-/// word first, the two frames consecutive on that identifier); for latitude/longitude also LONG
-/// in units of 1e-7 deg (a common vendor practice).
+/// Decodes CANaerospace frames into an OwnshipState; decode() is real-time safe. Accepted
+/// encodings per field (DecoderConfig): FLOAT; a DOUBLEH + DOUBLEL pair on the same identifier
+/// (high word first, the two frames consecutive on that identifier); LONG scaled by long_lsb
+/// (by default latitude/longitude only, in 1e-7 deg, a common vendor practice).
 class Decoder {
  public:
+  /// The default configuration (DecoderConfig{}): today's identifiers, any node.
+  Decoder() noexcept;
+  /// A configured decoder. Throws std::invalid_argument (see validate()) at setup.
+  explicit Decoder(const DecoderConfig& config);
+
   [[nodiscard]] DecodeStatus decode(const CanFrame& frame, std::int64_t now_ns) noexcept;
   [[nodiscard]] const OwnshipState& state() const noexcept { return state_; }
   [[nodiscard]] const DecoderCounters& counters() const noexcept { return counters_; }
+  [[nodiscard]] const DecoderConfig& config() const noexcept { return config_; }
 
  private:
   struct IdTrack {
@@ -153,6 +210,11 @@ class Decoder {
     bool double_high_pending = false;
     std::uint32_t double_high_bits = 0;
   };
+  static constexpr std::uint8_t kNoField = 0xFF;
+  void index_identifiers() noexcept;
+
+  DecoderConfig config_{};
+  std::array<std::uint8_t, 2048> field_by_id_{};  ///< Field per 11-bit identifier, or kNoField
   OwnshipState state_{};
   DecoderCounters counters_{};
   std::array<IdTrack, kFieldCount> track_{};

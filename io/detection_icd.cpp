@@ -20,6 +20,25 @@ std::uint32_t get_le(const CanFrame& f, std::size_t at, std::size_t bytes) noexc
   return v;
 }
 
+// Bit-level little-endian (Intel, DBC "@1") access: bit k of a message is bit k % 8 of byte
+// k / 8, and a signal's least significant bit sits at its start bit.
+void put_bits(CanFrame& f, std::size_t bit, std::size_t width, std::uint32_t v) noexcept {
+  for (std::size_t i = 0; i < width; ++i, ++bit) {
+    const auto mask = static_cast<std::uint8_t>(1u << (bit % 8));
+    if (((v >> i) & 1u) != 0)
+      f.data[bit / 8] = static_cast<std::uint8_t>(f.data[bit / 8] | mask);
+    else
+      f.data[bit / 8] = static_cast<std::uint8_t>(f.data[bit / 8] & ~mask);
+  }
+}
+
+std::uint32_t get_bits(const CanFrame& f, std::size_t bit, std::size_t width) noexcept {
+  std::uint32_t v = 0;
+  for (std::size_t i = 0; i < width; ++i, ++bit)
+    v |= ((static_cast<std::uint32_t>(f.data[bit / 8]) >> (bit % 8)) & 1u) << i;
+  return v;
+}
+
 std::int32_t sign_extend16(std::uint32_t v) noexcept {
   return static_cast<std::int32_t>(static_cast<std::int16_t>(static_cast<std::uint16_t>(v)));
 }
@@ -36,9 +55,109 @@ bool quantise(double physical, double scale, std::int64_t lo, std::int64_t hi,
   return true;
 }
 
+// Raw value of a one-sigma accuracy: NaN or negative is invalid; above the field it saturates.
+bool quantise_std(double physical, double scale, std::uint32_t max_raw,
+                  std::uint32_t& raw) noexcept {
+  if (!(physical >= 0.0))
+    return false;
+  const double r = std::round(physical / scale);
+  raw = r >= static_cast<double>(max_raw) ? max_raw : static_cast<std::uint32_t>(r);
+  return true;
+}
+
 struct RawDetection {
   std::int64_t range, velocity, snr, azimuth, elevation, rcs;
 };
+
+struct RawAccuracy {
+  std::uint32_t range, velocity, azimuth, elevation;
+};
+
+bool to_raw_accuracy(const Detection& d, RawAccuracy& raw) noexcept {
+  return quantise_std(d.range_std_m, kRangeStdScale_m, kRangeStdMaxRaw, raw.range) &&
+         quantise_std(d.radial_velocity_std_mps, kRadialVelocityStdScale_mps,
+                      kRadialVelocityStdMaxRaw, raw.velocity) &&
+         quantise_std(d.azimuth_std_deg, kAngleStdScale_deg, kAngleStdMaxRaw, raw.azimuth) &&
+         quantise_std(d.elevation_std_deg, kAngleStdScale_deg, kAngleStdMaxRaw, raw.elevation);
+}
+
+// CAN FD slot layout: start bit and width of each signal, relative to the slot's first bit
+// (docs/icd/detections.md, "CAN FD detection slot").
+namespace slot {
+constexpr std::size_t kRange = 0, kRangeWidth = 24;
+constexpr std::size_t kVelocity = 24, kVelocityWidth = 16;
+constexpr std::size_t kSnr = 40, kSnrWidth = 8;
+constexpr std::size_t kAzimuth = 48, kAzimuthWidth = 16;
+constexpr std::size_t kElevation = 64, kElevationWidth = 16;
+constexpr std::size_t kRcs = 80, kRcsWidth = 16;
+constexpr std::size_t kRangeStd = 96, kRangeStdWidth = 16;
+constexpr std::size_t kVelocityStd = 112, kVelocityStdWidth = 12;
+constexpr std::size_t kAzimuthStd = 124, kAzimuthStdWidth = 14;
+constexpr std::size_t kElevationStd = 138, kElevationStdWidth = 14;
+constexpr std::size_t kRangeAmbiguous = 152;
+constexpr std::size_t kVelocityAmbiguous = 153;
+static_assert(kVelocityAmbiguous < 8 * kFdSlotBytes);
+}  // namespace slot
+
+static_assert(kFdHeaderSlotOffset + kFdHeaderSlots * kFdSlotBytes == kFdHeaderBytes);
+static_assert(kFdContinuationSlotOffset + kFdContinuationSlots * kFdSlotBytes ==
+              kFdContinuationBytes);
+static_assert(kFdContinuationBytes <= kCanFdMaxBytes);
+static_assert(kFdHeaderSlots + kFdContinuationSlots * (frames_for_fd(kMaxDetectionsPerFrame) - 2) <
+                  256,
+              "a continuation's FirstIndex must fit a byte");
+
+void put_slot(CanFrame& f, std::size_t byte, const RawDetection& r, const RawAccuracy& a,
+              const Detection& d) noexcept {
+  const std::size_t b = 8 * byte;
+  put_bits(f, b + slot::kRange, slot::kRangeWidth, static_cast<std::uint32_t>(r.range));
+  put_bits(f, b + slot::kVelocity, slot::kVelocityWidth,
+           static_cast<std::uint32_t>(r.velocity) & 0xFFFFu);
+  put_bits(f, b + slot::kSnr, slot::kSnrWidth, static_cast<std::uint32_t>(r.snr));
+  put_bits(f, b + slot::kAzimuth, slot::kAzimuthWidth,
+           static_cast<std::uint32_t>(r.azimuth) & 0xFFFFu);
+  put_bits(f, b + slot::kElevation, slot::kElevationWidth,
+           static_cast<std::uint32_t>(r.elevation) & 0xFFFFu);
+  put_bits(f, b + slot::kRcs, slot::kRcsWidth, static_cast<std::uint32_t>(r.rcs) & 0xFFFFu);
+  put_bits(f, b + slot::kRangeStd, slot::kRangeStdWidth, a.range);
+  put_bits(f, b + slot::kVelocityStd, slot::kVelocityStdWidth, a.velocity);
+  put_bits(f, b + slot::kAzimuthStd, slot::kAzimuthStdWidth, a.azimuth);
+  put_bits(f, b + slot::kElevationStd, slot::kElevationStdWidth, a.elevation);
+  put_bits(f, b + slot::kRangeAmbiguous, 1, d.range_ambiguous ? 1u : 0u);
+  put_bits(f, b + slot::kVelocityAmbiguous, 1, d.velocity_ambiguous ? 1u : 0u);
+}
+
+Detection get_slot(const CanFrame& f, std::size_t byte) noexcept {
+  const std::size_t b = 8 * byte;
+  Detection d;
+  d.range_m = static_cast<double>(get_bits(f, b + slot::kRange, slot::kRangeWidth)) * kRangeScale_m;
+  d.radial_velocity_mps =
+      static_cast<double>(sign_extend16(get_bits(f, b + slot::kVelocity, slot::kVelocityWidth))) *
+      kRadialVelocityScale_mps;
+  d.snr_db = static_cast<double>(get_bits(f, b + slot::kSnr, slot::kSnrWidth)) * kSnrScale_db;
+  d.azimuth_deg =
+      static_cast<double>(sign_extend16(get_bits(f, b + slot::kAzimuth, slot::kAzimuthWidth))) *
+      kAngleScale_deg;
+  d.elevation_deg =
+      static_cast<double>(sign_extend16(get_bits(f, b + slot::kElevation, slot::kElevationWidth))) *
+      kAngleScale_deg;
+  d.rcs_dbsm = static_cast<double>(sign_extend16(get_bits(f, b + slot::kRcs, slot::kRcsWidth))) *
+               kRcsScale_dbsm;
+  d.range_std_m = static_cast<double>(get_bits(f, b + slot::kRangeStd, slot::kRangeStdWidth)) *
+                  kRangeStdScale_m;
+  d.radial_velocity_std_mps =
+      static_cast<double>(get_bits(f, b + slot::kVelocityStd, slot::kVelocityStdWidth)) *
+      kRadialVelocityStdScale_mps;
+  d.azimuth_std_deg =
+      static_cast<double>(get_bits(f, b + slot::kAzimuthStd, slot::kAzimuthStdWidth)) *
+      kAngleStdScale_deg;
+  d.elevation_std_deg =
+      static_cast<double>(get_bits(f, b + slot::kElevationStd, slot::kElevationStdWidth)) *
+      kAngleStdScale_deg;
+  d.range_ambiguous = get_bits(f, b + slot::kRangeAmbiguous, 1) != 0;
+  d.velocity_ambiguous = get_bits(f, b + slot::kVelocityAmbiguous, 1) != 0;
+  return d;
+}
 
 bool to_raw(const Detection& d, RawDetection& raw) noexcept {
   if (!(std::abs(d.azimuth_deg) <= kMaxAbsAngle_deg) ||
@@ -62,6 +181,46 @@ CanFrame frame(std::uint32_t id) noexcept {
   f.id = id;
   f.len = kDlc;
   return f;
+}
+
+// CAN FD flags as in candump's "##F" nibble (can_frame.hpp): bit-rate switch.
+constexpr std::uint8_t kFdFlagBrs = 1;
+
+CanFrame fd_frame(std::uint32_t id, std::uint8_t len) noexcept {
+  CanFrame f;
+  f.id = id;
+  f.len = len;
+  f.fd = true;
+  f.fd_flags = kFdFlagBrs;
+  return f;
+}
+
+// Byte of FD slot `k` of the list: frame index and byte offset inside that frame.
+struct SlotPlace {
+  std::size_t frame, byte;
+};
+constexpr SlotPlace slot_place(std::size_t k) noexcept {
+  if (k < kFdHeaderSlots)
+    return {0, kFdHeaderSlotOffset + k * kFdSlotBytes};
+  const std::size_t c = k - kFdHeaderSlots;
+  return {1 + c / kFdContinuationSlots,
+          kFdContinuationSlotOffset + (c % kFdContinuationSlots) * kFdSlotBytes};
+}
+
+void put_header(CanFrame& h, const Header& header) noexcept {
+  put_le(h, 0, header.frame_counter, 2);
+  put_le(h, 2, header.detection_count, 1);
+  put_le(h, 3, header.status, 1);
+  put_le(h, 4, header.time_ms, 4);
+}
+
+Header get_header(const CanFrame& f) noexcept {
+  Header h;
+  h.frame_counter = static_cast<std::uint16_t>(get_le(f, 0, 2));
+  h.detection_count = static_cast<std::uint8_t>(get_le(f, 2, 1));
+  h.status = static_cast<std::uint8_t>(get_le(f, 3, 1));
+  h.time_ms = get_le(f, 4, 4);
+  return h;
 }
 
 }  // namespace
@@ -110,20 +269,70 @@ EncodeResult encode(Header header, std::span<const Detection> detections,
     header.status |= status::kTruncated;
   header.detection_count = static_cast<std::uint8_t>(n);
   CanFrame h = frame(kHeaderId);
-  put_le(h, 0, header.frame_counter, 2);
-  put_le(h, 2, header.detection_count, 1);
-  put_le(h, 3, header.status, 1);
-  put_le(h, 4, header.time_ms, 4);
+  put_header(h, header);
   out[0] = h;
   result.frames = 1 + 2 * n;
   result.encoded = n;
   return result;
 }
 
-FeedStatus ListDecoder::feed(const CanFrame& f) noexcept {
-  if (f.extended || (f.id != kHeaderId && f.id != kDetectionAId && f.id != kDetectionBId)) {
-    return FeedStatus::kIgnored;
+EncodeResult encode_fd(Header header, std::span<const Detection> detections,
+                       std::span<CanFrame> out) noexcept {
+  EncodeResult result;
+  if (out.empty()) {
+    result.truncated = detections.size();
+    return result;
   }
+  const std::size_t room = kFdHeaderSlots + kFdContinuationSlots * (out.size() - 1);
+  const std::size_t limit = room < kMaxDetectionsPerFrame ? room : kMaxDetectionsPerFrame;
+  out[0] = fd_frame(kFdHeaderId, kFdHeaderBytes);
+  std::size_t n = 0;
+  for (const Detection& d : detections) {
+    RawDetection raw{};
+    RawAccuracy acc{};
+    if (!to_raw(d, raw) || !to_raw_accuracy(d, acc)) {
+      ++result.dropped;
+      continue;
+    }
+    if (n == limit) {
+      ++result.truncated;
+      continue;
+    }
+    const SlotPlace p = slot_place(n);
+    CanFrame& f = out[p.frame];
+    if (p.frame > 0 && p.byte == kFdContinuationSlotOffset) {
+      // First slot of a continuation frame: FrameCounter, FirstIndex, SlotCount (so far 0).
+      f = fd_frame(kFdContinuationId, kFdContinuationBytes);
+      put_le(f, 0, header.frame_counter, 2);
+      put_le(f, 2, static_cast<std::uint32_t>(n), 1);
+    }
+    if (p.frame > 0)
+      f.data[3] = static_cast<std::uint8_t>(f.data[3] + 1);
+    put_slot(f, p.byte, raw, acc, d);
+    ++n;
+  }
+  if (result.dropped > 0)
+    header.status |= status::kDropped;
+  if (result.truncated > 0)
+    header.status |= status::kTruncated;
+  header.detection_count = static_cast<std::uint8_t>(n);
+  put_header(out[0], header);
+  result.frames = frames_for_fd(n);
+  result.encoded = n;
+  return result;
+}
+
+FeedStatus ListDecoder::feed(const CanFrame& f) noexcept {
+  if (f.extended)
+    return FeedStatus::kIgnored;
+  if (f.id == kHeaderId || f.id == kDetectionAId || f.id == kDetectionBId)
+    return feed_classic(f);
+  if (f.id == kFdHeaderId || f.id == kFdContinuationId)
+    return feed_fd(f);
+  return FeedStatus::kIgnored;
+}
+
+FeedStatus ListDecoder::feed_classic(const CanFrame& f) noexcept {
   if (f.len != kDlc || f.fd) {
     ++malformed_;
     return FeedStatus::kMalformed;
@@ -132,17 +341,15 @@ FeedStatus ListDecoder::feed(const CanFrame& f) noexcept {
     if (in_list_)
       ++incomplete_;
     list_ = DetectionList{};
-    list_.header.frame_counter = static_cast<std::uint16_t>(get_le(f, 0, 2));
-    list_.header.detection_count = static_cast<std::uint8_t>(get_le(f, 2, 1));
-    list_.header.status = static_cast<std::uint8_t>(get_le(f, 3, 1));
-    list_.header.time_ms = get_le(f, 4, 4);
+    list_.header = get_header(f);
     list_.count = list_.header.detection_count;
     have_.fill(0);
     parts_seen_ = 0;
+    parts_expected_ = 2 * list_.count;
     in_list_ = list_.count > 0;
     return in_list_ ? FeedStatus::kConsumed : FeedStatus::kComplete;
   }
-  if (!in_list_) {
+  if (!in_list_ || list_.fd) {
     ++orphans_;
     return FeedStatus::kOrphan;
   }
@@ -168,7 +375,59 @@ FeedStatus ListDecoder::feed(const CanFrame& f) noexcept {
   }
   have_[index] |= bit;
   ++parts_seen_;
-  if (parts_seen_ == 2 * list_.count) {
+  if (parts_seen_ == parts_expected_) {
+    in_list_ = false;
+    return FeedStatus::kComplete;
+  }
+  return FeedStatus::kConsumed;
+}
+
+FeedStatus ListDecoder::feed_fd(const CanFrame& f) noexcept {
+  const bool is_header = f.id == kFdHeaderId;
+  if (!f.fd || f.len != (is_header ? kFdHeaderBytes : kFdContinuationBytes)) {
+    ++malformed_;
+    return FeedStatus::kMalformed;
+  }
+  if (is_header) {
+    if (in_list_)
+      ++incomplete_;
+    list_ = DetectionList{};
+    list_.fd = true;
+    list_.header = get_header(f);
+    list_.count = list_.header.detection_count;
+    const std::size_t in_header = list_.count < kFdHeaderSlots ? list_.count : kFdHeaderSlots;
+    for (std::size_t k = 0; k < in_header; ++k)
+      list_.detections[k] = get_slot(f, kFdHeaderSlotOffset + k * kFdSlotBytes);
+    have_.fill(0);
+    parts_seen_ = 0;
+    parts_expected_ = frames_for_fd(list_.count) - 1;
+    in_list_ = parts_expected_ > 0;
+    return in_list_ ? FeedStatus::kConsumed : FeedStatus::kComplete;
+  }
+  if (!in_list_ || !list_.fd) {
+    ++orphans_;
+    return FeedStatus::kOrphan;
+  }
+  const auto counter = static_cast<std::uint16_t>(get_le(f, 0, 2));
+  const std::size_t first = get_le(f, 2, 1);
+  const std::size_t slots = get_le(f, 3, 1);
+  // FirstIndex must be 2 + 3 k below the count, SlotCount what remains up to three, and each
+  // continuation may arrive once.
+  const bool index_ok = first >= kFdHeaderSlots && first < list_.count &&
+                        (first - kFdHeaderSlots) % kFdContinuationSlots == 0;
+  const std::size_t remaining = index_ok ? list_.count - first : 0;
+  const std::size_t k = index_ok ? (first - kFdHeaderSlots) / kFdContinuationSlots : 0;
+  if (counter != list_.header.frame_counter || !index_ok ||
+      slots != (remaining < kFdContinuationSlots ? remaining : kFdContinuationSlots) ||
+      have_[k] != 0) {
+    ++malformed_;
+    return FeedStatus::kMalformed;
+  }
+  for (std::size_t s = 0; s < slots; ++s)
+    list_.detections[first + s] = get_slot(f, kFdContinuationSlotOffset + s * kFdSlotBytes);
+  have_[k] = 1;
+  ++parts_seen_;
+  if (parts_seen_ == parts_expected_) {
     in_list_ = false;
     return FeedStatus::kComplete;
   }

@@ -1,6 +1,7 @@
 // CANaerospace decoder and encoder: frames worked out by hand from the specification (v1.7,
 // sec. 4: node-ID, data type, service code, message code, big-endian value), round trips at
-// fixed seeds, and every kind of malformed frame rejected and counted.
+// fixed seeds, every kind of malformed frame rejected and counted, and the configurable input
+// (remapped identifiers, accepted types, node-ID filter, per-field gaps, setup errors).
 
 #include "io/canaerospace.hpp"
 
@@ -10,7 +11,11 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <utility>
 
 namespace io = radar_emu::io;
 namespace canas = radar_emu::io::canas;
@@ -129,6 +134,12 @@ TEST(Canaerospace, HeadingWrapsToZeroToTwoPi) {
   ASSERT_EQ(d.decode(canas::encode_float(canas::id::kTrueHeading, 1, 0, -90.0f), 0),
             canas::DecodeStatus::kAccepted);
   EXPECT_NEAR(d.state()[canas::Field::kTrueHeading].value, 1.5 * std::numbers::pi, 1e-12);
+  // -1e-20 deg: -1.7e-22 rad + 2 pi rounds to 2 pi in double (its ulp is 8.9e-16); the stored
+  // value must stay below 2 pi.
+  ASSERT_EQ(d.decode(canas::encode_float(canas::id::kTrueHeading, 1, 1, -1e-20f), 0),
+            canas::DecodeStatus::kAccepted);
+  EXPECT_GE(d.state()[canas::Field::kTrueHeading].value, 0.0);
+  EXPECT_LT(d.state()[canas::Field::kTrueHeading].value, 2.0 * std::numbers::pi);
 }
 
 TEST(Canaerospace, MalformedFramesAreRejectedAndCountedByReason) {
@@ -267,4 +278,192 @@ TEST(Canaerospace, RandomFramesNeverCrashAtFixedSeed) {
       EXPECT_TRUE(std::isfinite(s.value));
     }
   }
+}
+
+// ---- Configurable input (DecoderConfig) ----------------------------------------------------
+
+namespace {
+// Message from setup that must throw std::invalid_argument; empty if it did not.
+template <typename F>
+std::string invalid_argument_of(F&& setup) {
+  try {
+    setup();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return {};
+}
+}  // namespace
+
+TEST(CanaerospaceConfig, DefaultsAreTheSpecIdentifiers) {
+  // Spec v1.7 appendix A (default identifier distribution): pitch 311, roll 312, true heading
+  // 1133, GPS latitude/longitude/height 1036/1037/1038, true east/north/up velocity
+  // 1130/1131/1132.
+  const canas::DecoderConfig c;
+  const std::pair<canas::Field, std::uint16_t> want[] = {
+      {canas::Field::kPitch, 311},        {canas::Field::kRoll, 312},
+      {canas::Field::kTrueHeading, 1133}, {canas::Field::kLatitude, 1036},
+      {canas::Field::kLongitude, 1037},   {canas::Field::kHeight, 1038},
+      {canas::Field::kVelEast, 1130},     {canas::Field::kVelNorth, 1131},
+      {canas::Field::kVelUp, 1132}};
+  for (const auto& [field, can_id] : want) {
+    EXPECT_EQ(c[field].can_id, can_id) << canas::field_name(field);
+    const bool lat_lon = field == canas::Field::kLatitude || field == canas::Field::kLongitude;
+    EXPECT_EQ(c[field].accepted,
+              canas::accept::kFloat | canas::accept::kDouble | (lat_lon ? canas::accept::kLong : 0))
+        << canas::field_name(field);
+    EXPECT_EQ(c[field].long_lsb, lat_lon ? 1e-7 : 0.0);
+  }
+  EXPECT_FALSE(c.node_id.has_value());
+  EXPECT_NO_THROW(canas::validate(c));
+  const canas::Decoder d;
+  EXPECT_FALSE(d.config().node_id.has_value());
+  EXPECT_EQ(d.config()[canas::Field::kTrueHeading].can_id, 1133);
+}
+
+TEST(CanaerospaceConfig, FieldNamesRoundTrip) {
+  for (std::size_t i = 0; i < canas::kFieldCount; ++i) {
+    const auto f = static_cast<canas::Field>(i);
+    EXPECT_FALSE(canas::field_name(f).empty());
+    EXPECT_EQ(canas::field_from_name(canas::field_name(f)), f);
+  }
+  EXPECT_EQ(canas::field_name(canas::Field::kLatitude), "latitude");
+  EXPECT_EQ(canas::field_from_name("heading"), std::nullopt);
+}
+
+TEST(CanaerospaceConfig, RemappedIdentifiers) {
+  // Latitude from the INS (1049) instead of GPS (1036); heading from the heading angle 321
+  // (+-180 deg) instead of true heading 1133; longitude on a user-defined low-priority id 1850.
+  canas::DecoderConfig c;
+  c[canas::Field::kLatitude].can_id = 1049;
+  c[canas::Field::kTrueHeading].can_id = 321;
+  c[canas::Field::kLongitude].can_id = 1850;
+  canas::Decoder d(c);
+  // INS latitude 1049 = 0x419, FLOAT 2.5 deg (0x40200000, see FloatPitch).
+  EXPECT_EQ(d.decode(raw(0x419, {0x01, 0x02, 0x00, 0x00, 0x40, 0x20, 0x00, 0x00}), 5),
+            canas::DecodeStatus::kAccepted);
+  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kLatitude].value, 2.5 * kDeg);
+  // The old identifiers are now ignored, not errors.
+  EXPECT_EQ(d.decode(canas::encode_float(1036, 1, 0, 3.0f), 6), canas::DecodeStatus::kIgnoredId);
+  EXPECT_EQ(d.decode(canas::encode_float(1133, 1, 0, 3.0f), 6), canas::DecodeStatus::kIgnoredId);
+  // Heading angle 321 = 0x141: -90 deg (0xC2B40000: sign 1, exponent 133, fraction .0110100)
+  // wraps to 270 deg.
+  EXPECT_EQ(d.decode(raw(0x141, {0x01, 0x02, 0x00, 0x00, 0xC2, 0xB4, 0x00, 0x00}), 7),
+            canas::DecodeStatus::kAccepted);
+  EXPECT_NEAR(d.state()[canas::Field::kTrueHeading].value, 1.5 * std::numbers::pi, 1e-12);
+  // Longitude on 1850 as a DOUBLE pair.
+  const auto [h, l] = canas::encode_double(1850, 1, 0, -122.25);
+  EXPECT_EQ(d.decode(h, 8), canas::DecodeStatus::kPendingDoubleLow);
+  EXPECT_EQ(d.decode(l, 9), canas::DecodeStatus::kAccepted);
+  EXPECT_EQ(d.state()[canas::Field::kLongitude].value, -122.25 * kDeg);
+  EXPECT_EQ(d.counters().ignored_id, 2u);
+  EXPECT_EQ(d.counters().rejected(), 0u);
+}
+
+TEST(CanaerospaceConfig, AcceptedDataTypesPerField) {
+  canas::DecoderConfig c;
+  c[canas::Field::kPitch].accepted = canas::accept::kFloat;  // no DOUBLE pairs for pitch
+  c[canas::Field::kHeight].accepted = canas::accept::kLong;  // height as LONG in centimetres
+  c[canas::Field::kHeight].long_lsb = 0.01;
+  c[canas::Field::kLatitude].accepted = canas::accept::kDouble;  // no FLOAT, no LONG
+  canas::Decoder d(c);
+  const auto [h, l] = canas::encode_double(canas::id::kPitchAngle, 1, 0, 1.0);
+  (void)l;
+  EXPECT_EQ(d.decode(h, 0), canas::DecodeStatus::kUnsupportedDataType);
+  EXPECT_EQ(d.decode(canas::encode_float(canas::id::kPitchAngle, 1, 1, 1.0f), 0),
+            canas::DecodeStatus::kAccepted);
+  // GPS height 1038 = 0x40E, LONG (3), 123456 cm = 0x0001E240 -> 1234.56 m.
+  EXPECT_EQ(d.decode(raw(0x40E, {0x01, 0x03, 0x00, 0x00, 0x00, 0x01, 0xE2, 0x40}), 0),
+            canas::DecodeStatus::kAccepted);
+  EXPECT_NEAR(d.state()[canas::Field::kHeight].value, 1234.56, 1e-9);
+  EXPECT_EQ(d.decode(canas::encode_float(canas::id::kGpsHeight, 1, 1, 10.0f), 0),
+            canas::DecodeStatus::kUnsupportedDataType);
+  EXPECT_EQ(d.decode(canas::encode_float(canas::id::kGpsLatitude, 1, 0, 10.0f), 0),
+            canas::DecodeStatus::kUnsupportedDataType);
+  EXPECT_EQ(d.decode(canas::encode_long(canas::id::kGpsLatitude, 1, 1, 100000000), 0),
+            canas::DecodeStatus::kUnsupportedDataType);
+  EXPECT_EQ(d.counters().unsupported_data_type, 4u);
+}
+
+TEST(CanaerospaceConfig, NodeFilterCountsOtherNodesNotErrors) {
+  canas::DecoderConfig c;
+  c.node_id = 5;
+  canas::Decoder d(c);
+  EXPECT_EQ(d.decode(canas::encode_float(canas::id::kRollAngle, 5, 10, 1.0f), 0),
+            canas::DecodeStatus::kAccepted);
+  // Node 7 on the same identifier, with message codes of its own: neither stored nor counted as
+  // a gap in node 5's sequence.
+  EXPECT_EQ(d.decode(canas::encode_float(canas::id::kRollAngle, 7, 200, 2.0f), 1),
+            canas::DecodeStatus::kOtherNode);
+  EXPECT_EQ(d.decode(raw(0x138, {0x07, 0x02, 0x00, 0x00, 0x40, 0x20, 0x00, 0x00}), 1),
+            canas::DecodeStatus::kOtherNode);
+  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kRoll].value, 1.0 * kDeg);
+  EXPECT_EQ(d.state()[canas::Field::kRoll].updated_ns, 0);
+  EXPECT_EQ(d.decode(canas::encode_float(canas::id::kRollAngle, 5, 11, 3.0f), 2),
+            canas::DecodeStatus::kAccepted);
+  // Identifiers not consumed stay ignored whatever the node.
+  EXPECT_EQ(d.decode(canas::encode_float(315, 7, 0, 1.0f), 3), canas::DecodeStatus::kIgnoredId);
+  const canas::DecoderCounters& k = d.counters();
+  EXPECT_EQ(k.other_node, 2u);
+  EXPECT_EQ(k.accepted, 2u);
+  EXPECT_EQ(k.rejected(), 0u);
+  EXPECT_EQ(k.message_code_gaps, 0u);
+  // Unset: any node is accepted (today's behaviour).
+  canas::Decoder any;
+  EXPECT_EQ(any.decode(canas::encode_float(canas::id::kRollAngle, 7, 0, 2.0f), 0),
+            canas::DecodeStatus::kAccepted);
+  EXPECT_EQ(any.counters().other_node, 0u);
+}
+
+TEST(CanaerospaceConfig, MessageCodeGapsAreCountedPerField) {
+  canas::Decoder d;
+  for (const std::uint8_t code :
+       std::initializer_list<std::uint8_t>{254, 255, 0, 1, 5, 6, 6})  // roll: 1 -> 5 and 6 -> 6
+    (void)d.decode(canas::encode_float(canas::id::kRollAngle, 1, code, 1.0f), 0);
+  for (const std::uint8_t code :
+       std::initializer_list<std::uint8_t>{10, 11, 13})  // pitch: 11 -> 13
+    (void)d.decode(canas::encode_float(canas::id::kPitchAngle, 1, code, 1.0f), 0);
+  // A DOUBLE pair takes two codes: 20, 21, then 22, 23; then 30 is a gap.
+  for (const std::uint8_t code : std::initializer_list<std::uint8_t>{20, 22, 30}) {
+    const auto [h, l] = canas::encode_double(canas::id::kGpsLatitude, 1, code, 1.0);
+    (void)d.decode(h, 0);
+    (void)d.decode(l, 0);
+  }
+  const canas::DecoderCounters& c = d.counters();
+  const auto gaps = [&](canas::Field f) {
+    return c.message_code_gaps_by_field[static_cast<std::size_t>(f)];
+  };
+  EXPECT_EQ(gaps(canas::Field::kRoll), 2u);
+  EXPECT_EQ(gaps(canas::Field::kPitch), 1u);
+  EXPECT_EQ(gaps(canas::Field::kLatitude), 1u);
+  EXPECT_EQ(gaps(canas::Field::kHeight), 0u);
+  EXPECT_EQ(c.message_code_gaps, 4u);
+}
+
+TEST(CanaerospaceConfig, SetupErrorsNameTheField) {
+  canas::DecoderConfig dup;
+  dup[canas::Field::kLongitude].can_id = 1036;  // latitude's
+  std::string e = invalid_argument_of([&] { canas::Decoder d(dup); });
+  EXPECT_NE(e.find("'longitude'"), std::string::npos) << e;
+  EXPECT_NE(e.find("'latitude'"), std::string::npos) << e;
+  EXPECT_NE(e.find("1036"), std::string::npos) << e;
+
+  canas::DecoderConfig wide;
+  wide[canas::Field::kPitch].can_id = 2048;  // 12 bits
+  e = invalid_argument_of([&] { canas::Decoder d(wide); });
+  EXPECT_NE(e.find("'pitch'"), std::string::npos) << e;
+  EXPECT_NE(e.find("2048"), std::string::npos) << e;
+  wide[canas::Field::kPitch].can_id = 2047;  // the largest 11-bit identifier is fine
+  EXPECT_NO_THROW(canas::validate(wide));
+
+  canas::DecoderConfig none;
+  none[canas::Field::kVelUp].accepted = 0;
+  e = invalid_argument_of([&] { canas::validate(none); });
+  EXPECT_NE(e.find("'vel_up'"), std::string::npos) << e;
+
+  canas::DecoderConfig long_no_lsb;
+  long_no_lsb[canas::Field::kRoll].accepted |= canas::accept::kLong;
+  e = invalid_argument_of([&] { canas::validate(long_no_lsb); });
+  EXPECT_NE(e.find("'roll'"), std::string::npos) << e;
+  EXPECT_NE(e.find("long_lsb"), std::string::npos) << e;
 }
