@@ -88,8 +88,18 @@ void AircraftStatePlayer::send(io::CanEndpoint& bus, const io::CanFrame& frame) 
   }
 }
 
+std::array<std::uint16_t, io::canas::kFieldCount> default_player_ids() noexcept {
+  std::array<std::uint16_t, io::canas::kFieldCount> ids{};
+  const auto fields = io::canas::DecoderConfig::default_fields();
+  for (std::size_t k = 0; k < ids.size(); ++k)
+    ids[k] = fields[k].can_id;
+  return ids;
+}
+
 void AircraftStatePlayer::publish_attitude(double t_s, io::CanEndpoint& bus) noexcept {
   namespace canas = io::canas;
+  using canas::Field;
+  auto id_of = [&](Field f) { return config_.can_ids[static_cast<std::size_t>(f)]; };
   const AircraftState s = trajectory_.at(t_s);
   const std::int64_t stamp = config_.epoch_ns + std::llround(t_s * 1e9);
   const std::uint8_t node = config_.node_id;
@@ -98,13 +108,15 @@ void AircraftStatePlayer::publish_attitude(double t_s, io::CanEndpoint& bus) noe
     f.timestamp_ns = stamp;
     send(bus, f);
   };
-  put(canas::id::kPitchAngle, s.pitch_rad * kDegPerRad);
-  put(canas::id::kRollAngle, s.roll_rad * kDegPerRad);
-  put(canas::id::kTrueHeading, s.true_heading_rad * kDegPerRad);
+  put(id_of(Field::kPitch), s.pitch_rad * kDegPerRad);
+  put(id_of(Field::kRoll), s.roll_rad * kDegPerRad);
+  put(id_of(Field::kTrueHeading), s.true_heading_rad * kDegPerRad);
 }
 
 void AircraftStatePlayer::publish_navigation(double t_s, io::CanEndpoint& bus) noexcept {
   namespace canas = io::canas;
+  using canas::Field;
+  auto id_of = [&](Field f) { return config_.can_ids[static_cast<std::size_t>(f)]; };
   const AircraftState s = trajectory_.at(t_s);
   const std::int64_t stamp = config_.epoch_ns + std::llround(t_s * 1e9);
   const std::uint8_t node = config_.node_id;
@@ -120,12 +132,12 @@ void AircraftStatePlayer::publish_navigation(double t_s, io::CanEndpoint& bus) n
     f.timestamp_ns = stamp;
     send(bus, f);
   };
-  put_double(canas::id::kGpsLatitude, s.latitude_rad * kDegPerRad);
-  put_double(canas::id::kGpsLongitude, s.longitude_rad * kDegPerRad);
-  put_float(canas::id::kGpsHeight, s.height_m);
-  put_float(canas::id::kTrueEastVelocity, s.vel_east_mps);
-  put_float(canas::id::kTrueNorthVelocity, s.vel_north_mps);
-  put_float(canas::id::kTrueUpVelocity, s.vel_up_mps);
+  put_double(id_of(Field::kLatitude), s.latitude_rad * kDegPerRad);
+  put_double(id_of(Field::kLongitude), s.longitude_rad * kDegPerRad);
+  put_float(id_of(Field::kHeight), s.height_m);
+  put_float(id_of(Field::kVelEast), s.vel_east_mps);
+  put_float(id_of(Field::kVelNorth), s.vel_north_mps);
+  put_float(id_of(Field::kVelUp), s.vel_up_mps);
 }
 
 std::size_t AircraftStatePlayer::publish_until(double time_s, io::CanEndpoint& bus) noexcept {

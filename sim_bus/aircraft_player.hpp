@@ -39,11 +39,17 @@ class Trajectory {
   std::vector<AircraftState> waypoints_;
 };
 
+/// The identifier of each ownship field (io::canas::Field order): by default the decoder's
+/// default table (CANaerospace v1.7 appendix A).
+[[nodiscard]] std::array<std::uint16_t, io::canas::kFieldCount> default_player_ids() noexcept;
+
 struct PlayerConfig {
   std::uint8_t node_id = 1;          ///< CANaerospace node-ID of the simulated INS/GPS
   double attitude_rate_hz = 80.0;    ///< pitch, roll, true heading
   double navigation_rate_hz = 10.0;  ///< latitude, longitude, height, velocities
   std::int64_t epoch_ns = 0;         ///< bus time stamp of scenario time 0 [ns]
+  /// Identifier per field, as the radar's decoder is configured to read them.
+  std::array<std::uint16_t, io::canas::kFieldCount> can_ids = default_player_ids();
 };
 
 class AircraftStatePlayer {
