@@ -3,11 +3,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "scene/scene_builders.hpp"
+
 namespace radar_emu::scene {
 
-namespace {
-
-constexpr std::uint16_t kGrass = 0, kAsphalt = 1, kMetal = 2;
+namespace detail {
 
 void add_quad(Mesh& m, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, std::uint16_t mat) {
   // a b c d counter-clockwise seen from the side the normal points to.
@@ -18,7 +18,6 @@ void add_quad(Mesh& m, glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, std::
   m.triangle_material.insert(m.triangle_material.end(), {mat, mat});
 }
 
-// Axis-aligned box, outward normals.
 void add_box(Mesh& m, glm::vec3 lo, glm::vec3 hi, std::uint16_t mat) {
   const glm::vec3 p000 = lo, p111 = hi;
   const glm::vec3 p100{hi.x, lo.y, lo.z}, p010{lo.x, hi.y, lo.z}, p001{lo.x, lo.y, hi.z};
@@ -31,7 +30,6 @@ void add_box(Mesh& m, glm::vec3 lo, glm::vec3 hi, std::uint16_t mat) {
   add_quad(m, p100, p110, p111, p101, mat);  // +x
 }
 
-// Closed prism of `sides` faces along x from x0 to x1, axis at (y, z) = centre, outward normals.
 void add_prism_x(Mesh& m, float x0, float x1, glm::vec2 centre, float radius, int sides,
                  std::uint16_t mat) {
   const double step = 2.0 * std::numbers::pi / sides;
@@ -87,9 +85,69 @@ glm::dmat4 translation(const glm::dvec3& p) {
   return t;
 }
 
-}  // namespace
+void add_closed_loop_objects(SceneDescription& d, std::uint16_t metal, bool corner_reflectors,
+                             const std::string& area) {
+  using L = DefaultSceneLayout;
+  const std::uint16_t kMetal = metal;
+  auto object = [&](const char* name, const glm::dmat4& placement) {
+    ObjectDesc o;
+    o.name = name;
+    o.world_from_body = placement;
+    o.area = area;
+    return o;
+  };
+  // Parked aircraft-sized object: fuselage east-west (12-sided prism, r 2 m, 32 m long, axis
+  // 3.5 m above ground), wings north-south (30 m x 4 m x 0.4 m), tail fin at the east end. The
+  // fin's root is sunk 0.2 m into the fuselage (whose flat top is at 3.5 + 2 sin 75 deg =
+  // 5.43 m) so that no gap opens between them; its tip is at 11.3 m.
+  ObjectDesc aircraft = object("parked_aircraft", translation(L::kParkedAircraft_m));
+  add_prism_x(aircraft.mesh, -16.0f, 16.0f, {0.0f, 3.5f}, 2.0f, 12, kMetal);
+  add_box(aircraft.mesh, {-2.0f, -15.0f, 3.3f}, {2.0f, 15.0f, 3.7f}, kMetal);
+  add_box(aircraft.mesh, {11.0f, -0.2f, 5.3f}, {15.0f, 0.2f, 11.3f}, kMetal);
+  // A trihedral on the fuselage top: a 32 m fuselage is bright (PO) only within 0.003 deg of
+  // broadside at 94 GHz, and the approach sees it 1.3 deg off.
+  if (corner_reflectors)
+    add_trihedral(aircraft.mesh, {-6.0, 0.0, 5.5 + 0.5}, {0.0, -1.0, 0.06}, 0.5, kMetal);
+  d.objects.push_back(std::move(aircraft));
+
+  // Flat faces of boxes flash only within a few hundredths of a degree of normal incidence at
+  // 94 GHz (PO), so each small object carries a 0.5 m square trihedral on its roof, aimed along
+  // the approach (toward the south, 3 degrees up), as test ranges mount corner reflectors; the
+  // corner sits one edge above the roof so that no plate dips into it.
+  const glm::dvec3 approach(0.0, -1.0, 0.06);
+  constexpr double kReflectorEdge_m = 0.5;
+  ObjectDesc vehicle = object("parked_vehicle", translation(L::kParkedVehicle_m));
+  add_box(vehicle.mesh, {-2.5f, -1.1f, 0.0f}, {2.5f, 1.1f, 2.2f}, kMetal);
+  if (corner_reflectors)
+    add_trihedral(vehicle.mesh, {0.0, 0.0, 2.2 + kReflectorEdge_m}, approach, kReflectorEdge_m,
+                  kMetal);
+  d.objects.push_back(std::move(vehicle));
+
+  ObjectDesc mast = object("light_mast", translation(L::kLightMast_m));
+  add_box(mast.mesh, {-0.5f, -0.5f, 0.0f}, {0.5f, 0.5f, 12.0f}, kMetal);
+  add_box(mast.mesh, {-2.0f, -0.5f, 12.0f}, {2.0f, 0.5f, 13.0f}, kMetal);
+  if (corner_reflectors)
+    add_trihedral(mast.mesh, {0.0, 0.0, 13.0 + kReflectorEdge_m}, approach, kReflectorEdge_m,
+                  kMetal);
+  d.objects.push_back(std::move(mast));
+
+  // Moving vehicle: 6 m x 2.5 m x 2.5 m, body origin at its bottom centre, northward at 15 m/s
+  // on a taxiway west of the runway.
+  ObjectDesc mover = object("moving_vehicle", glm::dmat4(1.0));
+  mover.motion = LinearMotion{L::kMovingVehicleStart_m, L::kMovingVehicleVelocity_mps};
+  add_box(mover.mesh, {-3.0f, -1.25f, 0.0f}, {3.0f, 1.25f, 2.5f}, kMetal);
+  // Body frame: x along the velocity (north), so "toward the approach" is body -x.
+  if (corner_reflectors)
+    add_trihedral(mover.mesh, {0.0, 0.0, 2.5 + kReflectorEdge_m}, {-1.0, 0.0, 0.06},
+                  kReflectorEdge_m, kMetal);
+  d.objects.push_back(std::move(mover));
+}
+
+}  // namespace detail
 
 SceneDescription default_scene() {
+  using detail::add_quad;
+  constexpr std::uint16_t kGrass = 0, kAsphalt = 1, kMetal = 2;
   using L = DefaultSceneLayout;
   SceneDescription d;
   d.materials = {{"grass", {0.25f, 0.45f, 0.15f}},
@@ -112,48 +170,7 @@ SceneDescription default_scene() {
   add_quad(runway.mesh, {-rw, 0, rh}, {rw, 0, rh}, {rw, rl, rh}, {-rw, rl, rh}, kAsphalt);
   d.objects.push_back(std::move(runway));
 
-  // Parked aircraft-sized object: fuselage east-west (12-sided prism, r 2 m, 32 m long, axis
-  // 3.5 m above ground), wings north-south (30 m x 4 m x 0.4 m), tail fin at the east end. The
-  // fin's root is sunk 0.2 m into the fuselage (whose flat top is at 3.5 + 2 sin 75 deg =
-  // 5.43 m) so that no gap opens between them; its tip is at 11.3 m.
-  ObjectDesc aircraft{"parked_aircraft", {}, translation(L::kParkedAircraft_m), std::nullopt};
-  add_prism_x(aircraft.mesh, -16.0f, 16.0f, {0.0f, 3.5f}, 2.0f, 12, kMetal);
-  add_box(aircraft.mesh, {-2.0f, -15.0f, 3.3f}, {2.0f, 15.0f, 3.7f}, kMetal);
-  add_box(aircraft.mesh, {11.0f, -0.2f, 5.3f}, {15.0f, 0.2f, 11.3f}, kMetal);
-  // A trihedral on the fuselage top: a 32 m fuselage is bright (PO) only within 0.003 deg of
-  // broadside at 94 GHz, and the approach sees it 1.3 deg off.
-  add_trihedral(aircraft.mesh, {-6.0, 0.0, 5.5 + 0.5}, {0.0, -1.0, 0.06}, 0.5, kMetal);
-  d.objects.push_back(std::move(aircraft));
-
-  // Flat faces of boxes flash only within a few hundredths of a degree of normal incidence at
-  // 94 GHz (PO), so each small object carries a 0.5 m square trihedral on its roof, aimed along
-  // the approach (toward the south, 3 degrees up), as test ranges mount corner reflectors; the
-  // corner sits one edge above the roof so that no plate dips into it.
-  const glm::dvec3 approach(0.0, -1.0, 0.06);
-  constexpr double kReflectorEdge_m = 0.5;
-  ObjectDesc vehicle{"parked_vehicle", {}, translation(L::kParkedVehicle_m), std::nullopt};
-  add_box(vehicle.mesh, {-2.5f, -1.1f, 0.0f}, {2.5f, 1.1f, 2.2f}, kMetal);
-  add_trihedral(vehicle.mesh, {0.0, 0.0, 2.2 + kReflectorEdge_m}, approach, kReflectorEdge_m,
-                kMetal);
-  d.objects.push_back(std::move(vehicle));
-
-  ObjectDesc mast{"light_mast", {}, translation(L::kLightMast_m), std::nullopt};
-  add_box(mast.mesh, {-0.5f, -0.5f, 0.0f}, {0.5f, 0.5f, 12.0f}, kMetal);
-  add_box(mast.mesh, {-2.0f, -0.5f, 12.0f}, {2.0f, 0.5f, 13.0f}, kMetal);
-  add_trihedral(mast.mesh, {0.0, 0.0, 13.0 + kReflectorEdge_m}, approach, kReflectorEdge_m, kMetal);
-  d.objects.push_back(std::move(mast));
-
-  // Moving vehicle: 6 m x 2.5 m x 2.5 m, body origin at its bottom centre, northward at 15 m/s
-  // on a taxiway west of the runway.
-  ObjectDesc mover{"moving_vehicle",
-                   {},
-                   glm::dmat4(1.0),
-                   LinearMotion{L::kMovingVehicleStart_m, L::kMovingVehicleVelocity_mps}};
-  add_box(mover.mesh, {-3.0f, -1.25f, 0.0f}, {3.0f, 1.25f, 2.5f}, kMetal);
-  // Body frame: x along the velocity (north), so "toward the approach" is body -x.
-  add_trihedral(mover.mesh, {0.0, 0.0, 2.5 + kReflectorEdge_m}, {-1.0, 0.0, 0.06}, kReflectorEdge_m,
-                kMetal);
-  d.objects.push_back(std::move(mover));
+  detail::add_closed_loop_objects(d, kMetal, true, "");
   return d;
 }
 

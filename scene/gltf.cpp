@@ -19,6 +19,7 @@
 #include <string_view>
 
 #include "scene/mesh_check.hpp"
+#include "scene/trajectory.hpp"
 
 // tinygltf parses the JSON / GLB container and decodes buffers (data: URIs, .bin files, the GLB
 // BIN chunk). Everything below that (accessor and buffer-view ranges, strides, index values,
@@ -235,6 +236,85 @@ bool read_vec3(const tinygltf::Value* v, glm::dvec3& out, const std::filesystem:
   return true;
 }
 
+// Optional scalar extras: false when absent; throw "FILE: WHAT must be ..." when present but
+// of the wrong kind.
+bool read_number(const tinygltf::Value* v, double& out, const std::filesystem::path& path,
+                 const std::string& what) {
+  if (!v)
+    return false;
+  if (!v->IsNumber() || !std::isfinite(v->GetNumberAsDouble()))
+    fail(path, what + " must be a finite number");
+  out = v->GetNumberAsDouble();
+  return true;
+}
+
+bool read_integer(const tinygltf::Value* v, long long lo, long long hi, long long& out,
+                  const std::filesystem::path& path, const std::string& what) {
+  double x = 0.0;
+  if (!read_number(v, x, path, what))
+    return false;
+  if (x != std::floor(x) || x < static_cast<double>(lo) || x > static_cast<double>(hi)) {
+    fail(path,
+         what + " must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  }
+  out = static_cast<long long>(x);
+  return true;
+}
+
+bool read_bool(const tinygltf::Value* v, bool& out, const std::filesystem::path& path,
+               const std::string& what) {
+  if (!v)
+    return false;
+  if (!v->IsBool())
+    fail(path, what + " must be true or false");
+  out = v->Get<bool>();
+  return true;
+}
+
+bool read_string(const tinygltf::Value* v, std::string& out, const std::filesystem::path& path,
+                 const std::string& what) {
+  if (!v)
+    return false;
+  if (!v->IsString())
+    fail(path, what + " must be a string");
+  out = v->Get<std::string>();
+  return true;
+}
+
+const tinygltf::Value* member(const tinygltf::Value& object, const char* key) {
+  return object.IsObject() && object.Has(key) ? &object.Get(key) : nullptr;
+}
+
+// extras.radar_emu.trajectory of a node (scene::Trajectory): {"waypoints_m": [[e, n, u], ...],
+// "speed_mps": v, "turn_radius_m": r, "turn_rate_rad_s": w, "loop": bool, "bank": bool}.
+Trajectory read_trajectory(const tinygltf::Value& v, const std::filesystem::path& path,
+                           const std::string& what) {
+  if (!v.IsObject())
+    fail(path, what + " must be an object");
+  Trajectory t;
+  const tinygltf::Value* wp = member(v, "waypoints_m");
+  if (!wp || !wp->IsArray() || wp->ArrayLen() < 2)
+    fail(path, what + ".waypoints_m must be an array of at least 2 [e, n, u] points");
+  for (int i = 0; i < static_cast<int>(wp->ArrayLen()); ++i) {
+    glm::dvec3 p(0.0);
+    (void)read_vec3(&wp->Get(i), p, path, what + ".waypoints_m[" + std::to_string(i) + "]");
+    t.waypoints_m.push_back(p);
+  }
+  if (!read_number(member(v, "speed_mps"), t.speed_mps, path, what + ".speed_mps"))
+    fail(path, what + ".speed_mps is missing");
+  (void)read_number(member(v, "turn_radius_m"), t.turn_radius_m, path, what + ".turn_radius_m");
+  (void)read_number(member(v, "turn_rate_rad_s"), t.turn_rate_rad_s, path,
+                    what + ".turn_rate_rad_s");
+  (void)read_bool(member(v, "loop"), t.loop, path, what + ".loop");
+  (void)read_bool(member(v, "bank"), t.bank, path, what + ".bank");
+  try {
+    (void)TrajectoryPath(t);  // every geometric check, now, with the file's name
+  } catch (const std::invalid_argument& e) {
+    fail(path, what + ": " + e.what());
+  }
+  return t;
+}
+
 bool supported_required_extension(const std::string& name) {
   // Material and texture extensions do not change geometry; everything else might.
   return name.starts_with("KHR_materials_") || name.starts_with("KHR_texture_");
@@ -255,10 +335,14 @@ struct Loader {
     if (const auto it = material_of_gltf.find(gltf_index); it != material_of_gltf.end())
       return it->second;
     const tinygltf::Material& m = model.materials[static_cast<std::size_t>(gltf_index)];
-    if (m.name.empty())
-      fail(path, where + ": material " + std::to_string(gltf_index) + " has no name");
     Material out;
     out.name = m.name;
+    // extras {"radar_emu": {"radar_material": NAME}} overrides the glTF name.
+    (void)read_string(
+        radar_extras(m.extras, "radar_material"), out.name, path,
+        "material " + std::to_string(gltf_index) + " extras radar_emu.radar_material");
+    if (out.name.empty())
+      fail(path, where + ": material " + std::to_string(gltf_index) + " has no name");
     const std::vector<double>& c = m.pbrMetallicRoughness.baseColorFactor;
     if (c.size() >= 3) {
       out.base_color = glm::vec3(glm::clamp(glm::dvec3(c[0], c[1], c[2]), 0.0, 1.0));
@@ -307,8 +391,32 @@ struct Loader {
     glm::dmat4 body_from_local = kEnuFromGltf;  // vertices: glTF axes -> ENU axes
     glm::dvec3 velocity(0.0), start(0.0);
     const std::string extras = node_name + " extras radar_emu.";
-    if (read_vec3(radar_extras(n.extras, "velocity_mps"), velocity, path,
-                  extras + "velocity_mps")) {
+    (void)read_string(radar_extras(n.extras, "area"), o.area, path, extras + "area");
+    long long integer = 0;
+    if (read_integer(radar_extras(n.extras, "lod_group"), -1,
+                     std::numeric_limits<std::int32_t>::max(), integer, path,
+                     extras + "lod_group")) {
+      o.lod_group = static_cast<std::int32_t>(integer);
+    }
+    if (read_integer(radar_extras(n.extras, "lod_level"), 0, 255, integer, path,
+                     extras + "lod_level")) {
+      o.lod_level = static_cast<std::uint8_t>(integer);
+    }
+    if (read_number(radar_extras(n.extras, "lod_facet_m"), o.lod_facet_m, path,
+                    extras + "lod_facet_m") &&
+        o.lod_facet_m < 0.0) {
+      fail(path, extras + "lod_facet_m must be >= 0");
+    }
+    if (const tinygltf::Value* tv = radar_extras(n.extras, "trajectory")) {
+      if (radar_extras(n.extras, "velocity_mps") != nullptr)
+        fail(path, node_name + " extras have both radar_emu.velocity_mps and .trajectory");
+      // Moving on a trajectory: it places the body; the node's rotation and scale are baked
+      // into the body-frame vertices, its translation is ignored.
+      o.trajectory = read_trajectory(*tv, path, extras + "trajectory");
+      body_from_local = world_from_local;
+      body_from_local[3] = glm::dvec4(0.0, 0.0, 0.0, 1.0);
+    } else if (read_vec3(radar_extras(n.extras, "velocity_mps"), velocity, path,
+                         extras + "velocity_mps")) {
       // Moving: the motion places the body; the node's rotation and scale are baked into the
       // body-frame vertices, its translation is the start position unless given explicitly.
       if (!read_vec3(radar_extras(n.extras, "start_position_m"), start, path,
@@ -407,6 +515,63 @@ bool starts_with_glb_magic(const std::filesystem::path& path) {
   return in.read(magic, sizeof magic) && std::string_view(magic, sizeof magic) == "glTF";
 }
 
+// Little-endian u32 at p (GLB integers are little-endian, spec sec. 4.4.1).
+std::uint32_t le32(const char* p) {
+  std::uint32_t v = 0;
+  for (int k = 3; k >= 0; --k)
+    v = (v << 8) | static_cast<unsigned char>(p[k]);
+  return v;
+}
+
+// The binary container's header and chunk framing (glTF 2.0 spec, sec. 4.4 "Binary glTF
+// layout": 12-byte header magic "glTF", version 2, total length = file length; then chunks of
+// u32 length, u32 type, data; the first is JSON (0x4E4F534A), an optional second BIN
+// (0x004E4942)), checked before tinygltf sees the file so that each defect gets its own message.
+void check_glb_container(const std::filesystem::path& path) {
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec)
+    fail(path, "cannot read the file size: " + ec.message());
+  std::ifstream in(path, std::ios::binary);
+  char h[20] = {};
+  in.read(h, sizeof h);
+  const auto got = static_cast<std::size_t>(in.gcount());
+  if (got < 12) {
+    fail(path, "not a valid glTF 2.0 file: GLB header truncated (" + std::to_string(got) +
+                   " bytes, 12 expected)");
+  }
+  if (std::memcmp(h, "glTF", 4) != 0)
+    fail(path, "not a valid glTF 2.0 file: no GLB magic 'glTF'");
+  if (le32(h + 4) != 2) {
+    fail(path, "not a valid glTF 2.0 file: GLB container version " + std::to_string(le32(h + 4)) +
+                   " (2 expected)");
+  }
+  if (le32(h + 8) != size) {
+    fail(path, "not a valid glTF 2.0 file: the GLB header gives a length of " +
+                   std::to_string(le32(h + 8)) + " bytes but the file has " + std::to_string(size) +
+                   " (truncated or damaged)");
+  }
+  if (got < 20)
+    fail(path, "not a valid glTF 2.0 file: GLB file ends before its JSON chunk header");
+  const std::uint64_t json_end = 20ull + le32(h + 12);
+  if (le32(h + 16) != 0x4E4F534Au)
+    fail(path, "not a valid glTF 2.0 file: the first GLB chunk is not JSON");
+  if (json_end > size) {
+    fail(path, "not a valid glTF 2.0 file: the GLB JSON chunk length " +
+                   std::to_string(le32(h + 12)) + " runs past the end of the file (" +
+                   std::to_string(size) + " bytes)");
+  }
+  if (json_end + 8 <= size) {
+    char c[8] = {};
+    in.seekg(static_cast<std::streamoff>(json_end));
+    in.read(c, sizeof c);
+    if (in.gcount() == 8 && json_end + 8 + le32(c) > size) {
+      fail(path, "not a valid glTF 2.0 file: the GLB BIN chunk length " + std::to_string(le32(c)) +
+                     " runs past the end of the file (" + std::to_string(size) + " bytes)");
+    }
+  }
+}
+
 std::string one_line(std::string s) {
   while (!s.empty() && (s.back() == '\n' || s.back() == '\r'))
     s.pop_back();
@@ -475,6 +640,8 @@ SceneDescription load_gltf(const std::filesystem::path& path, std::vector<std::s
   tinygltf::Model model;
   std::string err, warn;
   const bool binary = starts_with_glb_magic(path) || lower_extension(path) == ".glb";
+  if (binary)
+    check_glb_container(path);
   bool ok = false;
   try {
     ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path.string())
@@ -557,6 +724,11 @@ void write_gltf(const SceneDescription& d, const std::filesystem::path& path) {
     gm.name = m.name;
     gm.pbrMetallicRoughness.baseColorFactor = {m.base_color.r, m.base_color.g, m.base_color.b, 1.0};
     gm.doubleSided = false;
+    tinygltf::Value::Object r;
+    r["radar_material"] = tinygltf::Value(m.name);
+    tinygltf::Value::Object e;
+    e["radar_emu"] = tinygltf::Value(std::move(r));
+    gm.extras = tinygltf::Value(std::move(e));
     model.materials.push_back(gm);
   }
   std::vector<unsigned char> buffer;
@@ -630,15 +802,41 @@ void write_gltf(const SceneDescription& d, const std::filesystem::path& path) {
       model.meshes.push_back(mesh);
       node.mesh = static_cast<int>(model.meshes.size() - 1);
     }
+    tinygltf::Value::Object radar;
+    if (!o.area.empty())
+      radar["area"] = tinygltf::Value(o.area);
+    if (o.lod_group >= 0) {
+      radar["lod_group"] = tinygltf::Value(static_cast<int>(o.lod_group));
+      radar["lod_level"] = tinygltf::Value(static_cast<int>(o.lod_level));
+      radar["lod_facet_m"] = tinygltf::Value(o.lod_facet_m);
+    }
     if (o.motion) {
-      tinygltf::Value::Object r;
       const glm::dvec3 v = o.motion->velocity_mps, s = o.motion->start_position_m;
-      r["velocity_mps"] = number_array({v.x, v.y, v.z});
-      r["start_position_m"] = number_array({s.x, s.y, s.z});
+      radar["velocity_mps"] = number_array({v.x, v.y, v.z});
+      radar["start_position_m"] = number_array({s.x, s.y, s.z});
+    }
+    if (o.trajectory) {
+      const Trajectory& t = *o.trajectory;
+      tinygltf::Value::Array points;
+      for (const glm::dvec3& p : t.waypoints_m)
+        points.push_back(number_array({p.x, p.y, p.z}));
+      tinygltf::Value::Object tj;
+      tj["waypoints_m"] = tinygltf::Value(std::move(points));
+      tj["speed_mps"] = tinygltf::Value(t.speed_mps);
+      tj["turn_radius_m"] = tinygltf::Value(t.turn_radius_m);
+      if (t.turn_rate_rad_s != 0.0)
+        tj["turn_rate_rad_s"] = tinygltf::Value(t.turn_rate_rad_s);
+      tj["loop"] = tinygltf::Value(t.loop);
+      if (t.bank)
+        tj["bank"] = tinygltf::Value(true);
+      radar["trajectory"] = tinygltf::Value(std::move(tj));
+    }
+    if (!radar.empty()) {
       tinygltf::Value::Object e;
-      e["radar_emu"] = tinygltf::Value(std::move(r));
+      e["radar_emu"] = tinygltf::Value(std::move(radar));
       node.extras = tinygltf::Value(std::move(e));
-    } else {
+    }
+    if (!o.motion && !o.trajectory) {
       const glm::dmat4 gltf_from_body = kGltfFromEnu * o.world_from_body * kEnuFromGltf;
       if (!is_identity(gltf_from_body)) {
         node.matrix.resize(16);

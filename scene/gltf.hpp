@@ -19,7 +19,14 @@ namespace radar_emu::scene {
 /// the node's frame, ENU axes; mirroring transforms get their winding reversed). A node whose
 /// extras hold {"radar_emu": {"velocity_mps": [e, n, u]}} becomes a moving object: its rotation
 /// and scale are baked into the body vertices, "start_position_m": [e, n, u] (default: the
-/// node's translation) is the start. The anchor is read from the scene's extras
+/// node's translation) is the start. A node whose extras hold {"radar_emu": {"trajectory":
+/// {"waypoints_m": [[e, n, u], ...], "speed_mps": v, "turn_radius_m": r, "turn_rate_rad_s": w,
+/// "loop": bool, "bank": bool}}} moves on that scene::Trajectory (waypoints and speed required;
+/// rotation and scale baked in as above, translation ignored; velocity_mps and trajectory are
+/// exclusive). Node extras radar_emu "area" (string), "lod_group" (integer >= -1), "lod_level"
+/// (0..255) and "lod_facet_m" (number >= 0) fill the ObjectDesc fields of the same names.
+/// Material extras {"radar_emu": {"radar_material": NAME}} name the radar material (else the
+/// glTF material's name). The anchor is read from the scene's extras
 /// {"radar_emu": {"anchor_deg_m": [lat, lon, h]}} when present (else 0, 0, 0).
 /// Throws std::runtime_error "FILE: reason" for anything broken or unsupported (sparse or
 /// out-of-bounds accessors, bad indices, other modes, missing materials, node cycles, required
@@ -30,9 +37,10 @@ namespace radar_emu::scene {
                                          std::vector<std::string>* warnings = nullptr);
 
 /// Writes `description` as glTF 2.0 (binary .glb when the extension is .glb, otherwise JSON with
-/// the buffer embedded as a data: URI), materials by name, static placements as node matrices,
-/// moving objects and anchor in extras as load_gltf() reads them; load_gltf(write_gltf(d)) gives
-/// back d (same objects, vertices, triangle order and materials). Throws std::runtime_error
+/// the buffer embedded as a data: URI), materials by name (and in extras radar_material), static
+/// placements as node matrices, moving objects, trajectories, area, LOD fields and anchor in
+/// extras as load_gltf() reads them; load_gltf(write_gltf(d)) gives back d (same objects,
+/// vertices, triangle order, materials, motions and extras). Throws std::runtime_error
 /// "FILE: reason" on I/O failure or an inconsistent description.
 void write_gltf(const SceneDescription& description, const std::filesystem::path& path);
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <stdexcept>
@@ -33,10 +34,13 @@ struct Builder {
   std::uint16_t current = 0;
   bool have_current = false;
 
-  std::uint16_t material(const std::string& name) {
+  std::uint16_t material(const std::string& name, const std::filesystem::path& path,
+                         std::size_t line) {
     auto it = material_index.find(name);
     if (it != material_index.end())
       return it->second;
+    if (desc.materials.size() > std::numeric_limits<std::uint16_t>::max())
+      fail(path, line, "more than 65536 materials");
     desc.materials.push_back({name, {0.7f, 0.7f, 0.75f}});
     const auto i = static_cast<std::uint16_t>(desc.materials.size() - 1);
     material_index[name] = i;
@@ -91,7 +95,7 @@ void load_obj(const std::filesystem::path& path, const MeshFileOptions& o, Build
       if (tok.size() < 4)
         fail(path, line_no, "face needs at least 3 vertices");
       if (!b.have_current) {
-        b.current = b.material(o.default_material);
+        b.current = b.material(o.default_material, path, line_no);
         b.have_current = true;
       }
       std::vector<unsigned> idx;
@@ -119,17 +123,21 @@ void load_obj(const std::filesystem::path& path, const MeshFileOptions& o, Build
     } else if (tok[0] == "usemtl") {
       if (tok.size() < 2)
         fail(path, line_no, "usemtl needs a name");
-      b.current = b.material(std::string(tok[1]));
+      b.current = b.material(std::string(tok[1]), path, line_no);
       b.have_current = true;
     }
     // vt, vn, o, g, s, mtllib: irrelevant to radar geometry.
   }
+  if (in.bad())
+    fail(path, 0, "read error");
 }
 
 void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Builder& b) {
   std::ifstream in(path, std::ios::binary);
   std::vector<char> data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::uint16_t mat = b.material(o.default_material);
+  if (in.bad())
+    fail(path, 0, "read error");
+  const std::uint16_t mat = b.material(o.default_material, path, 0);
   auto add = [&](const glm::dvec3 v[3], std::size_t line) {
     b.lines.push_back(line);
     const auto base = static_cast<unsigned>(b.obj.mesh.positions_m.size());
@@ -159,7 +167,10 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
     return;
   }
   const std::string text(data.begin(), data.end());
-  if (text.rfind("solid", 0) != 0) {
+  // Many binary STL headers begin with "solid" too: a file with NUL bytes is binary, whatever
+  // its header says.
+  const bool has_nul = text.find('\0') != std::string::npos;
+  if (text.rfind("solid", 0) != 0 || (has_nul && data.size() >= 84)) {
     fail(path, 0,
          data.size() >= 84
              ? "binary STL size does not match its triangle count " + std::to_string(count)
@@ -190,6 +201,10 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
       add(v, line_no);
       nv = 0;
     }
+  }
+  if (nv != 0) {
+    fail(path, line_no,
+         "the file ends inside a facet (" + std::to_string(nv) + " vertices, no endloop)");
   }
 }
 

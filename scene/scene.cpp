@@ -7,8 +7,12 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
+#include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "scene/trajectory.hpp"
 
 // Structure of the acceleration:
 //   static_scene: one Embree triangle geometry per static object, vertices pre-transformed to
@@ -26,6 +30,18 @@
 // Embree traverses in float; every hit is then refined in double precision from the triangle's
 // world-space vertices (Moller-Trumbore), so ranges and positions are exact to double rounding
 // of the stored float vertices, whatever the traversal's float error at 20 km.
+//
+// Levels of detail: terrain tiles (LOD groups) are static geometries too, but in one more BVH per
+// level (level_scenes[L] holds level L of every tile), built once. Each LOD geometry carries an
+// Embree intersection and occlusion filter whose user pointer is that object's byte in
+// `object_active`; set_view() writes those bytes, and the filter rejects candidate hits on
+// inactive geometries, so traversal continues to the active level behind. Switching levels is
+// then a byte store: no rebuild, no commit, no allocation. Geometries outside LOD groups carry no
+// filter and cost nothing extra. One BVH per level keeps the levels' overlapping surfaces out of
+// each other's traversal: a query skips the BVH of a level that no tile uses, and clips each
+// level's ray interval to the ranges from the radar where that level's active tiles lie
+// (set_view: [nearest, farthest] over their boxes; for a ray starting at distance d from the
+// radar, widened by d either side, by the triangle inequality).
 
 namespace radar_emu::scene {
 
@@ -75,6 +91,17 @@ glm::dmat4 moving_transform(const LinearMotion& m, double t_s) noexcept {
   x[1] = glm::dvec4(-s, c, 0.0, 0.0);
   x[3] = glm::dvec4(m.start_position_m + m.velocity_mps * t_s, 1.0);
   return x;
+}
+
+// Embree filter for LOD geometries: rejects every candidate hit while the object is inactive.
+// `geometryUserPtr` points at the object's byte in Impl::object_active (set at setup, never
+// moved). Called from query threads; set_view() writes the bytes between frames only.
+void lod_filter(const RTCFilterFunctionNArguments* args) noexcept {
+  const auto* active = static_cast<const std::uint8_t*>(args->geometryUserPtr);
+  if (active != nullptr && *active != 0)
+    return;
+  for (unsigned i = 0; i < args->N; ++i)
+    args->valid[i] = 0;
 }
 
 // Our ray in Embree's float layout. Returns false for rays Embree must not see (non-finite
@@ -144,10 +171,118 @@ void to_body(const Ray& ray, const glm::dmat4& world_from_body, const RTCRay& wo
 
 }  // namespace
 
+namespace {
+
+// The view volume as four half-spaces through the antenna plus a range sphere (Scene::set_view).
+struct Frustum {
+  glm::dvec3 apex_m{0.0};
+  std::array<glm::dvec3, 4> inward{};  // world normals; inside: dot(n, p - apex) >= 0
+  double max_range_m = 0.0;
+
+  // False only when the box [lo, hi] is certainly outside: entirely behind one plane, or all
+  // of it beyond the range.
+  [[nodiscard]] bool meets(const glm::dvec3& lo, const glm::dvec3& hi) const noexcept {
+    const glm::dvec3 c = 0.5 * (lo + hi) - apex_m, e = 0.5 * (hi - lo);
+    const double tol = 1e-9 * (1.0 + glm::length(c) + glm::length(e));
+    for (const glm::dvec3& n : inward) {
+      if (glm::dot(n, c) + glm::dot(glm::abs(n), e) < -tol)
+        return false;
+    }
+    return glm::length(glm::clamp(apex_m, lo, hi) - apex_m) <= max_range_m * (1.0 + 1e-12);
+  }
+};
+
+bool valid_view(const ViewVolume& v) noexcept {
+  constexpr double kHalfPi = 0.5 * std::numbers::pi;
+  if (!finite(v.position_m))
+    return false;
+  for (int c = 0; c < 3; ++c) {
+    if (!finite(v.world_from_antenna[c]))
+      return false;
+  }
+  // A rotation: columns orthonormal.
+  const glm::dmat3 rtr = glm::transpose(v.world_from_antenna) * v.world_from_antenna;
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) {
+      if (std::abs(rtr[c][r] - (c == r ? 1.0 : 0.0)) > 1e-6)
+        return false;
+    }
+  }
+  auto in_range = [&](double lo, double hi) {
+    return std::isfinite(lo) && std::isfinite(hi) && lo > -kHalfPi && hi < kHalfPi && lo < hi;
+  };
+  return in_range(v.azimuth_min_rad, v.azimuth_max_rad) &&
+         in_range(v.elevation_min_rad, v.elevation_max_rad) && std::isfinite(v.max_range_m) &&
+         v.max_range_m > 0.0 && std::isfinite(v.range_cell_m) && v.range_cell_m > 0.0 &&
+         std::isfinite(v.angular_cell_rad) && v.angular_cell_rad >= 0.0;
+}
+
+// Bounding half-spaces of the field of view, antenna frame (x boresight, y right, z down;
+// azimuth a = atan2(y, x), elevation e = atan2(-z, rho), rho = hypot(x, y)).
+//   a >= a0  <=>  y cos a0 - x sin a0 >= 0;   a <= a1  <=>  x sin a1 - y cos a1 >= 0 (exact; the
+//   two planes contain the z axis and, with a1 - a0 < pi, bound one wedge).
+//   e <= e1  <=>  -z <= rho tan e1, a cone. Within the wedge, with ac and hw the centre and half
+//   width of the azimuth span and x' = x cos ac + y sin ac = rho cos(a - ac), rho lies in
+//   [x', x' / cos hw]; so for tan e1 >= 0 the cone's inside lies in -z <= x' tan e1 / cos hw,
+//   and for tan e1 < 0 in -z <= x' tan e1. Likewise e >= e0 lies in -z >= x' k0 with
+//   k0 = tan e0 / cos hw (tan e0 <= 0) or tan e0 (tan e0 > 0). Every point of the field of view
+//   is inside all four planes: the test can keep too much, never too little.
+Frustum make_frustum(const ViewVolume& v) noexcept {
+  Frustum f;
+  f.apex_m = v.position_m;
+  f.max_range_m = v.max_range_m;
+  const double a0 = v.azimuth_min_rad, a1 = v.azimuth_max_rad;
+  const double ac = 0.5 * (a0 + a1), hw = 0.5 * (a1 - a0);
+  const double t1 = std::tan(v.elevation_max_rad), t0 = std::tan(v.elevation_min_rad);
+  const double k1 = t1 >= 0.0 ? t1 / std::cos(hw) : t1;
+  const double k0 = t0 <= 0.0 ? t0 / std::cos(hw) : t0;
+  const glm::dvec3 xp(std::cos(ac), std::sin(ac), 0.0);  // x' direction
+  const std::array<glm::dvec3, 4> antenna = {
+      glm::dvec3(-std::sin(a0), std::cos(a0), 0.0),  // a >= a0
+      glm::dvec3(std::sin(a1), -std::cos(a1), 0.0),  // a <= a1
+      k1 * xp + glm::dvec3(0.0, 0.0, 1.0),           // e <= e1: k1 x' + z >= 0
+      -k0 * xp - glm::dvec3(0.0, 0.0, 1.0),          // e >= e0: -z - k0 x' >= 0
+  };
+  for (std::size_t i = 0; i < 4; ++i)
+    f.inward[i] = v.world_from_antenna * antenna[i];
+  return f;
+}
+
+// Longest edge of any triangle of `mesh` placed by `xf` [m].
+double longest_edge_m(const Mesh& mesh, const glm::dmat4& xf) {
+  double longest = 0.0;
+  for (const glm::uvec3& t : mesh.triangles) {
+    const glm::dvec3 a(xf * glm::dvec4(glm::dvec3(mesh.positions_m[t.x]), 1.0));
+    const glm::dvec3 b(xf * glm::dvec4(glm::dvec3(mesh.positions_m[t.y]), 1.0));
+    const glm::dvec3 c(xf * glm::dvec4(glm::dvec3(mesh.positions_m[t.z]), 1.0));
+    longest = std::max({longest, glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+  }
+  return longest;
+}
+
+}  // namespace
+
 struct Scene::Impl {
   struct Mover {
     RTCScene scene = nullptr;  // body-frame BVH
     std::uint32_t object = 0;
+    std::int32_t path = -1;  // index into `paths`; -1: LinearMotion
+    // Body-frame box (trajectories: the world box is the rotated box's box).
+    glm::dvec3 body_centre_m{0.0};
+    glm::dvec3 body_half_m{0.0};
+  };
+  struct LodMember {
+    std::uint32_t object = 0;
+    std::uint8_t level = 0;
+    double facet_m = 0.0;
+  };
+  // One terrain tile: its levels are lod_members[first, first + count), finest first.
+  struct LodGroup {
+    std::int32_t id = -1;
+    std::uint32_t first = 0, count = 0;
+    glm::dvec3 lo_m{0.0}, hi_m{0.0};  // world box over every level
+    std::uint64_t triangles = 0;      // of the active level
+    int active = 0;                   // index within the group, -1: culled
   };
 
   SceneDescription desc;
@@ -156,7 +291,26 @@ struct Scene::Impl {
   std::vector<glm::dvec3> bounds_min_at_zero_m;  // world bounds at t = 0, per object
   std::vector<glm::dvec3> bounds_max_at_zero_m;
   std::vector<std::uint32_t> object_of_static_geometry;  // static_scene geomID -> object id
+  // One BVH per LOD level (index = level; scene null when no tile has that level).
+  struct LevelBvh {
+    RTCScene scene = nullptr;
+    std::vector<std::uint32_t> object_of_geometry;  // geomID -> object id
+    std::uint32_t active_tiles = 0;                 // tiles whose active level this is
+    double near_m = 0.0;  // active tiles' boxes lie between these distances from view_position
+    double far_m = std::numeric_limits<double>::infinity();
+  };
+  std::vector<LevelBvh> level_scenes;
+  glm::dvec3 view_position_m{0.0};
+  bool view_bands = false;  // near_m/far_m valid (set_view); false: every ray's whole interval
   std::vector<Mover> movers;
+  std::vector<TrajectoryPath> paths;
+  std::vector<LodGroup> groups;  // by ascending id
+  std::vector<LodMember> lod_members;
+  std::vector<std::int32_t> group_of_object;  // index into groups, -1: not in a LOD group
+  // Per object, 1 = queries may hit it. The LOD filter's user pointers point into it: sized once
+  // at setup, never resized.
+  std::vector<std::uint8_t> object_active;
+  ViewStats view;
   ErrorSink errors;
   RTCDevice device = nullptr;
   RTCScene static_scene = nullptr;  // null when every object moves
@@ -173,6 +327,10 @@ struct Scene::Impl {
       rtcReleaseScene(m.scene);
     if (static_scene)
       rtcReleaseScene(static_scene);
+    for (const LevelBvh& l : level_scenes) {
+      if (l.scene)
+        rtcReleaseScene(l.scene);
+    }
     if (device)
       rtcReleaseDevice(device);
   }
@@ -206,12 +364,20 @@ struct Scene::Impl {
       }
       if (m.positions_m.size() >= kInvalidId || m.triangles.size() >= kInvalidId)
         fail(who + " has too many vertices or triangles");
+      if (o.motion && o.trajectory)
+        fail(who + " has both a linear motion and a trajectory");
       if (o.motion) {
         if (!finite(o.motion->start_position_m) || !finite(o.motion->velocity_mps))
           fail(who + ": the motion's start position or velocity is not finite");
-      } else if (!finite(o.world_from_body)) {
+      } else if (!o.trajectory && !finite(o.world_from_body)) {
         fail(who + ": world_from_body is not finite");
       }
+      if (o.lod_group < -1)
+        fail(who + ": lod_group " + std::to_string(o.lod_group) + " (expected -1 or >= 0)");
+      if (o.lod_group >= 0 && (o.motion || o.trajectory))
+        fail(who + ": a LOD tile (lod_group " + std::to_string(o.lod_group) + ") cannot move");
+      if (!std::isfinite(o.lod_facet_m) || o.lod_facet_m < 0.0)
+        fail(who + ": lod_facet_m must be a finite number >= 0");
       for (std::size_t i = 0; i < m.positions_m.size(); ++i) {
         const glm::vec3& p = m.positions_m[i];
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
@@ -241,8 +407,10 @@ struct Scene::Impl {
   }
 
   // One Embree triangle geometry; vertices transformed by `xf` (world from body for static
-  // objects, identity for the body-frame mesh of a moving object).
-  RTCGeometry make_mesh(const Mesh& mesh, const glm::dmat4& xf) {
+  // objects, identity for the body-frame mesh of a moving object). `active_flag` (LOD objects):
+  // the byte the LOD filter reads.
+  RTCGeometry make_mesh(const Mesh& mesh, const glm::dmat4& xf,
+                        const std::uint8_t* active_flag = nullptr) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!g)
       fail("cannot create a triangle geometry");
@@ -266,6 +434,12 @@ struct Scene::Impl {
       idx[3 * i + 0] = mesh.triangles[i].x;
       idx[3 * i + 1] = mesh.triangles[i].y;
       idx[3 * i + 2] = mesh.triangles[i].z;
+    }
+    if (active_flag != nullptr) {
+      // Embree keeps the pointer as opaque user data; the filter only reads through it.
+      rtcSetGeometryUserData(g, const_cast<std::uint8_t*>(active_flag));
+      rtcSetGeometryIntersectFilterFunction(g, lod_filter);
+      rtcSetGeometryOccludedFilterFunction(g, lod_filter);
     }
     rtcCommitGeometry(g);
     return g;
@@ -296,48 +470,203 @@ struct Scene::Impl {
     check("building the BVH of " + what + " failed");
   }
 
+  // The ray `in` (Embree layout, tfar = best hit so far) restricted to where level `l` can be
+  // hit; false when there is nothing to query (no BVH, no tile at this level, empty interval).
+  // Distances become ray parameters through the direction's length (1 for unit directions).
+  // The bounds are padded (relative 1e-5, absolute 1 cm, far above float traversal error) so
+  // that rounding never clips a hit inside a tile's box.
+  bool level_ray(const LevelBvh& l, const RTCRay& in, double origin_offset_m,
+                 double direction_length, RTCRay& out) const noexcept {
+    if (!l.scene || l.active_tiles == 0)
+      return false;
+    out = in;
+    if (view_bands && direction_length > 0.0) {
+      const double lo = ((l.near_m - origin_offset_m) * (1.0 - 1e-5) - 1e-2) / direction_length;
+      const double hi = ((l.far_m + origin_offset_m) * (1.0 + 1e-5) + 1e-2) / direction_length;
+      if (lo > 0.0)
+        out.tnear = std::max(out.tnear, static_cast<float>(lo));
+      if (hi < static_cast<double>(out.tfar))
+        out.tfar = static_cast<float>(hi);
+      if (!(out.tnear <= out.tfar))
+        return false;
+    }
+    return true;
+  }
+
+  // Trajectories (validated with the object's name) and LOD groups (levels unique per group,
+  // finest first), before any Embree object exists.
+  void prepare() {
+    const std::size_t n = desc.objects.size();
+    std::size_t trajectories = 0;
+    for (const ObjectDesc& o : desc.objects)
+      trajectories += o.trajectory ? 1u : 0u;
+    paths.reserve(trajectories);
+    std::map<std::int32_t, std::vector<std::uint32_t>> members;
+    for (std::size_t id = 0; id < n; ++id) {
+      const ObjectDesc& o = desc.objects[id];
+      if (o.trajectory) {
+        try {
+          paths.emplace_back(*o.trajectory);
+        } catch (const std::invalid_argument& e) {
+          fail("object '" + o.name + "': " + e.what());
+        }
+      }
+      if (o.lod_group >= 0)
+        members[o.lod_group].push_back(static_cast<std::uint32_t>(id));
+    }
+    group_of_object.assign(n, -1);
+    object_active.assign(n, 1);
+    for (auto& [id, objects] : members) {
+      std::sort(objects.begin(), objects.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return desc.objects[a].lod_level < desc.objects[b].lod_level;
+      });
+      LodGroup g;
+      g.id = id;
+      g.first = static_cast<std::uint32_t>(lod_members.size());
+      g.count = static_cast<std::uint32_t>(objects.size());
+      for (std::size_t k = 0; k < objects.size(); ++k) {
+        const ObjectDesc& o = desc.objects[objects[k]];
+        if (k > 0 && desc.objects[objects[k - 1]].lod_level == o.lod_level) {
+          fail("object '" + o.name + "': LOD group " + std::to_string(id) +
+               " already has a mesh at level " + std::to_string(o.lod_level) + " ('" +
+               desc.objects[objects[k - 1]].name + "')");
+        }
+        const double facet =
+            o.lod_facet_m > 0.0 ? o.lod_facet_m : longest_edge_m(o.mesh, o.world_from_body);
+        lod_members.push_back({objects[k], o.lod_level, facet});
+        group_of_object[objects[k]] = static_cast<std::int32_t>(groups.size());
+      }
+      groups.push_back(g);
+    }
+  }
+
+  // Trajectory movers: position, velocity, orientation and the world box of the rotated body
+  // box (centre R c + p, half extents |R| h: Arvo, "Transforming axis-aligned bounding boxes",
+  // Graphics Gems, 1990).
+  void place_on_path(const Mover& mv, double t_s) noexcept {
+    const TrajectorySample p = paths[static_cast<std::size_t>(mv.path)].at(t_s);
+    glm::dmat4 x(p.world_from_body);
+    x[3] = glm::dvec4(p.position_m, 1.0);
+    world_from_body[mv.object] = x;
+    const glm::dmat3& r = p.world_from_body;
+    const glm::dmat3 abs_r(glm::abs(r[0]), glm::abs(r[1]), glm::abs(r[2]));
+    const glm::dvec3 c = r * mv.body_centre_m + p.position_m, h = abs_r * mv.body_half_m;
+    ObjectState& st = states[mv.object];
+    st.bounds_min_m = c - h;
+    st.bounds_max_m = c + h;
+    st.velocity_mps = p.velocity_mps;
+  }
+
+  // Activity flags for the default view: everything outside LOD groups, finest level of each
+  // tile.
+  void default_view() noexcept {
+    std::fill(object_active.begin(), object_active.end(), std::uint8_t{1});
+    view_bands = false;
+    for (LevelBvh& l : level_scenes)
+      l.active_tiles = 0;
+    for (LodGroup& g : groups) {
+      g.active = 0;
+      for (std::uint32_t k = 0; k < g.count; ++k)
+        object_active[lod_members[g.first + k].object] = k == 0 ? 1 : 0;
+      ++level_scenes[lod_members[g.first].level].active_tiles;
+    }
+    for (std::size_t i = 0; i < states.size(); ++i)
+      states[i].active = object_active[i] != 0;
+    view.lod_groups_in_view = 0;
+    view.lod_groups_culled = 0;
+    view.lod_groups_at_level = {};
+    view.objects_in_view = 0;
+    view.triangles_in_view = 0;
+    view.triangles_active = 0;
+    for (std::size_t i = 0; i < states.size(); ++i)
+      view.triangles_active += object_active[i] ? states[i].triangle_count : 0;
+    for (const LodGroup& g : groups)
+      ++view.lod_groups_at_level[std::min<std::size_t>(lod_members[g.first].level, 3)];
+  }
+
   void build() {
     const std::size_t n = desc.objects.size();
     states.resize(n);
     world_from_body.resize(n);
     bounds_min_at_zero_m.resize(n);
     bounds_max_at_zero_m.resize(n);
+    prepare();
+    std::size_t next_path = 0;
     for (std::size_t id = 0; id < n; ++id) {
       const ObjectDesc& o = desc.objects[id];
       ObjectState& s = states[id];
       s.name = o.name;
-      s.moving = o.motion.has_value();
+      s.moving = o.motion.has_value() || o.trajectory.has_value();
       s.velocity_mps = o.motion ? o.motion->velocity_mps : glm::dvec3(0.0);
       s.triangle_count = o.mesh.triangles.size();
       triangles += o.mesh.triangles.size();
       const auto object_id = static_cast<std::uint32_t>(id);
-      if (o.motion) {
-        world_from_body[id] = moving_transform(*o.motion, 0.0);
-        movers.push_back({new_scene(RTC_SCENE_FLAG_ROBUST, RTC_BUILD_QUALITY_HIGH), object_id});
+      if (o.motion || o.trajectory) {
+        Mover mv;
+        mv.object = object_id;
+        if (o.trajectory) {
+          mv.path = static_cast<std::int32_t>(next_path++);
+          glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-lo);
+          for (const glm::vec3& p : o.mesh.positions_m) {
+            lo = glm::min(lo, glm::dvec3(p));
+            hi = glm::max(hi, glm::dvec3(p));
+          }
+          mv.body_centre_m = 0.5 * (lo + hi);
+          mv.body_half_m = 0.5 * (hi - lo);
+          world_from_body[id] = glm::dmat4(1.0);  // placed below, after the BVH
+        } else {
+          world_from_body[id] = moving_transform(*o.motion, 0.0);
+        }
+        mv.scene = new_scene(RTC_SCENE_FLAG_ROBUST, RTC_BUILD_QUALITY_HIGH);
+        movers.push_back(mv);
         RTCGeometry mesh = make_mesh(o.mesh, glm::dmat4(1.0));
         rtcAttachGeometryByID(movers.back().scene, mesh, 0);
         rtcReleaseGeometry(mesh);
         commit(movers.back().scene, "object '" + o.name + "'");
       } else {
         world_from_body[id] = o.world_from_body;
-        if (!static_scene)
-          static_scene = new_scene(RTC_SCENE_FLAG_ROBUST, RTC_BUILD_QUALITY_HIGH);
-        RTCGeometry mesh = make_mesh(o.mesh, o.world_from_body);
-        const unsigned geom = rtcAttachGeometry(static_scene, mesh);
+        const bool lod = o.lod_group >= 0;
+        if (lod && level_scenes.size() <= o.lod_level)
+          level_scenes.resize(std::size_t{o.lod_level} + 1);
+        RTCScene& target = lod ? level_scenes[o.lod_level].scene : static_scene;
+        std::vector<std::uint32_t>& ids =
+            lod ? level_scenes[o.lod_level].object_of_geometry : object_of_static_geometry;
+        if (!target)
+          target = new_scene(RTC_SCENE_FLAG_ROBUST, RTC_BUILD_QUALITY_HIGH);
+        RTCGeometry mesh = make_mesh(o.mesh, o.world_from_body, lod ? &object_active[id] : nullptr);
+        const unsigned geom = rtcAttachGeometry(target, mesh);
         rtcReleaseGeometry(mesh);
-        if (object_of_static_geometry.size() <= geom)
-          object_of_static_geometry.resize(geom + 1, kInvalidId);
-        object_of_static_geometry[geom] = object_id;
+        if (ids.size() <= geom)
+          ids.resize(geom + 1, kInvalidId);
+        ids[geom] = object_id;
       }
       check("adding object '" + o.name + "' failed");
       world_bounds(id, bounds_min_at_zero_m[id], bounds_max_at_zero_m[id]);
       s.bounds_min_m = bounds_min_at_zero_m[id];
       s.bounds_max_m = bounds_max_at_zero_m[id];
+      if (o.trajectory)
+        place_on_path(movers.back(), 0.0);
     }
-    if (static_scene) {
+    if (static_scene)
       commit(static_scene, "the static geometry");
-      ++static_builds;
+    for (std::size_t l = 0; l < level_scenes.size(); ++l) {
+      if (level_scenes[l].scene)
+        commit(level_scenes[l].scene, "LOD level " + std::to_string(l));
     }
+    if (static_scene || !level_scenes.empty())
+      ++static_builds;
+    for (LodGroup& g : groups) {
+      g.lo_m = glm::dvec3(std::numeric_limits<double>::max());
+      g.hi_m = -g.lo_m;
+      for (std::uint32_t k = 0; k < g.count; ++k) {
+        const std::uint32_t obj = lod_members[g.first + k].object;
+        g.lo_m = glm::min(g.lo_m, states[obj].bounds_min_m);
+        g.hi_m = glm::max(g.hi_m, states[obj].bounds_max_m);
+      }
+    }
+    view.lod_groups = static_cast<std::uint32_t>(groups.size());
+    view.triangles_total = triangles;
+    default_view();
   }
 };
 
@@ -376,6 +705,23 @@ bool Scene::intersect(const Ray& ray, Hit& hit) const noexcept {
     if (rh.hit.geomID != kInvalidId && rh.hit.geomID < m.object_of_static_geometry.size()) {
       object = m.object_of_static_geometry[rh.hit.geomID];
       prim = rh.hit.primID;
+    }
+  }
+  const double origin_offset_m = m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
+  const double direction_length = glm::length(ray.direction);
+  for (const Impl::LevelBvh& l : m.level_scenes) {
+    RTCRayHit rl{};
+    if (!m.level_ray(l, rh.ray, origin_offset_m, direction_length, rl.ray))
+      continue;
+    rl.hit.geomID = kInvalidId;
+    rl.hit.instID[0] = kInvalidId;
+    rtcInitIntersectContext(&ctx);
+    rtcIntersect1(l.scene, &ctx, &rl);
+    if (rl.hit.geomID != kInvalidId && rl.ray.tfar < rh.ray.tfar &&
+        rl.hit.geomID < l.object_of_geometry.size()) {
+      rh.ray.tfar = rl.ray.tfar;
+      object = l.object_of_geometry[rl.hit.geomID];
+      prim = rl.hit.primID;
     }
   }
   for (const Impl::Mover& mv : m.movers) {
@@ -447,6 +793,17 @@ bool Scene::occluded(const Ray& ray) const noexcept {
     if (rs.tfar < 0.0f)  // Embree sets tfar to -inf on a hit
       return true;
   }
+  const double origin_offset_m = m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
+  const double direction_length = glm::length(ray.direction);
+  for (const Impl::LevelBvh& l : m.level_scenes) {
+    RTCRay rl{};
+    if (!m.level_ray(l, r, origin_offset_m, direction_length, rl))
+      continue;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded1(l.scene, &ctx, &rl);
+    if (rl.tfar < 0.0f)
+      return true;
+  }
   for (const Impl::Mover& mv : m.movers) {
     const ObjectState& st = m.states[mv.object];
     if (!crosses_box(ray, st.bounds_min_m, st.bounds_max_m, static_cast<double>(r.tnear),
@@ -469,6 +826,10 @@ void Scene::set_time(double t_s) noexcept {
     return;
   m.time_s = t_s;
   for (const Impl::Mover& mv : m.movers) {
+    if (mv.path >= 0) {
+      m.place_on_path(mv, t_s);
+      continue;
+    }
     const LinearMotion& motion = *m.desc.objects[mv.object].motion;
     m.world_from_body[mv.object] = moving_transform(motion, t_s);
     // The rotation is constant, so the bounds translate with the body origin.
@@ -480,6 +841,98 @@ void Scene::set_time(double t_s) noexcept {
 
 double Scene::time_s() const noexcept {
   return impl_->time_s;
+}
+
+void Scene::set_view(const ViewVolume& v) noexcept {
+  Impl& m = *impl_;
+  if (!valid_view(v)) {
+    m.default_view();
+    ++m.view.invalid_views;
+    return;
+  }
+  const Frustum f = make_frustum(v);
+  ViewStats& st = m.view;
+  for (Impl::LevelBvh& l : m.level_scenes) {
+    l.active_tiles = 0;
+    l.near_m = std::numeric_limits<double>::infinity();
+    l.far_m = 0.0;
+  }
+  m.view_position_m = v.position_m;
+  m.view_bands = true;
+  st.lod_groups_in_view = 0;
+  st.lod_groups_culled = 0;
+  st.lod_groups_at_level = {};
+  for (Impl::LodGroup& g : m.groups) {
+    const bool in_view = f.meets(g.lo_m, g.hi_m);
+    st.lod_groups_in_view += in_view ? 1 : 0;
+    int pick = 0;  // finest unless a coarser level qualifies
+    const double range_m = glm::length(glm::clamp(v.position_m, g.lo_m, g.hi_m) - v.position_m);
+    if (!in_view && v.cull_outside) {
+      pick = -1;
+    } else {
+      const double allowed_m = std::max(v.range_cell_m, range_m * v.angular_cell_rad);
+      for (std::uint32_t k = 0; k < g.count; ++k) {
+        if (m.lod_members[g.first + k].facet_m <= allowed_m)
+          pick = static_cast<int>(k);  // levels ascend: the last that qualifies is the coarsest
+      }
+    }
+    g.active = pick;
+    for (std::uint32_t k = 0; k < g.count; ++k) {
+      const std::uint32_t obj = m.lod_members[g.first + k].object;
+      const bool on = static_cast<int>(k) == pick;
+      m.object_active[obj] = on ? 1 : 0;
+      m.states[obj].active = on;
+    }
+    if (pick < 0) {
+      ++st.lod_groups_culled;
+    } else {
+      const std::uint8_t level = m.lod_members[g.first + static_cast<std::uint32_t>(pick)].level;
+      ++st.lod_groups_at_level[std::min<std::size_t>(level, 3)];
+      // Farthest point of the box: the far corner on each axis.
+      const glm::dvec3 far_corner = glm::mix(
+          g.lo_m, g.hi_m, glm::dvec3(glm::lessThan(v.position_m, 0.5 * (g.lo_m + g.hi_m))));
+      Impl::LevelBvh& l = m.level_scenes[level];
+      ++l.active_tiles;
+      l.near_m = std::min(l.near_m, range_m);
+      l.far_m = std::max(l.far_m, glm::length(far_corner - v.position_m));
+    }
+  }
+  st.objects_in_view = 0;
+  st.triangles_active = 0;
+  st.triangles_in_view = 0;
+  for (std::size_t i = 0; i < m.states.size(); ++i) {
+    const ObjectState& s = m.states[i];
+    if (!s.active)
+      continue;
+    st.triangles_active += s.triangle_count;
+    const std::int32_t g = m.group_of_object[i];
+    const bool in_view = g >= 0 ? f.meets(m.groups[static_cast<std::size_t>(g)].lo_m,
+                                          m.groups[static_cast<std::size_t>(g)].hi_m)
+                                : f.meets(s.bounds_min_m, s.bounds_max_m);
+    if (in_view) {
+      ++st.objects_in_view;
+      st.triangles_in_view += s.triangle_count;
+    }
+  }
+  ++st.views_set;
+}
+
+void Scene::clear_view() noexcept {
+  impl_->default_view();
+}
+
+const ViewStats& Scene::view_stats() const noexcept {
+  return impl_->view;
+}
+
+int Scene::active_lod_level(std::int32_t lod_group) const noexcept {
+  const Impl& m = *impl_;
+  const auto it =
+      std::lower_bound(m.groups.begin(), m.groups.end(), lod_group,
+                       [](const Impl::LodGroup& g, std::int32_t id) { return g.id < id; });
+  if (it == m.groups.end() || it->id != lod_group || it->active < 0)
+    return -1;
+  return m.lod_members[it->first + static_cast<std::uint32_t>(it->active)].level;
 }
 std::span<const Material> Scene::materials() const noexcept {
   return impl_->desc.materials;

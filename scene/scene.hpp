@@ -1,9 +1,12 @@
 #pragma once
-// The built scene: an Embree 3 BVH over the static geometry plus one body-frame BVH per moving
-// object, behind a ray-query API in our own types. Queries traverse in float and refine every hit
-// in double precision; moving objects are placed by double-precision transforms, so set_time()
-// rebuilds nothing.
+// The built scene: an Embree 3 BVH over the static geometry (plus one per level of detail of the
+// terrain tiles) and one body-frame BVH per moving object, behind a ray-query API in our own
+// types. Queries traverse in float and refine every hit in double precision; moving objects
+// (constant velocity or waypoint trajectories) are placed by double-precision transforms, so
+// set_time() rebuilds nothing; set_view() picks each tile's level of detail and culls tiles outside
+// the radar's view by flags that an Embree filter reads, so it rebuilds nothing either.
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -11,6 +14,46 @@
 #include "scene/types.hpp"
 
 namespace radar_emu::scene {
+
+/// What the radar can see in one frame (Scene::set_view): a pyramid from the antenna bounded by
+/// the field of view's azimuth and elevation limits, cut at the maximum range, plus the radar's
+/// resolution, which picks the level of detail of terrain tiles.
+struct ViewVolume {
+  glm::dvec3 position_m{0.0};  ///< antenna phase centre, world [m]
+  /// Rotation world from antenna; antenna frame x boresight, y right, z down (radar::RadarPose).
+  glm::dmat3 world_from_antenna{1.0};
+  /// Field of view, antenna frame [rad]: azimuth atan2(y, x), positive right; elevation
+  /// atan2(-z, hypot(x, y)), positive up (radar::azel_from_direction). -pi/2 < min < max < pi/2.
+  double azimuth_min_rad = -0.1745;
+  double azimuth_max_rad = 0.1745;
+  double elevation_min_rad = -0.0873;
+  double elevation_max_rad = 0.0873;
+  double max_range_m = 6000.0;  ///< one-way range limit [m], > 0
+  double range_cell_m = 1.0;    ///< the radar's range resolution cell [m], > 0
+  /// Angular cross-range cell (beamwidth) or the tracer's terrain ray spacing [rad], >= 0: with
+  /// it, a tile at range R may use facets up to max(range_cell_m, R angular_cell_rad); 0: up to
+  /// range_cell_m at every range (see Scene::set_view).
+  double angular_cell_rad = 0.0;
+  /// true: LOD tiles entirely outside the volume have no active level (queries ignore them);
+  /// false: they keep the level the rule gives for their range.
+  bool cull_outside = true;
+};
+
+/// What the last set_view() selected (all zero counts before the first call, apart from the
+/// totals).
+struct ViewStats {
+  std::uint32_t lod_groups = 0;          ///< terrain tiles (LOD groups) in the scene
+  std::uint32_t lod_groups_in_view = 0;  ///< tiles whose box meets the view volume
+  std::uint32_t lod_groups_culled = 0;   ///< tiles with no active level (outside, cull_outside)
+  /// Active tiles by selected level (index 3 counts levels >= 3).
+  std::array<std::uint32_t, 4> lod_groups_at_level{};
+  std::uint32_t objects_in_view = 0;    ///< active objects whose world box meets the volume
+  std::uint64_t triangles_total = 0;    ///< every triangle in the scene, every LOD level
+  std::uint64_t triangles_active = 0;   ///< triangles that queries can hit
+  std::uint64_t triangles_in_view = 0;  ///< active triangles of objects whose box meets the volume
+  std::uint64_t views_set = 0;          ///< set_view() calls accepted
+  std::uint64_t invalid_views = 0;      ///< set_view() calls rejected (volume invalid: defaults)
+};
 
 class Scene {
  public:
@@ -33,11 +76,38 @@ class Scene {
   /// True if anything blocks `ray` within [t_near, t_far]. Real-time safe, thread-safe.
   [[nodiscard]] bool occluded(const Ray& ray) const noexcept;
 
-  /// Moves every moving object to time `t_s` (their transforms and world boxes only; no BVH is
-  /// rebuilt, no Embree call). Non-finite `t_s` is ignored. Real-time safe (no allocation, O(number
-  /// of moving objects)); not thread-safe against concurrent queries.
+  /// Moves every moving object to time `t_s`: constant-velocity objects (LinearMotion) and
+  /// trajectories (scene/trajectory.hpp; O(log pieces) each). Only transforms, velocities and
+  /// world boxes change: no BVH is rebuilt, no Embree call. Non-finite `t_s` is ignored.
+  /// Real-time safe (no allocation, O(number of moving objects)); not thread-safe against
+  /// concurrent queries.
   void set_time(double t_s) noexcept;
   [[nodiscard]] double time_s() const noexcept;
+
+  /// Per-frame view: selects what queries can hit, for the frame's radar position and beam.
+  /// (a) A terrain tile (LOD group) is in view when its world box (over all its levels) meets
+  ///     the volume: it is not entirely outside any of the four bounding planes of the field of
+  ///     view (azimuth planes exact; elevation cones replaced by planes that contain them over
+  ///     the azimuth span) and its nearest point is within max_range_m. Conservative: a tile that
+  ///     any ray inside the field of view and range can reach is in view.
+  /// (b) LOD rule: a tile whose box's nearest point is at range R uses its coarsest level whose
+  ///     lod_facet_m <= max(range_cell_m, R * angular_cell_rad) (facets no longer than the radar's
+  ///     resolution cell, or than the terrain sampling, at that range), or its finest level when
+  ///     none qualifies. Nearest point: the rule errs toward finer.
+  /// (c) Queries then ignore every LOD mesh but the selected level of each tile, and, with
+  ///     cull_outside, every level of tiles out of view (an Embree filter reads a per-object flag
+  ///     this call writes: no rebuild, no commit). Objects outside LOD groups (targets, moving
+  ///     objects, buildings) stay active.
+  /// An invalid volume (non-finite, a limit outside (-pi/2, pi/2), min >= max, range or cell
+  /// <= 0) resets to the default view and is counted in ViewStats::invalid_views.
+  /// Real-time safe (no allocation; O(objects)); not thread-safe against concurrent queries.
+  void set_view(const ViewVolume& view) noexcept;
+  /// Back to the default view (also before the first set_view()): every object outside LOD
+  /// groups active, and the finest level (level 0) of every tile. Real-time safe.
+  void clear_view() noexcept;
+  [[nodiscard]] const ViewStats& view_stats() const noexcept;
+  /// Selected level of tile `lod_group`: -1 when it is culled or there is no such group.
+  [[nodiscard]] int active_lod_level(std::int32_t lod_group) const noexcept;
 
   [[nodiscard]] std::span<const Material> materials() const noexcept;
   [[nodiscard]] std::span<const ObjectState> objects() const noexcept;
@@ -46,13 +116,14 @@ class Scene {
   [[nodiscard]] const SceneDescription& description() const noexcept;
   [[nodiscard]] std::size_t triangle_count() const noexcept;
   /// World from body of object `object_id` at the current time (static objects: their
-  /// placement; moving objects: start + v t, body +x along the horizontal velocity). Identity
-  /// for an unknown id. Real-time safe.
+  /// placement; LinearMotion: start + v t, body +x along the horizontal velocity; trajectories:
+  /// TrajectoryPath::at). Identity for an unknown id. Real-time safe.
   [[nodiscard]] glm::dmat4 world_from_body(std::uint32_t object_id) const noexcept;
 
-  /// Diagnostics: how often the static geometry's BVH has been built (1 after construction,
+  /// Diagnostics: how often the static geometry's BVHs have been built (1 after construction,
   /// 0 when every object moves) and how many Embree scene commits there have been in total (one
-  /// per BVH at construction). set_time() changes neither: it rebuilds nothing.
+  /// per BVH at construction: static objects, one per LOD level present, one per moving
+  /// object). set_time() and set_view() change neither: they rebuild nothing.
   [[nodiscard]] std::uint64_t static_build_count() const noexcept;
   [[nodiscard]] std::uint64_t embree_commit_count() const noexcept;
   /// Embree errors reported since construction (0 in a healthy scene; a query that hits an

@@ -19,6 +19,28 @@
 //                    and curved parts; every part is a closed, outward-wound mesh. The benchmark
 //                    target of the RCS engine: about 25,000 facets at the default facet size (0: a
 //                    / 58).
+// The vehicles and aircraft below are closed, outward-wound parts lofted through polygonal
+// sections (every part its own closed surface; parts may interpenetrate, as real assemblies do),
+// all "metal", origin on the ground below the centre of the overall length, x forward, y left,
+// z up; their bounds are exactly x [-a/2, a/2], y [-b/2, b/2], z [0, c] for proportions near the
+// examples (wheels and skids touch z = 0 with a vertex). Part proportions: scene/targets.cpp.
+//   truck            overall length a, width b, height c, e.g. 8 x 2.5 x 3.4 m: cab with a sloped
+//                    upper front, cargo box, chassis, 6 wheels (16-gons); 436 triangles.
+//   jeep             overall length a, width b (wheels), height c, e.g. 4 x 1.8 x 1.9 m: hull with
+//                    a sloped nose, cabin with a raked windscreen, 4 wheels; 292 triangles.
+//   helicopter       fuselage length a (nose to fin), main rotor diameter b, height c (skids to
+//                    hub top), e.g. 12.7 x 14.6 x 4.4 m (UH-1): elliptic fuselage, tail boom,
+//                    fin, tail rotor disc, stabiliser, mast, hub, a two-bladed main rotor parked
+//                    across the fuselage (so the width is b), skids on struts; 512 triangles.
+//   transport_aircraft overall length a, wing span b, height c (ground to fin tip), e.g. A320
+//                    37.6 x 35.8 x 11.8 m or C-130 29.8 x 40.4 x 11.7 m: 32-gon fuselage with
+//                    nose and upswept tail cones, swept tapered wing with dihedral, tailplane,
+//                    fin (hexagonal aerofoils), two engine nacelles on pylons, nose and main
+//                    gear wheels; 896 triangles.
+//   (Triangle counts at facet_m = 0.) For these four, facet_m = 0 gives the coarsest mesh (flat
+//   faces unsplit; round parts 12 to 32 sides); facet_m > 0 splits faces and adds sides so that no
+//   edge exceeds facet_m (split quads: sqrt(2) facet_m); flat faces, hence the volume of the
+//   non-round parts, are unchanged.
 // facet_m bounds the edge length of the facets (quads split in two have diagonals up to
 // sqrt(2) facet_m; 0: the coarsest mesh that is exact for flat targets, 32 segments around for
 // curved ones).
@@ -40,19 +62,26 @@ enum class TargetKind {
   kSphere,
   kCylinder,
   kBox,
-  kVehicle
+  kVehicle,
+  kTruck,
+  kJeep,
+  kHelicopter,
+  kTransportAircraft
 };
 
+/// Dimensions of a target [m]; what a, b and c mean depends on the kind (list above). For the
+/// vehicles and aircraft: a = overall length (x), b = overall width (y: track, wing span or
+/// rotor diameter), c = overall height (z).
 struct TargetSpec {
   TargetKind kind = TargetKind::kPlate;
-  double a_m = 1.0;
-  double b_m = 1.0;
-  double c_m = 1.0;
-  double facet_m = 0.0;
+  double a_m = 1.0;      ///< first dimension [m]
+  double b_m = 1.0;      ///< second dimension [m]
+  double c_m = 1.0;      ///< third dimension [m]
+  double facet_m = 0.0;  ///< longest facet edge [m] (see above); 0: the kind's default
 };
 
 /// Names as on the command line: plate, dihedral, trihedral-square, trihedral-tri, sphere,
-/// cylinder, box, vehicle.
+/// cylinder, box, vehicle, truck, jeep, helicopter, transport_aircraft.
 [[nodiscard]] std::optional<TargetKind> target_kind_from_name(std::string_view name) noexcept;
 [[nodiscard]] std::string_view target_name(TargetKind kind) noexcept;
 [[nodiscard]] std::string target_names();  ///< "plate|dihedral|..." for messages

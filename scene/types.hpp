@@ -33,6 +33,29 @@ struct LinearMotion {
   glm::dvec3 velocity_mps{0.0};      ///< world velocity [m/s]
 };
 
+/// Waypoint trajectory: straight legs between waypoints joined by circular turns tangent to both
+/// legs (a fillet of radius turn_radius_m at each inner waypoint, in the plane of the two legs),
+/// traversed at constant speed. Body x points along the velocity (3-D: climbing legs pitch the
+/// body), body y stays horizontal (left) unless `bank` rolls it into the turns. Waypoints are
+/// world (ENU) positions of the body origin [m]; scene/trajectory.hpp evaluates it.
+struct Trajectory {
+  std::vector<glm::dvec3> waypoints_m;  ///< >= 2 world positions [m]; consecutive ones distinct
+  double speed_mps = 0.0;               ///< speed along the path [m/s], > 0
+  /// Radius of the turns [m]; 0 (with turn_rate_rad_s 0): sharp corners, heading jumps there.
+  double turn_radius_m = 0.0;
+  /// Alternative to turn_radius_m (which must then be 0): a constant turn rate [rad/s], so the
+  /// radius is speed_mps / turn_rate_rad_s.
+  double turn_rate_rad_s = 0.0;
+  /// Closed path: a leg from the last waypoint back to the first, a turn at every waypoint, and
+  /// the path repeats. t = 0 is where the leg from waypoint 0 to waypoint 1 starts (after the turn
+  /// at waypoint 0). Open paths start at waypoint 0 at t = 0 and rest at their ends outside
+  /// [0, duration] (velocity 0).
+  bool loop = false;
+  /// Roll into turns like a coordinated turn: tan(bank) = v^2 / (g r) (body z tilted toward the
+  /// turn centre; the roll steps at the arc's ends).
+  bool bank = false;
+};
+
 struct ObjectDesc {
   std::string name;
   Mesh mesh;
@@ -49,7 +72,11 @@ struct ObjectDesc {
   std::int32_t lod_group = -1;
   std::uint8_t lod_level = 0;
   /// Longest facet edge of this mesh [m] (what LOD selection compares with the range cell).
+  /// 0: Scene computes it from the mesh.
   double lod_facet_m = 0.0;
+  /// Moving on a waypoint trajectory (exclusive with `motion`; `world_from_body` is ignored).
+  /// Like `motion`, moving it never rebuilds anything.
+  std::optional<Trajectory> trajectory = std::nullopt;
 };
 
 /// WGS84 point at the origin of the world ENU frame.
@@ -89,7 +116,10 @@ struct Hit {
 struct ObjectState {
   std::string name;
   bool moving = false;
-  glm::dvec3 velocity_mps{0.0};  ///< world velocity [m/s]
+  /// Queries can hit it: false for LOD meshes that are not the level selected for their tile
+  /// and for tiles culled by Scene::set_view().
+  bool active = true;
+  glm::dvec3 velocity_mps{0.0};  ///< world velocity at the current time [m/s]
   glm::dvec3 bounds_min_m{0.0};  ///< world axis-aligned bounds at the current time [m]
   glm::dvec3 bounds_max_m{0.0};
   std::size_t triangle_count = 0;

@@ -267,6 +267,118 @@ TEST(Gltf, MovingObjectsAndAnchorFromExtras) {
   expect_error(write_fixture("badvel.gltf", j), "velocity_mps must be an array of 3 finite");
 }
 
+TEST(Gltf, TrajectoryAreaLodAndRadarMaterialFromExtras) {
+  json j = make_fixture();
+  j["nodes"][0]["translation"] = {5, 0, -7};  // ignored for a trajectory
+  j["nodes"][0]["extras"] = json::parse(R"({"radar_emu": {
+      "trajectory": {"waypoints_m": [[0, 0, 0], [100, 0, 0], [100, 50.5, 2]], "speed_mps": 7.5,
+                     "turn_radius_m": 12, "loop": true, "bank": true},
+      "area": "airport", "lod_group": 3, "lod_level": 2, "lod_facet_m": 40.5}})");
+  j["materials"][0]["extras"] = json::parse(R"({"radar_emu": {"radar_material": "steel"}})");
+  const sc::SceneDescription d = sc::load_gltf(write_fixture("trajectory.gltf", j));
+  const sc::ObjectDesc& o = d.objects[0];
+  ASSERT_TRUE(o.trajectory.has_value());
+  EXPECT_FALSE(o.motion.has_value());
+  const std::vector<glm::dvec3> w = {{0, 0, 0}, {100, 0, 0}, {100, 50.5, 2}};
+  EXPECT_EQ(o.trajectory->waypoints_m, w);
+  EXPECT_EQ(o.trajectory->speed_mps, 7.5);
+  EXPECT_EQ(o.trajectory->turn_radius_m, 12.0);
+  EXPECT_EQ(o.trajectory->turn_rate_rad_s, 0.0);
+  EXPECT_TRUE(o.trajectory->loop);
+  EXPECT_TRUE(o.trajectory->bank);
+  EXPECT_EQ(o.area, "airport");
+  EXPECT_EQ(o.lod_group, 3);
+  EXPECT_EQ(o.lod_level, 2);
+  EXPECT_EQ(o.lod_facet_m, 40.5);
+  // Body-frame vertices: the translation is not baked in (glTF (2.5, 3, -4) = ENU (2.5, 4, 3)).
+  EXPECT_EQ(glm::dvec3(o.mesh.positions_m[2]), glm::dvec3(2.5, 4, 3));
+  // The radar material name overrides the glTF material name.
+  ASSERT_EQ(d.materials.size(), 1u);
+  EXPECT_EQ(d.materials[0].name, "steel");
+
+  // Broken extras name the file, the node and the field.
+  const auto broken = [&](const char* extras, const std::string& what) {
+    json b = make_fixture();
+    b["nodes"][0]["extras"] = json::parse(extras);
+    expect_error(write_fixture("broken_extras.gltf", b), what);
+  };
+  broken(R"({"radar_emu": {"trajectory": {"waypoints_m": [[0, 0, 0]], "speed_mps": 1}}})",
+         "node 0 extras radar_emu.trajectory.waypoints_m must be an array of at least 2");
+  broken(R"({"radar_emu": {"trajectory": {"waypoints_m": [[0, 0, 0], [1, 0]], "speed_mps": 1}}})",
+         "node 0 extras radar_emu.trajectory.waypoints_m[1] must be an array of 3 numbers");
+  broken(R"({"radar_emu": {"trajectory": {"waypoints_m": [[0, 0, 0], [1, 0, 0]]}}})",
+         "node 0 extras radar_emu.trajectory.speed_mps is missing");
+  broken(R"({"radar_emu": {"trajectory": {"waypoints_m": [[0, 0, 0], [1, 0, 0]],
+             "speed_mps": 1, "loop": 1}}})",
+         "node 0 extras radar_emu.trajectory.loop must be true or false");
+  broken(R"({"radar_emu": {"trajectory": {"waypoints_m": [[0, 0, 0], [10, 0, 0], [10, 10, 0]],
+             "speed_mps": 1, "turn_radius_m": 20}}})",
+         "node 0 extras radar_emu.trajectory: trajectory: leg 0 (10.000000 m) is shorter");
+  broken(R"({"radar_emu": {"trajectory": {"waypoints_m": [[0, 0, 0], [1, 0, 0]],
+             "speed_mps": 1}, "velocity_mps": [1, 0, 0]}})",
+         "node 0 extras have both radar_emu.velocity_mps and .trajectory");
+  broken(R"({"radar_emu": {"lod_group": 1.5}})",
+         "node 0 extras radar_emu.lod_group must be an integer in [-1, 2147483647]");
+  broken(R"({"radar_emu": {"lod_level": 256}})",
+         "node 0 extras radar_emu.lod_level must be an integer in [0, 255]");
+  broken(R"({"radar_emu": {"lod_facet_m": -2}})",
+         "node 0 extras radar_emu.lod_facet_m must be >= 0");
+  broken(R"({"radar_emu": {"area": 5}})", "node 0 extras radar_emu.area must be a string");
+  json b = make_fixture();
+  b["materials"][0]["extras"] = json::parse(R"({"radar_emu": {"radar_material": ["x"]}})");
+  expect_error(write_fixture("badradarmat.gltf", b),
+               "material 0 extras radar_emu.radar_material must be a string");
+}
+
+TEST(Gltf, TrajectoriesAndDatabaseFieldsRoundTrip) {
+  sc::SceneDescription d = sc::default_scene();
+  d.objects[0].area = "surround";
+  d.objects[1].area = "airport";
+  d.objects[1].lod_group = 12;
+  d.objects[1].lod_level = 1;
+  d.objects[1].lod_facet_m = 0.1 + 0.2;  // a double that needs all 17 digits
+  sc::ObjectDesc mover = d.objects[3];
+  mover.name = "patrol";
+  mover.trajectory = sc::Trajectory{
+      {{1.0 / 3.0, -2, 0}, {400, 0.125, 1}, {400, 300, 1}}, 8.0 / 3.0, 0.0, 0.05, true, true};
+  d.objects.push_back(mover);
+  for (const char* name : {"db.glb", "db.gltf"}) {
+    const fs::path p = tmp(name);
+    sc::write_gltf(d, p);
+    const sc::SceneDescription r = sc::load_gltf(p);
+    ASSERT_EQ(r.objects.size(), d.objects.size()) << name;
+    for (std::size_t i = 0; i < d.objects.size(); ++i) {
+      const sc::ObjectDesc &a = d.objects[i], &b = r.objects[i];
+      EXPECT_EQ(a.area, b.area) << name << " " << a.name;
+      EXPECT_EQ(a.lod_group, b.lod_group) << name << " " << a.name;
+      EXPECT_EQ(a.lod_level, b.lod_level) << name << " " << a.name;
+      EXPECT_EQ(a.lod_facet_m, b.lod_facet_m) << name << " " << a.name;
+      ASSERT_EQ(a.trajectory.has_value(), b.trajectory.has_value()) << name << " " << a.name;
+      if (a.trajectory) {
+        EXPECT_EQ(a.trajectory->waypoints_m, b.trajectory->waypoints_m);
+        EXPECT_EQ(a.trajectory->speed_mps, b.trajectory->speed_mps);
+        EXPECT_EQ(a.trajectory->turn_radius_m, b.trajectory->turn_radius_m);
+        EXPECT_EQ(a.trajectory->turn_rate_rad_s, b.trajectory->turn_rate_rad_s);
+        EXPECT_EQ(a.trajectory->loop, b.trajectory->loop);
+        EXPECT_EQ(a.trajectory->bank, b.trajectory->bank);
+        EXPECT_EQ(a.mesh.positions_m, b.mesh.positions_m);  // body frame, nothing baked in
+      }
+    }
+    // Every material carries its radar name in extras too.
+    std::ifstream in(p, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(bytes.find("\"radar_material\""), std::string::npos) << name;
+    // The loaded scene moves the patrol like the original.
+    sc::Scene s1(d), s2(r);
+    for (double t : {0.0, 17.0, 123.4}) {
+      s1.set_time(t);
+      s2.set_time(t);
+      const auto id = static_cast<std::uint32_t>(d.objects.size() - 1);
+      EXPECT_EQ(s1.world_from_body(id), s2.world_from_body(id)) << name << " " << t;
+    }
+  }
+}
+
 TEST(Gltf, DefaultSceneRoundTripsThroughGlbAndGltf) {
   const sc::SceneDescription d = sc::default_scene();
   const sc::Scene original(d);

@@ -338,6 +338,52 @@ TEST(SceneMotion, BodyXPointsAlongTheHorizontalVelocity) {
   EXPECT_NEAR(s.objects()[0].bounds_max_m.y, 110.0 + half, 1e-5);
 }
 
+TEST(SceneMotion, TrajectoryPlacesTheBoxAndItsVelocityWithoutRebuilding) {
+  // A 6 m x 2 m x 2 m box (body origin at its bottom centre) on an L-shaped path: east 200 m,
+  // a 50 m turn to the north, north 200 m, at 10 m/s. Centre of the turn (150, 50).
+  sc::SceneDescription d;
+  d.materials = {{"grass", {}}, {"metal", {}}};
+  d.objects.push_back(ground_triangle());
+  sc::ObjectDesc box{"box", {}, glm::dmat4(1.0), std::nullopt};
+  add_box(box.mesh, {-3, -1, 0}, {3, 1, 2}, 1);
+  box.trajectory = sc::Trajectory{{{0, 0, 0}, {200, 0, 0}, {200, 200, 0}}, 10.0, 50.0};
+  d.objects.push_back(box);
+  sc::Scene s(d);
+  EXPECT_EQ(s.embree_commit_count(), 2u);
+  EXPECT_TRUE(s.objects()[1].moving);
+  const double quarter = 50.0 * std::numbers::pi / 2.0;
+  sc::Hit hit;
+  // On the first leg at t = 7 s the box's centre is at (70, 0, 1): a ray from the west along
+  // the leg meets its rear face 3 m behind the centre.
+  s.set_time(7.0);
+  ASSERT_TRUE(s.intersect(ray({0.0, 0.0, 1.0}, {1, 0, 0}), hit));
+  EXPECT_NEAR(hit.t_m, 67.0, 1e-9);
+  EXPECT_EQ(hit.object_id, 1u);
+  EXPECT_LT(glm::length(s.objects()[1].velocity_mps - glm::dvec3(10, 0, 0)), 1e-12);
+  // Mid-turn: body origin at 45 degrees on the circle, heading north-east, body +y (left)
+  // toward the turn centre; a ray from the centre toward it meets that side 1 m from the body
+  // origin, at r - 1.
+  s.set_time((150.0 + quarter / 2.0) / 10.0);
+  const glm::dvec3 c(150.0, 50.0, 1.0);
+  const glm::dvec3 out = glm::normalize(glm::dvec3(1.0, -1.0, 0.0));
+  ASSERT_TRUE(s.intersect(ray(c, out), hit));
+  EXPECT_NEAR(hit.t_m, 49.0, 1e-6);
+  EXPECT_NEAR(glm::dot(hit.normal, -out), 1.0, 1e-9);  // the inner (left) face, facing the centre
+  const glm::dvec3 v = s.objects()[1].velocity_mps;
+  EXPECT_NEAR(glm::length(v), 10.0, 1e-12);
+  EXPECT_NEAR(glm::dot(v, out), 0.0, 1e-9);  // tangent to the circle
+  // The world box contains the rotated box (corners within 3.17 m of the centre).
+  const glm::dvec3 centre = c + 50.0 * out;
+  EXPECT_LE(s.objects()[1].bounds_min_m.x, centre.x - 4.0 / std::sqrt(2.0) + 1e-9);
+  EXPECT_GE(s.objects()[1].bounds_max_m.y, centre.y + 4.0 / std::sqrt(2.0) - 1e-9);
+  // Second leg, due north.
+  s.set_time((150.0 + quarter + 100.0) / 10.0);
+  ASSERT_TRUE(s.intersect(ray({200.0, 0.0, 1.0}, {0, 1, 0}), hit));
+  EXPECT_NEAR(hit.t_m, 50.0 + 100.0 - 3.0, 1e-9);
+  EXPECT_EQ(s.static_build_count(), 1u);
+  EXPECT_EQ(s.embree_commit_count(), 2u);
+}
+
 TEST(SceneThreads, ConcurrentQueriesMatchSerialOnes) {
   const sc::Scene s(sc::default_scene());
   std::mt19937 rng(5);
@@ -406,6 +452,28 @@ TEST(SceneValidation, BrokenDescriptionsFailWithContext) {
   d.objects[1].motion->velocity_mps.y = std::nan("");
   EXPECT_EQ(error_of(d),
             "scene: object 'box': the motion's start position or velocity is not finite");
+  d = triangle_and_moving_box();
+  d.objects[1].trajectory = sc::Trajectory{{{0, 0, 0}, {10, 0, 0}}, 1.0};
+  EXPECT_EQ(error_of(d), "scene: object 'box' has both a linear motion and a trajectory");
+  d.objects[1].motion.reset();
+  d.objects[1].trajectory->speed_mps = -1.0;
+  EXPECT_EQ(error_of(d), "scene: object 'box': trajectory: speed_mps must be a finite number > 0");
+  d = triangle_and_moving_box();
+  d.objects[1].lod_group = 2;
+  EXPECT_EQ(error_of(d), "scene: object 'box': a LOD tile (lod_group 2) cannot move");
+  d = triangle_and_moving_box();
+  d.objects[0].lod_group = -4;
+  EXPECT_EQ(error_of(d), "scene: object 'ground': lod_group -4 (expected -1 or >= 0)");
+  d = triangle_and_moving_box();
+  d.objects[0].lod_facet_m = -1.0;
+  EXPECT_EQ(error_of(d), "scene: object 'ground': lod_facet_m must be a finite number >= 0");
+  d = triangle_and_moving_box();
+  d.objects.push_back(d.objects[0]);
+  d.objects.back().name = "ground2";
+  d.objects[0].lod_group = d.objects.back().lod_group = 7;
+  d.objects[0].lod_level = d.objects.back().lod_level = 1;
+  EXPECT_EQ(error_of(d),
+            "scene: object 'ground2': LOD group 7 already has a mesh at level 1 ('ground')");
   d = triangle_and_moving_box();
   d.objects[0].mesh.triangles.clear();
   d.objects[0].mesh.triangle_material.clear();

@@ -11,9 +11,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
+#include <vector>
 
+#include "scene/mesh_check.hpp"
 #include "scene/mesh_io.hpp"
 #include "scene/scene.hpp"
 
@@ -168,11 +172,265 @@ TEST(Targets, VehicleIsTheTwentyFiveThousandFacetBenchmarkTarget) {
   EXPECT_EQ(inward, 0u);
 }
 
+// ---- Vehicles and aircraft (truck, jeep, helicopter, transport_aircraft) ----
+// Their part lists and proportions are documented in scene/targets.cpp; the volumes below are
+// the closed forms of those parts: boxes, prisms of polygonal profiles (shoelace area times
+// width), regular n-gon prisms ((n/2) r^2 sin(2 pi/n) times length), pyramids (A h / 3) and
+// frustums of similar sections (h/3 (A0 + A1 + sqrt(A0 A1)), exact for any polyhedron whose
+// vertices lie in two parallel planes with similar, parallel-sided sections). The parts are
+// separately closed surfaces, so the divergence-theorem volume of the whole mesh is the sum of
+// the parts' volumes whether or not they interpenetrate.
+
+namespace {
+
+double ngon_area(int n, double ru, double rv) {
+  return 0.5 * n * ru * rv * std::sin(2.0 * kPi / n);
+}
+double shoelace(const std::vector<glm::dvec2>& p) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    s += p[i].x * p[(i + 1) % p.size()].y - p[(i + 1) % p.size()].x * p[i].y;
+  return 0.5 * std::abs(s);
+}
+double frustum(double h, double a0, double a1) {
+  return h / 3.0 * (a0 + a1 + std::sqrt(a0 * a1));
+}
+
+using Key = std::tuple<float, float, float>;
+Key key(glm::vec3 p) {
+  return {p.x, p.y, p.z};
+}
+
+// Every directed edge (by vertex position) appears exactly once and its reverse exactly once:
+// closed and consistently wound.
+bool closed_and_consistent(const sc::Mesh& m) {
+  std::map<std::pair<Key, Key>, int> edges;
+  for (const auto& t : m.triangles) {
+    for (int k = 0; k < 3; ++k)
+      ++edges[{key(m.positions_m[t[k]]), key(m.positions_m[t[(k + 1) % 3]])}];
+  }
+  for (const auto& [e, n] : edges) {
+    const auto r = edges.find({e.second, e.first});
+    if (n != 1 || r == edges.end() || r->second != 1)
+      return false;
+  }
+  return true;
+}
+
+// Signed volumes of the connected parts (triangles sharing a vertex position).
+std::vector<double> part_volumes(const sc::Mesh& m) {
+  std::vector<std::size_t> parent(m.triangles.size());
+  for (std::size_t i = 0; i < parent.size(); ++i)
+    parent[i] = i;
+  auto find = [&](std::size_t i) {
+    while (parent[i] != i)
+      i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  std::map<Key, std::size_t> first;
+  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const auto [it, inserted] = first.emplace(key(m.positions_m[m.triangles[i][k]]), i);
+      if (!inserted)
+        parent[find(i)] = find(it->second);
+    }
+  }
+  std::map<std::size_t, double> v;
+  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
+    const auto& t = m.triangles[i];
+    v[find(i)] +=
+        glm::dot(glm::dvec3(m.positions_m[t.x]),
+                 glm::cross(glm::dvec3(m.positions_m[t.y]), glm::dvec3(m.positions_m[t.z]))) /
+        6.0;
+  }
+  std::vector<double> out;
+  for (const auto& [root, vol] : v)
+    out.push_back(vol);
+  return out;
+}
+
+void bounds(const sc::Mesh& m, glm::dvec3& lo, glm::dvec3& hi) {
+  lo = glm::dvec3(1e300);
+  hi = glm::dvec3(-1e300);
+  for (const glm::vec3& p : m.positions_m) {
+    lo = glm::min(lo, glm::dvec3(p));
+    hi = glm::max(hi, glm::dvec3(p));
+  }
+}
+
+double longest_edge(const sc::Mesh& m) {
+  double longest = 0.0;
+  for (const auto& t : m.triangles) {
+    const glm::dvec3 p0(m.positions_m[t.x]), p1(m.positions_m[t.y]), p2(m.positions_m[t.z]);
+    longest = std::max({longest, glm::length(p1 - p0), glm::length(p2 - p1), glm::length(p0 - p2)});
+  }
+  return longest;
+}
+
+double truck_volume(double a, double b, double c) {
+  const double wheels = 6 * ngon_area(16, 0.15 * c, 0.15 * c) * 0.14 * b;
+  const double chassis = 0.93 * a * 0.66 * b * 0.10 * c;
+  const double cab = shoelace({{0.24 * a, 0.22 * c},
+                               {0.5 * a, 0.22 * c},
+                               {0.5 * a, 0.55 * c},
+                               {0.44 * a, 0.78 * c},
+                               {0.24 * a, 0.78 * c}}) *
+                     b;
+  const double cargo = 0.71 * a * b * 0.71 * c;
+  return wheels + chassis + cab + cargo;
+}
+
+double jeep_volume(double a, double b, double c) {
+  const double wheels = 4 * ngon_area(16, 0.19 * c, 0.19 * c) * 0.14 * b;
+  const double hull = shoelace({{-0.5 * a, 0.2 * c},
+                                {0.44 * a, 0.2 * c},
+                                {0.5 * a, 0.3 * c},
+                                {0.5 * a, 0.52 * c},
+                                {-0.5 * a, 0.55 * c}}) *
+                      0.86 * b;
+  const double cabin =
+      shoelace({{-0.45 * a, 0.5 * c}, {0.12 * a, 0.5 * c}, {0.02 * a, c}, {-0.45 * a, c}}) * 0.84 *
+      b;
+  return wheels + hull + cabin;
+}
+
+double helicopter_volume(double a, double b, double c) {
+  const double zf = 0.38 * c;
+  auto ell = [&](double s) { return ngon_area(16, s * 0.08 * a, s * 0.22 * c); };
+  const double fuselage = ell(0.6) * 0.08 * a / 3 + frustum(0.12 * a, ell(0.6), ell(1.0)) +
+                          ell(1.0) * 0.42 * a + frustum(0.1 * a, ell(1.0), ell(0.4)) +
+                          ell(0.4) * 0.03 * a / 3;
+  const double boom =
+      frustum(0.29 * a, ngon_area(12, 0.045 * c, 0.045 * c), ngon_area(12, 0.025 * c, 0.025 * c));
+  const double fin = shoelace({{-0.5 * a, 0.45 * c},
+                               {-0.43 * a, 0.45 * c},
+                               {-0.46 * a, 0.85 * c},
+                               {-0.5 * a, 0.85 * c}}) *
+                     0.016 * a;
+  const double stabiliser = 0.05 * a * 0.2 * a * 0.03 * c;
+  const double tail_rotor = ngon_area(16, 0.08 * a, 0.08 * a) * 0.004 * a;
+  const double mast = ngon_area(12, 0.025 * a, 0.025 * a) * (0.93 * c - zf - 0.15 * c);
+  const double hub = 0.08 * a * 0.08 * a * 0.12 * c;
+  const double blades = b * 0.035 * b * 0.012 * c;
+  const double skids = 2 * ngon_area(12, 0.008 * a, 0.008 * a) * 0.45 * a;
+  const double struts = 4 * 0.01 * a * 0.01 * a * (0.33 * c - 0.004 * a);
+  return fuselage + boom + fin + stabiliser + tail_rotor + mast + hub + blades + skids + struts;
+}
+
+double transport_aircraft_volume(double a, double b, double c) {
+  const double r = 0.053 * a, zf = 0.3 * c;
+  auto ring = [&](double s) { return ngon_area(32, s * r, s * r); };
+  const double fuselage = ring(0.55) * 0.07 * a / 3 + frustum(0.1 * a, ring(0.55), ring(1.0)) +
+                          ring(1.0) * 0.53 * a + frustum(0.23 * a, ring(1.0), ring(0.35)) +
+                          ring(0.35) * 0.07 * a / 3;
+  // Hexagonal aerofoil of thickness ratio tau: area 0.675 tau chord^2; a tapered surface of
+  // span s is a frustum: s A_root (1 + t + t^2) / 3.
+  auto surface = [](double span, double chord, double tau, double taper) {
+    return span * 0.675 * tau * chord * chord * (1 + taper + taper * taper) / 3.0;
+  };
+  const double wing = surface(b, 0.19 * a, 0.12, 0.24);
+  const double tailplane = surface(0.34 * b, 0.1 * a, 0.10, 0.33);
+  const double fin = surface(c - (zf + 0.4 * r), 0.17 * a, 0.10, 0.35);
+  const double re = 0.031 * a;
+  auto eng = [&](double s) { return ngon_area(24, s * re, s * re); };
+  const double nacelles =
+      2 * (frustum(0.04 * a, eng(0.9), eng(1.0)) + frustum(0.07 * a, eng(1.0), eng(0.7)));
+  const double pylons = 2 * 0.08 * a * 0.008 * a * 0.35 * re;
+  const double nose_gear =
+      ngon_area(12, 0.035 * c, 0.035 * c) * 0.016 * a + 0.008 * a * 0.006 * a * (zf - 0.035 * c);
+  const double main_gear = 2 * (ngon_area(16, 0.05 * c, 0.05 * c) * 0.02 * b +
+                                0.012 * a * 0.008 * a * (zf - 0.55 * r - 0.05 * c));
+  return fuselage + wing + tailplane + fin + nacelles + pylons + nose_gear + main_gear;
+}
+
+struct VehicleCase {
+  sc::TargetKind kind;
+  double a, b, c;
+  double volume_m3;
+};
+
+}  // namespace
+
+TEST(Targets, VehiclesAndAircraftAreClosedOutwardWithTheirPartsVolumesAndBounds) {
+  const VehicleCase cases[] = {
+      {sc::TargetKind::kTruck, 8.0, 2.5, 3.4, truck_volume(8.0, 2.5, 3.4)},
+      {sc::TargetKind::kJeep, 4.0, 1.8, 1.9, jeep_volume(4.0, 1.8, 1.9)},
+      {sc::TargetKind::kHelicopter, 12.7, 14.6, 4.4, helicopter_volume(12.7, 14.6, 4.4)},
+      {sc::TargetKind::kTransportAircraft, 37.57, 35.8, 11.76,
+       transport_aircraft_volume(37.57, 35.8, 11.76)},  // A320
+      {sc::TargetKind::kTransportAircraft, 29.8, 40.4, 11.7,
+       transport_aircraft_volume(29.8, 40.4, 11.7)},  // C-130 size
+  };
+  for (const VehicleCase& k : cases) {
+    const std::string name(sc::target_name(k.kind));
+    const sc::SceneDescription d = sc::make_target({k.kind, k.a, k.b, k.c, 0.0});
+    ASSERT_EQ(d.objects.size(), 1u);
+    EXPECT_EQ(d.objects[0].name, name);
+    ASSERT_EQ(d.materials.size(), 1u);
+    EXPECT_EQ(d.materials[0].name, "metal");
+    const sc::Mesh& m = d.objects[0].mesh;
+    std::cout << name << " " << k.a << " x " << k.b << " x " << k.c << " m: " << m.triangles.size()
+              << " triangles, volume " << volume(m) << " m^3 (parts, closed form " << k.volume_m3
+              << ")\n";
+    EXPECT_EQ(m.triangle_material.size(), m.triangles.size());
+    // Closed: by directed edges (each paired with its reverse) and by the loader's check.
+    EXPECT_TRUE(closed_and_consistent(m)) << name;
+    const sc::MeshCheck check = sc::check_mesh(m);
+    EXPECT_TRUE(check.closed()) << name << ": " << check.boundary_edges << " boundary, "
+                                << check.non_manifold_edges << " non-manifold";
+    EXPECT_TRUE(check.degenerate.empty()) << name;
+    // Outward: every part encloses a positive volume; together the parts' closed forms.
+    for (double v : part_volumes(m))
+      EXPECT_GT(v, 0.0) << name;
+    EXPECT_NEAR(volume(m), k.volume_m3, 1e-5 * k.volume_m3) << name;
+    // Overall dimensions as specified: x [-a/2, a/2], y [-b/2, b/2], z [0, c].
+    glm::dvec3 lo, hi;
+    bounds(m, lo, hi);
+    const double tol = 1e-5 * k.a;
+    EXPECT_NEAR(lo.x, -k.a / 2, tol) << name;
+    EXPECT_NEAR(hi.x, k.a / 2, tol) << name;
+    EXPECT_NEAR(lo.y, -k.b / 2, tol) << name;
+    EXPECT_NEAR(hi.y, k.b / 2, tol) << name;
+    EXPECT_NEAR(lo.z, 0.0, tol) << name;
+    EXPECT_NEAR(hi.z, k.c, tol) << name;
+    EXPECT_GT(m.triangles.size(), 100u) << name;
+    EXPECT_LT(m.triangles.size(), 5000u) << name;
+  }
+}
+
+TEST(Targets, VehiclesAndAircraftHonourTheFacetSize) {
+  // Flat-faced parts keep their volume exactly when refined; round parts gain sides (closer to
+  // the circle), so the aircraft's volume grows a little toward its circular-section value.
+  for (const auto kind : {sc::TargetKind::kTruck, sc::TargetKind::kJeep,
+                          sc::TargetKind::kHelicopter, sc::TargetKind::kTransportAircraft}) {
+    const bool aircraft = kind == sc::TargetKind::kTransportAircraft;
+    const double a = aircraft ? 37.57 : 8.0, b = aircraft ? 35.8 : 2.5, c = aircraft ? 11.76 : 3.4;
+    const double f = aircraft ? 1.0 : 0.35;
+    const sc::Mesh coarse = target(kind, a, b, c, 0.0);
+    const sc::Mesh fine = target(kind, a, b, c, f);
+    const std::string name(sc::target_name(kind));
+    std::cout << name << " facet " << f << " m: " << fine.triangles.size() << " triangles\n";
+    EXPECT_GT(fine.triangles.size(), coarse.triangles.size()) << name;
+    EXPECT_LE(longest_edge(fine), std::sqrt(2.0) * f * (1 + 1e-5)) << name;
+    EXPECT_TRUE(closed_and_consistent(fine)) << name;
+    EXPECT_TRUE(sc::check_mesh(fine).degenerate.empty()) << name;
+    for (double v : part_volumes(fine))
+      EXPECT_GT(v, 0.0) << name;
+    EXPECT_GE(volume(fine), volume(coarse) * (1 - 1e-5)) << name;
+    EXPECT_LE(volume(fine), volume(coarse) * 1.02) << name;
+  }
+}
+
 TEST(Targets, NamesAndBadDimensions) {
   EXPECT_EQ(sc::target_kind_from_name("trihedral-tri"), sc::TargetKind::kTrihedralTriangular);
   EXPECT_FALSE(sc::target_kind_from_name("cone").has_value());
   EXPECT_EQ(sc::target_names(),
-            "plate|dihedral|trihedral-square|trihedral-tri|sphere|cylinder|box|vehicle");
+            "plate|dihedral|trihedral-square|trihedral-tri|sphere|cylinder|box|vehicle|truck|jeep|"
+            "helicopter|transport_aircraft");
+  for (const char* n : {"truck", "jeep", "helicopter", "transport_aircraft"}) {
+    ASSERT_TRUE(sc::target_kind_from_name(n).has_value()) << n;
+    EXPECT_EQ(sc::target_name(*sc::target_kind_from_name(n)), n);
+  }
   EXPECT_THROW(sc::make_target({sc::TargetKind::kPlate, -1.0, 1, 1, 0}), std::invalid_argument);
   EXPECT_THROW(sc::make_target({sc::TargetKind::kBox, 1, std::nan(""), 1, 0}),
                std::invalid_argument);
