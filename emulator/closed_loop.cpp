@@ -1,23 +1,33 @@
 #include "emulator/closed_loop.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <ctime>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <stdexcept>
 
+#include "emulator/bus_backends.hpp"
 #include "emulator/ownship.hpp"
 #include "emulator/plot.hpp"
 #include "io/candump.hpp"
+#include "io/modbus.hpp"
+#include "io/modbus_map.hpp"
+#include "scene/airport_gen.hpp"
 #include "scene/default_scene.hpp"
 #include "scene/geo.hpp"
 #include "scene/gltf.hpp"
 #include "scene/scene.hpp"
+#include "scene/terrain_gen.hpp"
 #include "sim_bus/aircraft_player.hpp"
 #include "sim_bus/avionics_sink.hpp"
+#include "sim_bus/fault_injector.hpp"
 #include "sim_bus/faulty_node.hpp"
 #include "sim_bus/loopback_can.hpp"
+#include "sim_bus/loopback_registers.hpp"
+#include "sim_bus/nav_register_player.hpp"
 #include "timing/clock.hpp"
 #include "timing/scheduler.hpp"
 
@@ -31,7 +41,17 @@ constexpr std::uint8_t kFaultyNodeId = 99;
 scene::SceneDescription scene_description(const Scenario& s) {
   if (!s.scene_file.empty())
     return scene::load_gltf(s.scene_file);
-  return scene::default_scene();  // parse_scenario() accepts only "default" as built-in
+  if (s.scene_builtin == "airport") {
+    scene::AirportSpec spec;
+    spec.seed = s.scene_seed;
+    return scene::generate_airport(spec);
+  }
+  if (s.scene_builtin == "terrain") {
+    scene::TerrainSpec spec;
+    spec.seed = s.scene_seed;
+    return scene::generate_terrain(spec);
+  }
+  return scene::default_scene();  // parse_scenario() accepts only these built-ins
 }
 
 // The scripted ownship: the scenario's straight line in anchor ENU, sampled every second as the
@@ -74,6 +94,13 @@ io::icd::Detection to_icd(const radar::Detection& d) noexcept {
   o.radial_velocity_mps = d.radial_velocity_mps;
   o.snr_db = 10.0 * std::log10(d.snr);
   o.rcs_dbsm = 10.0 * std::log10(d.rcs_m2);
+  // Carried by the CAN FD lists only (docs/icd/detections.md).
+  o.range_std_m = d.range_std_m;
+  o.azimuth_std_deg = d.azimuth_std_rad * kDegPerRad;
+  o.elevation_std_deg = d.elevation_std_rad * kDegPerRad;
+  o.radial_velocity_std_mps = d.velocity_std_mps;
+  o.range_ambiguous = d.range_ambiguous;
+  o.velocity_ambiguous = d.velocity_ambiguous;
   return o;
 }
 
@@ -101,26 +128,133 @@ struct ClosedLoop::Impl {
         replay_ep(bus.add_endpoint("replay", 16)),
         radar_ep(bus.add_endpoint("radar", 1 << 16)),
         avionics(bus.add_endpoint("avionics", 1 << 16)),
-        player(ownship_trajectory(s, enu),
-               sim_bus::PlayerConfig{s.ins_node_id, s.attitude_rate_hz, s.navigation_rate_hz,
-                                     s.epoch_unix_ns}),
+        player(ownship_trajectory(s, enu), player_config(s)),
         faulty(kFaultyNodeId),
         sink(std::min<std::uint64_t>(s.frames, o.record_frames_max)),
+        decoder(s.input),
         recorded_frames(std::min<std::uint64_t>(s.frames, o.record_frames_max)),
         rx_log("can0", static_cast<std::size_t>(recorded_frames * input_frames_per_frame(s))),
-        tx_log("can0", static_cast<std::size_t>(recorded_frames *
-                                                io::icd::frames_for(s.sensor.max_detections))),
+        tx_log("can0", static_cast<std::size_t>(recorded_frames * list_frames(s))),
         profiler(static_cast<std::size_t>(std::max<std::uint64_t>(recorded_frames, 1))) {
     if (s.frames == 0)
       throw std::runtime_error("scenario: frames must be >= 1");
     contributions.resize(tracer.max_contributions());
     detections.resize(s.sensor.max_detections);
     icd_detections.resize(s.sensor.max_detections);
-    out_frames.resize(io::icd::frames_for(s.sensor.max_detections));
+    out_frames.resize(list_frames(s));
+    // The radar's receiving side of the bus, with the scenario's faults (none in a replay: the
+    // log already holds what the recording run received after its faults).
+    link = std::make_unique<sim_bus::FaultyCanLink>(
+        radar_ep, o.replay ? sim_bus::FaultConfig{} : s.link_faults);
+    if (s.stale_sender && !o.replay) {
+      sim_bus::StaleConfig c = s.stale;
+      c.epoch_ns = s.epoch_unix_ns;
+      stale_ins = std::make_unique<sim_bus::StaleSender>(ins, c);
+    }
+    if (s.babbling_node && !o.replay) {
+      sim_bus::BabbleConfig c = s.babble;
+      c.epoch_ns = s.epoch_unix_ns;
+      babbler = std::make_unique<sim_bus::BabblingNode>(c);
+      babble_ep = &bus.add_endpoint("babbler", 16);
+    }
+    setup_backends(s, o);
   }
 
+  // Hardware CAN, Modbus navigation and the Modbus detection table (setup; throws with context).
+  void setup_backends(const Scenario& s, const RunOptions& o) {
+    can_spec = parse_can_spec(o.can);
+    hardware_can = can_spec.kind != CanSpec::Kind::kSim;
+    if (hardware_can && can_spec.fd != s.can_fd && !s.can_fd)
+      scenario.can_fd = true;  // ",fd" on the command line sends FD lists too
+    nav_modbus_sim = o.nav_modbus == "sim";
+    nav_external = !o.nav_modbus.empty() && !nav_modbus_sim;
+    if ((hardware_can || nav_external) && !o.realtime) {
+      throw std::runtime_error(
+          std::string(hardware_can ? "--can " + o.can : "--nav-modbus " + o.nav_modbus) +
+          ": a real bus runs on the wall clock: add --realtime");
+    }
+    if ((hardware_can || !o.nav_modbus.empty()) && o.replay)
+      throw std::runtime_error("replay runs on the software bus only (no --can or --nav-modbus)");
+    if (hardware_can) {
+      // Bus time is Unix time (set when the run starts), as the kernel's CLOCK_REALTIME stamps.
+      hw_can = open_can(can_spec, 0, warnings);
+    }
+    if (nav_modbus_sim || nav_external) {
+      nav_regs.resize(io::modbus::nav_register_count(nav_map));
+    }
+    if (nav_modbus_sim) {
+      nav_bank =
+          std::make_unique<sim_bus::LoopbackRegisterBank>(nav_map.base_address, nav_regs.size());
+      sim_bus::NavPlayerConfig pc;
+      pc.map = nav_map;
+      pc.rate_hz = s.navigation_rate_hz;
+      nav_player = std::make_unique<sim_bus::NavRegisterPlayer>(player.trajectory(), pc);
+      // The scenario's link faults act on the register transport too: a lost frame is a lost
+      // transaction, a stale INS a frozen register image (sim_bus/fault_injector.hpp).
+      sim_bus::RegisterFaultConfig rf;
+      if (!o.replay) {
+        rf.timeout_probability = s.link_faults.drop_probability;
+        rf.corrupt_probability = s.link_faults.corrupt_probability;
+        rf.corrupt_max_bits = s.link_faults.corrupt_max_bits;
+        if (s.stale_sender) {
+          rf.frozen_start_s = s.stale.start_s;
+          rf.frozen_end_s = s.stale.end_s;
+        }
+        rf.seed = s.link_faults.seed;
+      }
+      rf.epoch_ns = s.epoch_unix_ns;
+      nav_faulty = std::make_unique<sim_bus::FaultyRegisterBank>(*nav_bank, rf);
+    }
+    if (nav_external) {
+      io::modbus::ModbusClientConfig cc;
+      cc.endpoint = o.nav_modbus;
+      nav_client = std::make_unique<io::modbus::ModbusClient>(cc);
+      io::modbus::NavPollerConfig pc;
+      pc.map = nav_map;
+      std::atomic<std::int64_t>* offset = &bus_from_monotonic_ns;
+      pc.clock_ns = [offset] {
+        timespec ts{};
+        clock_gettime(CLOCK_MONOTONIC, &ts);
+        return offset->load(std::memory_order_relaxed) +
+               static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
+      };
+      nav_poller = std::make_unique<io::modbus::NavPoller>(*nav_client, pc);
+    }
+    if (!o.modbus_server.empty()) {
+      table_config.max_detections = std::max<std::size_t>(1, s.sensor.max_detections);
+      table_regs.resize(io::modbus::detection_table_registers(table_config));
+      io::modbus::ModbusServerConfig sc;
+      sc.endpoint = modbus_server_endpoint(o.modbus_server);
+      sc.start_address = table_config.base_address;
+      sc.register_count = table_regs.size();
+      modbus_server = std::make_unique<io::modbus::ModbusServer>(sc);
+    }
+  }
+
+  // Frames one detection list takes on the bus (classic or FD).
+  static std::size_t list_frames(const Scenario& s) {
+    return s.can_fd ? io::icd::frames_for_fd(s.sensor.max_detections)
+                    : io::icd::frames_for(s.sensor.max_detections);
+  }
+
+  static sim_bus::PlayerConfig player_config(const Scenario& s) {
+    sim_bus::PlayerConfig c;
+    c.node_id = s.ins_node_id;
+    c.attitude_rate_hz = s.attitude_rate_hz;
+    c.navigation_rate_hz = s.navigation_rate_hz;
+    c.epoch_ns = s.epoch_unix_ns;
+    for (std::size_t k = 0; k < c.can_ids.size(); ++k)
+      c.can_ids[k] = s.input.fields[k].can_id;
+    return c;
+  }
+
+  // Input frames one radar frame can receive (sizes the input log): the INS schedule, doubled
+  // for duplicates, plus a babbling node's rate.
   static std::uint64_t input_frames_per_frame(const Scenario& s) {
-    const double per_s = 3.0 * s.attitude_rate_hz + 8.0 * s.navigation_rate_hz;
+    double per_s = (3.0 * s.attitude_rate_hz + 8.0 * s.navigation_rate_hz) *
+                   (1.0 + s.link_faults.duplicate_probability);
+    if (s.babbling_node)
+      per_s += s.babble.rate_hz * (1.0 + s.link_faults.duplicate_probability);
     return static_cast<std::uint64_t>(std::ceil(per_s / s.rate_hz)) + 12;
   }
 
@@ -139,6 +273,10 @@ struct ClosedLoop::Impl {
   sim_bus::LoopbackEndpoint& avionics;
   sim_bus::AircraftStatePlayer player;
   sim_bus::FaultyNode faulty;
+  std::unique_ptr<sim_bus::FaultyCanLink> link;     ///< what the radar receives through
+  std::unique_ptr<sim_bus::StaleSender> stale_ins;  ///< the INS's sending side, when stale
+  std::unique_ptr<sim_bus::BabblingNode> babbler;
+  sim_bus::LoopbackEndpoint* babble_ep = nullptr;
   sim_bus::AvionicsSink sink;
   io::canas::Decoder decoder;
   std::uint64_t recorded_frames;
@@ -149,6 +287,27 @@ struct ClosedLoop::Impl {
   std::vector<radar::Detection> detections;
   std::vector<io::icd::Detection> icd_detections;
   std::vector<io::CanFrame> out_frames;
+  // Backends (setup_backends()).
+  std::vector<std::string> warnings;
+  CanSpec can_spec;
+  bool hardware_can = false;
+  std::unique_ptr<io::CanEndpoint> hw_can;
+  bool nav_modbus_sim = false;
+  bool nav_external = false;
+  io::modbus::NavMapConfig nav_map{};
+  std::vector<std::uint16_t> nav_regs;
+  std::unique_ptr<sim_bus::LoopbackRegisterBank> nav_bank;
+  std::unique_ptr<sim_bus::NavRegisterPlayer> nav_player;
+  std::unique_ptr<sim_bus::FaultyRegisterBank> nav_faulty;
+  io::modbus::NavDecoder nav_decoder{};
+  std::uint64_t nav_read_failures = 0;
+  std::unique_ptr<io::modbus::ModbusClient> nav_client;
+  std::unique_ptr<io::modbus::NavPoller> nav_poller;
+  std::atomic<std::int64_t> bus_from_monotonic_ns{0};  ///< bus time - CLOCK_MONOTONIC [ns]
+  io::canas::OwnshipState nav_state{};                 ///< last state from the poller
+  io::modbus::DetectionTableConfig table_config{};
+  std::vector<std::uint16_t> table_regs;
+  std::unique_ptr<io::modbus::ModbusServer> modbus_server;
 };
 
 ClosedLoop::ClosedLoop(const Scenario& scenario, const RunOptions& options)
@@ -158,6 +317,14 @@ ClosedLoop::~ClosedLoop() = default;
 
 const Scenario& ClosedLoop::scenario() const noexcept {
   return impl_->scenario;
+}
+
+std::string ClosedLoop::modbus_server_address() const {
+  return impl_->modbus_server ? impl_->modbus_server->address() : std::string();
+}
+
+const std::vector<std::string>& ClosedLoop::setup_warnings() const noexcept {
+  return impl_->warnings;
 }
 
 RunResult ClosedLoop::run() {
@@ -180,6 +347,16 @@ RunResult ClosedLoop::run() {
   const std::int64_t period_ns = std::llround(1e9 / s.rate_hz);
   const std::int64_t start_ns =
       m.options.realtime ? wall.now_ns() + 20'000'000 : simulated.now_ns();  // 20 ms to settle
+  if (m.hardware_can || m.nav_external) {
+    // A real bus: bus time is Unix time (CLOCK_REALTIME, as SocketCAN's and gs_usb's stamps),
+    // taken once here and carried on by the monotonic clock.
+    timespec rt{};
+    clock_gettime(CLOCK_REALTIME, &rt);
+    const std::int64_t realtime_now_ns =
+        static_cast<std::int64_t>(rt.tv_sec) * 1'000'000'000LL + rt.tv_nsec;
+    m.scenario.epoch_unix_ns = realtime_now_ns + (start_ns - wall.now_ns());
+    m.bus_from_monotonic_ns.store(m.scenario.epoch_unix_ns - start_ns);
+  }
   timing::FixedRateScheduler scheduler(sched_clock, period_ns, start_ns);
   const std::int64_t timeout_ns = std::llround(s.state_timeout_s * 1e9);
   const std::int64_t run_start_wall = wall.now_ns();
@@ -204,8 +381,13 @@ RunResult ClosedLoop::run() {
           ++r.replay_frames_fed;
         ++m.replay_next;
       }
-    } else {
-      (void)m.player.publish_until(t_s, m.ins);
+    } else if (!m.hardware_can && !m.nav_external) {
+      if (m.nav_player)
+        (void)m.nav_player->publish_until(t_s, *m.nav_bank);
+      (void)m.player.publish_until(
+          t_s, m.stale_ins ? static_cast<io::CanEndpoint&>(*m.stale_ins) : m.ins);
+      if (m.babbler)
+        (void)m.babbler->publish_until(t_s, *m.babble_ep);
       if (s.malformed_every_n_frames > 0 && done % s.malformed_every_n_frames == 0) {
         m.faulty.send_next(m.faulty_ep, bus_now_ns);
       }
@@ -217,17 +399,38 @@ RunResult ClosedLoop::run() {
     {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kInput);
       io::CanFrame f;
-      while (m.radar_ep.receive(f)) {
+      m.link->advance_to(bus_now_ns);
+      io::CanEndpoint& rx = m.hw_can ? *m.hw_can : static_cast<io::CanEndpoint&>(*m.link);
+      while (rx.receive(f)) {
         ++r.bus_frames_in;
+        // Reception times are kept to the microsecond, the resolution of the candump log, so
+        // that a replay of bus_in.log decodes exactly what this run decoded.
+        f.timestamp_ns -= f.timestamp_ns % 1000;
         (void)m.rx_log.record(f);
         (void)m.decoder.decode(f, f.timestamp_ns);
       }
-      valid = radar_pose_from_state(m.decoder.state(), bus_now_ns, timeout_ns, m.enu,
-                                    s.antenna_depression_rad, pose);
-      const io::canas::OwnshipState& st = m.decoder.state();
+      // The ownship state: CANaerospace from the bus, or the Modbus navigation map.
+      const io::canas::OwnshipState* state = &m.decoder.state();
+      if (m.nav_faulty) {
+        m.nav_faulty->advance_to(bus_now_ns);
+        if (m.nav_faulty->read_holding(m.nav_map.base_address, m.nav_regs) ==
+            io::RegisterStatus::kOk) {
+          (void)m.nav_decoder.decode(m.nav_regs, bus_now_ns);
+        } else {
+          ++m.nav_read_failures;
+        }
+        state = &m.nav_decoder.state();
+      } else if (m.nav_poller) {
+        (void)m.nav_poller->latest(m.nav_state);
+        state = &m.nav_state;
+      }
+      valid = radar_pose_from_state(*state, bus_now_ns, timeout_ns, m.enu, s.antenna_depression_rad,
+                                    pose);
+      const io::canas::OwnshipState& st = *state;
       for (std::size_t k = 0; k < io::canas::kFieldCount; ++k) {
         const auto field = static_cast<io::canas::Field>(k);
-        r.field_age_max_s[k] = std::max(r.field_age_max_s[k], st.age_s(field, bus_now_ns));
+        if (st[field].received)
+          r.field_age_max_s[k] = std::max(r.field_age_max_s[k], st.age_s(field, bus_now_ns));
         if (!st.fresh(field, bus_now_ns, timeout_ns))
           ++r.field_stale_frames[k];
       }
@@ -236,6 +439,28 @@ RunResult ClosedLoop::run() {
     {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kSceneUpdate);
       m.scene.set_time(t_s);
+      if (valid) {
+        // Model no more than the radar sees: terrain tiles outside the beam are dropped, the
+        // others take the coarsest level of detail whose facets stay within a resolution cell.
+        scene::ViewVolume view;
+        view.position_m = pose.position_m;
+        view.world_from_antenna = pose.world_from_antenna;
+        view.azimuth_min_rad = s.sbr.azimuth_min_rad;
+        view.azimuth_max_rad = s.sbr.azimuth_max_rad;
+        view.elevation_min_rad = s.sbr.elevation_min_rad;
+        view.elevation_max_rad = s.sbr.elevation_max_rad;
+        view.max_range_m = s.sbr.max_range_m;
+        view.range_cell_m = radar::range_resolution_m(s.sensor.processing.waveform);
+        view.angular_cell_rad = s.sbr.terrain_ray_spacing_rad;
+        m.scene.set_view(view);
+        const scene::ViewStats& vs = m.scene.view_stats();
+        r.view.lod_groups_culled += vs.lod_groups_culled;
+        r.view.lod_groups_in_view += vs.lod_groups_in_view;
+        r.view.triangles_active += vs.triangles_active;
+        for (std::size_t k = 0; k < r.view.lod_groups_at_level.size(); ++k)
+          r.view.lod_groups_at_level[k] += vs.lod_groups_at_level[k];
+        ++r.view.frames;
+      }
     }
     // ---- trace: shoot and bounce ----
     std::size_t n_contrib = 0;
@@ -272,18 +497,29 @@ RunResult ClosedLoop::run() {
       const bool send_list = valid || !s.stale_output_silent;
       io::icd::EncodeResult enc{};
       if (send_list) {
-        enc = io::icd::encode(h, std::span(m.icd_detections.data(), n_det), m.out_frames);
+        const std::span<const io::icd::Detection> list(m.icd_detections.data(), n_det);
+        enc = s.can_fd ? io::icd::encode_fd(h, list, m.out_frames)
+                       : io::icd::encode(h, list, m.out_frames);
       } else {
         ++r.lists_suppressed;
       }
       r.icd_dropped += enc.dropped;
       r.icd_truncated += enc.truncated;
+      io::CanEndpoint& tx = m.hw_can ? *m.hw_can : static_cast<io::CanEndpoint&>(m.radar_ep);
       for (std::size_t i = 0; i < enc.frames; ++i) {
         io::CanFrame& f = m.out_frames[i];
         f.timestamp_ns = bus_now_ns;
-        if (m.radar_ep.send(f))
+        if (tx.send(f))
           ++r.bus_frames_out;
         (void)m.tx_log.record(f);
+      }
+      if (m.modbus_server) {
+        // The Modbus table is state, not a message: it is published every frame, stale or not.
+        const io::modbus::TableEncodeResult te = io::modbus::encode_detection_table(
+            h, std::span<const io::icd::Detection>(m.icd_detections.data(), n_det), m.table_regs,
+            m.table_config);
+        (void)te;
+        (void)m.modbus_server->publish(m.table_regs);
       }
       if (r.records.size() < m.recorded_frames) {
         FrameRecord rec;
@@ -295,6 +531,8 @@ RunResult ClosedLoop::run() {
         rec.detection_count = static_cast<std::uint32_t>(n_det);
         rec.late = tick.late;
         rec.sent = send_list;
+        rec.ownship_valid = valid;
+        rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
         r.records.push_back(rec);
         r.detections.insert(r.detections.end(), m.icd_detections.begin(),
                             m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
@@ -324,6 +562,11 @@ RunResult ClosedLoop::run() {
   r.overruns = scheduler.overruns();
   r.missed_periods = scheduler.missed_periods();
   r.decoder = m.decoder.counters();
+  r.link_faults = m.link->counters();
+  if (m.stale_ins)
+    r.stale_sender = m.stale_ins->counters();
+  if (m.babbler)
+    r.babble = m.babbler->counters();
   if (m.options.replay)
     r.replay_frames_left = m.options.replay_input.size() - m.replay_next;
   r.bus_rx_overflows = m.radar_ep.rx_overflows() + m.avionics.rx_overflows();
@@ -377,6 +620,9 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
     f["status"] = rec.header.status;
     if (!rec.sent)
       f["sent"] = false;  // stale_output = "silent": nothing went on the bus
+    if (rec.ownship_valid) {
+      f["ownship_enu_m"] = {rec.ownship_enu_m.x, rec.ownship_enu_m.y, rec.ownship_enu_m.z};
+    }
     nlohmann::ordered_json list = nlohmann::ordered_json::array();
     for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
       const io::icd::Detection& d = r.detections[rec.first_detection + i];
@@ -407,7 +653,48 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
   rep["rate_hz"] = s.rate_hz;
   rep["frames"] = r.frames;
   rep["frames_valid"] = r.frames_valid;
-  rep["input_source"] = m.options.replay ? "replay" : "sim";
+  rep["backends"] = {
+      {"can", m.options.replay ? std::string("replay") : m.can_spec.text},
+      {"ownship_from", m.options.nav_modbus.empty() ? std::string("canaerospace")
+                                                    : "modbus:" + m.options.nav_modbus},
+      {"detection_lists", s.can_fd ? "can_fd" : "can_classic"},
+      {"modbus_server", m.modbus_server ? m.modbus_server->address() : std::string()}};
+  if (m.hw_can)
+    rep["can_backend"] = nlohmann::ordered_json::parse(can_backend_report_json(*m.hw_can));
+  if (m.nav_faulty || m.nav_poller) {
+    const io::modbus::NavDecoderCounters& nc =
+        m.nav_poller ? m.nav_poller->counters().decoder : m.nav_decoder.counters();
+    nlohmann::ordered_json nav = {
+        {"samples", nc.samples},           {"new_samples", nc.new_samples},
+        {"stale_samples", nc.stale},       {"rejected", nc.rejected()},
+        {"not_a_number", nc.not_a_number}, {"out_of_range", nc.out_of_range},
+        {"wrong_size", nc.wrong_size},     {"counter_gaps", nc.counter_gaps}};
+    if (m.nav_faulty) {
+      const sim_bus::RegisterFaultCounters& fc = m.nav_faulty->counters();
+      nav["read_failures"] = m.nav_read_failures;
+      nav["faults"] = {{"timeouts", fc.timeouts},
+                       {"corrupted", fc.corrupted},
+                       {"frozen_reads", fc.frozen_reads}};
+    } else {
+      const io::modbus::NavPollerCounters pc = m.nav_poller->counters();
+      nav["polls"] = pc.polls;
+      nav["timeouts"] = pc.timeouts;
+      nav["disconnected"] = pc.disconnected;
+      nav["read_errors"] = pc.read_errors;
+      nav["missed_periods"] = pc.missed_periods;
+    }
+    rep["nav_modbus"] = std::move(nav);
+  }
+  if (m.modbus_server) {
+    const io::modbus::ModbusServerCounters sc = m.modbus_server->counters();
+    rep["modbus_server"] = {{"address", m.modbus_server->address()},
+                            {"requests", sc.requests},
+                            {"replies", sc.replies},
+                            {"refused_writes", sc.refused_writes},
+                            {"errors", sc.errors},
+                            {"clients_accepted", sc.clients_accepted},
+                            {"publishes", sc.publishes}};
+  }
   rep["wall_time_s"] = r.wall_time_s;
   rep["detections"] = {
       {"total", r.detections_total},
@@ -445,6 +732,7 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                     {"out_of_range", c.out_of_range},
                     {"unpaired_double", c.unpaired_double},
                     {"extended_id", c.extended_id}}},
+                  {"other_node", c.other_node},
                   {"message_code_gaps", c.message_code_gaps}};
   {
     // Validity: each field's worst age at a frame's time and how many frames found it stale.
@@ -453,10 +741,8 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
         "height", "vel_east", "vel_north",    "vel_up"};
     nlohmann::ordered_json ages;
     for (std::size_t k = 0; k < io::canas::kFieldCount; ++k) {
-      const double age = r.field_age_max_s[k];
-      ages[kFieldNames[k]] = {{"age_max_s", std::isfinite(age) ? nlohmann::ordered_json(age)
-                                                               : nlohmann::ordered_json(nullptr)},
-                              {"stale_frames", r.field_stale_frames[k]}};
+      const double age = r.field_age_max_s[k];  // over the frames after its first reception
+      ages[kFieldNames[k]] = {{"age_max_s", age}, {"stale_frames", r.field_stale_frames[k]}};
     }
     rep["validity"] = {{"state_timeout_s", s.state_timeout_s},
                        {"stale_output", s.stale_output_silent ? "silent" : "flag"},
@@ -469,10 +755,51 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                      {"frames_fed", r.replay_frames_fed},
                      {"frames_after_last_radar_frame", r.replay_frames_left}};
   }
-  rep["faults_injected"] = {{"short_dlc", r.injected_malformed[0]},
-                            {"unknown_data_type", r.injected_malformed[1]},
-                            {"not_a_number", r.injected_malformed[2]},
-                            {"out_of_range", r.injected_malformed[3]}};
+  rep["faults_injected"] = {
+      {"seed", s.link_faults.seed},
+      {"malformed",
+       {{"short_dlc", r.injected_malformed[0]},
+        {"unknown_data_type", r.injected_malformed[1]},
+        {"not_a_number", r.injected_malformed[2]},
+        {"out_of_range", r.injected_malformed[3]}}},
+      {"link",
+       {{"frames_in", r.link_faults.frames_in},
+        {"frames_out", r.link_faults.frames_out},
+        {"dropped", r.link_faults.dropped},
+        {"delayed", r.link_faults.delayed},
+        {"corrupted", r.link_faults.corrupted},
+        {"reordered", r.link_faults.reordered},
+        {"duplicated", r.link_faults.duplicated},
+        {"held_overflow", r.link_faults.held_overflow}}},
+      {"stale_sender",
+       {{"mode", !s.stale_sender                               ? "none"
+                 : s.stale.mode == sim_bus::StaleMode::kSilent ? "silent"
+                 : s.stale.mode == sim_bus::StaleMode::kFrozen ? "frozen"
+                                                               : "frozen_value"},
+        {"suppressed", r.stale_sender.suppressed},
+        {"replayed", r.stale_sender.replayed}}},
+      {"babbling_node",
+       {{"sent", r.babble.sent},
+        {"send_failures", r.babble.send_failures},
+        {"skipped", r.babble.skipped}}}};
+  {
+    const double n = r.view.frames > 0 ? static_cast<double>(r.view.frames) : 1.0;
+    rep["scene"] = {
+        {"source", s.scene_file.empty() ? "builtin:" + s.scene_builtin : s.scene_file.string()},
+        {"seed", s.scene_seed},
+        {"objects", m.scene.objects().size()},
+        {"triangles", m.scene.triangle_count()},
+        {"lod_tiles", m.scene.view_stats().lod_groups},
+        {"per_frame_mean",
+         {{"lod_tiles_in_view", static_cast<double>(r.view.lod_groups_in_view) / n},
+          {"lod_tiles_culled", static_cast<double>(r.view.lod_groups_culled) / n},
+          {"lod_tiles_at_level",
+           {static_cast<double>(r.view.lod_groups_at_level[0]) / n,
+            static_cast<double>(r.view.lod_groups_at_level[1]) / n,
+            static_cast<double>(r.view.lod_groups_at_level[2]) / n,
+            static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
+          {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
+  }
   rep["trace"] = {{"rays", r.trace.rays},
                   {"target_bundles", r.trace.target_bundles},
                   {"coarsened_bundles", r.trace.coarsened_bundles},

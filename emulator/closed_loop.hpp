@@ -16,6 +16,7 @@
 #include "io/detection_icd.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
+#include "sim_bus/fault_injector.hpp"
 #include "timing/profiler.hpp"
 #include "timing/realtime.hpp"
 
@@ -33,6 +34,16 @@ struct RunOptions {
   /// run received it, so the radar decodes the same frames at the same frames (deterministic).
   std::vector<io::CanFrame> replay_input;
   bool replay = false;  ///< use replay_input (even when it is empty)
+  /// Bus backends (emulator/bus_backends.hpp). `can`: "sim" (software loopback with the
+  /// scripted INS and avionics), "socketcan:IFACE[,fd]..." or "gsusb[:SERIAL][,fd]...".
+  std::string can = "sim";
+  /// Where the ownship state comes from: "" (CANaerospace on the CAN bus), "sim" (the
+  /// navigation register map on the loopback register bank, played from the scenario), or a
+  /// Modbus TCP/RTU server "tcp:HOST:PORT" / "rtu:DEV:BAUD" (polled by a background thread).
+  std::string nav_modbus;
+  /// Serve the detection table as Modbus holding registers: "" (off), "HOST:PORT", ":PORT"
+  /// (127.0.0.1), "rtu:DEV:BAUD". Port 0 picks a free port (see modbus_server_address()).
+  std::string modbus_server;
 };
 
 /// What one frame put on the bus.
@@ -44,6 +55,8 @@ struct FrameRecord {
   std::uint32_t detection_count = 0;
   bool late = false;
   bool sent = true;  ///< false: stale state with stale_output "silent", nothing was sent
+  bool ownship_valid = false;
+  glm::dvec3 ownship_enu_m{0.0};  ///< antenna position used by the frame (scene ENU) [m]
 };
 
 struct RunResult {
@@ -57,15 +70,24 @@ struct RunResult {
   std::uint64_t detections_min = 0;
   std::uint64_t detections_max = 0;
   io::canas::DecoderCounters decoder{};
-  /// Per ownship field (io::canas::Field order): the largest age seen at a frame's time [s]
-  /// (+inf when never received) and the frames at which the field was older than the timeout.
+  /// Per ownship field (io::canas::Field order): the largest age seen at a frame's time once the
+  /// field had been received [s], and the frames at which it was missing or older than the
+  /// timeout.
   std::array<double, io::canas::kFieldCount> field_age_max_s{};
   std::array<std::uint64_t, io::canas::kFieldCount> field_stale_frames{};
   std::uint64_t replay_frames_fed = 0;   ///< replay: log frames put on the bus
   std::uint64_t replay_frames_left = 0;  ///< replay: log frames after the last radar frame
   std::uint64_t icd_dropped = 0;
   std::uint64_t icd_truncated = 0;
-  radar::TraceStats trace{};         ///< summed over frames
+  radar::TraceStats trace{};  ///< summed over frames
+  /// Scene culling and level of detail (scene::ViewStats), summed over the frames with a view.
+  struct ViewTotals {
+    std::uint64_t frames = 0;
+    std::uint64_t lod_groups_in_view = 0;
+    std::uint64_t lod_groups_culled = 0;
+    std::array<std::uint64_t, 4> lod_groups_at_level{};
+    std::uint64_t triangles_active = 0;
+  } view{};
   radar::SensorStats sensor{};       ///< summed over frames
   std::uint64_t bus_frames_in = 0;   ///< frames the radar received
   std::uint64_t bus_frames_out = 0;  ///< frames the radar sent
@@ -74,6 +96,9 @@ struct RunResult {
   std::uint64_t sink_lists = 0;        ///< detection lists the avionics sink reassembled
   std::uint64_t sink_malformed = 0;
   std::array<std::uint64_t, 4> injected_malformed{};  ///< by sim_bus::MalformedKind
+  sim_bus::FaultCounters link_faults{};               ///< the radar's receiving side
+  sim_bus::StaleCounters stale_sender{};
+  sim_bus::BabbleCounters babble{};
   std::array<timing::StageSummary, timing::kStageCount> stages{};
   timing::RealtimeReport realtime{};
   double wall_time_s = 0.0;
@@ -100,6 +125,11 @@ class ClosedLoop {
   void write_outputs(const RunResult& result, const std::filesystem::path& dir) const;
 
   [[nodiscard]] const Scenario& scenario() const noexcept;
+  /// "HOST:PORT" the Modbus detection table is served on ("" when not serving). The server
+  /// keeps serving the last table until the ClosedLoop is destroyed.
+  [[nodiscard]] std::string modbus_server_address() const;
+  /// Warnings from backend setup (bit rate not set, ...), for the summary.
+  [[nodiscard]] const std::vector<std::string>& setup_warnings() const noexcept;
 
  private:
   struct Impl;

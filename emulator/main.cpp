@@ -2,6 +2,7 @@
 // libraries (style.md item 1).
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -9,12 +10,14 @@
 #include <iostream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "emulator/ambiguity_tool.hpp"
 #include "emulator/atten_tool.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
+#include "emulator/scene_tool.hpp"
 #include "emulator/sigma0_tool.hpp"
 #include "io/candump.hpp"
 #include "radar/clutter/terrain.hpp"
@@ -96,9 +99,10 @@ emu::Scenario load_scenario_or_default(const std::string& scenario_file) {
              : emu::load_scenario(scenario_file);
 }
 
-// Runs the loop, writes the outputs and prints the summary (run and replay).
+// Runs the loop, writes the outputs and prints the summary (run and replay). With a Modbus
+// server, the final detection table stays served for `linger_s` seconds after the run.
 int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const std::string& out,
-                 bool quiet) {
+                 bool quiet, double linger_s = 0.0) {
   const bool show_progress = !quiet && scenario.frames >= 100;
   if (show_progress) {
     options.progress = [](std::uint64_t done, std::uint64_t total) {
@@ -111,17 +115,38 @@ int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const s
     };
   }
   emu::ClosedLoop loop(scenario, options);
+  for (const auto& w : loop.setup_warnings())
+    std::fprintf(stderr, "radar-emu: warning: %s\n", w.c_str());
+  const std::string modbus = loop.modbus_server_address();
+  if (!modbus.empty()) {
+    // The readiness line scripts wait for (a client may connect from now on).
+    std::fprintf(stderr, "radar-emu: modbus server listening on %s\n", modbus.c_str());
+    std::fflush(stderr);
+  }
   const emu::RunResult result = loop.run();
   if (!out.empty())
     loop.write_outputs(result, out);
   if (!quiet)
     print_summary(loop, result, out);
+  if (!modbus.empty() && linger_s > 0.0) {
+    std::fprintf(stderr, "radar-emu: run complete; serving the final table on %s for %.1f s\n",
+                 modbus.c_str(), linger_s);
+    std::fflush(stderr);
+    std::this_thread::sleep_for(std::chrono::duration<double>(linger_s));
+  }
   return 0;
 }
 
+struct BusArgs {
+  std::string can = "sim";
+  std::string nav_modbus;
+  std::string modbus_server;
+  double modbus_linger_s = 0.0;
+};
+
 int run_command(const std::string& scenario_file, std::uint64_t frames, const std::string& out,
                 bool realtime, bool print_scenario, bool quiet, int rt_priority, bool lock_memory,
-                int cpu) {
+                int cpu, const BusArgs& bus) {
   if (print_scenario) {
     std::cout << emu::default_scenario_toml();
     return 0;
@@ -134,7 +159,10 @@ int run_command(const std::string& scenario_file, std::uint64_t frames, const st
   options.rt.fifo_priority = rt_priority;
   options.rt.lock_memory = lock_memory;
   options.rt.cpu = cpu;
-  return execute_loop(scenario, std::move(options), out, quiet);
+  options.can = bus.can;
+  options.nav_modbus = bus.nav_modbus;
+  options.modbus_server = bus.modbus_server;
+  return execute_loop(scenario, std::move(options), out, quiet, bus.modbus_linger_s);
 }
 
 // Replays a recorded input log (a run's bus_in.log, or any candump log of CANaerospace input)
@@ -228,6 +256,21 @@ int main(int argc, char** argv) {
   run->add_option("--cpu", cpu, "Pin the frame loop to this CPU with --realtime");
   run->add_flag("--print-scenario", print_scenario, "Print the embedded default scenario and exit");
   run->add_flag("-q,--quiet", quiet, "No progress or summary");
+  BusArgs bus_args;
+  run->add_option("--can", bus_args.can,
+                  "CAN backend: sim (software loopback, default), socketcan:IFACE[,fd]"
+                  "[,bitrate=N][,dbitrate=N], gsusb[:SERIAL][,fd][,bitrate=N][,dbitrate=N] "
+                  "(real buses need --realtime; ,fd sends the detection lists as CAN FD)");
+  run->add_option("--nav-modbus", bus_args.nav_modbus,
+                  "Ownship state from a Modbus navigation register map (docs/icd/modbus.md) "
+                  "instead of CANaerospace: tcp:HOST:PORT, rtu:DEV:BAUD (with --realtime), or "
+                  "sim (played from the scenario on the loopback register bank)");
+  run->add_option("--modbus-server", bus_args.modbus_server,
+                  "Serve the detection table as Modbus holding registers on HOST:PORT (:PORT "
+                  "binds 127.0.0.1; port 0 picks a free one, printed on stderr)");
+  run->add_option("--modbus-linger-s", bus_args.modbus_linger_s,
+                  "Keep serving the final detection table this long after the run [s]")
+      ->check(CLI::Range(0.0, 86400.0));
 
   CLI::App* replay = app.add_subcommand(
       "replay",
@@ -262,6 +305,8 @@ int main(int argc, char** argv) {
   target->add_option("--facet-m", spec.facet_m,
                      "Largest facet edge [m] (0: coarsest exact mesh, 32 segments for curves)");
   target->add_option("--out", target_out, "Output file: .glb, .gltf, .obj or .stl")->required();
+  emu::SceneCommands scene_tools;  // scene gen | info | preview (emulator/scene_tool.hpp)
+  emu::add_scene_commands(*scene_cmd, scene_tools);
 
   // rcs / profile: options are kept as text and parsed by the tool, so errors name the option.
   struct SweepText {
@@ -415,12 +460,14 @@ int main(int argc, char** argv) {
   try {
     if (run->parsed()) {
       return run_command(scenario_file, frames, out, realtime, print_scenario, quiet, rt_priority,
-                         lock_memory, cpu);
+                         lock_memory, cpu, bus_args);
     }
     if (replay->parsed())
       return replay_command(replay_log, replay_scenario, replay_frames, replay_out, replay_quiet);
     if (target->parsed())
       return target_command(target_kind, spec, target_out);
+    if (const auto scene_status = emu::run_scene_command(scene_tools))
+      return *scene_status;
     if (rcs->parsed()) {
       rcs_opt.freqs_hz = frequencies(rcs_text);
       rcs_opt.theta_deg = emu::parse_sweep(rcs_text.theta, "--theta-deg");

@@ -23,7 +23,7 @@ double from_db(double db) {
 // the ENU origin, runway to the north), a forward-looking 94 GHz radar, 20 Hz frames.
 constexpr std::string_view kDefaultScenario =
     R"(# radar-emu default scenario (embedded). Units are in the key names.
-name = "default approach, 94 GHz forward-looking radar over the default airport scene"
+name = "default approach, 94 GHz forward-looking radar over the generated airport"
 
 [run]
 frames = 200                # bounded run (10 s at 20 Hz)
@@ -33,7 +33,9 @@ state_timeout_s = 0.5       # older ownship data marks the output invalid
 stale_output = "flag"       # while stale: "flag" (empty list, OWNSHIP_INVALID) or "silent"
 
 [scene]
-builtin = "default"         # or: file = "scene.glb"
+builtin = "airport"         # "airport" (generated, seed below), "default" (runway only),
+                            # "terrain" (the seed paper's 5 x 7 km database), or file = "x.glb"
+seed = 1                    # generator seed of the built-in database
 
 [ownship]
 # Straight flight in the scene's East-North-Up frame: 4 km short of the threshold, on a
@@ -46,6 +48,23 @@ heading_deg = 0.0
 ins_node_id = 1
 attitude_rate_hz = 80.0     # CANaerospace v1.7 baseline schedule
 navigation_rate_hz = 10.0
+
+[input]
+# CANaerospace input (docs/icd/canaerospace_input.md): accept frames from this node-ID only
+# (-1: any node), and the identifier of each field (defaults: CANaerospace v1.7 appendix A).
+node_id = -1
+pitch_id = 311
+roll_id = 312
+true_heading_id = 1133      # or 321 (heading angle), 1069 (magnetic heading): another heading!
+latitude_id = 1036          # or 1049 (INS latitude)
+longitude_id = 1037         # or 1050 (INS longitude)
+height_id = 1038            # or 1051 (INS height)
+vel_east_id = 1130
+vel_north_id = 1131
+vel_up_id = 1132
+
+[output]
+can_fd = false              # detection lists as packed CAN FD frames (0x70B/0x70C) instead of classic
 
 [antenna]
 depression_deg = 5.0        # boresight below the body x axis (3 deg below the horizon here)
@@ -78,7 +97,7 @@ doppler_window = "hann"
 max_bounces = 3
 terrain_ray_spacing_deg = 0.0573   # 1 mrad
 target_ray_spacing_m = 0.1
-max_rays_per_target = 200000
+max_rays_per_target = 20000 # bundles of larger targets (the parked transports) coarsen (counted)
 
 [detector]
 cfar = "ca"                 # ca | os
@@ -92,7 +111,24 @@ max_detections = 64
 noise_seed = 20261123       # receiver noise and clutter speckle; fixed for reproducible runs
 
 [faults]
+# Software-bus fault injection (sim_bus/fault_injector.hpp), all off by default. Seeded: a run
+# is reproducible from its seed, and bus_in.log holds what the radar received after the faults.
 malformed_every_n_frames = 0  # >0: a faulty node sends a malformed CANaerospace frame this often
+seed = 20261123               # fault generator seed
+drop_probability = 0.0        # radar's receiving side: frames lost
+delay_s = 0.0                 # added latency ...
+jitter_s = 0.0                # ... +- uniform jitter (<= delay_s)
+corrupt_probability = 0.0     # frames with 1..corrupt_max_bits bits flipped
+corrupt_max_bits = 1
+reorder_probability = 0.0     # a frame swaps with the next one
+duplicate_probability = 0.0   # a frame is received twice
+stale_mode = "none"           # INS sender: "none", "silent", "frozen", "frozen_value" ...
+stale_start_s = 0.0           # ... from this scenario time ...
+stale_end_s = 0.0             # ... to this one
+babble_rate_hz = 0.0          # >0: a node floods the bus with babble_id at this rate
+babble_id = 0
+babble_start_s = 0.0
+babble_end_s = 0.0            # 0: until the end
 )";
 
 class TableReader {
@@ -234,8 +270,8 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   }
   const TableReader top(root, "", origin, {"name"});
   for (const auto& [key, value] : root) {
-    static const std::set<std::string> kTables{"run",   "scene",    "ownship", "antenna",
-                                               "radar", "detector", "faults"};
+    static const std::set<std::string> kTables{"run",     "scene", "ownship",  "input", "output",
+                                               "antenna", "radar", "detector", "faults"};
     if (value.is_table() && !kTables.contains(std::string(key.str()))) {
       top.fail(key.str(), "unknown table");
     }
@@ -256,14 +292,19 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     run.fail("stale_output", "expected \"flag\" or \"silent\", got \"" + stale_output + "\"");
   s.stale_output_silent = stale_output == "silent";
 
-  const TableReader scene(root, "scene", origin, {"builtin", "file"});
+  const TableReader scene(root, "scene", origin, {"builtin", "file", "seed"});
   scene.string("builtin", s.scene_builtin);
+  std::int64_t scene_seed = static_cast<std::int64_t>(s.scene_seed & 0x7fffffffffffffffull);
+  scene.integer("seed", scene_seed, 0, std::numeric_limits<std::int64_t>::max());
+  s.scene_seed = static_cast<std::uint64_t>(scene_seed);
   std::string file;
   scene.string("file", file);
   if (!file.empty())
     s.scene_file = file;
-  if (s.scene_file.empty() && s.scene_builtin != "default") {
-    scene.fail("builtin", "unknown built-in scene '" + s.scene_builtin + "' (known: default)");
+  if (s.scene_file.empty() && s.scene_builtin != "default" && s.scene_builtin != "airport" &&
+      s.scene_builtin != "terrain") {
+    scene.fail("builtin", "unknown built-in scene '" + s.scene_builtin +
+                              "' (known: airport, default, terrain)");
   }
 
   const TableReader own(root, "ownship", origin,
@@ -392,8 +433,81 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   s.sensor.noise_seed = static_cast<std::uint64_t>(seed);
   det.boolean("thermal_noise", s.sensor.thermal_noise);
 
-  const TableReader faults(root, "faults", origin, {"malformed_every_n_frames"});
+  {
+    namespace canas = io::canas;
+    std::set<std::string> keys{"node_id"};
+    for (std::size_t k = 0; k < canas::kFieldCount; ++k)
+      keys.insert(std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id");
+    const TableReader in(root, "input", origin, keys);
+    std::int64_t node = s.input.node_id ? *s.input.node_id : -1;
+    in.integer("node_id", node, -1, 255);
+    s.input.node_id = node < 0 ? std::nullopt : std::optional<std::uint8_t>(node);
+    for (std::size_t k = 0; k < canas::kFieldCount; ++k) {
+      const std::string key = std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id";
+      in.integer(key, s.input.fields[k].can_id, 0, 2047);
+    }
+    try {
+      canas::validate(s.input);
+    } catch (const std::invalid_argument& e) {
+      in.fail("", e.what());
+    }
+    const TableReader out(root, "output", origin, {"can_fd"});
+    out.boolean("can_fd", s.can_fd);
+  }
+
+  const TableReader faults(
+      root, "faults", origin,
+      {"malformed_every_n_frames", "seed", "drop_probability", "delay_s", "jitter_s",
+       "corrupt_probability", "corrupt_max_bits", "reorder_probability", "duplicate_probability",
+       "stale_mode", "stale_start_s", "stale_end_s", "babble_rate_hz", "babble_id",
+       "babble_start_s", "babble_end_s"});
   faults.integer("malformed_every_n_frames", s.malformed_every_n_frames, 0, 1'000'000'000);
+  sim_bus::FaultConfig& lf = s.link_faults;
+  std::int64_t fault_seed = static_cast<std::int64_t>(lf.seed & 0x7fffffffffffffffull);
+  faults.integer("seed", fault_seed, 0, std::numeric_limits<std::int64_t>::max());
+  lf.seed = static_cast<std::uint64_t>(fault_seed);
+  faults.number("drop_probability", lf.drop_probability, 0.0, 1.0);
+  faults.number("delay_s", lf.delay_s, 0.0, 10.0);
+  faults.number("jitter_s", lf.jitter_s, 0.0, 10.0);
+  if (lf.jitter_s > lf.delay_s)
+    faults.fail("jitter_s", "must not exceed delay_s (a frame cannot arrive before it is sent)");
+  faults.number("corrupt_probability", lf.corrupt_probability, 0.0, 1.0);
+  faults.integer("corrupt_max_bits", lf.corrupt_max_bits, 1, sim_bus::kMaxCorruptBits);
+  faults.number("reorder_probability", lf.reorder_probability, 0.0, 1.0);
+  faults.number("duplicate_probability", lf.duplicate_probability, 0.0, 1.0);
+  std::string stale_mode = !s.stale_sender                               ? "none"
+                           : s.stale.mode == sim_bus::StaleMode::kSilent ? "silent"
+                           : s.stale.mode == sim_bus::StaleMode::kFrozen ? "frozen"
+                                                                         : "frozen_value";
+  faults.string("stale_mode", stale_mode);
+  if (stale_mode == "none") {
+    s.stale_sender = false;
+  } else if (stale_mode == "silent" || stale_mode == "frozen" || stale_mode == "frozen_value") {
+    s.stale_sender = true;
+    s.stale.mode = stale_mode == "silent"   ? sim_bus::StaleMode::kSilent
+                   : stale_mode == "frozen" ? sim_bus::StaleMode::kFrozen
+                                            : sim_bus::StaleMode::kFrozenValue;
+  } else {
+    faults.fail("stale_mode",
+                "expected \"none\", \"silent\", \"frozen\" or \"frozen_value\", "
+                "got \"" +
+                    stale_mode + "\"");
+  }
+  faults.number("stale_start_s", s.stale.start_s, 0.0, 1e9);
+  faults.number("stale_end_s", s.stale.end_s, 0.0, 1e9);
+  if (s.stale_sender && s.stale.end_s < s.stale.start_s)
+    faults.fail("stale_end_s", "must not be before stale_start_s");
+  double babble_rate_hz = s.babbling_node ? s.babble.rate_hz : 0.0;
+  faults.number("babble_rate_hz", babble_rate_hz, 0.0, 1e6);
+  s.babbling_node = babble_rate_hz > 0.0;
+  if (s.babbling_node)
+    s.babble.rate_hz = babble_rate_hz;
+  faults.integer("babble_id", s.babble.id, 0, 0x7FF);
+  faults.number("babble_start_s", s.babble.start_s, 0.0, 1e9);
+  double babble_end_s = std::isfinite(s.babble.end_s) ? s.babble.end_s : 0.0;
+  faults.number("babble_end_s", babble_end_s, 0.0, 1e9);
+  if (babble_end_s > 0.0)
+    s.babble.end_s = babble_end_s;
 }
 
 }  // namespace

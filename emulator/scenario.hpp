@@ -9,8 +9,10 @@
 #include <string>
 #include <string_view>
 
+#include "io/canaerospace.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
+#include "sim_bus/fault_injector.hpp"
 
 namespace radar_emu::emulator {
 
@@ -25,7 +27,11 @@ struct Scenario {
   /// (an empty list whose header has OWNSHIP_INVALID set) or "silent" (no list at all).
   bool stale_output_silent = false;
   // [scene]
-  std::string scene_builtin = "default";  ///< used when scene_file is empty
+  /// Built-in database when scene_file is empty: "airport" (scene/airport_gen.hpp, the
+  /// default), "default" (the minimal runway scene of scene/default_scene.hpp) or "terrain"
+  /// (the seed paper's 5 x 7 km database, scene/terrain_gen.hpp; its own anchor).
+  std::string scene_builtin = "airport";
+  std::uint64_t scene_seed = 1;  ///< generator seed of the built-in database
   std::filesystem::path scene_file;
   // [ownship]: constant-velocity straight flight in the scene's ENU frame
   glm::dvec3 ownship_start_enu_m{0.0, -4000.0, 230.0};
@@ -34,6 +40,8 @@ struct Scenario {
   double ownship_roll_rad = 0.0;
   double ownship_heading_rad = 0.0;
   std::uint8_t ins_node_id = 1;
+  // [input]: how the radar reads CANaerospace (identifier per field, node-ID filter)
+  io::canas::DecoderConfig input{};
   double attitude_rate_hz = 80.0;
   double navigation_rate_hz = 10.0;
   // [antenna]
@@ -50,8 +58,15 @@ struct Scenario {
   double swath_start_m = -1.0;  ///< pulsed: first range bin; < 0: the blind range c T / 2
   radar::SbrConfig sbr{};
   radar::SensorConfig sensor{};  ///< derived from the tables above once the file is read
-  // [faults]
+  // [output]
+  bool can_fd = false;  ///< detection lists as packed CAN FD frames (docs/icd/detections.md)
+  // [faults] (sim_bus/fault_injector.hpp; seeded, so a run is reproducible from its seed)
   std::uint64_t malformed_every_n_frames = 0;  ///< 0 = no malformed-frame injection
+  sim_bus::FaultConfig link_faults{};          ///< on the radar's receiving side of the bus
+  bool stale_sender = false;                   ///< the INS goes stale in stale.start_s..end_s
+  sim_bus::StaleConfig stale{};
+  bool babbling_node = false;  ///< a node floods the bus (babble.rate_hz > 0)
+  sim_bus::BabbleConfig babble{};
 };
 
 /// The embedded default scenario, as TOML text (printed by `radar-emu run --print-scenario`).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -224,23 +225,30 @@ SceneDescription generate_airport(const AirportSpec& spec) {
 
   if (spec.approach_lights) {
     // Category I approach lights (ICAO Annex 14 Vol. I, 5.3.4): barrettes every 30 m on the
-    // extended centreline to 900 m, the 30 m crossbar at 300 m.
-    ObjectDesc lights = object("approach_lights");
+    // extended centreline to 900 m, the 30 m crossbar at 300 m. One object per light station
+    // ("approach_light_030" .. "_900"): the SBR tracer gives each metallic object a ray bundle
+    // over its angular extent, and one object spanning 900 m along the line of sight would be
+    // a bundle of mostly empty rays.
     constexpr double kMastTop_m = 1.8, kBarTop_m = 2.1, kHalf_m = 0.15;
-    auto mast = [&](double x, double y) {
-      add_box_d(lights.mesh, {x - kHalf_m, y - kHalf_m, 0.0},
-                {x + kHalf_m, y + kHalf_m, kMastTop_m}, kMetal);
-    };
     for (int k = 1; k <= 30; ++k) {
+      char name[32];
+      std::snprintf(name, sizeof name, "approach_light_%03d", 30 * k);
+      ObjectDesc station = object(name);
+      auto mast = [&](double x, double y) {
+        add_box_d(station.mesh, {x - kHalf_m, y - kHalf_m, 0.0},
+                  {x + kHalf_m, y + kHalf_m, kMastTop_m}, kMetal);
+      };
       const double y = -30.0 * k;
       mast(0.0, y);
       const double half_bar = k == 10 ? 15.0 : 2.0;  // the crossbar includes the barrette
-      add_box_d(lights.mesh, {-half_bar, y - kHalf_m, kMastTop_m},
+      add_box_d(station.mesh, {-half_bar, y - kHalf_m, kMastTop_m},
                 {half_bar, y + kHalf_m, kBarTop_m}, kMetal);
+      if (k == 10) {
+        for (double x : {-14.0, -7.0, 7.0, 14.0})
+          mast(x, y);
+      }
+      d.objects.push_back(std::move(station));
     }
-    for (double x : {-14.0, -7.0, 7.0, 14.0})
-      mast(x, -300.0);
-    d.objects.push_back(std::move(lights));
   }
 
   // Terminal east of the main apron, with a roof slab, and the control tower behind it.

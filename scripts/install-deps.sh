@@ -11,7 +11,7 @@ PACKAGES=(
   libusb-1.0-0-dev libsocketcan-dev libmodbus-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   # independent peers used by the tests (buses.md)
-  python3 python3-can python3-canmatrix python3-pymodbus mbpoll
+  python3 python3-can python3-canmatrix python3-pymodbus python3-serial-asyncio mbpoll socat
 )
 
 missing=()

@@ -75,6 +75,20 @@ expect_error "beyond 1000" sigma0 --eps-r 4,0.1 --rms-height-m 1 --corr-length-m
 expect_error "ITU-R P.676: frequency 0.5" atten --freq-hz 0.5e9 --out "$dir/a.csv"
 expect_error "rain rate must be in" atten --freq-hz 35e9 --rain-mmh -3 --out "$dir/a.csv"
 expect_error "--veg-depth-m must be" atten --freq-hz 10e9 --veg-depth-m -2 --out "$dir/a.csv"
+# scene gen / info / preview: one-line errors naming the kind, option or file.
+expect_error "unknown scene kind 'city'" scene gen city --out "$dir/c.glb"
+expect_error "--seed: 'abc' is not a whole number" scene gen terrain --seed abc --out "$dir/t.glb"
+expect_error "--seed: '-3' is not a whole number" scene gen terrain --seed -3 --out "$dir/t.glb"
+expect_error "--out: '$dir/t.obj' is not a .glb or .gltf file" scene gen terrain --out "$dir/t.obj"
+expect_error "does not exist" scene gen terrain --out "$dir/no/such/dir/t.glb"
+expect_error "nope.glb" scene info "$dir/nope.glb"
+expect_error "zero.toml" scene info "$dir/zero.toml"
+expect_error "nope.glb" scene preview "$dir/nope.glb" --out "$dir/v.png"
+expect_error "--camera: '1,2' is not three numbers" scene preview "$dir/nope.glb" --camera 1,2 --out "$dir/v.png"
+expect_error "--width / --height" scene preview "$dir/nope.glb" --width 0 --out "$dir/v.png"
+for sub in "scene gen" "scene info" "scene preview"; do
+  if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
+done
 for sub in "" run scene "scene target" rcs profile sigma0 atten; do
   if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
 done

@@ -42,8 +42,51 @@ TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
   EXPECT_NEAR(s.sensor.processing.waveform.swath_start_m, 1500.0, 1e-9);
   EXPECT_EQ(s.sensor.processing.waveform.range_bins, 1502);  // ceil(4500 / 2.9979) = ceil(1501.04)
   EXPECT_DOUBLE_EQ(s.ownship_start_enu_m.y, -4000.0);
-  EXPECT_EQ(s.scene_builtin, "default");
+  EXPECT_EQ(s.scene_builtin, "airport");  // issue 7: the closed loop flies over the airport
+  EXPECT_EQ(s.scene_seed, 1u);
   EXPECT_TRUE(s.scene_file.empty());
+  // Issue 6: CANaerospace v1.7 appendix A identifiers, any node, classic lists, no faults.
+  EXPECT_EQ(s.input[radar_emu::io::canas::Field::kLatitude].can_id, 1036);
+  EXPECT_EQ(s.input[radar_emu::io::canas::Field::kTrueHeading].can_id, 1133);
+  EXPECT_FALSE(s.input.node_id.has_value());
+  EXPECT_FALSE(s.can_fd);
+  EXPECT_FALSE(s.stale_output_silent);
+  EXPECT_TRUE(radar_emu::sim_bus::no_faults(s.link_faults));
+  EXPECT_FALSE(s.stale_sender);
+  EXPECT_FALSE(s.babbling_node);
+}
+
+TEST(Scenario, BusInputOutputAndFaultKeys) {
+  const emu::Scenario s = emu::parse_scenario(
+      "[run]\nstale_output = \"silent\"\n[input]\nnode_id = 7\nlatitude_id = 1049\n"
+      "[output]\ncan_fd = true\n[faults]\ndrop_probability = 0.1\ndelay_s = 0.02\n"
+      "jitter_s = 0.01\nstale_mode = \"frozen\"\nstale_start_s = 2\nstale_end_s = 3\n"
+      "babble_rate_hz = 500\nbabble_id = 5\n[scene]\nbuiltin = \"terrain\"\nseed = 9\n",
+      "bus.toml");
+  EXPECT_TRUE(s.stale_output_silent);
+  EXPECT_EQ(s.input.node_id, std::optional<std::uint8_t>(7));
+  EXPECT_EQ(s.input[radar_emu::io::canas::Field::kLatitude].can_id, 1049);
+  EXPECT_TRUE(s.can_fd);
+  EXPECT_DOUBLE_EQ(s.link_faults.drop_probability, 0.1);
+  EXPECT_DOUBLE_EQ(s.link_faults.jitter_s, 0.01);
+  EXPECT_TRUE(s.stale_sender);
+  EXPECT_EQ(s.stale.mode, radar_emu::sim_bus::StaleMode::kFrozen);
+  EXPECT_DOUBLE_EQ(s.stale.end_s, 3.0);
+  EXPECT_TRUE(s.babbling_node);
+  EXPECT_EQ(s.babble.id, 5u);
+  EXPECT_EQ(s.scene_builtin, "terrain");
+  EXPECT_EQ(s.scene_seed, 9u);
+  // Errors name the table, the key and what was expected.
+  EXPECT_NE(error_of("[input]\nlatitude_id = 311\n").find("[input]"), std::string::npos);
+  EXPECT_NE(error_of("[input]\nnode_id = 300\n").find("[input] node_id"), std::string::npos);
+  EXPECT_NE(error_of("[faults]\ndelay_s = 0.01\njitter_s = 0.02\n").find("[faults] jitter_s"),
+            std::string::npos);
+  EXPECT_NE(error_of("[faults]\nstale_mode = \"sleepy\"\n").find("[faults] stale_mode"),
+            std::string::npos);
+  EXPECT_NE(error_of("[run]\nstale_output = \"mute\"\n").find("[run] stale_output"),
+            std::string::npos);
+  EXPECT_NE(error_of("[scene]\nbuiltin = \"moon\"\n").find("known: airport, default, terrain"),
+            std::string::npos);
 }
 
 TEST(Scenario, UserFileOverridesOnlyWhatItNames) {

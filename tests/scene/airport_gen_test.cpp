@@ -147,10 +147,12 @@ TEST(Airport, MaterialsObjectsAndTriangleCounts) {
             << metal_objects << " metal objects\n";
   EXPECT_GE(total, 5000u);
   EXPECT_LE(total, 60000u);
-  EXPECT_EQ(metal_objects, 11u);  // 4 closed-loop, approach lights, 3 aircraft, truck, jeep, heli
-  for (const char* name : {"ground", "runway", "taxiways", "aprons", "approach_lights", "terminal",
-                           "hangar_1", "hangar_2", "hangar_3", "transport_1", "transport_2",
-                           "transport_3", "service_truck", "service_jeep", "helicopter"}) {
+  // 4 closed-loop objects, 30 approach-light stations, 3 aircraft, truck, jeep, helicopter.
+  EXPECT_EQ(metal_objects, 40u);
+  for (const char* name :
+       {"ground", "runway", "taxiways", "aprons", "approach_light_030", "terminal", "hangar_1",
+        "hangar_2", "hangar_3", "transport_1", "transport_2", "transport_3", "service_truck",
+        "service_jeep", "helicopter"}) {
     EXPECT_NE(find(d, name), nullptr) << name;
   }
   const sc::Scene s(d);  // builds
@@ -238,11 +240,20 @@ TEST(Airport, KeepsTheDefaultScenesClosedLoopObjectsUnchanged) {
 
 TEST(Airport, ApproachLightsStandOnTheExtendedCentreline) {
   const sc::SceneDescription d = sc::generate_airport({});
-  const sc::ObjectDesc* lights = find(d, "approach_lights");
-  ASSERT_NE(lights, nullptr);
-  // Masts: the boxes standing on the ground (12 triangles each, in build order). Group the
-  // vertices at z = 0 by box.
-  const sc::Mesh& m = lights->mesh;
+  // Every light station is an object "approach_light_DDD"; together they hold the masts: the
+  // boxes standing on the ground (12 triangles each, in build order).
+  sc::Mesh m;
+  int stations = 0;
+  for (const auto& o : d.objects) {
+    if (o.name.rfind("approach_light_", 0) != 0)
+      continue;
+    ++stations;
+    const auto base = static_cast<std::uint32_t>(m.positions_m.size());
+    m.positions_m.insert(m.positions_m.end(), o.mesh.positions_m.begin(), o.mesh.positions_m.end());
+    for (const auto& t : o.mesh.triangles)
+      m.triangles.push_back(t + glm::uvec3(base));
+  }
+  EXPECT_EQ(stations, 30);
   ASSERT_EQ(m.triangles.size() % 12, 0u);
   std::map<int, int> centreline;  // distance south of the threshold [m] -> masts at x = 0
   int crossbar_masts = 0;
@@ -275,8 +286,10 @@ TEST(Airport, ApproachLightsStandOnTheExtendedCentreline) {
   for (const auto& [dist, n] : centreline)
     EXPECT_EQ(n, 1) << dist;
   EXPECT_EQ(crossbar_masts, 4);
+  sc::ObjectDesc all_lights;  // the stations together (identity placement, as generated)
+  all_lights.mesh = m;
   glm::dvec3 lo, hi;
-  world_bounds(*lights, lo, hi);
+  world_bounds(all_lights, lo, hi);
   EXPECT_NEAR(lo.x, -15.0, 1e-5);  // the 30 m crossbar
   EXPECT_NEAR(hi.x, 15.0, 1e-5);
   EXPECT_NEAR(lo.y, -900.15, 1e-3);
@@ -320,7 +333,7 @@ TEST(Airport, SameSeedSameSceneOtherSeedOtherScene) {
   spec.approach_lights = false;
   const sc::SceneDescription bare = sc::generate_airport(spec);
   EXPECT_EQ(find(bare, "transport_1"), nullptr);
-  EXPECT_EQ(find(bare, "approach_lights"), nullptr);
+  EXPECT_EQ(find(bare, "approach_light_030"), nullptr);
   EXPECT_NE(find(bare, "moving_vehicle"), nullptr);
 }
 
