@@ -86,6 +86,25 @@ bool is_angle(Field f) noexcept {
 
 }  // namespace
 
+FieldCheck si_from_bus_units(Field field, double value, double& si) noexcept {
+  if (!std::isfinite(value))
+    return FieldCheck::kNotANumber;
+  const Limits lim = limits_of(field);
+  if (value < lim.lo || value > lim.hi)
+    return FieldCheck::kOutOfRange;
+  double v = is_angle(field) ? value * kRadPerDeg : value;
+  if (field == Field::kTrueHeading) {
+    v = std::fmod(v, 2.0 * std::numbers::pi);
+    if (v < 0.0)
+      v += 2.0 * std::numbers::pi;
+    // A tiny negative angle rounds to exactly 2 pi when 2 pi is added: keep [0, 2 pi).
+    if (v >= 2.0 * std::numbers::pi)
+      v = 0.0;
+  }
+  si = v;
+  return FieldCheck::kOk;
+}
+
 std::uint16_t can_id_of(Field field) noexcept {
   switch (field) {
     case Field::kPitch:
@@ -311,23 +330,16 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
     ++counters_.unpaired_double;
   }
 
-  if (!std::isfinite(value)) {
-    ++counters_.not_a_number;
-    return DecodeStatus::kNotANumber;
-  }
-  const Limits lim = limits_of(field);
-  if (value < lim.lo || value > lim.hi) {
-    ++counters_.out_of_range;
-    return DecodeStatus::kOutOfRange;
-  }
-  double si = is_angle(field) ? value * kRadPerDeg : value;
-  if (field == Field::kTrueHeading) {
-    si = std::fmod(si, 2.0 * std::numbers::pi);
-    if (si < 0.0)
-      si += 2.0 * std::numbers::pi;
-    // A tiny negative angle rounds to exactly 2 pi when 2 pi is added: keep [0, 2 pi).
-    if (si >= 2.0 * std::numbers::pi)
-      si = 0.0;
+  double si = 0.0;
+  switch (si_from_bus_units(field, value, si)) {
+    case FieldCheck::kNotANumber:
+      ++counters_.not_a_number;
+      return DecodeStatus::kNotANumber;
+    case FieldCheck::kOutOfRange:
+      ++counters_.out_of_range;
+      return DecodeStatus::kOutOfRange;
+    case FieldCheck::kOk:
+      break;
   }
   FieldSample& sample = state_.fields[static_cast<std::size_t>(field)];
   sample.value = si;

@@ -80,6 +80,15 @@ enum class Field : std::uint8_t {
 };
 inline constexpr std::size_t kFieldCount = static_cast<std::size_t>(Field::kCount);
 
+/// Outcome of checking one field value against its physical limits.
+enum class FieldCheck : std::uint8_t { kOk = 0, kNotANumber, kOutOfRange };
+
+/// A field value in bus units (deg, m, m/s) to its stored SI value (rad, m, m/s; true heading
+/// wrapped to [0, 2 pi)), after the physical limits of docs/icd/canaerospace_input.md. Every
+/// ownship input (CANaerospace, the Modbus navigation map) goes through it, so all accept the
+/// same states. `si` is written only for kOk. Real-time safe.
+[[nodiscard]] FieldCheck si_from_bus_units(Field field, double value, double& si) noexcept;
+
 /// CAN identifier carrying `field` in the default configuration (the id:: constants).
 [[nodiscard]] std::uint16_t can_id_of(Field field) noexcept;
 

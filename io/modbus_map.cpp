@@ -9,7 +9,6 @@ namespace radar_emu::io::modbus {
 
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // Rounds half away from zero and range-checks against [lo, hi] (as doubles, exactly
@@ -230,35 +229,6 @@ namespace {
 
 using canas::Field;
 
-// Physical validity limits in map units (deg, m, m/s): the same as the CANaerospace input's
-// (docs/icd/canaerospace_input.md), so both inputs accept the same states.
-struct Limits {
-  double lo, hi;
-};
-Limits limits_of(Field f) noexcept {
-  switch (f) {
-    case Field::kPitch:
-      return {-90.0, 90.0};
-    case Field::kRoll:
-      return {-180.0, 180.0};
-    case Field::kTrueHeading:
-      return {-360.0, 360.0};
-    case Field::kLatitude:
-      return {-90.0, 90.0};
-    case Field::kLongitude:
-      return {-180.0, 180.0};
-    case Field::kHeight:
-      return {-1000.0, 60000.0};
-    case Field::kVelEast:
-    case Field::kVelNorth:
-    case Field::kVelUp:
-      return {-1500.0, 1500.0};
-    case Field::kCount:
-      break;
-  }
-  return {0.0, 0.0};
-}
-
 struct FieldSlot {
   Field field;
   std::size_t NavLayout::*offset;
@@ -333,22 +303,13 @@ NavDecodeStatus NavDecoder::decode(std::span<const std::uint16_t> regs,
     } else {
       value = from_scaled_i32(decode_i32({regs[at], regs[at + 1]}, config_.order), slot.scale);
     }
-    if (!std::isfinite(value)) {
-      ++counters_.not_a_number;
+    // The CANaerospace input's limits and conversion: both inputs accept the same states.
+    double si = 0.0;
+    const canas::FieldCheck check = canas::si_from_bus_units(slot.field, value, si);
+    if (check != canas::FieldCheck::kOk) {
+      ++(check == canas::FieldCheck::kNotANumber ? counters_.not_a_number : counters_.out_of_range);
       ++skipped;
       continue;
-    }
-    const Limits lim = limits_of(slot.field);
-    if (value < lim.lo || value > lim.hi) {
-      ++counters_.out_of_range;
-      ++skipped;
-      continue;
-    }
-    double si = slot.angle ? value * kRadPerDeg : value;
-    if (slot.field == Field::kTrueHeading) {
-      si = std::fmod(si, 2.0 * std::numbers::pi);
-      if (si < 0.0)
-        si += 2.0 * std::numbers::pi;
     }
     canas::FieldSample& sample = state_.fields[static_cast<std::size_t>(slot.field)];
     sample.value = si;
