@@ -257,11 +257,11 @@ RegisterStatus ModbusClient::classify_failure(int error) noexcept {
   return RegisterStatus::kDisconnected;
 }
 
-RegisterStatus ModbusClient::read_holding(std::uint16_t address,
-                                          std::span<std::uint16_t> out) noexcept {
+template <class Call>
+RegisterStatus ModbusClient::transact(std::uint16_t address, std::size_t count, std::size_t max,
+                                      Call call) noexcept {
   counters_.requests.fetch_add(1, std::memory_order_relaxed);
-  if (out.empty() || out.size() > kModbusMaxReadRegisters ||
-      static_cast<std::size_t>(address) + out.size() > 65536) {
+  if (count == 0 || count > max || static_cast<std::size_t>(address) + count > 65536) {
     counters_.errors.fetch_add(1, std::memory_order_relaxed);
     return RegisterStatus::kError;
   }
@@ -269,8 +269,8 @@ RegisterStatus ModbusClient::read_holding(std::uint16_t address,
     counters_.disconnected.fetch_add(1, std::memory_order_relaxed);
     return RegisterStatus::kDisconnected;
   }
-  const int n = static_cast<int>(out.size());
-  const int rc = modbus_read_registers(impl_->ctx, address, n, out.data());
+  const int n = static_cast<int>(count);
+  const int rc = call(n);
   if (rc == n) {
     consecutive_timeouts_ = 0;
     counters_.ok.fetch_add(1, std::memory_order_relaxed);
@@ -283,30 +283,17 @@ RegisterStatus ModbusClient::read_holding(std::uint16_t address,
   return classify_failure(errno);
 }
 
+RegisterStatus ModbusClient::read_holding(std::uint16_t address,
+                                          std::span<std::uint16_t> out) noexcept {
+  return transact(address, out.size(), kModbusMaxReadRegisters,
+                  [&](int n) { return modbus_read_registers(impl_->ctx, address, n, out.data()); });
+}
+
 RegisterStatus ModbusClient::write_holding(std::uint16_t address,
                                            std::span<const std::uint16_t> values) noexcept {
-  counters_.requests.fetch_add(1, std::memory_order_relaxed);
-  if (values.empty() || values.size() > kModbusMaxWriteRegisters ||
-      static_cast<std::size_t>(address) + values.size() > 65536) {
-    counters_.errors.fetch_add(1, std::memory_order_relaxed);
-    return RegisterStatus::kError;
-  }
-  if (!ensure_connected()) {
-    counters_.disconnected.fetch_add(1, std::memory_order_relaxed);
-    return RegisterStatus::kDisconnected;
-  }
-  const int n = static_cast<int>(values.size());
-  const int rc = modbus_write_registers(impl_->ctx, address, n, values.data());
-  if (rc == n) {
-    consecutive_timeouts_ = 0;
-    counters_.ok.fetch_add(1, std::memory_order_relaxed);
-    return RegisterStatus::kOk;
-  }
-  if (rc >= 0) {
-    counters_.errors.fetch_add(1, std::memory_order_relaxed);
-    return RegisterStatus::kError;
-  }
-  return classify_failure(errno);
+  return transact(address, values.size(), kModbusMaxWriteRegisters, [&](int n) {
+    return modbus_write_registers(impl_->ctx, address, n, values.data());
+  });
 }
 
 ModbusClientCounters ModbusClient::counters() const noexcept {

@@ -100,6 +100,11 @@ class ModbusClient final : public RegisterBank {
  private:
   struct Impl;
   bool ensure_connected() noexcept;
+  // One request of `count` registers (1..max) at `address`: bounds, connection, the libmodbus
+  // call (returns registers transferred or -1 with errno), counters and failure classification.
+  template <class Call>
+  RegisterStatus transact(std::uint16_t address, std::size_t count, std::size_t max,
+                          Call call) noexcept;
   void drop_link() noexcept;
   RegisterStatus classify_failure(int error) noexcept;
 
