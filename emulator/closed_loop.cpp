@@ -164,8 +164,10 @@ struct ClosedLoop::Impl {
   void setup_backends(const Scenario& s, const RunOptions& o) {
     can_spec = parse_can_spec(o.can);
     hardware_can = can_spec.kind != CanSpec::Kind::kSim;
-    if (hardware_can && can_spec.fd != s.can_fd && !s.can_fd)
-      scenario.can_fd = true;  // ",fd" on the command line sends FD lists too
+    // ",fd" on the command line sends FD lists too (the frame buffers, sized for classic
+    // lists, hold FD lists: those take fewer frames).
+    if (can_spec.fd)
+      scenario.can_fd = true;
     nav_modbus_sim = o.nav_modbus == "sim";
     nav_external = !o.nav_modbus.empty() && !nav_modbus_sim;
     if ((hardware_can || nav_external) && !o.realtime) {
