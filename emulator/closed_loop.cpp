@@ -735,6 +735,7 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                     {"unpaired_double", c.unpaired_double},
                     {"extended_id", c.extended_id}}},
                   {"other_node", c.other_node},
+                  {"repeated_message_code", c.repeated_message_code},
                   {"message_code_gaps", c.message_code_gaps}};
   {
     // Validity: each field's worst age at a frame's time and how many frames found it stale.

@@ -288,6 +288,13 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
   // Message-code tracking (spec sec. 4.1.4: incremented by one per message, wraps at 255).
   IdTrack& track = track_[index];
   const std::uint8_t code = frame.data[kMessageCodeByte];
+  if (track.seen &&
+      (code == track.last_message_code ||
+       (type == DataType::kDoubleH && track.pair_seen && code == track.last_pair_high_code))) {
+    // The same message again: nothing new, and taking it would make stale data look fresh.
+    ++counters_.repeated_message_code;
+    return DecodeStatus::kRepeatedMessageCode;
+  }
   if (track.seen && code != static_cast<std::uint8_t>(track.last_message_code + 1)) {
     ++counters_.message_code_gaps;
     ++counters_.message_code_gaps_by_field[index];
@@ -303,6 +310,7 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
         ++counters_.unpaired_double;  // previous high never closed
       track.double_high_pending = true;
       track.double_high_bits = bits;
+      track.double_high_code = code;
       return DecodeStatus::kPendingDoubleLow;
     case DataType::kDoubleL: {
       if (!track.double_high_pending) {
@@ -310,6 +318,8 @@ DecodeStatus Decoder::decode(const CanFrame& frame, std::int64_t now_ns) noexcep
         return DecodeStatus::kUnpairedDouble;
       }
       track.double_high_pending = false;
+      track.last_pair_high_code = track.double_high_code;
+      track.pair_seen = true;
       const std::uint64_t all = (static_cast<std::uint64_t>(track.double_high_bits) << 32) | bits;
       value = std::bit_cast<double>(all);
       break;

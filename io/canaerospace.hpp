@@ -172,6 +172,11 @@ enum class DecodeStatus : std::uint8_t {
   kUnpairedDouble,       ///< DOUBLEL without a preceding DOUBLEH on the same identifier
   kExtendedId,           ///< CANaerospace uses 11-bit identifiers only
   kOtherNode,            ///< consumed identifier, but not from the configured node (not an error)
+  /// The identifier's message code is the same as in its last frame, or a DOUBLEH repeats the
+  /// code of the last completed pair (spec sec. 4.1.4: +1 per message): a repetition (a
+  /// duplicated frame, or a sender stuck on its last message). The value is not taken, so the
+  /// field's age keeps growing (not an error).
+  kRepeatedMessageCode,
 };
 
 /// Rejection and bookkeeping counters (reported in report.json).
@@ -190,6 +195,7 @@ struct DecoderCounters {
   /// message_code_gaps split by field (indexed by Field).
   std::array<std::uint64_t, kFieldCount> message_code_gaps_by_field{};
   std::uint64_t other_node = 0;  ///< frames of a consumed identifier from another node-ID
+  std::uint64_t repeated_message_code = 0;  ///< kRepeatedMessageCode frames (value not taken)
   [[nodiscard]] std::uint64_t rejected() const noexcept {
     return short_frame + unknown_data_type + unsupported_data_type + not_a_number + out_of_range +
            unpaired_double + extended_id;
@@ -218,6 +224,9 @@ class Decoder {
     bool seen = false;
     bool double_high_pending = false;
     std::uint32_t double_high_bits = 0;
+    std::uint8_t double_high_code = 0;     // message code of the pending DOUBLEH
+    std::uint8_t last_pair_high_code = 0;  // DOUBLEH code of the last completed pair
+    bool pair_seen = false;
   };
   static constexpr std::uint8_t kNoField = 0xFF;
   void index_identifiers() noexcept;

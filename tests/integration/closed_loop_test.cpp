@@ -267,8 +267,8 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
       detected_frames_per_object.assign(objects.size(), 0);
       std::size_t found = 0;
       for (const auto& n : names)
-        found += static_cast<std::size_t>(
-            std::count(with_reflector.begin(), with_reflector.end(), n));
+        found +=
+            static_cast<std::size_t>(std::count(with_reflector.begin(), with_reflector.end(), n));
       ASSERT_EQ(found, 4u) << "the airport keeps the four closed-loop objects";
     }
     std::vector<Window> windows;
@@ -597,16 +597,25 @@ TEST(ClosedLoopFaults, TenPercentDropWithJitterKeepsTheRateAndHoldsTheState) {
   EXPECT_GE(frames_with_every_object(r), 70u);
 }
 
-TEST(ClosedLoopFaults, SilentSenderMakesExactlyTheFramesPastTheTimeoutInvalid) {
+TEST(ClosedLoopFaults, StaleSenderMakesExactlyTheFramesPastTheTimeoutInvalid) {
   // The INS stops sending from t = 2.0 s to 3.0 s. Its last navigation frame before the window
   // is the one at 1.9 s (10 Hz), so position is older than the 0.5 s timeout for frames with
   // t > 2.4 s until the one at 3.0 s arrives: frames 2.45 .. 2.95 s (11 frames) are flagged
   // OWNSHIP_INVALID with no detections; with stale_output "silent" nothing is sent for them.
-  for (const bool silent : {false, true}) {
+  // A sender frozen on its last messages (message codes frozen too) is stale the same way: its
+  // repeated messages are not taken (docs/icd/canaerospace_input.md).
+  struct Case {
+    radar_emu::sim_bus::StaleMode mode;
+    bool silent;
+  };
+  for (const Case c : {Case{radar_emu::sim_bus::StaleMode::kSilent, false},
+                       Case{radar_emu::sim_bus::StaleMode::kSilent, true},
+                       Case{radar_emu::sim_bus::StaleMode::kFrozen, false}}) {
+    const bool silent = c.silent;
     emu::Scenario s = default_scenario();
     s.frames = 70;
     s.stale_sender = true;
-    s.stale.mode = radar_emu::sim_bus::StaleMode::kSilent;
+    s.stale.mode = c.mode;
     s.stale.start_s = 2.0;
     s.stale.end_s = 3.0;
     s.stale_output_silent = silent;
@@ -629,7 +638,12 @@ TEST(ClosedLoopFaults, SilentSenderMakesExactlyTheFramesPastTheTimeoutInvalid) {
     EXPECT_EQ(r.lists_suppressed, silent ? 11u : 0u);
     // The avionics sink saw one list per sent frame.
     EXPECT_EQ(r.sink_lists, sent_n);
-    EXPECT_GT(r.stale_sender.suppressed, 0u);
+    if (c.mode == radar_emu::sim_bus::StaleMode::kSilent) {
+      EXPECT_GT(r.stale_sender.suppressed, 0u);
+    } else {
+      EXPECT_GT(r.stale_sender.replayed, 0u);
+      EXPECT_EQ(r.decoder.repeated_message_code, r.stale_sender.replayed);
+    }
   }
 }
 

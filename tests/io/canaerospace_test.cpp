@@ -212,12 +212,39 @@ TEST(Canaerospace, DoubleHighFollowedByAnotherTypeIsUnpaired) {
 
 TEST(Canaerospace, MessageCodeGapsAreCountedAndWrapIsNot) {
   canas::Decoder d;
-  const std::uint8_t codes[] = {254, 255, 0, 1, 5, 6, 6};  // wrap ok; 1->5 gap; 6->6 gap
+  // Wrap 255 -> 0 is no gap; 1 -> 5 is one; 6 -> 6 repeats the message (spec sec. 4.1.4: +1 per
+  // message): not a gap, and its value is not taken.
+  const std::uint8_t codes[] = {254, 255, 0, 1, 5, 6, 6};
   for (std::uint8_t c : codes) {
     (void)d.decode(canas::encode_float(canas::id::kRollAngle, 1, c, 1.0f), 0);
   }
-  EXPECT_EQ(d.counters().message_code_gaps, 2u);
-  EXPECT_EQ(d.counters().accepted, 7u);
+  EXPECT_EQ(d.counters().message_code_gaps, 1u);
+  EXPECT_EQ(d.counters().repeated_message_code, 1u);
+  EXPECT_EQ(d.counters().accepted, 6u);
+}
+
+TEST(Canaerospace, RepeatedMessagesDoNotRefreshTheField) {
+  // A sender stuck on its last message (FLOAT, and a DOUBLE pair replayed whole) keeps its
+  // message codes: the field's reception time must not move, so it goes stale.
+  canas::Decoder d;
+  ASSERT_EQ(d.decode(canas::encode_float(canas::id::kPitchAngle, 1, 7, 2.0f), 100),
+            canas::DecodeStatus::kAccepted);
+  EXPECT_EQ(d.decode(canas::encode_float(canas::id::kPitchAngle, 1, 7, 2.0f), 200),
+            canas::DecodeStatus::kRepeatedMessageCode);
+  EXPECT_EQ(d.state()[canas::Field::kPitch].updated_ns, 100);
+  const auto [h, l] = canas::encode_double(canas::id::kGpsLatitude, 1, 40, 43.6);
+  ASSERT_EQ(d.decode(h, 100), canas::DecodeStatus::kPendingDoubleLow);
+  ASSERT_EQ(d.decode(l, 100), canas::DecodeStatus::kAccepted);
+  EXPECT_EQ(d.decode(h, 300), canas::DecodeStatus::kRepeatedMessageCode);
+  EXPECT_EQ(d.decode(l, 300), canas::DecodeStatus::kRepeatedMessageCode);
+  EXPECT_EQ(d.state()[canas::Field::kLatitude].updated_ns, 100);
+  // The next pair (codes 42, 43) is new.
+  const auto [h2, l2] = canas::encode_double(canas::id::kGpsLatitude, 1, 42, 43.7);
+  EXPECT_EQ(d.decode(h2, 400), canas::DecodeStatus::kPendingDoubleLow);
+  EXPECT_EQ(d.decode(l2, 400), canas::DecodeStatus::kAccepted);
+  EXPECT_EQ(d.state()[canas::Field::kLatitude].updated_ns, 400);
+  EXPECT_EQ(d.counters().repeated_message_code, 3u);
+  EXPECT_EQ(d.counters().message_code_gaps, 0u);
 }
 
 TEST(OwnshipState, AgeAndFreshness) {
@@ -417,8 +444,8 @@ TEST(CanaerospaceConfig, NodeFilterCountsOtherNodesNotErrors) {
 
 TEST(CanaerospaceConfig, MessageCodeGapsAreCountedPerField) {
   canas::Decoder d;
-  for (const std::uint8_t code :
-       std::initializer_list<std::uint8_t>{254, 255, 0, 1, 5, 6, 6})  // roll: 1 -> 5 and 6 -> 6
+  for (const std::uint8_t code : std::initializer_list<std::uint8_t>{
+           254, 255, 0, 1, 5, 6, 6})  // roll: 1 -> 5 (6 -> 6 repeats)
     (void)d.decode(canas::encode_float(canas::id::kRollAngle, 1, code, 1.0f), 0);
   for (const std::uint8_t code :
        std::initializer_list<std::uint8_t>{10, 11, 13})  // pitch: 11 -> 13
@@ -433,11 +460,12 @@ TEST(CanaerospaceConfig, MessageCodeGapsAreCountedPerField) {
   const auto gaps = [&](canas::Field f) {
     return c.message_code_gaps_by_field[static_cast<std::size_t>(f)];
   };
-  EXPECT_EQ(gaps(canas::Field::kRoll), 2u);
+  EXPECT_EQ(gaps(canas::Field::kRoll), 1u);
   EXPECT_EQ(gaps(canas::Field::kPitch), 1u);
   EXPECT_EQ(gaps(canas::Field::kLatitude), 1u);
   EXPECT_EQ(gaps(canas::Field::kHeight), 0u);
-  EXPECT_EQ(c.message_code_gaps, 4u);
+  EXPECT_EQ(c.message_code_gaps, 3u);
+  EXPECT_EQ(c.repeated_message_code, 1u);
 }
 
 TEST(CanaerospaceConfig, SetupErrorsNameTheField) {

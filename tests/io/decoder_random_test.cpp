@@ -449,13 +449,14 @@ TEST(DecoderRandom, MillionFramesLandInExactlyOneCounterAndStayInRange) {
   EXPECT_EQ(c.out_of_range, n_of(canas::DecodeStatus::kOutOfRange));
   EXPECT_EQ(c.extended_id, n_of(canas::DecodeStatus::kExtendedId));
   EXPECT_EQ(c.other_node, n_of(canas::DecodeStatus::kOtherNode));
+  EXPECT_EQ(c.repeated_message_code, n_of(canas::DecodeStatus::kRepeatedMessageCode));
   // unpaired_double also counts DOUBLEH frames abandoned later (returned as kPendingDoubleLow
   // when they came), so it is at least the kUnpairedDouble count, and pending + unpaired frames
   // are accounted for exactly by: frames - (everything else).
   EXPECT_GE(c.unpaired_double, n_of(canas::DecodeStatus::kUnpairedDouble));
-  EXPECT_EQ(c.accepted + c.ignored_id + c.other_node + c.short_frame + c.unknown_data_type +
-                c.unsupported_data_type + c.not_a_number + c.out_of_range + c.extended_id +
-                n_of(canas::DecodeStatus::kUnpairedDouble) +
+  EXPECT_EQ(c.accepted + c.ignored_id + c.other_node + c.repeated_message_code + c.short_frame +
+                c.unknown_data_type + c.unsupported_data_type + c.not_a_number + c.out_of_range +
+                c.extended_id + n_of(canas::DecodeStatus::kUnpairedDouble) +
                 n_of(canas::DecodeStatus::kPendingDoubleLow),
             frames);
   EXPECT_EQ(list_decoder.malformed(),

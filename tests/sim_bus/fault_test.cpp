@@ -509,9 +509,16 @@ TEST(StaleSender, FrozenReplaysLastValuesWithFrozenOrLiveMessageCode) {
       if (t_ms >= 1'000 && t_ms < 2'000) {
         EXPECT_DOUBLE_EQ(decoder.state()[canas::Field::kPitch].value, frozen_pitch_rad) << t;
         EXPECT_DOUBLE_EQ(decoder.state()[canas::Field::kHeight].value, frozen_height_m) << t;
-        // Reception time stamps stay live: a freshness check alone cannot see a frozen node.
-        const std::int64_t last_attitude_ns = (t_ms * kMs / 12'500'000) * 12'500'000;
-        EXPECT_EQ(decoder.state()[canas::Field::kPitch].updated_ns, kEpochNs + last_attitude_ns);
+        if (mode == sb::StaleMode::kFrozenValue) {
+          // Live message codes: the frames are taken as new and the reception time stamps stay
+          // live, so a freshness check alone cannot see this frozen node.
+          const std::int64_t last_attitude_ns = (t_ms * kMs / 12'500'000) * 12'500'000;
+          EXPECT_EQ(decoder.state()[canas::Field::kPitch].updated_ns, kEpochNs + last_attitude_ns);
+        } else {
+          // Frozen codes repeat the last message: not taken, so the fields age (last attitude
+          // frame before the window: 0.9875 s) and the state goes stale after the timeout.
+          EXPECT_EQ(decoder.state()[canas::Field::kPitch].updated_ns, kEpochNs + 987'500'000);
+        }
       }
       if (t_ms >= 2'000) {  // after the window the live values come back
         EXPECT_NE(decoder.state()[canas::Field::kPitch].value, frozen_pitch_rad);
@@ -525,11 +532,12 @@ TEST(StaleSender, FrozenReplaysLastValuesWithFrozenOrLiveMessageCode) {
     if (mode == sb::StaleMode::kFrozenValue) {
       EXPECT_EQ(decoder.counters().message_code_gaps, 0u);  // invisible to the code check
     } else {
-      // Each replayed frame repeats its code. In the window every FLOAT breaks its identifier's
-      // sequence, and so does every DOUBLEH (its code repeats the pair's low code + 1 is
-      // expected), while each DOUBLEL follows its replayed DOUBLEH; after the window the first
-      // frame on each identifier (3 attitude + 6 navigation) breaks it once more.
-      EXPECT_EQ(decoder.counters().message_code_gaps, 80u * 3 + 10u * (2 + 4) + 3u + 6u);
+      // Each replayed frame repeats its code: every one of them is a repetition (a DOUBLEH
+      // repeats the code of the last completed pair, its DOUBLEL the identifier's last code),
+      // none is a gap; after the window the first frame on each identifier (3 attitude + 6
+      // navigation) breaks the sequence once.
+      EXPECT_EQ(decoder.counters().repeated_message_code, 80u * 3 + 10u * 8);
+      EXPECT_EQ(decoder.counters().message_code_gaps, 3u + 6u);
     }
   }
 }
