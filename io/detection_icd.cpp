@@ -369,8 +369,14 @@ FeedStatus ListDecoder::feed_classic(const CanFrame& f) noexcept {
         static_cast<double>(sign_extend16(get_le(f, 5, 2))) * kRadialVelocityScale_mps;
     d.snr_db = static_cast<double>(get_le(f, 7, 1)) * kSnrScale_db;
   } else {
-    d.azimuth_deg = static_cast<double>(sign_extend16(get_le(f, 2, 2))) * kAngleScale_deg;
-    d.elevation_deg = static_cast<double>(sign_extend16(get_le(f, 4, 2))) * kAngleScale_deg;
+    const double az = static_cast<double>(sign_extend16(get_le(f, 2, 2))) * kAngleScale_deg;
+    const double el = static_cast<double>(sign_extend16(get_le(f, 4, 2))) * kAngleScale_deg;
+    if (!(std::abs(az) <= kMaxAbsAngle_deg && std::abs(el) <= kMaxAbsAngle_deg)) {
+      ++malformed_;
+      return FeedStatus::kMalformed;
+    }
+    d.azimuth_deg = az;
+    d.elevation_deg = el;
     d.rcs_dbsm = static_cast<double>(sign_extend16(get_le(f, 6, 2))) * kRcsScale_dbsm;
   }
   have_[index] |= bit;
@@ -381,6 +387,15 @@ FeedStatus ListDecoder::feed_classic(const CanFrame& f) noexcept {
   }
   return FeedStatus::kConsumed;
 }
+
+namespace {
+// The ICD's valid angles (kMaxAbsAngle_deg): the encoder never sends beyond them, so a frame
+// that carries one is malformed.
+bool angles_valid(const Detection& d) noexcept {
+  return std::abs(d.azimuth_deg) <= kMaxAbsAngle_deg &&
+         std::abs(d.elevation_deg) <= kMaxAbsAngle_deg;
+}
+}  // namespace
 
 FeedStatus ListDecoder::feed_fd(const CanFrame& f) noexcept {
   const bool is_header = f.id == kFdHeaderId;
@@ -396,8 +411,16 @@ FeedStatus ListDecoder::feed_fd(const CanFrame& f) noexcept {
     list_.header = get_header(f);
     list_.count = list_.header.detection_count;
     const std::size_t in_header = list_.count < kFdHeaderSlots ? list_.count : kFdHeaderSlots;
-    for (std::size_t k = 0; k < in_header; ++k)
+    bool valid = true;
+    for (std::size_t k = 0; k < in_header; ++k) {
       list_.detections[k] = get_slot(f, kFdHeaderSlotOffset + k * kFdSlotBytes);
+      valid = valid && angles_valid(list_.detections[k]);
+    }
+    if (!valid) {
+      ++malformed_;
+      in_list_ = false;
+      return FeedStatus::kMalformed;
+    }
     have_.fill(0);
     parts_seen_ = 0;
     parts_expected_ = frames_for_fd(list_.count) - 1;
@@ -422,6 +445,13 @@ FeedStatus ListDecoder::feed_fd(const CanFrame& f) noexcept {
       have_[k] != 0) {
     ++malformed_;
     return FeedStatus::kMalformed;
+  }
+  for (std::size_t s = 0; s < slots; ++s) {
+    const Detection d = get_slot(f, kFdContinuationSlotOffset + s * kFdSlotBytes);
+    if (!angles_valid(d)) {
+      ++malformed_;
+      return FeedStatus::kMalformed;
+    }
   }
   for (std::size_t s = 0; s < slots; ++s)
     list_.detections[first + s] = get_slot(f, kFdContinuationSlotOffset + s * kFdSlotBytes);

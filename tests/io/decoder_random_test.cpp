@@ -465,6 +465,7 @@ TEST(DecoderRandom, MillionFramesLandInExactlyOneCounterAndStayInRange) {
   EXPECT_EQ(bad_canas, 0u);
   EXPECT_EQ(state_changed_without_accept, 0u);
   EXPECT_EQ(bad_lists, 0u);
+  EXPECT_EQ(angles_beyond_icd, 0u);  // frames with angles beyond +-90 deg are malformed
   EXPECT_EQ(clean_lists_wrong, 0u);
   // The mix reached every path that matters.
   EXPECT_GT(c.accepted, 10'000u);

@@ -194,6 +194,35 @@ TEST(DetectionIcd, DecoderRejectsCorruptionAndCountsIt) {
   EXPECT_EQ(dec.feed(other), icd::FeedStatus::kIgnored);
 }
 
+TEST(DetectionIcd, AnglesBeyondTheIcdRangeAreMalformed) {
+  // The encoder never sends |angle| > 90 deg (docs/icd/detections.md): a B frame carrying one,
+  // here azimuth raw 12000 = 120 deg (bytes 2-3, little-endian), is malformed.
+  const std::vector<icd::Detection> in(1, make(100, 1, 2, 3, 20, 0));
+  std::vector<io::CanFrame> f(icd::frames_for(1));
+  ASSERT_EQ(icd::encode({}, in, f).frames, 3u);
+  icd::ListDecoder dec;
+  EXPECT_EQ(dec.feed(f[0]), icd::FeedStatus::kConsumed);
+  EXPECT_EQ(dec.feed(f[1]), icd::FeedStatus::kConsumed);
+  io::CanFrame wide = f[2];
+  wide.data[2] = 12000 & 0xFF;
+  wide.data[3] = 12000 >> 8;
+  EXPECT_EQ(dec.feed(wide), icd::FeedStatus::kMalformed);
+  EXPECT_EQ(dec.feed(f[2]), icd::FeedStatus::kComplete);
+  EXPECT_EQ(dec.malformed(), 1u);
+  // The same on CAN FD: elevation of slot 0 in the header frame (bit 64 of the slot at byte 8,
+  // i.e. bytes 16-17) set to -9500 = -95 deg drops the list.
+  std::vector<io::CanFrame> g(icd::frames_for_fd(1));
+  ASSERT_EQ(icd::encode_fd({}, in, g).frames, 1u);
+  io::CanFrame low = g[0];
+  const auto raw = static_cast<std::uint16_t>(-9500);
+  low.data[16] = raw & 0xFF;
+  low.data[17] = raw >> 8;
+  icd::ListDecoder fd;
+  EXPECT_EQ(fd.feed(low), icd::FeedStatus::kMalformed);
+  EXPECT_EQ(fd.feed(g[0]), icd::FeedStatus::kComplete);
+  EXPECT_NEAR(fd.list().detections[0].elevation_deg, 2.0, 0.005);
+}
+
 TEST(DetectionIcd, RandomFramesNeverCrashAtFixedSeed) {
   const std::uint32_t seed = 31337;
   std::cout << "seed " << seed << "\n";
