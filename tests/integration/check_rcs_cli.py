@@ -11,27 +11,14 @@ Usage: check_rcs_cli.py RADAR_EMU WORK_DIR"""
 import csv
 import math
 import os
-import subprocess
 import sys
+
+from cli_check import check, finish, runner
 
 exe, work = sys.argv[1], sys.argv[2]
 os.makedirs(work, exist_ok=True)
 C = 299792458.0
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
-
-
-def run(*args):
-    r = subprocess.run([exe, *args], capture_output=True, text=True)
-    if r.returncode != 0:
-        print(r.stdout, r.stderr)
-        sys.exit(f"radar-emu {' '.join(args)} exited {r.returncode}")
-    return r
+run = runner(exe)
 
 
 plate = os.path.join(work, "plate_mm.obj")
@@ -104,6 +91,5 @@ with open(bad, "w") as f:
 r = run("rcs", "--mesh", bad, "--freq-hz", "10e9", "--out", os.path.join(work, "d.csv"))
 check(f"{bad}: triangle 1 (line 6) is degenerate" in r.stderr, "degenerate report: " + r.stderr)
 
-if failures:
-    sys.exit(f"{len(failures)} failure(s)")
+finish()
 print("rcs/profile CLI: ok")

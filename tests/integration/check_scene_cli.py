@@ -16,27 +16,14 @@ import json
 import os
 import re
 import struct
-import subprocess
 import sys
+
+from cli_check import check, finish, runner
 import zlib
 
 exe, work = sys.argv[1], sys.argv[2]
 os.makedirs(work, exist_ok=True)
-failures = []
-
-
-def check(cond, what):
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what)
-
-
-def run(*args):
-    r = subprocess.run([exe, *args], capture_output=True, text=True)
-    if r.returncode != 0:
-        print(r.stdout, r.stderr)
-        sys.exit(f"radar-emu {' '.join(args)} exited {r.returncode}")
-    return r
+run = runner(exe)
 
 
 def read_glb(path):
@@ -169,6 +156,5 @@ for y in range(h):
 colours = {r[i:i + 3] for r in rows for i in range(0, len(r), 3)}
 check(len(colours) > 50, f"the preview shows a scene ({len(colours)} colours)")
 
-if failures:
-    sys.exit(f"{len(failures)} failure(s)")
+finish()
 print("scene cli: ok")

@@ -1,0 +1,28 @@
+"""Shared by the CLI check scripts (check_rcs_cli.py, check_scene_cli.py): run radar-emu and
+collect failed checks, so that a script reports every failure before it exits non-zero."""
+import subprocess
+import sys
+
+failures = []
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+        print("FAIL:", what)
+
+
+def runner(exe):
+    """A run(*args) for `exe`: exits the script with the command's output when it fails."""
+    def run(*args):
+        r = subprocess.run([exe, *args], capture_output=True, text=True)
+        if r.returncode != 0:
+            print(r.stdout, r.stderr)
+            sys.exit(f"radar-emu {' '.join(args)} exited {r.returncode}")
+        return r
+    return run
+
+
+def finish():
+    if failures:
+        sys.exit(f"{len(failures)} failure(s)")
