@@ -45,7 +45,8 @@ TEST(IoAllocation, CodecsDoNotAllocate) {
     const auto code = static_cast<std::uint8_t>(frame);
     (void)canas_decoder.decode(canas::encode_float(canas::id::kPitchAngle, 1, code, 1.0f), frame);
     (void)canas_decoder.decode(canas::encode_float(canas::id::kRollAngle, 2, code, 1.0f), frame);
-    const auto [hi, lo] = canas::encode_double(1049, 1, code, 48.0);
+    // A DOUBLE pair takes two message codes (DOUBLEH c, DOUBLEL c + 1), so pairs advance by 2.
+    const auto [hi, lo] = canas::encode_double(1049, 1, static_cast<std::uint8_t>(2 * frame), 48.0);
     (void)canas_decoder.decode(hi, frame);
     (void)canas_decoder.decode(lo, frame);
   }
