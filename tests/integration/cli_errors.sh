@@ -89,7 +89,18 @@ expect_error "--width / --height" scene preview "$dir/nope.glb" --width 0 --out 
 for sub in "scene gen" "scene info" "scene preview"; do
   if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
 done
-for sub in "" run scene "scene target" rcs profile sigma0 atten; do
+# Bus backends and replay (issue 6).
+expect_error "--can: unknown backend 'bogus'" run --can bogus
+expect_error "--can: unknown option 'bitrate=5'" run --can sim,bitrate=5
+expect_error "add --realtime" run --can socketcan:can0
+expect_error "add --realtime" run --nav-modbus tcp:127.0.0.1:1502
+expect_error "--modbus-server: 'x:y'" run --modbus-server x:y --frames 1
+printf '(1767225600.000000) can0 137#0102\nnot a candump line\n' > "$dir/bad.log"
+expect_error "bad.log:2" replay "$dir/bad.log"
+expect_error "nope.log" replay "$dir/nope.log"
+printf '[faults]\ndelay_s = 0.01\njitter_s = 0.02\n' > "$dir/jitter.toml"
+expect_error "\[faults\] jitter_s" run "$dir/jitter.toml"
+for sub in "" run replay scene "scene target" rcs profile sigma0 atten; do
   if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
 done
 [ $fails -eq 0 ] && echo "cli errors: ok"
