@@ -13,6 +13,7 @@
 #include <string>
 
 #include "scene/scene.hpp"
+#include "scene/scene_builders.hpp"
 #include "tests/alloc_counter.hpp"
 
 namespace sc = radar_emu::scene;
@@ -59,33 +60,6 @@ sc::ObjectDesc tile(int ix, int iy, int level) {
   return o;
 }
 
-void add_box(sc::Mesh& m, glm::vec3 lo, glm::vec3 hi) {
-  const auto b = static_cast<unsigned>(m.positions_m.size());
-  m.positions_m.insert(m.positions_m.end(), {{lo.x, lo.y, lo.z},
-                                             {hi.x, lo.y, lo.z},
-                                             {hi.x, hi.y, lo.z},
-                                             {lo.x, hi.y, lo.z},
-                                             {lo.x, lo.y, hi.z},
-                                             {hi.x, lo.y, hi.z},
-                                             {hi.x, hi.y, hi.z},
-                                             {lo.x, hi.y, hi.z}});
-  for (const glm::uvec3 t : {glm::uvec3{0, 2, 1},
-                             {0, 3, 2},
-                             {4, 5, 6},
-                             {4, 6, 7},
-                             {0, 1, 5},
-                             {0, 5, 4},
-                             {3, 7, 6},
-                             {3, 6, 2},
-                             {0, 4, 7},
-                             {0, 7, 3},
-                             {1, 2, 6},
-                             {1, 6, 5}}) {
-    m.triangles.push_back(t + glm::uvec3(b));
-    m.triangle_material.push_back(1);
-  }
-}
-
 // The terrain at levels 0..max_level, plus boxes standing on it and a box driving a loop.
 sc::SceneDescription database(int max_level) {
   sc::SceneDescription d;
@@ -100,13 +74,13 @@ sc::SceneDescription database(int max_level) {
     sc::ObjectDesc b;
     b.name = "building_" + std::to_string(k);
     const double x = 150.0 + 230.0 * k, y = 300.0 + 170.0 * (k % 5);
-    add_box(b.mesh, {-10, -8, -5}, {10, 8, 25});
+    sc::detail::add_box(b.mesh, {-10, -8, -5}, {10, 8, 25}, 0);
     b.world_from_body[3] = glm::dvec4(x, y, height_m(x, y), 1.0);
     d.objects.push_back(b);
   }
   sc::ObjectDesc truck;
   truck.name = "truck";
-  add_box(truck.mesh, {-4, -1.5f, 0}, {4, 1.5f, 3.5f});
+  sc::detail::add_box(truck.mesh, {-4, -1.5f, 0}, {4, 1.5f, 3.5f}, 0);
   truck.trajectory = sc::Trajectory{
       {{600, 600, 40}, {1400, 600, 40}, {1400, 1300, 40}}, 15.0, 80.0, 0.0, true, false};
   d.objects.push_back(truck);
