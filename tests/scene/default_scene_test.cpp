@@ -10,6 +10,7 @@
 #include <tuple>
 
 #include "scene/scene.hpp"
+#include "tests/scene/mesh_parts.hpp"
 
 namespace sc = radar_emu::scene;
 using L = sc::DefaultSceneLayout;
@@ -34,68 +35,9 @@ std::uint32_t id_of(const sc::Scene& s, const std::string& name) {
   return ~0u;
 }
 
-// Signed volume by the divergence theorem: sum over triangles of a . (b x c) / 6. Positive and
-// equal to the true volume only when the triangles close a surface and every face is wound
-// outward.
-double signed_volume(const sc::Mesh& m, const std::vector<std::size_t>& tris) {
-  double v = 0.0;
-  for (std::size_t i : tris) {
-    const auto& t = m.triangles[i];
-    const glm::dvec3 a(m.positions_m[t.x]), b(m.positions_m[t.y]), c(m.positions_m[t.z]);
-    v += glm::dot(a, glm::cross(b, c)) / 6.0;
-  }
-  return v;
-}
-
-using Point = std::tuple<float, float, float>;
-Point key(glm::vec3 p) {
-  return {p.x, p.y, p.z};
-}
-
-// Every directed edge a->b appears exactly once and its reverse b->a exactly once: the part is
-// closed (watertight) and consistently wound.
-bool closed(const sc::Mesh& m, const std::vector<std::size_t>& tris) {
-  std::map<std::pair<Point, Point>, int> edges;
-  for (std::size_t i : tris) {
-    const auto& t = m.triangles[i];
-    for (int k = 0; k < 3; ++k)
-      ++edges[{key(m.positions_m[t[k]]), key(m.positions_m[t[(k + 1) % 3]])}];
-  }
-  for (const auto& [e, count] : edges) {
-    const auto reverse = edges.find({e.second, e.first});
-    if (count != 1 || reverse == edges.end() || reverse->second != 1)
-      return false;
-  }
-  return true;
-}
-
-// Connected parts of a mesh (triangles sharing a vertex position), as triangle index lists.
-std::vector<std::vector<std::size_t>> parts(const sc::Mesh& m) {
-  std::vector<std::size_t> parent(m.triangles.size());
-  for (std::size_t i = 0; i < parent.size(); ++i)
-    parent[i] = i;
-  auto find = [&](std::size_t i) {
-    while (parent[i] != i)
-      i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  std::map<Point, std::size_t> first_triangle_at;
-  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const auto [it, inserted] =
-          first_triangle_at.emplace(key(m.positions_m[m.triangles[i][k]]), i);
-      if (!inserted)
-        parent[find(i)] = find(it->second);
-    }
-  }
-  std::map<std::size_t, std::vector<std::size_t>> by_root;
-  for (std::size_t i = 0; i < m.triangles.size(); ++i)
-    by_root[find(i)].push_back(i);
-  std::vector<std::vector<std::size_t>> out;
-  for (auto& [root, tris] : by_root)
-    out.push_back(std::move(tris));
-  return out;
-}
+using radar_emu::test::closed_and_consistent;
+using radar_emu::test::mesh_parts;
+using radar_emu::test::signed_volume;
 
 // An open part that is a square trihedral corner reflector: 6 triangles on 3 mutually
 // perpendicular planes.
@@ -125,8 +67,8 @@ void body_bounds(const sc::ObjectDesc& o, const glm::dmat4& world_from_body, glm
                  glm::dvec3& hi) {
   lo = glm::dvec3(1e300);
   hi = glm::dvec3(-1e300);
-  for (const auto& part : parts(o.mesh)) {
-    if (!closed(o.mesh, part))
+  for (const auto& part : mesh_parts(o.mesh)) {
+    if (!closed_and_consistent(o.mesh, part))
       continue;
     for (std::size_t i : part) {
       for (int k = 0; k < 3; ++k) {
@@ -241,8 +183,8 @@ TEST(DefaultScene, MetallicMeshesAreClosedAndWoundOutward) {
     const sc::Mesh& m = object(d, name).mesh;
     double volume = 0.0;
     int n_closed = 0;
-    for (const auto& part : parts(m)) {
-      if (closed(m, part)) {
+    for (const auto& part : mesh_parts(m)) {
+      if (closed_and_consistent(m, part)) {
         // Outward: each closed part encloses a positive volume.
         const double v = signed_volume(m, part);
         EXPECT_GT(v, 0.0) << name;

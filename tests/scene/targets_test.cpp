@@ -20,6 +20,7 @@
 #include "scene/mesh_check.hpp"
 #include "scene/mesh_io.hpp"
 #include "scene/scene.hpp"
+#include "tests/scene/mesh_parts.hpp"
 
 namespace sc = radar_emu::scene;
 namespace fs = std::filesystem;
@@ -196,56 +197,13 @@ double frustum(double h, double a0, double a1) {
   return h / 3.0 * (a0 + a1 + std::sqrt(a0 * a1));
 }
 
-using Key = std::tuple<float, float, float>;
-Key key(glm::vec3 p) {
-  return {p.x, p.y, p.z};
-}
-
-// Every directed edge (by vertex position) appears exactly once and its reverse exactly once:
-// closed and consistently wound.
-bool closed_and_consistent(const sc::Mesh& m) {
-  std::map<std::pair<Key, Key>, int> edges;
-  for (const auto& t : m.triangles) {
-    for (int k = 0; k < 3; ++k)
-      ++edges[{key(m.positions_m[t[k]]), key(m.positions_m[t[(k + 1) % 3]])}];
-  }
-  for (const auto& [e, n] : edges) {
-    const auto r = edges.find({e.second, e.first});
-    if (n != 1 || r == edges.end() || r->second != 1)
-      return false;
-  }
-  return true;
-}
+using radar_emu::test::closed_and_consistent;
 
 // Signed volumes of the connected parts (triangles sharing a vertex position).
 std::vector<double> part_volumes(const sc::Mesh& m) {
-  std::vector<std::size_t> parent(m.triangles.size());
-  for (std::size_t i = 0; i < parent.size(); ++i)
-    parent[i] = i;
-  auto find = [&](std::size_t i) {
-    while (parent[i] != i)
-      i = parent[i] = parent[parent[i]];
-    return i;
-  };
-  std::map<Key, std::size_t> first;
-  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const auto [it, inserted] = first.emplace(key(m.positions_m[m.triangles[i][k]]), i);
-      if (!inserted)
-        parent[find(i)] = find(it->second);
-    }
-  }
-  std::map<std::size_t, double> v;
-  for (std::size_t i = 0; i < m.triangles.size(); ++i) {
-    const auto& t = m.triangles[i];
-    v[find(i)] +=
-        glm::dot(glm::dvec3(m.positions_m[t.x]),
-                 glm::cross(glm::dvec3(m.positions_m[t.y]), glm::dvec3(m.positions_m[t.z]))) /
-        6.0;
-  }
   std::vector<double> out;
-  for (const auto& [root, vol] : v)
-    out.push_back(vol);
+  for (const auto& part : radar_emu::test::mesh_parts(m))
+    out.push_back(radar_emu::test::signed_volume(m, part));
   return out;
 }
 
