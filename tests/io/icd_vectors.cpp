@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <random>
 #include <vector>
 
@@ -15,6 +16,33 @@
 
 namespace io = radar_emu::io;
 namespace icd = radar_emu::io::icd;
+
+namespace {
+// One list's physical values as JSON (the FD lists also carry accuracies and flags).
+void write_list_json(std::ostream& json, bool first, const icd::Header& h,
+                     const std::vector<icd::Detection>& dets, bool fd) {
+  json << (first ? "" : ",\n") << "{\"frame_counter\": " << h.frame_counter
+       << ", \"status\": " << int(h.status) << ", \"time_ms\": " << h.time_ms
+       << ", \"detections\": [";
+  for (std::size_t i = 0; i < dets.size(); ++i) {
+    const auto& d = dets[i];
+    json << (i ? ", " : "") << "{\"range_m\": " << d.range_m
+         << ", \"azimuth_deg\": " << d.azimuth_deg << ", \"elevation_deg\": " << d.elevation_deg
+         << ", \"radial_velocity_mps\": " << d.radial_velocity_mps << ", \"snr_db\": " << d.snr_db
+         << ", \"rcs_dbsm\": " << d.rcs_dbsm;
+    if (fd) {
+      json << ", \"range_std_m\": " << d.range_std_m
+           << ", \"radial_velocity_std_mps\": " << d.radial_velocity_std_mps
+           << ", \"azimuth_std_deg\": " << d.azimuth_std_deg
+           << ", \"elevation_std_deg\": " << d.elevation_std_deg
+           << ", \"range_ambiguous\": " << (d.range_ambiguous ? "true" : "false")
+           << ", \"velocity_ambiguous\": " << (d.velocity_ambiguous ? "true" : "false");
+    }
+    json << "}";
+  }
+  json << "]}";
+}
+}  // namespace
 
 int main(int argc, char** argv) {
   if (argc != 2) {
@@ -54,17 +82,7 @@ int main(int argc, char** argv) {
       frames[i].timestamp_ns = 1'767'225'600'000'000'000 + list * 50'000'000LL;
       (void)log.record(frames[i]);
     }
-    json << (list ? ",\n" : "") << "{\"frame_counter\": " << h.frame_counter
-         << ", \"status\": " << int(h.status) << ", \"time_ms\": " << h.time_ms
-         << ", \"detections\": [";
-    for (std::size_t i = 0; i < dets.size(); ++i) {
-      const auto& d = dets[i];
-      json << (i ? ", " : "") << "{\"range_m\": " << d.range_m
-           << ", \"azimuth_deg\": " << d.azimuth_deg << ", \"elevation_deg\": " << d.elevation_deg
-           << ", \"radial_velocity_mps\": " << d.radial_velocity_mps << ", \"snr_db\": " << d.snr_db
-           << ", \"rcs_dbsm\": " << d.rcs_dbsm << "}";
-    }
-    json << "]}";
+    write_list_json(json, list == 0, h, dets, false);
   }
   json << "],\n";
   log.write_file(dir / "detections.log");
@@ -104,22 +122,7 @@ int main(int argc, char** argv) {
       fd_frames[i].timestamp_ns = 1'767'225'600'000'000'000 + list * 50'000'000LL;
       (void)fd_log.record(fd_frames[i]);
     }
-    json << (list ? ",\n" : "") << "{\"frame_counter\": " << h.frame_counter
-         << ", \"status\": " << int(h.status) << ", \"time_ms\": " << h.time_ms
-         << ", \"detections\": [";
-    for (std::size_t i = 0; i < dets.size(); ++i) {
-      const auto& d = dets[i];
-      json << (i ? ", " : "") << "{\"range_m\": " << d.range_m
-           << ", \"azimuth_deg\": " << d.azimuth_deg << ", \"elevation_deg\": " << d.elevation_deg
-           << ", \"radial_velocity_mps\": " << d.radial_velocity_mps << ", \"snr_db\": " << d.snr_db
-           << ", \"rcs_dbsm\": " << d.rcs_dbsm << ", \"range_std_m\": " << d.range_std_m
-           << ", \"radial_velocity_std_mps\": " << d.radial_velocity_std_mps
-           << ", \"azimuth_std_deg\": " << d.azimuth_std_deg
-           << ", \"elevation_std_deg\": " << d.elevation_std_deg
-           << ", \"range_ambiguous\": " << (d.range_ambiguous ? "true" : "false")
-           << ", \"velocity_ambiguous\": " << (d.velocity_ambiguous ? "true" : "false") << "}";
-    }
-    json << "]}";
+    write_list_json(json, list == 0, h, dets, true);
   }
   json << "],\n";
   if (fd_log.overflowed() != 0) {
