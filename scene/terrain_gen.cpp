@@ -703,6 +703,14 @@ class Builder {
 
   // --- lakes ------------------------------------------------------------------------------------
 
+  // A lake's water level: half a metre under the lowest ground on its shore (64 points).
+  [[nodiscard]] double water_level_m(const Lake& l) const {
+    double level = kInf;
+    for (int k = 0; k < 64; ++k)
+      level = std::min(level, base_ground(l.point(2.0 * kPi * k / 64)));
+    return level - 0.5;
+  }
+
   void make_lakes() {
     // Central lake: clear of roads, the river's banks and the edges.
     for (int attempt = 0;; ++attempt) {
@@ -720,10 +728,7 @@ class Builder {
              river_.nearest(q, 700.0).d_m > 600.0;
       }
       if (ok || attempt > 600) {
-        double level = kInf;
-        for (int k = 0; k < 64; ++k)
-          level = std::min(level, base_ground(l.point(2.0 * kPi * k / 64)));
-        l.level_m = level - 0.5;
+        l.level_m = water_level_m(l);
         lake_ = l;
         break;
       }
@@ -744,10 +749,7 @@ class Builder {
           std::max(std::abs(l.c.x), std::abs(l.c.y)) + l.a_m < kHalfSurround_m - 400.0 &&
           river_.valley_distance(l.c) > l.a_m + 700.0;
       if (ok || attempt > 2000) {
-        double level = kInf;
-        for (int k = 0; k < 64; ++k)
-          level = std::min(level, base_ground(l.point(2.0 * kPi * k / 64)));
-        l.level_m = level - 0.5;
+        l.level_m = water_level_m(l);
         outer_lake_ = l;
         break;
       }
