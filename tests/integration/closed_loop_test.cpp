@@ -539,9 +539,10 @@ TEST(ClosedLoop, StaleStateMarksOutputInvalidAndEmitsNoDetections) {
 // ---- Fault injection on the software bus (issue 6) ---------------------------------------
 
 namespace {
-// Frames in which each of the four objects of the default scene is detected (any detection
-// within 30 m and 2 deg of where it is); the caller compares with the frame count.
-std::size_t frames_with_every_object(const emu::RunResult& r) {
+// Frames that carry at least four detections, as many as the scene has reflector-carrying
+// objects: a coarse check that the radar still sees the scene under faults (the geometric match
+// of every detection is ClosedLoopDefault.DetectionsMatchIndependentGeometry's).
+std::size_t frames_with_at_least_four_detections(const emu::RunResult& r) {
   std::size_t n = 0;
   for (const auto& rec : r.records) {
     if (rec.detection_count >= 4)
@@ -594,7 +595,7 @@ TEST(ClosedLoopFaults, TenPercentDropWithJitterKeepsTheRateAndHoldsTheState) {
   for (std::size_t k = 0; k < r.field_age_max_s.size(); ++k)
     EXPECT_LT(r.field_age_max_s[k], s.state_timeout_s) << "field " << k;
   // The radar still sees the scene.
-  EXPECT_GE(frames_with_every_object(r), 70u);
+  EXPECT_GE(frames_with_at_least_four_detections(r), 70u);
 }
 
 TEST(ClosedLoopFaults, StaleSenderMakesExactlyTheFramesPastTheTimeoutInvalid) {
@@ -697,5 +698,5 @@ TEST(ClosedLoopFaults, BabblingNodeIsIgnoredAndTheRadarKeepsItsState) {
   EXPECT_GE(r.decoder.ignored_id, r.babble.sent);
   EXPECT_EQ(r.decoder.rejected(), 0u);
   EXPECT_EQ(r.bus_rx_overflows, 0u);
-  EXPECT_GE(frames_with_every_object(r), 36u);
+  EXPECT_GE(frames_with_at_least_four_detections(r), 36u);
 }
