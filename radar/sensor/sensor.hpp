@@ -42,6 +42,9 @@ struct SensorConfig {
   std::size_t max_contributions = 1u << 18;  ///< per frame; beyond it returns are counted, dropped
 };
 
+/// Detection::object_id when no scene object's return dominates the cell (clutter or noise).
+inline constexpr std::uint32_t kNoObject = 0xFFFFFFFFu;
+
 /// One detection in SI units, antenna frame.
 struct Detection {
   double range_m = 0.0;
@@ -59,6 +62,9 @@ struct Detection {
   std::uint32_t range_cell = 0;
   std::uint32_t doppler_cell = 0;
   std::uint32_t azimuth_cell = 0;  ///< beam position
+  /// Ground truth: the scene object (Contribution::object_id) whose coherent return dominates
+  /// the detection's cell, or kNoObject when clutter or receiver noise dominates.
+  std::uint32_t object_id = kNoObject;
 };
 
 struct SensorStats {
