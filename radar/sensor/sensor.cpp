@@ -4,6 +4,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -33,7 +34,46 @@ double vertex(double pm, double p0, double pp) noexcept {
 }
 
 constexpr std::uint64_t kChannelSum = 0, kChannelDeltaAz = 1, kChannelDeltaEl = 2,
-                        kChannelSpeckle = 3;
+                        kChannelSpeckle = 3, kChannelFalseAlarm = 4;
+
+// Spans of `in` widened by mr range bins and mv velocity rows (wrapping), one bounding span a
+// row, clipped to nr bins.
+void dilate(std::span<const RowSpan> in, std::span<RowSpan> out, long mr, long mv,
+            long nr) noexcept {
+  const auto nv = static_cast<long>(in.size());
+  for (auto& o : out)
+    o = RowSpan{};
+  if (2 * mv + 1 >= nv) {  // every row reaches every other: one span for all
+    RowSpan all{};
+    for (const RowSpan& r : in)
+      if (!r.empty())
+        all = all.empty() ? r : RowSpan{std::min(all.begin, r.begin), std::max(all.end, r.end)};
+    if (!all.empty()) {
+      all = {static_cast<std::uint32_t>(std::max<long>(0, all.begin - mr)),
+             static_cast<std::uint32_t>(std::min<long>(nr, all.end + mr))};
+    }
+    for (auto& o : out)
+      o = all;
+    return;
+  }
+  for (long j = 0; j < nv; ++j) {
+    const RowSpan r = in[static_cast<std::size_t>(j)];
+    if (r.empty())
+      continue;
+    const auto lo = static_cast<std::uint32_t>(std::max<long>(0, r.begin - mr));
+    const auto hi = static_cast<std::uint32_t>(std::min<long>(nr, r.end + mr));
+    for (long dj = -mv; dj <= mv; ++dj) {
+      RowSpan& o = out[static_cast<std::size_t>(((j + dj) % nv + nv) % nv)];
+      o = o.empty() ? RowSpan{lo, hi} : RowSpan{std::min(o.begin, lo), std::max(o.end, hi)};
+    }
+  }
+}
+
+// Widens row span `r` to cover bins [lo, hi).
+void cover(RowSpan& r, long lo, long hi) noexcept {
+  const auto a = static_cast<std::uint32_t>(lo), b = static_cast<std::uint32_t>(hi);
+  r = r.empty() ? RowSpan{a, b} : RowSpan{std::min(r.begin, a), std::max(r.end, b)};
+}
 
 bool finite(const Contribution& c) noexcept {
   return std::isfinite(c.amplitude.real()) && std::isfinite(c.amplitude.imag()) &&
@@ -50,13 +90,22 @@ struct Sensor::Workspace {
         clutter((p.range_bins() + 1) * p.velocity_bins()),
         power(p.image_cells()),
         cfar(cfar_config, p.range_bins(), p.velocity_bins()),
-        hits(max_hits) {}
+        hits(max_hits),
+        alarms(max_hits),
+        dirty(p.velocity_bins()),
+        cuts(p.velocity_bins()),
+        synth(p.velocity_bins()) {}
+  // image and clutter are zero outside `dirty` between frames: a beam clears what it wrote.
   std::vector<std::complex<double>> image;  ///< coherent signal, then the Sigma channel
   std::vector<double> clutter;              ///< mean clutter power a cell, N_r + 1 a row
-  std::vector<double> power;
+  std::vector<double> power;                ///< valid on `synth` only
   Cfar2d cfar;
   std::vector<CfarHit> hits;
-  std::uint64_t crossings = 0, overflowed = 0;
+  std::vector<FalseAlarm> alarms;
+  std::vector<RowSpan> dirty;  ///< per velocity row: bins this frame's returns reach
+  std::vector<RowSpan> cuts;   ///< cells under test evaluated on the image
+  std::vector<RowSpan> synth;  ///< cells synthesised (the cuts' windows)
+  std::uint64_t crossings = 0, overflowed = 0, synthesised = 0;
 };
 
 Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.antenna) {
@@ -182,11 +231,6 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
   const auto [dj0, dj1] = proc.velocity_support(proc.config().kernel_half_width_bins);
   const std::size_t stride = nr + 1;
-  for (std::size_t b = w; b < n_beams; b += n_workers) {
-    std::fill(workspaces_[b]->image.begin(), workspaces_[b]->image.end(),
-              std::complex<double>{0.0, 0.0});
-    std::fill(workspaces_[b]->clutter.begin(), workspaces_[b]->clutter.end(), 0.0);
-  }
   // Each return's response is prepared once and added to every beam of this worker that sees it
   // with that beam's two-way gain. Targets: exact response (coherent). Clutter: mean power a
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
@@ -210,6 +254,8 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
           break;
         prepared = true;
         proc.add_footprint(fp, g.sum, ws.image);
+        for (int r = 0; r < fp.n_rows; ++r)
+          cover(ws.dirty[fp.rows[r]], fp.l0, fp.l1 + 1);
         continue;
       }
       const long jc = std::lround(item.pos.velocity_bin);
@@ -225,6 +271,7 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
       const long l0 = std::lround(lo), l1 = std::lround(hi);
       for (int t = 0; t < n_taps; ++t) {
         double* row = ws.clutter.data() + static_cast<std::size_t>(tap_rows[t]) * stride;
+        RowSpan& dirty = ws.dirty[tap_rows[t]];
         auto add = [&](long a, long c, double v) {  // v on bins a..c (clipped)
           a = std::max<long>(a, 0);
           c = std::min<long>(c, nrl - 1);
@@ -232,6 +279,7 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
             return;
           row[a] += v;
           row[c + 1] -= v;
+          cover(dirty, a, c + 1);
         };
         if (item.half_bins <= 0.0 || l0 == l1) {
           add(l0, l0, p * taps[t]);
@@ -253,10 +301,22 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
   const std::size_t nr = proc.range_bins(), nv = proc.velocity_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(nv);
   const std::size_t stride = nr + 1;
+  // 1. Where to synthesise: the returns' cells widened by the CFAR margins once (cells under
+  // test whose window or neighbours hold a return) and twice (the cells those windows read).
+  if (config_.synthesise_every_cell) {
+    std::fill(ws.cuts.begin(), ws.cuts.end(), RowSpan{0, static_cast<std::uint32_t>(nr)});
+    std::fill(ws.synth.begin(), ws.synth.end(), RowSpan{0, static_cast<std::uint32_t>(nr)});
+  } else {
+    const long mr = ws.cfar.range_margin(), mv = ws.cfar.velocity_margin();
+    dilate(ws.dirty, ws.cuts, mr, mv, nrl);
+    dilate(ws.cuts, ws.synth, mr, mv, nrl);
+  }
+  // Clutter power from its difference array, over the bins it reaches.
   for (std::size_t j = 0; j < nv; ++j) {
+    const RowSpan d = ws.dirty[j];
     double* row = ws.clutter.data() + j * stride;
     double run = 0.0;
-    for (std::size_t l = 0; l < nr; ++l) {
+    for (std::uint32_t l = d.begin; l < d.end; ++l) {
       run += row[l];
       row[l] = std::max(run, 0.0);  // rounding of the running sum must not go negative
     }
@@ -264,14 +324,17 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
 
   // 2. Receiver noise and clutter speckle (a complex Gaussian of variance 1 + clutter a cell).
   // Where no target adds a coherent signal only the power is needed: it is exponential.
-  NoiseRng rng(stream_key(config_.noise_seed, frame_, kChannelSum, beam));
   const double floor_var = config_.thermal_noise ? 1.0 : 0.0;
   for (std::size_t j = 0; j < nv; ++j) {
+    const RowSpan sp = ws.synth[j], d = ws.dirty[j];
+    if (sp.empty())
+      continue;
+    NoiseRng rng(stream_key(config_.noise_seed, frame_, kChannelSum, beam, j));
     const double* clutter = ws.clutter.data() + j * stride;
     std::complex<double>* image = ws.image.data() + j * nr;
     double* power = ws.power.data() + j * nr;
-    for (std::size_t l = 0; l < nr; ++l) {
-      const double var = floor_var + clutter[l];
+    for (std::uint32_t l = sp.begin; l < sp.end; ++l) {
+      const double var = floor_var + (l >= d.begin && l < d.end ? clutter[l] : 0.0);
       if (image[l] == std::complex<double>{0.0, 0.0}) {
         power[l] = var > 0.0 ? -var * std::log(rng.uniform()) : 0.0;
       } else {
@@ -280,11 +343,12 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
         power[l] = std::norm(image[l]);
       }
     }
+    ws.synthesised += sp.end - sp.begin;
   }
 
   // 3. CFAR, then keep local maxima over the 8 neighbours (velocity wraps; ties by index).
   std::uint64_t overflow = 0;
-  const std::size_t n_hits = ws.cfar.detect(ws.power, ws.hits, overflow);
+  const std::size_t n_hits = ws.cfar.detect(ws.power, ws.cuts, ws.hits, overflow);
   ws.crossings += n_hits + overflow;
   ws.overflowed += overflow;
   std::size_t n_cand = 0;
@@ -331,14 +395,56 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
     cand.delta_v = vertex(ws.power[jm * nr + static_cast<std::size_t>(l)], hit.power,
                           ws.power[jp * nr + static_cast<std::size_t>(l)]);
   }
+
+  // 4. The noise-only cells: their false alarms, drawn (Cfar2d::draw_false_alarms).
+  if (config_.thermal_noise) {
+    NoiseRng rng(stream_key(config_.noise_seed, frame_, kChannelFalseAlarm, beam));
+    std::uint64_t crossings = 0, fa_overflow = 0;
+    const std::size_t n_fa =
+        ws.cfar.draw_false_alarms(rng, ws.cuts, ws.alarms, crossings, fa_overflow);
+    ws.crossings += crossings;
+    ws.overflowed += fa_overflow;
+    for (std::size_t i = 0; i < n_fa && n_cand < per_beam_capacity_; ++i) {
+      const FalseAlarm& fa = ws.alarms[i];
+      Candidate& cand = out[n_cand++];
+      cand.power = fa.hit.power;
+      cand.noise = fa.hit.noise;
+      cand.beam = static_cast<std::uint32_t>(beam);
+      cand.range_bin = fa.hit.range_bin;
+      cand.velocity_bin = fa.hit.velocity_bin;
+      NoiseRng phase(stream_key(config_.noise_seed, frame_, kChannelSpeckle, beam,
+                                std::uint64_t{fa.hit.velocity_bin} * nr + fa.hit.range_bin));
+      cand.sum = std::polar(std::sqrt(fa.hit.power), 2.0 * kPi * phase.uniform());
+      cand.delta_r = vertex(fa.range_minus, fa.hit.power, fa.range_plus);
+      cand.delta_v = vertex(fa.velocity_minus, fa.hit.power, fa.velocity_plus);
+    }
+  }
   beam_count_[beam] = n_cand;
+
+  // 5. Leave the image and the clutter rows zero for the next frame: clear what was written.
+  for (std::size_t j = 0; j < nv; ++j) {
+    RowSpan& d = ws.dirty[j];
+    if (d.empty())
+      continue;
+    std::fill(ws.image.begin() + static_cast<long>(j * nr + d.begin),
+              ws.image.begin() + static_cast<long>(j * nr + d.end), std::complex<double>{});
+    std::fill(ws.clutter.begin() + static_cast<long>(j * stride + d.begin),
+              ws.clutter.begin() + static_cast<long>(j * stride + d.end + 1), 0.0);
+    d = RowSpan{};
+  }
 }
 
-void Sensor::monopulse(const Candidate& c, double& az_ratio, double& el_ratio) const noexcept {
+void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_ratio,
+                           std::uint32_t& object_id) const noexcept {
   az_ratio = el_ratio = 0.0;
-  if (!config_.antenna.monopulse)
-    return;
+  object_id = kNoObject;
   const RangeDopplerProcessor& proc = *processor_;
+  // The coherent Sigma response at the cell per object (a target is many returns: its rays add
+  // coherently); up to kObjects distinct objects, the rest are too many to matter here.
+  constexpr std::size_t kObjects = 32;
+  std::array<std::uint32_t, kObjects> ids{};
+  std::array<std::complex<double>, kObjects> per_object{};
+  std::size_t n_objects = 0;
   const auto l = static_cast<long>(c.range_bin), j = static_cast<long>(c.velocity_bin);
   // Coherent parts of the three channels, and the covariances of their Gaussian parts (clutter
   // from the same patches in all three; receiver noise independent in each).
@@ -362,6 +468,13 @@ void Sensor::monopulse(const Candidate& c, double& az_ratio, double& el_ratio) c
       s_coh += r * g.sum;
       d_az += r * g.daz;
       d_el += r * g.del;
+      std::size_t o = 0;
+      while (o < n_objects && ids[o] != item.object_id)
+        ++o;
+      if (o == n_objects && n_objects < kObjects)
+        ids[n_objects++] = item.object_id;
+      if (o < n_objects)
+        per_object[o] += r * g.sum;
     } else {
       const double p = std::norm(item.amplitude) * range_energy_ * range_share(item, l) *
                        velocity_weight(item, j);
@@ -372,6 +485,17 @@ void Sensor::monopulse(const Candidate& c, double& az_ratio, double& el_ratio) c
       c_ee += p * g.del * g.del;
     }
   }
+  // Ground truth: the object whose coherent power at the cell exceeds the clutter's mean power
+  // and the noise's (and every other object's).
+  double best = std::max(c_ss - n0, n0);
+  for (std::size_t o = 0; o < n_objects; ++o) {
+    if (std::norm(per_object[o]) > best) {
+      best = std::norm(per_object[o]);
+      object_id = ids[o];
+    }
+  }
+  if (!config_.antenna.monopulse)
+    return;
   // Difference channel given the sum: jointly Gaussian, so Delta | Sigma is Gaussian with mean
   // (C_ds / C_ss) (Sigma - Sigma_coh) and variance C_dd - C_ds^2 / C_ss.
   const std::complex<double> x = c.sum - s_coh;
@@ -425,6 +549,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     it.amplitude = c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
     it.pos = proc.position_of(c.range_m, c.radial_velocity_mps);
     it.coherent = c.coherent;
+    it.object_id = c.object_id;
     it.half_bins = c.coherent ? 0.0 : 0.5 * std::max(c.range_spread_m, 0.0) / bin_m;
     it.range_m = c.range_m;
     it.radial_velocity_mps = c.radial_velocity_mps;
@@ -453,7 +578,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   range_start_[0] = 0;
 
   for (auto& ws : workspaces_)
-    ws->crossings = ws->overflowed = 0;
+    ws->crossings = ws->overflowed = ws->synthesised = 0;
   // Beams are independent; worker w handles beams w, w + W, ... Every random stream is keyed by
   // (seed, frame, beam, ...), so the result does not depend on the schedule.
   tbb::parallel_for(std::size_t{0}, n_workers_,
@@ -461,6 +586,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   for (auto& ws : workspaces_) {
     stats.cfar_crossings += ws->crossings;
     stats.hits_overflowed += ws->overflowed;
+    stats.cells_synthesised += ws->synthesised;
   }
   stats.cells_touched += n_beams * proc.image_cells();
 
@@ -533,7 +659,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
         proc.range_of_bin(c.range_bin + c.delta_r) + kSpeedOfLight_mps * fd / (2.0 * k_chirp);
     d.radial_velocity_mps = v_meas;
     double az_ratio = 0.0, el_ratio = 0.0;
-    monopulse(c, az_ratio, el_ratio);
+    cell_channels(c, az_ratio, el_ratio, d.object_id);
     const double off_az = config_.antenna.monopulse ? antenna_.offset_from_ratio_az(az_ratio) : 0.0;
     const double off_el = config_.antenna.monopulse ? antenna_.offset_from_ratio_el(el_ratio) : 0.0;
     d.azimuth_rad = config_.antenna.beam_azimuth_rad[c.beam] + off_az;

@@ -9,7 +9,15 @@
 // footprint's mean power), receiver noise is added, and a 2-D CFAR finds the crossings. Peaks are
 // grouped within the beam and across adjacent beams; each detection gets interpolated range and
 // velocity, a monopulse angle, measured SNR, an RCS estimate from the radar equation, one-sigma
-// uncertainties and ambiguity flags.
+// uncertainties, ambiguity flags and the scene object that dominates its cell.
+//
+// Cost follows the signal, not the image: only the cells a return reaches are synthesised, with
+// the CFAR windows around them (Cfar2d::range_margin/velocity_margin, twice: the cells under
+// test next to a return, and the cells their windows read). Every other cell holds receiver
+// noise alone, and its false alarms are drawn from their exact distribution, CFAR and
+// local-maximum test included (Cfar2d::draw_false_alarms), so an empty frame costs a few
+// microseconds a beam. `synthesise_every_cell` turns this off (the reference the tests compare
+// the statistical cells with).
 
 #include <complex>
 #include <cstddef>
@@ -40,6 +48,9 @@ struct SensorConfig {
   double max_range_m = 6000.0;   ///< farthest return of interest: sets the range-ambiguity flag
   std::size_t max_hits_per_beam = 4096;
   std::size_t max_contributions = 1u << 18;  ///< per frame; beyond it returns are counted, dropped
+  /// Synthesise receiver noise in every cell of every beam instead of drawing the noise-only
+  /// cells' false alarms (reference mode: slower, same distributions).
+  bool synthesise_every_cell = false;
 };
 
 /// Detection::object_id when no scene object's return dominates the cell (clutter or noise).
@@ -68,7 +79,8 @@ struct Detection {
 };
 
 struct SensorStats {
-  std::uint64_t cells_touched = 0;  ///< image cells processed (beams x range x velocity)
+  std::uint64_t cells_touched = 0;      ///< image cells covered (beams x range x velocity)
+  std::uint64_t cells_synthesised = 0;  ///< of those, synthesised (returns and CFAR margins)
   std::uint64_t cfar_crossings = 0;
   std::uint64_t detections = 0;
   std::uint64_t truncated = 0;        ///< detections beyond max_detections or the output span
@@ -118,6 +130,7 @@ class Sensor {
     double radial_velocity_mps = 0.0;
     double azimuth_rad = 0.0, elevation_rad = 0.0;
     double sum_el = 0.0, delta_el = 0.0;  ///< elevation channels (one beam elevation per scan)
+    std::uint32_t object_id = 0;
     bool coherent = true;
     bool usable = false;
   };
@@ -137,8 +150,11 @@ class Sensor {
   /// Share of a diffuse item's power in range bin l, and its velocity-leakage weight in bin j.
   [[nodiscard]] double range_share(const Item& item, long l) const noexcept;
   [[nodiscard]] double velocity_weight(const Item& item, long j) const noexcept;
-  /// Monopulse ratios at a detection: the difference channels drawn jointly with the sum.
-  void monopulse(const Candidate& c, double& az_ratio, double& el_ratio) const noexcept;
+  /// At a detection's cell: the monopulse ratios (the difference channels drawn jointly with the
+  /// sum; 0 without monopulse) and the object whose coherent return dominates (kNoObject when
+  /// clutter or noise is stronger).
+  void cell_channels(const Candidate& c, double& az_ratio, double& el_ratio,
+                     std::uint32_t& object_id) const noexcept;
 
   SensorConfig config_;
   Antenna antenna_;
