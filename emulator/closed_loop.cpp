@@ -830,6 +830,7 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
       {"noise_seed", s.sensor.noise_seed},
       {"cells_processed", r.sensor.cells_touched},
       {"cells_synthesised", r.sensor.cells_synthesised},
+      {"returns_merged", r.sensor.merged_returns},
       {"cfar_crossings", r.sensor.cfar_crossings},
       {"false_alarm_rate_upper_bound", r.sensor.cells_touched
                                            ? static_cast<double>(r.sensor.cfar_crossings) /

@@ -122,6 +122,11 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   require(std::isfinite(c.max_range_m) && c.max_range_m > 0, "max_range_m", "must be > 0");
   require(c.max_contributions >= 1 && c.max_contributions <= (1u << 26), "max_contributions",
           "must be in [1, 2^26]");
+  require(std::isfinite(c.merge_step_bins) && c.merge_step_bins >= 0.0 && c.merge_step_bins <= 0.5,
+          "merge_step_bins", "must be in [0, 0.5] (0: off)");
+  require(std::isfinite(c.merge_step_beamwidths) && c.merge_step_beamwidths > 0.0 &&
+              c.merge_step_beamwidths <= 0.5,
+          "merge_step_beamwidths", "must be in (0, 0.5]");
   require(c.processing.kernel_half_width_bins >= 0 &&
               c.processing.kernel_half_width_bins <= (Footprint::kMaxBins - 1) / 2,
           "kernel_half_width_bins", "must be in [0, 32] for the sensor");
@@ -136,6 +141,15 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   for (std::size_t i = 0; i < antenna_.beams(); ++i)
     workspaces_.push_back(std::make_unique<Workspace>(c.cfar, *processor_, c.max_hits_per_beam));
   items_.resize(c.max_contributions);
+  if (c.merge_step_bins > 0.0) {
+    std::size_t cap = 1;
+    while (cap < 2 * c.max_contributions)
+      cap <<= 1;
+    merge_table_.assign(cap, -1);
+    merge_used_.resize(c.max_contributions);
+    merge_keys_.resize(c.max_contributions);
+    merge_sums_.resize(c.max_contributions);
+  }
   by_range_.resize(c.max_contributions);
   range_start_.resize(processor_->range_bins() + 2);
   range_energy_ = processor_->range_energy();
@@ -519,6 +533,84 @@ void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_rati
   }
 }
 
+void Sensor::merge_returns(SensorStats& stats) noexcept {
+  // Coherent returns of one object within one merge cell of each other (merge_step_bins in range
+  // and velocity, merge_step_beamwidths of the sum beam in azimuth and elevation) reach the image
+  // through responses that differ by less than the direct path's own table step: they are one
+  // return, with the sum of their amplitudes at their amplitude-weighted mean position. Open
+  // addressing on a table of twice the contributions; the first return of a cell represents it,
+  // so the result does not depend on anything but the input order.
+  const double q = 1.0 / config_.merge_step_bins;
+  const double da = config_.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad();
+  const double de = config_.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad();
+  const std::size_t mask = merge_table_.size() - 1;
+  std::size_t n_used = 0;
+  for (std::size_t i = 0; i < item_count_; ++i) {
+    Item& it = items_[i];
+    if (!it.usable || !it.coherent)
+      continue;
+    const MergeKey key{it.object_id, std::llround(std::floor(it.pos.range_bin * q)),
+                       std::llround(std::floor(it.pos.velocity_bin * q)),
+                       std::llround(std::floor(it.azimuth_rad / da)),
+                       std::llround(std::floor(it.elevation_rad / de))};
+    std::uint64_t h = stream_key(key.object_id, static_cast<std::uint64_t>(key.range),
+                                 static_cast<std::uint64_t>(key.velocity),
+                                 static_cast<std::uint64_t>(key.azimuth),
+                                 static_cast<std::uint64_t>(key.elevation));
+    std::size_t slot = static_cast<std::size_t>(h) & mask;
+    while (merge_table_[slot] >= 0 &&
+           !(merge_keys_[static_cast<std::size_t>(merge_table_[slot])] == key))
+      slot = (slot + 1) & mask;
+    const double w = std::abs(it.amplitude);
+    MergeSums& m = merge_sums_[i];
+    if (merge_table_[slot] < 0) {  // the first return of its cell represents it
+      merge_table_[slot] = static_cast<std::int32_t>(i);
+      merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
+      merge_keys_[i] = key;
+      m = {w,
+           w * it.pos.range_bin,
+           w * it.pos.velocity_bin,
+           w * it.range_m,
+           w * it.radial_velocity_mps,
+           w * it.azimuth_rad,
+           w * it.elevation_rad,
+           1};
+      continue;
+    }
+    const auto rep = static_cast<std::size_t>(merge_table_[slot]);
+    Item& r = items_[rep];
+    MergeSums& a = merge_sums_[rep];
+    r.amplitude += it.amplitude;
+    a.weight += w;
+    a.range_bin += w * it.pos.range_bin;
+    a.velocity_bin += w * it.pos.velocity_bin;
+    a.range_m += w * it.range_m;
+    a.velocity_mps += w * it.radial_velocity_mps;
+    a.azimuth_rad += w * it.azimuth_rad;
+    a.elevation_rad += w * it.elevation_rad;
+    ++a.count;
+    it.usable = false;
+    ++stats.merged_returns;
+  }
+  for (std::size_t u = 0; u < n_used; ++u) {
+    const std::uint32_t slot = merge_used_[u];
+    const auto rep = static_cast<std::size_t>(merge_table_[slot]);
+    merge_table_[slot] = -1;
+    const MergeSums& a = merge_sums_[rep];
+    if (a.count < 2 || !(a.weight > 0.0))
+      continue;
+    Item& r = items_[rep];
+    r.pos.range_bin = a.range_bin / a.weight;
+    r.pos.velocity_bin = a.velocity_bin / a.weight;
+    r.range_m = a.range_m / a.weight;
+    r.radial_velocity_mps = a.velocity_mps / a.weight;
+    r.azimuth_rad = a.azimuth_rad / a.weight;
+    r.elevation_rad = a.elevation_rad / a.weight;
+    antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el,
+                         r.delta_el);
+  }
+}
+
 std::size_t Sensor::process(std::span<const Contribution> contributions, std::span<Detection> out,
                             SensorStats& stats) noexcept {
   const RangeDopplerProcessor& proc = *processor_;
@@ -565,8 +657,14 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
       continue;
     }
     it.usable = true;
-    max_half_bins_ = std::max(max_half_bins_, it.half_bins);
-    ++range_start_[bucket_of(it) + 1];
+  }
+  if (config_.merge_step_bins > 0.0)
+    merge_returns(stats);
+  for (std::size_t i = 0; i < item_count_; ++i) {
+    if (items_[i].usable) {
+      max_half_bins_ = std::max(max_half_bins_, items_[i].half_bins);
+      ++range_start_[bucket_of(items_[i]) + 1];
+    }
   }
   for (std::size_t b = 0; b + 1 < range_start_.size(); ++b)
     range_start_[b + 1] += range_start_[b];

@@ -51,6 +51,11 @@ struct SensorConfig {
   /// Synthesise receiver noise in every cell of every beam instead of drawing the noise-only
   /// cells' false alarms (reference mode: slower, same distributions).
   bool synthesise_every_cell = false;
+  /// Coherent returns of one object closer than this in range and in velocity [bins] (and
+  /// merge_step_beamwidths in angle) are summed into one before synthesis; 0: off. The default is
+  /// the direct path's own table step (1/64 bin: its interpolation error is below 1e-3).
+  double merge_step_bins = 1.0 / 64.0;
+  double merge_step_beamwidths = 1.0 / 64.0;  ///< of the sum beam's 3 dB widths
 };
 
 /// Detection::object_id when no scene object's return dominates the cell (clutter or noise).
@@ -89,6 +94,7 @@ struct SensorStats {
   std::uint64_t merged = 0;           ///< peaks merged into a stronger one in an adjacent beam
   std::uint64_t rejected_input = 0;   ///< contributions with non-finite fields
   std::uint64_t dropped_input = 0;    ///< contributions beyond max_contributions
+  std::uint64_t merged_returns = 0;   ///< coherent returns summed into another (merge_step_bins)
 };
 
 class Sensor {
@@ -144,6 +150,22 @@ class Sensor {
     double sum = 0, daz = 0, del = 0;  ///< two-way amplitude factors of the three channels
   };
   bool gains_of(const Item& item, std::size_t beam, Gains& g) const noexcept;
+  /// Sums coherent returns that share a merge cell (SensorConfig::merge_step_bins).
+  void merge_returns(SensorStats& stats) noexcept;
+  struct MergeKey {
+    std::uint32_t object_id = 0;
+    long long range = 0, velocity = 0, azimuth = 0, elevation = 0;
+    bool operator==(const MergeKey&) const = default;
+  };
+  struct MergeSums {  ///< amplitude-weighted sums of a merge cell's positions
+    double weight = 0, range_bin = 0, velocity_bin = 0, range_m = 0, velocity_mps = 0;
+    double azimuth_rad = 0, elevation_rad = 0;
+    std::uint32_t count = 0;
+  };
+  std::vector<std::int32_t> merge_table_;  ///< open addressing: item index or -1
+  std::vector<std::uint32_t> merge_used_;  ///< slots taken this frame
+  std::vector<MergeKey> merge_keys_;       ///< per representative item
+  std::vector<MergeSums> merge_sums_;
   /// Worker w: accumulates every item into its beams (w, w + W, ...), then detects in them.
   void process_worker(std::size_t w, std::size_t n_workers) noexcept;
   void detect_beam(std::size_t beam, Workspace& ws) noexcept;

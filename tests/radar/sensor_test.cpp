@@ -15,6 +15,7 @@
 #include <random>
 #include <vector>
 
+#include "radar/sensor/noise.hpp"
 #include "radar/sensor/range_doppler.hpp"
 #include "radar/sensor/waveform.hpp"
 #include "radar/sensor/window.hpp"
@@ -544,4 +545,40 @@ TEST(Sensor, NonFiniteContributionsAreCountedNotUsed) {
   EXPECT_EQ(stats.rejected_input, 2u);
   for (std::size_t i = 0; i < n; ++i)
     EXPECT_TRUE(std::isfinite(out[i].range_m) && std::isfinite(out[i].snr));
+}
+
+TEST(Sensor, MergedCoherentReturnsGiveTheImageOfTheSeparateReturns) {
+  // 2000 rays of one rigid object (one radial velocity) scattered over 2 range bins and 2 mrad,
+  // random phases (as a ray-traced target): merged into cells of 1/64 bin (the default), the detections' SNR and
+  // range equal those of the separate returns (merge off) to within the direct path's own table
+  // error (1e-3 relative in amplitude: 0.01 dB in power).
+  std::vector<rd::Contribution> rays;
+  rd::NoiseRng rng(20261124);
+  rd::SensorConfig c = sensor_config();
+  c.thermal_noise = false;
+  const double r0 = rd::RangeDopplerProcessor(c.processing).range_of_bin(64.0);
+  for (int i = 0; i < 2000; ++i) {
+    rays.push_back(point(1e-3 * rng.uniform(), r0 + 6.0 * rng.uniform(), 0.3,
+                         0.002 * rng.uniform(), 0.001 * rng.uniform(), 2 * kPi * rng.uniform()));
+    rays.back().object_id = 4;
+  }
+  std::printf("seed 20261124\n");
+  std::vector<rd::Detection> merged(16), separate(16);
+  rd::SensorStats s_merged, s_separate;
+  const std::size_t n_merged = rd::Sensor(c).process(rays, merged, s_merged);
+  c.merge_step_bins = 0.0;
+  const std::size_t n_separate = rd::Sensor(c).process(rays, separate, s_separate);
+  std::printf("%llu of 2000 returns merged into others; %zu / %zu detections\n",
+              static_cast<unsigned long long>(s_merged.merged_returns), n_merged, n_separate);
+  EXPECT_GT(s_merged.merged_returns, 500u);
+  EXPECT_EQ(s_separate.merged_returns, 0u);
+  ASSERT_EQ(n_merged, n_separate);
+  ASSERT_GE(n_merged, 1u);
+  for (std::size_t i = 0; i < n_merged; ++i) {
+    std::printf("SNR %.4f / %.4f dB, range %.4f / %.4f m\n", db(merged[i].snr), db(separate[i].snr),
+                merged[i].range_m, separate[i].range_m);
+    EXPECT_NEAR(db(merged[i].snr), db(separate[i].snr), 0.01);
+    EXPECT_NEAR(merged[i].range_m, separate[i].range_m, 0.02);  // 1/150 of a bin
+    EXPECT_EQ(merged[i].object_id, 4u);
+  }
 }
