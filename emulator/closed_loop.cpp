@@ -37,6 +37,9 @@ namespace {
 
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr std::uint8_t kFaultyNodeId = 99;
+// Spans a frame puts on the --trace-events timeline: input, scene_update, trace, sensor, output,
+// frame.
+constexpr std::size_t kTimelineStagesPerFrame = 6;
 
 scene::SceneDescription scene_description(const Scenario& s) {
   if (!s.scene_file.empty())
@@ -135,7 +138,10 @@ struct ClosedLoop::Impl {
         recorded_frames(std::min<std::uint64_t>(s.frames, o.record_frames_max)),
         rx_log("can0", static_cast<std::size_t>(recorded_frames * input_frames_per_frame(s))),
         tx_log("can0", static_cast<std::size_t>(recorded_frames * list_frames(s))),
-        profiler(static_cast<std::size_t>(std::max<std::uint64_t>(recorded_frames, 1))) {
+        profiler(static_cast<std::size_t>(std::max<std::uint64_t>(recorded_frames, 1)),
+                 o.trace_events_file.empty()
+                     ? 0
+                     : static_cast<std::size_t>(recorded_frames) * kTimelineStagesPerFrame) {
     if (s.frames == 0)
       throw std::runtime_error("scenario: frames must be >= 1");
     contributions.resize(tracer.max_contributions());
@@ -367,6 +373,7 @@ RunResult ClosedLoop::run() {
   for (std::uint64_t done = 0; done < s.frames; ++done) {
     const timing::Tick tick = scheduler.wait_next();
     const std::int64_t frame_start_wall = wall.now_ns();
+    m.profiler.set_frame(done);
     const std::int64_t since_start_ns = tick.deadline_ns - start_ns;
     const double t_s = static_cast<double>(since_start_ns) * 1e-9;
     const std::int64_t bus_now_ns = s.epoch_unix_ns + since_start_ns;
@@ -542,8 +549,9 @@ RunResult ClosedLoop::run() {
                                    m.detections.begin() + static_cast<std::ptrdiff_t>(n_det));
       }
     }
-    const std::int64_t frame_ns = wall.now_ns() - frame_start_wall;
-    m.profiler.record(timing::Stage::kFrame, frame_ns);
+    const std::int64_t frame_end_wall = wall.now_ns();
+    const std::int64_t frame_ns = frame_end_wall - frame_start_wall;
+    m.profiler.record_span(timing::Stage::kFrame, frame_start_wall, frame_end_wall);
     if (frame_ns > period_ns)
       ++r.frames_over_budget;
 
@@ -573,6 +581,7 @@ RunResult ClosedLoop::run() {
     r.replay_frames_left = m.options.replay_input.size() - m.replay_next;
   r.bus_rx_overflows = m.radar_ep.rx_overflows() + m.avionics.rx_overflows();
   r.record_overflows = m.rx_log.overflowed() + m.tx_log.overflowed();
+  r.trace_events_dropped = m.profiler.events_dropped();
   r.sink_lists = m.sink.lists_completed();
   r.sink_malformed = m.sink.decoder().malformed() + m.sink.decoder().orphans();
   for (std::size_t k = 0; k < r.injected_malformed.size(); ++k) {
@@ -853,13 +862,57 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                        {"pinned", r.realtime.pinned},
                        {"warnings", r.realtime.warnings}};
   }
-  rep["outputs"] = {"report.json", "detections.json", "detections.png", "bus_in.log",
-                    "bus_out.log"};
+  rep["outputs"] = {"report.json", "detections.json", "truth.json", "detections.png",
+                    "timing.png",  "bus_in.log",      "bus_out.log"};
+  if (!m.options.trace_events_file.empty()) {
+    rep["trace_events"] = {{"file", m.options.trace_events_file.string()},
+                           {"events", m.profiler.events().size()},
+                           {"dropped", r.trace_events_dropped}};
+  }
   write_json(dir / "report.json", rep);
 
   write_bscope_png(r, s, dir / "detections.png");
+  write_timing_png(m.profiler, 1.0 / s.rate_hz, dir / "timing.png");
   m.rx_log.write_file(dir / "bus_in.log");
   m.tx_log.write_file(dir / "bus_out.log");
+}
+
+void ClosedLoop::write_trace_events() const {
+  const Impl& m = *impl_;
+  const std::filesystem::path& path = m.options.trace_events_file;
+  if (path.empty())
+    return;
+  // Chrome trace-event format ("JSON Object Format", complete events ph "X"): ts and dur in
+  // microseconds; opens in https://ui.perfetto.dev and chrome://tracing.
+  const std::span<const timing::StageEvent> events = m.profiler.events();
+  std::int64_t t0_ns = events.empty() ? 0 : events.front().start_ns;
+  for (const timing::StageEvent& e : events)
+    t0_ns = std::min(t0_ns, e.start_ns);
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const timing::StageEvent& e : events) {
+    list.push_back({{"name", std::string(timing::stage_name(e.stage))},
+                    {"cat", e.stage == timing::Stage::kFrame ? "frame" : "stage"},
+                    {"ph", "X"},
+                    {"ts", static_cast<double>(e.start_ns - t0_ns) * 1e-3},
+                    {"dur", static_cast<double>(e.duration_ns) * 1e-3},
+                    {"pid", 1},
+                    {"tid", 1},
+                    {"args", {{"frame", e.frame}}}});
+  }
+  nlohmann::ordered_json doc;
+  doc["traceEvents"] = std::move(list);
+  doc["displayTimeUnit"] = "ms";
+  doc["otherData"] = {{"scenario", m.scenario.name},
+                      {"rate_hz", m.scenario.rate_hz},
+                      {"dropped_events", m.profiler.events_dropped()}};
+  if (path.has_parent_path()) {
+    std::error_code ec;
+    std::filesystem::create_directories(path.parent_path(), ec);
+  }
+  std::ofstream out(path, std::ios::binary);
+  out << doc.dump() << '\n';
+  if (!out)
+    throw std::runtime_error(path.string() + ": write failed");
 }
 
 }  // namespace radar_emu::emulator
