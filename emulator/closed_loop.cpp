@@ -15,6 +15,8 @@
 #include "io/candump.hpp"
 #include "io/modbus.hpp"
 #include "io/modbus_map.hpp"
+#include "radar/propagation/itu.hpp"
+#include "radar/propagation/path.hpp"
 #include "scene/airport_gen.hpp"
 #include "scene/default_scene.hpp"
 #include "scene/geo.hpp"
@@ -164,6 +166,38 @@ struct ClosedLoop::Impl {
       babble_ep = &bus.add_endpoint("babbler", 16);
     }
     setup_backends(s, o);
+    setup_weather(s);
+  }
+
+  // [weather]: the one-way specific attenuation at the carrier, built once from the ITU-R
+  // models (radar/propagation/path.hpp sums P.676 gases, P.838 rain and P.840 fog). The SBR
+  // transmits vertical polarisation (radar/em/sbr.cpp), so rain takes P.838's tilt pi/2.
+  void setup_weather(const Scenario& s) {
+    const WeatherSpec& w = s.weather;
+    if (!w.enabled)
+      return;
+    const double f = s.sbr.carrier_hz;
+    const radar::Atmosphere air{w.pressure_hpa, w.temperature_k, w.humidity_gm3};
+    constexpr double kTiltVertical = std::numbers::pi / 2.0;
+    try {
+      radar::MediumSpec medium;
+      medium.name = w.condition;
+      medium.atmosphere = air;
+      medium.rain_mm_per_h = w.rain_mm_per_h;
+      medium.liquid_water_gm3 = w.fog_water_gm3;
+      const radar::PathAttenuation path(f, kTiltVertical, std::span(&medium, 1));
+      weather_db_per_m = path.specific_db_per_m(0);
+      weather_gas_db_per_km = radar::gaseous_specific_attenuation(f, air).total_db_per_km();
+      weather_rain_db_per_km =
+          radar::rain_specific_attenuation_db_per_km(f, w.rain_mm_per_h, 0.0, kTiltVertical);
+      if (w.fog_water_gm3 > 0.0) {
+        weather_fog_db_per_km =
+            radar::cloud_fog_specific_attenuation_db_per_km(f, w.fog_water_gm3, w.temperature_k);
+      }
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error("scenario: [weather] at carrier_hz " + std::to_string(f) + ": " +
+                               e.what());
+    }
   }
 
   // Hardware CAN, Modbus navigation and the Modbus detection table (setup; throws with context).
@@ -291,6 +325,8 @@ struct ClosedLoop::Impl {
   io::CandumpRecorder rx_log;
   io::CandumpRecorder tx_log;
   timing::StageProfiler profiler;
+  double weather_db_per_m = 0.0;  ///< one-way specific attenuation [dB/m]; 0: free space
+  double weather_gas_db_per_km = 0.0, weather_rain_db_per_km = 0.0, weather_fog_db_per_km = 0.0;
   std::vector<radar::Contribution> contributions;
   std::vector<radar::Detection> detections;
   std::vector<io::icd::Detection> icd_detections;
@@ -477,6 +513,8 @@ RunResult ClosedLoop::run() {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kTrace);
       if (valid)
         n_contrib = m.tracer.trace(pose, m.contributions, r.trace);  // accumulates
+      // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
+      radar::apply_two_way_loss(std::span(m.contributions.data(), n_contrib), m.weather_db_per_m);
     }
     // ---- sensor: cells, CFAR, detections ----
     std::size_t n_det = 0;
@@ -811,6 +849,35 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
             static_cast<double>(r.view.lod_groups_at_level[2]) / n,
             static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
           {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
+  }
+  {
+    // The atmosphere the returns crossed and its two-way loss at reference ranges.
+    const WeatherSpec& w = s.weather;
+    nlohmann::ordered_json weather;
+    if (!w.enabled) {
+      weather["condition"] = "none (no [weather] table: free space)";
+    } else {
+      constexpr double kReferenceRangeM = 1000.0;
+      weather = {{"condition", w.condition},
+                 {"rain_rate_mmph", w.rain_mm_per_h},
+                 {"fog_water_gpm3", w.fog_water_gm3},
+                 {"humidity_gpm3", w.humidity_gm3},
+                 {"temperature_c", w.temperature_k - 273.15},
+                 {"pressure_hpa", w.pressure_hpa},
+                 {"models",
+                  "ITU-R P.676-13 (gases), P.838-3 (rain, vertical polarisation), "
+                  "P.840-9 (fog)"},
+                 {"carrier_hz", s.sbr.carrier_hz},
+                 {"one_way_db_per_km",
+                  {{"gases", m.weather_gas_db_per_km},
+                   {"rain", m.weather_rain_db_per_km},
+                   {"fog", m.weather_fog_db_per_km},
+                   {"total", m.weather_db_per_m * 1e3}}},
+                 {"reference_range_m", kReferenceRangeM},
+                 {"two_way_loss_db_at_reference", 2.0 * m.weather_db_per_m * kReferenceRangeM},
+                 {"two_way_loss_db_at_max_range", 2.0 * m.weather_db_per_m * s.sbr.max_range_m}};
+    }
+    rep["weather"] = std::move(weather);
   }
   rep["trace"] = {{"rays", r.trace.rays},
                   {"target_bundles", r.trace.target_bundles},
