@@ -15,6 +15,7 @@
 #include "io/candump.hpp"
 #include "io/modbus.hpp"
 #include "io/modbus_map.hpp"
+#include "radar/materials.hpp"
 #include "radar/propagation/itu.hpp"
 #include "radar/propagation/path.hpp"
 #include "scene/airport_gen.hpp"
@@ -42,6 +43,8 @@ constexpr std::uint8_t kFaultyNodeId = 99;
 // Spans a frame puts on the --trace-events timeline: input, scene_update, trace, sensor, output,
 // frame.
 constexpr std::size_t kTimelineStagesPerFrame = 6;
+// Bound on the truth.json entries a run keeps (40 bytes each); beyond it they are counted.
+constexpr std::size_t kTruthEntriesMax = 1u << 20;
 
 scene::SceneDescription scene_description(const Scenario& s) {
   if (!s.scene_file.empty())
@@ -167,6 +170,20 @@ struct ClosedLoop::Impl {
     }
     setup_backends(s, o);
     setup_weather(s);
+    // Ground truth covers the objects with a conducting material (the tracer's targets); pure
+    // terrain (ground, pavement, grass) is left out of truth.json.
+    const std::vector<radar::RadarMaterial> mats = radar::resolve_materials(scene.materials());
+    const auto& desc = scene.description();
+    for (std::size_t i = 0; i < desc.objects.size(); ++i) {
+      for (std::uint16_t k : desc.objects[i].mesh.triangle_material) {
+        if (k < mats.size() && mats[k].conductor) {
+          truth_objects.push_back(static_cast<std::uint32_t>(i));
+          break;
+        }
+      }
+    }
+    truth_capacity = std::min<std::size_t>(
+        static_cast<std::size_t>(recorded_frames) * truth_objects.size(), kTruthEntriesMax);
   }
 
   // [weather]: the one-way specific attenuation at the carrier, built once from the ITU-R
@@ -327,6 +344,8 @@ struct ClosedLoop::Impl {
   timing::StageProfiler profiler;
   double weather_db_per_m = 0.0;  ///< one-way specific attenuation [dB/m]; 0: free space
   double weather_gas_db_per_km = 0.0, weather_rain_db_per_km = 0.0, weather_fog_db_per_km = 0.0;
+  std::vector<std::uint32_t> truth_objects;  ///< objects truth.json covers
+  std::size_t truth_capacity = 0;
   std::vector<radar::Contribution> contributions;
   std::vector<radar::Detection> detections;
   std::vector<io::icd::Detection> icd_detections;
@@ -378,6 +397,7 @@ RunResult ClosedLoop::run() {
   r.records.reserve(static_cast<std::size_t>(m.recorded_frames));
   r.detections.reserve(static_cast<std::size_t>(m.recorded_frames) * s.sensor.max_detections);
   r.sensor_detections.reserve(r.detections.capacity());
+  r.truth.reserve(m.truth_capacity);
   r.detections_min = std::numeric_limits<std::uint64_t>::max();
   r.field_age_max_s.fill(0.0);
   r.field_stale_frames.fill(0);
@@ -580,6 +600,29 @@ RunResult ClosedLoop::run() {
         rec.sent = send_list;
         rec.ownship_valid = valid;
         rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
+        rec.first_truth = static_cast<std::uint32_t>(r.truth.size());
+        if (valid) {
+          // Ground truth: each target whose box centre is inside the field of view and range.
+          const std::span<const scene::ObjectState> states = m.scene.objects();
+          for (std::uint32_t id : m.truth_objects) {
+            const scene::ObjectState& st = states[id];
+            const ObjectTruth t =
+                point_truth(pose, 0.5 * (st.bounds_min_m + st.bounds_max_m), st.velocity_mps);
+            if (t.range_m > s.sbr.max_range_m || t.azimuth_rad < s.sbr.azimuth_min_rad ||
+                t.azimuth_rad > s.sbr.azimuth_max_rad ||
+                t.elevation_rad < s.sbr.elevation_min_rad ||
+                t.elevation_rad > s.sbr.elevation_max_rad) {
+              continue;
+            }
+            if (r.truth.size() == r.truth.capacity()) {
+              ++r.truth_overflows;
+              continue;
+            }
+            r.truth.push_back(t);
+            r.truth.back().object_id = id;
+            ++rec.truth_count;
+          }
+        }
         r.records.push_back(rec);
         r.detections.insert(r.detections.end(), m.icd_detections.begin(),
                             m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
@@ -648,6 +691,14 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
       throw std::runtime_error(path.string() + ": write failed");
   };
 
+  // Scene object names (scene::SceneDescription), "clutter" when no object dominates the cell.
+  auto object_name = [&](std::uint32_t id) -> std::string {
+    if (id == radar::kNoObject)
+      return "clutter";
+    const auto& objects = m.scene.description().objects;
+    return id < objects.size() ? objects[id].name : "unknown";
+  };
+
   // detections.json: what the radar sent, frame by frame (values before ICD quantisation).
   nlohmann::ordered_json dets;
   dets["scenario"] = s.name;
@@ -660,7 +711,10 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
       {"rcs", "dBsm"},
       {"*_std", "one-sigma thermal-noise accuracy, same unit as the value"},
       {"range_ambiguous / velocity_ambiguous",
-       "the waveform may have folded this value (unambiguous interval in report.json)"}};
+       "the waveform may have folded this value (unambiguous interval in report.json)"},
+      {"object_id / object",
+       "scene object whose return dominates the cell (truth.json); null / \"clutter\" when "
+       "clutter or noise dominates"}};
   nlohmann::ordered_json frames = nlohmann::ordered_json::array();
   for (const FrameRecord& rec : r.records) {
     nlohmann::ordered_json f;
@@ -676,24 +730,70 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
     for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
       const io::icd::Detection& d = r.detections[rec.first_detection + i];
       const radar::Detection& q = r.sensor_detections[rec.first_detection + i];
-      list.push_back({{"range_m", d.range_m},
-                      {"azimuth_deg", d.azimuth_deg},
-                      {"elevation_deg", d.elevation_deg},
-                      {"radial_velocity_mps", d.radial_velocity_mps},
-                      {"snr_db", d.snr_db},
-                      {"rcs_dbsm", d.rcs_dbsm},
-                      {"range_std_m", q.range_std_m},
-                      {"azimuth_std_deg", q.azimuth_std_rad * kDegPerRad},
-                      {"elevation_std_deg", q.elevation_std_rad * kDegPerRad},
-                      {"radial_velocity_std_mps", q.velocity_std_mps},
-                      {"range_ambiguous", q.range_ambiguous},
-                      {"velocity_ambiguous", q.velocity_ambiguous}});
+      list.push_back(
+          {{"range_m", d.range_m},
+           {"azimuth_deg", d.azimuth_deg},
+           {"elevation_deg", d.elevation_deg},
+           {"radial_velocity_mps", d.radial_velocity_mps},
+           {"snr_db", d.snr_db},
+           {"rcs_dbsm", d.rcs_dbsm},
+           {"range_std_m", q.range_std_m},
+           {"azimuth_std_deg", q.azimuth_std_rad * kDegPerRad},
+           {"elevation_std_deg", q.elevation_std_rad * kDegPerRad},
+           {"radial_velocity_std_mps", q.velocity_std_mps},
+           {"range_ambiguous", q.range_ambiguous},
+           {"velocity_ambiguous", q.velocity_ambiguous},
+           {"object_id", q.object_id == radar::kNoObject ? nlohmann::ordered_json(nullptr)
+                                                         : nlohmann::ordered_json(q.object_id)},
+           {"object", object_name(q.object_id)}});
     }
     f["detections"] = std::move(list);
     frames.push_back(std::move(f));
   }
   dets["frames"] = std::move(frames);
   write_json(dir / "detections.json", dets);
+
+  // truth.json: where the scene's targets really were, frame by frame.
+  {
+    nlohmann::ordered_json truth;
+    truth["scenario"] = s.name;
+    truth["definition"] = {
+        {"objects",
+         "scene objects with a conducting material (the tracer's targets; pure terrain is left "
+         "out) whose reference point is inside the field of view and within max_range_m"},
+        {"reference_point", "centre of the object's world axis-aligned bounding box at the frame"},
+        {"range_m", "antenna phase centre to the reference point"},
+        {"azimuth_deg", "antenna frame, positive right of boresight"},
+        {"elevation_deg", "antenna frame, positive up"},
+        {"radial_velocity_mps",
+         "range rate of the reference point, positive receding, ownship motion included"}};
+    nlohmann::ordered_json objs = nlohmann::ordered_json::array();
+    for (std::uint32_t id : m.truth_objects)
+      objs.push_back({{"object_id", id}, {"object", object_name(id)}});
+    truth["objects"] = std::move(objs);
+    truth["overflowed"] = r.truth_overflows;
+    nlohmann::ordered_json tframes = nlohmann::ordered_json::array();
+    for (const FrameRecord& rec : r.records) {
+      nlohmann::ordered_json f;
+      f["frame_counter"] = rec.header.frame_counter;
+      f["time_s"] = rec.time_s;
+      f["ownship_valid"] = rec.ownship_valid;
+      nlohmann::ordered_json list = nlohmann::ordered_json::array();
+      for (std::uint32_t i = 0; i < rec.truth_count; ++i) {
+        const ObjectTruth& t = r.truth[rec.first_truth + i];
+        list.push_back({{"object_id", t.object_id},
+                        {"object", object_name(t.object_id)},
+                        {"range_m", t.range_m},
+                        {"azimuth_deg", t.azimuth_rad * kDegPerRad},
+                        {"elevation_deg", t.elevation_rad * kDegPerRad},
+                        {"radial_velocity_mps", t.radial_velocity_mps}});
+      }
+      f["objects"] = std::move(list);
+      tframes.push_back(std::move(f));
+    }
+    truth["frames"] = std::move(tframes);
+    write_json(dir / "truth.json", truth);
+  }
 
   // report.json: the run's summary.
   nlohmann::ordered_json rep;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "emulator/scenario.hpp"
+#include "emulator/truth.hpp"
 #include "io/can_frame.hpp"
 #include "io/canaerospace.hpp"
 #include "io/detection_icd.hpp"
@@ -56,6 +57,8 @@ struct FrameRecord {
   io::icd::Header header{};
   std::uint32_t first_detection = 0;  ///< index into RunResult::detections
   std::uint32_t detection_count = 0;
+  std::uint32_t first_truth = 0;  ///< index into RunResult::truth
+  std::uint32_t truth_count = 0;  ///< objects in the beam (truth.json)
   bool late = false;
   bool sent = true;  ///< false: stale state with stale_output "silent", nothing was sent
   bool ownship_valid = false;
@@ -97,6 +100,7 @@ struct RunResult {
   std::uint64_t bus_rx_overflows = 0;
   std::uint64_t record_overflows = 0;      ///< frames not kept in logs (record_frames_max)
   std::uint64_t trace_events_dropped = 0;  ///< stage spans not kept for --trace-events
+  std::uint64_t truth_overflows = 0;       ///< in-beam objects not kept in truth.json (bound)
   std::uint64_t sink_lists = 0;            ///< detection lists the avionics sink reassembled
   std::uint64_t sink_malformed = 0;
   std::array<std::uint64_t, 4> injected_malformed{};  ///< by sim_bus::MalformedKind
@@ -111,6 +115,8 @@ struct RunResult {
   /// The sensor's own view of each recorded detection (same index as `detections`): its
   /// one-sigma accuracies and ambiguity flags, which the ICD does not carry.
   std::vector<radar::Detection> sensor_detections;
+  /// Objects in the beam per recorded frame (FrameRecord::first_truth / truth_count).
+  std::vector<ObjectTruth> truth;
 };
 
 class ClosedLoop {
