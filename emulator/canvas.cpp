@@ -20,6 +20,17 @@ Canvas::Canvas(int width, int height, Rgb background)
   }
 }
 
+void Canvas::blit(const Canvas& src, int x, int y) noexcept {
+  for (int sy = 0; sy < src.h_; ++sy) {
+    for (int sx = 0; sx < src.w_; ++sx) {
+      const std::size_t i = (static_cast<std::size_t>(sy) * static_cast<std::size_t>(src.w_) +
+                             static_cast<std::size_t>(sx)) *
+                            3;
+      put(x + sx, y + sy, Rgb{src.px_[i], src.px_[i + 1], src.px_[i + 2]});
+    }
+  }
+}
+
 void Canvas::put(int x, int y, Rgb c) noexcept {
   if (x < 0 || y < 0 || x >= w_ || y >= h_)
     return;

@@ -18,6 +18,7 @@ class Canvas {
   void put(int x, int y, Rgb c) noexcept;                     ///< clipped to the canvas
   void rect(int x0, int y0, int x1, int y1, Rgb c) noexcept;  ///< filled, inclusive
   void line(int x0, int y0, int x1, int y1, Rgb c) noexcept;  ///< Bresenham
+  void blit(const Canvas& src, int x, int y) noexcept;        ///< src's top-left at (x, y), clipped
   /// Text (stb_easy_font, about 6 x 12 pixels per character at scale 1), top-left at (x, y).
   void text(int x, int y, const std::string& s, Rgb c, int scale = 1);
   [[nodiscard]] static int text_width(const std::string& s, int scale = 1);

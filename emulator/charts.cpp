@@ -14,12 +14,14 @@ namespace {
 constexpr int kWidth = 1000, kHeight = 640;
 constexpr int kLeft = 90, kRight = 30, kTop = 50, kBottom = 70;
 const Rgb kBackground{255, 255, 255}, kInk{30, 30, 30}, kGrid{225, 225, 225};
-constexpr std::array<Rgb, 6> kPalette{{{31, 119, 180},
+constexpr std::array<Rgb, 8> kPalette{{{31, 119, 180},
                                        {214, 39, 40},
                                        {44, 160, 44},
                                        {255, 127, 14},
                                        {148, 103, 189},
-                                       {23, 190, 207}}};
+                                       {23, 190, 207},
+                                       {30, 30, 30},
+                                       {140, 86, 75}}};
 
 std::string format_tick(double v) {
   char buf[32];
@@ -86,6 +88,10 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
 }
 
 void write_line_chart_png(const LineChart& chart, const std::filesystem::path& path) {
+  render_line_chart(chart).write_png(path);
+}
+
+Canvas render_line_chart(const LineChart& chart) {
   double x0 = std::numeric_limits<double>::max(), x1 = -x0, y0 = x0, y1 = -x0;
   for (const Series& s : chart.series) {
     if (s.x.size() != s.y.size())
@@ -149,7 +155,7 @@ void write_line_chart_png(const LineChart& chart, const std::filesystem::path& p
     c.rect(lx, ly + 5, lx + 24, ly + 7, col);
     c.text(lx + 32, ly, s.label, kInk, 2);
   }
-  c.write_png(path);
+  return c;
 }
 
 void write_heatmap_png(const Heatmap& m, const std::filesystem::path& path) {

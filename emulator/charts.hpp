@@ -32,6 +32,8 @@ struct Heatmap {
 /// Throw std::runtime_error naming the path on write failure, std::invalid_argument for empty or
 /// inconsistent data.
 void write_line_chart_png(const LineChart& chart, const std::filesystem::path& path);
+/// The same chart as a 1000 x 640 canvas (to combine several charts into one picture).
+[[nodiscard]] Canvas render_line_chart(const LineChart& chart);
 void write_heatmap_png(const Heatmap& map, const std::filesystem::path& path);
 
 /// Tick positions at 1, 2 or 5 times a power of ten covering [lo, hi] with about `target`

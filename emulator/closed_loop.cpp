@@ -15,6 +15,9 @@
 #include "io/candump.hpp"
 #include "io/modbus.hpp"
 #include "io/modbus_map.hpp"
+#include "radar/materials.hpp"
+#include "radar/propagation/itu.hpp"
+#include "radar/propagation/path.hpp"
 #include "scene/airport_gen.hpp"
 #include "scene/default_scene.hpp"
 #include "scene/geo.hpp"
@@ -37,6 +40,11 @@ namespace {
 
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr std::uint8_t kFaultyNodeId = 99;
+// Spans a frame puts on the --trace-events timeline: input, scene_update, trace, sensor, output,
+// frame.
+constexpr std::size_t kTimelineStagesPerFrame = 6;
+// Bound on the truth.json entries a run keeps (40 bytes each); beyond it they are counted.
+constexpr std::size_t kTruthEntriesMax = 1u << 20;
 
 scene::SceneDescription scene_description(const Scenario& s) {
   if (!s.scene_file.empty())
@@ -135,7 +143,10 @@ struct ClosedLoop::Impl {
         recorded_frames(std::min<std::uint64_t>(s.frames, o.record_frames_max)),
         rx_log("can0", static_cast<std::size_t>(recorded_frames * input_frames_per_frame(s))),
         tx_log("can0", static_cast<std::size_t>(recorded_frames * list_frames(s))),
-        profiler(static_cast<std::size_t>(std::max<std::uint64_t>(recorded_frames, 1))) {
+        profiler(static_cast<std::size_t>(std::max<std::uint64_t>(recorded_frames, 1)),
+                 o.trace_events_file.empty()
+                     ? 0
+                     : static_cast<std::size_t>(recorded_frames) * kTimelineStagesPerFrame) {
     if (s.frames == 0)
       throw std::runtime_error("scenario: frames must be >= 1");
     contributions.resize(tracer.max_contributions());
@@ -158,6 +169,52 @@ struct ClosedLoop::Impl {
       babble_ep = &bus.add_endpoint("babbler", 16);
     }
     setup_backends(s, o);
+    setup_weather(s);
+    // Ground truth covers the objects with a conducting material (the tracer's targets); pure
+    // terrain (ground, pavement, grass) is left out of truth.json.
+    const std::vector<radar::RadarMaterial> mats = radar::resolve_materials(scene.materials());
+    const auto& desc = scene.description();
+    for (std::size_t i = 0; i < desc.objects.size(); ++i) {
+      for (std::uint16_t k : desc.objects[i].mesh.triangle_material) {
+        if (k < mats.size() && mats[k].conductor) {
+          truth_objects.push_back(static_cast<std::uint32_t>(i));
+          break;
+        }
+      }
+    }
+    truth_capacity = std::min<std::size_t>(
+        static_cast<std::size_t>(recorded_frames) * truth_objects.size(), kTruthEntriesMax);
+  }
+
+  // [weather]: the one-way specific attenuation at the carrier, built once from the ITU-R
+  // models (radar/propagation/path.hpp sums P.676 gases, P.838 rain and P.840 fog). The SBR
+  // transmits vertical polarisation (radar/em/sbr.cpp), so rain takes P.838's tilt pi/2.
+  void setup_weather(const Scenario& s) {
+    const WeatherSpec& w = s.weather;
+    if (!w.enabled)
+      return;
+    const double f = s.sbr.carrier_hz;
+    const radar::Atmosphere air{w.pressure_hpa, w.temperature_k, w.humidity_gm3};
+    constexpr double kTiltVertical = std::numbers::pi / 2.0;
+    try {
+      radar::MediumSpec medium;
+      medium.name = w.condition;
+      medium.atmosphere = air;
+      medium.rain_mm_per_h = w.rain_mm_per_h;
+      medium.liquid_water_gm3 = w.fog_water_gm3;
+      const radar::PathAttenuation path(f, kTiltVertical, std::span(&medium, 1));
+      weather_db_per_m = path.specific_db_per_m(0);
+      weather_gas_db_per_km = radar::gaseous_specific_attenuation(f, air).total_db_per_km();
+      weather_rain_db_per_km =
+          radar::rain_specific_attenuation_db_per_km(f, w.rain_mm_per_h, 0.0, kTiltVertical);
+      if (w.fog_water_gm3 > 0.0) {
+        weather_fog_db_per_km =
+            radar::cloud_fog_specific_attenuation_db_per_km(f, w.fog_water_gm3, w.temperature_k);
+      }
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error("scenario: [weather] at carrier_hz " + std::to_string(f) + ": " +
+                               e.what());
+    }
   }
 
   // Hardware CAN, Modbus navigation and the Modbus detection table (setup; throws with context).
@@ -285,6 +342,10 @@ struct ClosedLoop::Impl {
   io::CandumpRecorder rx_log;
   io::CandumpRecorder tx_log;
   timing::StageProfiler profiler;
+  double weather_db_per_m = 0.0;  ///< one-way specific attenuation [dB/m]; 0: free space
+  double weather_gas_db_per_km = 0.0, weather_rain_db_per_km = 0.0, weather_fog_db_per_km = 0.0;
+  std::vector<std::uint32_t> truth_objects;  ///< objects truth.json covers
+  std::size_t truth_capacity = 0;
   std::vector<radar::Contribution> contributions;
   std::vector<radar::Detection> detections;
   std::vector<io::icd::Detection> icd_detections;
@@ -336,6 +397,7 @@ RunResult ClosedLoop::run() {
   r.records.reserve(static_cast<std::size_t>(m.recorded_frames));
   r.detections.reserve(static_cast<std::size_t>(m.recorded_frames) * s.sensor.max_detections);
   r.sensor_detections.reserve(r.detections.capacity());
+  r.truth.reserve(m.truth_capacity);
   r.detections_min = std::numeric_limits<std::uint64_t>::max();
   r.field_age_max_s.fill(0.0);
   r.field_stale_frames.fill(0);
@@ -367,6 +429,7 @@ RunResult ClosedLoop::run() {
   for (std::uint64_t done = 0; done < s.frames; ++done) {
     const timing::Tick tick = scheduler.wait_next();
     const std::int64_t frame_start_wall = wall.now_ns();
+    m.profiler.set_frame(done);
     const std::int64_t since_start_ns = tick.deadline_ns - start_ns;
     const double t_s = static_cast<double>(since_start_ns) * 1e-9;
     const std::int64_t bus_now_ns = s.epoch_unix_ns + since_start_ns;
@@ -470,6 +533,8 @@ RunResult ClosedLoop::run() {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kTrace);
       if (valid)
         n_contrib = m.tracer.trace(pose, m.contributions, r.trace);  // accumulates
+      // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
+      radar::apply_two_way_loss(std::span(m.contributions.data(), n_contrib), m.weather_db_per_m);
     }
     // ---- sensor: cells, CFAR, detections ----
     std::size_t n_det = 0;
@@ -535,6 +600,29 @@ RunResult ClosedLoop::run() {
         rec.sent = send_list;
         rec.ownship_valid = valid;
         rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
+        rec.first_truth = static_cast<std::uint32_t>(r.truth.size());
+        if (valid) {
+          // Ground truth: each target whose box centre is inside the field of view and range.
+          const std::span<const scene::ObjectState> states = m.scene.objects();
+          for (std::uint32_t id : m.truth_objects) {
+            const scene::ObjectState& st = states[id];
+            const ObjectTruth t =
+                point_truth(pose, 0.5 * (st.bounds_min_m + st.bounds_max_m), st.velocity_mps);
+            if (t.range_m > s.sbr.max_range_m || t.azimuth_rad < s.sbr.azimuth_min_rad ||
+                t.azimuth_rad > s.sbr.azimuth_max_rad ||
+                t.elevation_rad < s.sbr.elevation_min_rad ||
+                t.elevation_rad > s.sbr.elevation_max_rad) {
+              continue;
+            }
+            if (r.truth.size() == r.truth.capacity()) {
+              ++r.truth_overflows;
+              continue;
+            }
+            r.truth.push_back(t);
+            r.truth.back().object_id = id;
+            ++rec.truth_count;
+          }
+        }
         r.records.push_back(rec);
         r.detections.insert(r.detections.end(), m.icd_detections.begin(),
                             m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
@@ -542,8 +630,9 @@ RunResult ClosedLoop::run() {
                                    m.detections.begin() + static_cast<std::ptrdiff_t>(n_det));
       }
     }
-    const std::int64_t frame_ns = wall.now_ns() - frame_start_wall;
-    m.profiler.record(timing::Stage::kFrame, frame_ns);
+    const std::int64_t frame_end_wall = wall.now_ns();
+    const std::int64_t frame_ns = frame_end_wall - frame_start_wall;
+    m.profiler.record_span(timing::Stage::kFrame, frame_start_wall, frame_end_wall);
     if (frame_ns > period_ns)
       ++r.frames_over_budget;
 
@@ -573,6 +662,7 @@ RunResult ClosedLoop::run() {
     r.replay_frames_left = m.options.replay_input.size() - m.replay_next;
   r.bus_rx_overflows = m.radar_ep.rx_overflows() + m.avionics.rx_overflows();
   r.record_overflows = m.rx_log.overflowed() + m.tx_log.overflowed();
+  r.trace_events_dropped = m.profiler.events_dropped();
   r.sink_lists = m.sink.lists_completed();
   r.sink_malformed = m.sink.decoder().malformed() + m.sink.decoder().orphans();
   for (std::size_t k = 0; k < r.injected_malformed.size(); ++k) {
@@ -601,6 +691,14 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
       throw std::runtime_error(path.string() + ": write failed");
   };
 
+  // Scene object names (scene::SceneDescription), "clutter" when no object dominates the cell.
+  auto object_name = [&](std::uint32_t id) -> std::string {
+    if (id == radar::kNoObject)
+      return "clutter";
+    const auto& objects = m.scene.description().objects;
+    return id < objects.size() ? objects[id].name : "unknown";
+  };
+
   // detections.json: what the radar sent, frame by frame (values before ICD quantisation).
   nlohmann::ordered_json dets;
   dets["scenario"] = s.name;
@@ -613,7 +711,10 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
       {"rcs", "dBsm"},
       {"*_std", "one-sigma thermal-noise accuracy, same unit as the value"},
       {"range_ambiguous / velocity_ambiguous",
-       "the waveform may have folded this value (unambiguous interval in report.json)"}};
+       "the waveform may have folded this value (unambiguous interval in report.json)"},
+      {"object_id / object",
+       "scene object whose return dominates the cell (truth.json); null / \"clutter\" when "
+       "clutter or noise dominates"}};
   nlohmann::ordered_json frames = nlohmann::ordered_json::array();
   for (const FrameRecord& rec : r.records) {
     nlohmann::ordered_json f;
@@ -629,24 +730,70 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
     for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
       const io::icd::Detection& d = r.detections[rec.first_detection + i];
       const radar::Detection& q = r.sensor_detections[rec.first_detection + i];
-      list.push_back({{"range_m", d.range_m},
-                      {"azimuth_deg", d.azimuth_deg},
-                      {"elevation_deg", d.elevation_deg},
-                      {"radial_velocity_mps", d.radial_velocity_mps},
-                      {"snr_db", d.snr_db},
-                      {"rcs_dbsm", d.rcs_dbsm},
-                      {"range_std_m", q.range_std_m},
-                      {"azimuth_std_deg", q.azimuth_std_rad * kDegPerRad},
-                      {"elevation_std_deg", q.elevation_std_rad * kDegPerRad},
-                      {"radial_velocity_std_mps", q.velocity_std_mps},
-                      {"range_ambiguous", q.range_ambiguous},
-                      {"velocity_ambiguous", q.velocity_ambiguous}});
+      list.push_back(
+          {{"range_m", d.range_m},
+           {"azimuth_deg", d.azimuth_deg},
+           {"elevation_deg", d.elevation_deg},
+           {"radial_velocity_mps", d.radial_velocity_mps},
+           {"snr_db", d.snr_db},
+           {"rcs_dbsm", d.rcs_dbsm},
+           {"range_std_m", q.range_std_m},
+           {"azimuth_std_deg", q.azimuth_std_rad * kDegPerRad},
+           {"elevation_std_deg", q.elevation_std_rad * kDegPerRad},
+           {"radial_velocity_std_mps", q.velocity_std_mps},
+           {"range_ambiguous", q.range_ambiguous},
+           {"velocity_ambiguous", q.velocity_ambiguous},
+           {"object_id", q.object_id == radar::kNoObject ? nlohmann::ordered_json(nullptr)
+                                                         : nlohmann::ordered_json(q.object_id)},
+           {"object", object_name(q.object_id)}});
     }
     f["detections"] = std::move(list);
     frames.push_back(std::move(f));
   }
   dets["frames"] = std::move(frames);
   write_json(dir / "detections.json", dets);
+
+  // truth.json: where the scene's targets really were, frame by frame.
+  {
+    nlohmann::ordered_json truth;
+    truth["scenario"] = s.name;
+    truth["definition"] = {
+        {"objects",
+         "scene objects with a conducting material (the tracer's targets; pure terrain is left "
+         "out) whose reference point is inside the field of view and within max_range_m"},
+        {"reference_point", "centre of the object's world axis-aligned bounding box at the frame"},
+        {"range_m", "antenna phase centre to the reference point"},
+        {"azimuth_deg", "antenna frame, positive right of boresight"},
+        {"elevation_deg", "antenna frame, positive up"},
+        {"radial_velocity_mps",
+         "range rate of the reference point, positive receding, ownship motion included"}};
+    nlohmann::ordered_json objs = nlohmann::ordered_json::array();
+    for (std::uint32_t id : m.truth_objects)
+      objs.push_back({{"object_id", id}, {"object", object_name(id)}});
+    truth["objects"] = std::move(objs);
+    truth["overflowed"] = r.truth_overflows;
+    nlohmann::ordered_json tframes = nlohmann::ordered_json::array();
+    for (const FrameRecord& rec : r.records) {
+      nlohmann::ordered_json f;
+      f["frame_counter"] = rec.header.frame_counter;
+      f["time_s"] = rec.time_s;
+      f["ownship_valid"] = rec.ownship_valid;
+      nlohmann::ordered_json list = nlohmann::ordered_json::array();
+      for (std::uint32_t i = 0; i < rec.truth_count; ++i) {
+        const ObjectTruth& t = r.truth[rec.first_truth + i];
+        list.push_back({{"object_id", t.object_id},
+                        {"object", object_name(t.object_id)},
+                        {"range_m", t.range_m},
+                        {"azimuth_deg", t.azimuth_rad * kDegPerRad},
+                        {"elevation_deg", t.elevation_rad * kDegPerRad},
+                        {"radial_velocity_mps", t.radial_velocity_mps}});
+      }
+      f["objects"] = std::move(list);
+      tframes.push_back(std::move(f));
+    }
+    truth["frames"] = std::move(tframes);
+    write_json(dir / "truth.json", truth);
+  }
 
   // report.json: the run's summary.
   nlohmann::ordered_json rep;
@@ -803,6 +950,35 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
             static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
           {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
   }
+  {
+    // The atmosphere the returns crossed and its two-way loss at reference ranges.
+    const WeatherSpec& w = s.weather;
+    nlohmann::ordered_json weather;
+    if (!w.enabled) {
+      weather["condition"] = "none (no [weather] table: free space)";
+    } else {
+      constexpr double kReferenceRangeM = 1000.0;
+      weather = {{"condition", w.condition},
+                 {"rain_rate_mmph", w.rain_mm_per_h},
+                 {"fog_water_gpm3", w.fog_water_gm3},
+                 {"humidity_gpm3", w.humidity_gm3},
+                 {"temperature_c", w.temperature_k - 273.15},
+                 {"pressure_hpa", w.pressure_hpa},
+                 {"models",
+                  "ITU-R P.676-13 (gases), P.838-3 (rain, vertical polarisation), "
+                  "P.840-9 (fog)"},
+                 {"carrier_hz", s.sbr.carrier_hz},
+                 {"one_way_db_per_km",
+                  {{"gases", m.weather_gas_db_per_km},
+                   {"rain", m.weather_rain_db_per_km},
+                   {"fog", m.weather_fog_db_per_km},
+                   {"total", m.weather_db_per_m * 1e3}}},
+                 {"reference_range_m", kReferenceRangeM},
+                 {"two_way_loss_db_at_reference", 2.0 * m.weather_db_per_m * kReferenceRangeM},
+                 {"two_way_loss_db_at_max_range", 2.0 * m.weather_db_per_m * s.sbr.max_range_m}};
+    }
+    rep["weather"] = std::move(weather);
+  }
   rep["trace"] = {{"rays", r.trace.rays},
                   {"target_bundles", r.trace.target_bundles},
                   {"coarsened_bundles", r.trace.coarsened_bundles},
@@ -855,13 +1031,57 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                        {"pinned", r.realtime.pinned},
                        {"warnings", r.realtime.warnings}};
   }
-  rep["outputs"] = {"report.json", "detections.json", "detections.png", "bus_in.log",
-                    "bus_out.log"};
+  rep["outputs"] = {"report.json", "detections.json", "truth.json", "detections.png",
+                    "timing.png",  "bus_in.log",      "bus_out.log"};
+  if (!m.options.trace_events_file.empty()) {
+    rep["trace_events"] = {{"file", m.options.trace_events_file.string()},
+                           {"events", m.profiler.events().size()},
+                           {"dropped", r.trace_events_dropped}};
+  }
   write_json(dir / "report.json", rep);
 
   write_bscope_png(r, s, dir / "detections.png");
+  write_timing_png(m.profiler, 1.0 / s.rate_hz, dir / "timing.png");
   m.rx_log.write_file(dir / "bus_in.log");
   m.tx_log.write_file(dir / "bus_out.log");
+}
+
+void ClosedLoop::write_trace_events() const {
+  const Impl& m = *impl_;
+  const std::filesystem::path& path = m.options.trace_events_file;
+  if (path.empty())
+    return;
+  // Chrome trace-event format ("JSON Object Format", complete events ph "X"): ts and dur in
+  // microseconds; opens in https://ui.perfetto.dev and chrome://tracing.
+  const std::span<const timing::StageEvent> events = m.profiler.events();
+  std::int64_t t0_ns = events.empty() ? 0 : events.front().start_ns;
+  for (const timing::StageEvent& e : events)
+    t0_ns = std::min(t0_ns, e.start_ns);
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const timing::StageEvent& e : events) {
+    list.push_back({{"name", std::string(timing::stage_name(e.stage))},
+                    {"cat", e.stage == timing::Stage::kFrame ? "frame" : "stage"},
+                    {"ph", "X"},
+                    {"ts", static_cast<double>(e.start_ns - t0_ns) * 1e-3},
+                    {"dur", static_cast<double>(e.duration_ns) * 1e-3},
+                    {"pid", 1},
+                    {"tid", 1},
+                    {"args", {{"frame", e.frame}}}});
+  }
+  nlohmann::ordered_json doc;
+  doc["traceEvents"] = std::move(list);
+  doc["displayTimeUnit"] = "ms";
+  doc["otherData"] = {{"scenario", m.scenario.name},
+                      {"rate_hz", m.scenario.rate_hz},
+                      {"dropped_events", m.profiler.events_dropped()}};
+  if (path.has_parent_path()) {
+    std::error_code ec;
+    std::filesystem::create_directories(path.parent_path(), ec);
+  }
+  std::ofstream out(path, std::ios::binary);
+  out << doc.dump() << '\n';
+  if (!out)
+    throw std::runtime_error(path.string() + ": write failed");
 }
 
 }  // namespace radar_emu::emulator

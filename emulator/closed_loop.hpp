@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "emulator/scenario.hpp"
+#include "emulator/truth.hpp"
 #include "io/can_frame.hpp"
 #include "io/canaerospace.hpp"
 #include "io/detection_icd.hpp"
@@ -44,6 +45,9 @@ struct RunOptions {
   /// Serve the detection table as Modbus holding registers: "" (off), "HOST:PORT", ":PORT"
   /// (127.0.0.1), "rtu:DEV:BAUD". Port 0 picks a free port (see modbus_server_address()).
   std::string modbus_server;
+  /// Chrome trace-event JSON of every stage of every kept frame (record_frames_max frames),
+  /// written by write_trace_events(); "" = no timeline is recorded.
+  std::filesystem::path trace_events_file;
 };
 
 /// What one frame put on the bus.
@@ -53,6 +57,8 @@ struct FrameRecord {
   io::icd::Header header{};
   std::uint32_t first_detection = 0;  ///< index into RunResult::detections
   std::uint32_t detection_count = 0;
+  std::uint32_t first_truth = 0;  ///< index into RunResult::truth
+  std::uint32_t truth_count = 0;  ///< objects in the beam (truth.json)
   bool late = false;
   bool sent = true;  ///< false: stale state with stale_output "silent", nothing was sent
   bool ownship_valid = false;
@@ -92,8 +98,10 @@ struct RunResult {
   std::uint64_t bus_frames_in = 0;   ///< frames the radar received
   std::uint64_t bus_frames_out = 0;  ///< frames the radar sent
   std::uint64_t bus_rx_overflows = 0;
-  std::uint64_t record_overflows = 0;  ///< frames not kept in logs (record_frames_max)
-  std::uint64_t sink_lists = 0;        ///< detection lists the avionics sink reassembled
+  std::uint64_t record_overflows = 0;      ///< frames not kept in logs (record_frames_max)
+  std::uint64_t trace_events_dropped = 0;  ///< stage spans not kept for --trace-events
+  std::uint64_t truth_overflows = 0;       ///< in-beam objects not kept in truth.json (bound)
+  std::uint64_t sink_lists = 0;            ///< detection lists the avionics sink reassembled
   std::uint64_t sink_malformed = 0;
   std::array<std::uint64_t, 4> injected_malformed{};  ///< by sim_bus::MalformedKind
   sim_bus::FaultCounters link_faults{};               ///< the radar's receiving side
@@ -107,6 +115,8 @@ struct RunResult {
   /// The sensor's own view of each recorded detection (same index as `detections`): its
   /// one-sigma accuracies and ambiguity flags, which the ICD does not carry.
   std::vector<radar::Detection> sensor_detections;
+  /// Objects in the beam per recorded frame (FrameRecord::first_truth / truth_count).
+  std::vector<ObjectTruth> truth;
 };
 
 class ClosedLoop {
@@ -121,8 +131,13 @@ class ClosedLoop {
   /// Runs scenario.frames frames.
   RunResult run();
 
-  /// Writes report.json, detections.json, bus_in.log and bus_out.log into `dir` (created).
+  /// Writes report.json, detections.json, truth.json, detections.png, timing.png, bus_in.log
+  /// and bus_out.log into `dir` (created).
   void write_outputs(const RunResult& result, const std::filesystem::path& dir) const;
+  /// Writes the stage timeline as Chrome trace-event JSON ({"traceEvents": [...]}, "X" complete
+  /// events, ts and dur in microseconds from the first frame's start, args.frame the frame index)
+  /// to options.trace_events_file. Does nothing when that is empty.
+  void write_trace_events() const;
 
   [[nodiscard]] const Scenario& scenario() const noexcept;
   /// "HOST:PORT" the Modbus detection table is served on ("" when not serving). The server

@@ -89,7 +89,8 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r,
     std::printf("  warning     %s\n", w.c_str());
   if (!out_dir.empty())
     std::printf(
-        "  outputs     %s/{report.json,detections.json,detections.png,bus_in.log,bus_out.log}\n",
+        "  outputs     %s/{report.json,detections.json,truth.json,detections.png,timing.png,"
+        "bus_in.log,bus_out.log}\n",
         out_dir.c_str());
 }
 
@@ -126,6 +127,7 @@ int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const s
   const emu::RunResult result = loop.run();
   if (!out.empty())
     loop.write_outputs(result, out);
+  loop.write_trace_events();
   if (!quiet)
     print_summary(loop, result, out);
   if (!modbus.empty() && linger_s > 0.0) {
@@ -142,6 +144,7 @@ struct BusArgs {
   std::string nav_modbus;
   std::string modbus_server;
   double modbus_linger_s = 0.0;
+  std::string trace_events;
 };
 
 int run_command(const std::string& scenario_file, std::uint64_t frames, const std::string& out,
@@ -162,6 +165,7 @@ int run_command(const std::string& scenario_file, std::uint64_t frames, const st
   options.can = bus.can;
   options.nav_modbus = bus.nav_modbus;
   options.modbus_server = bus.modbus_server;
+  options.trace_events_file = bus.trace_events;
   return execute_loop(scenario, std::move(options), out, quiet, bus.modbus_linger_s);
 }
 
@@ -245,7 +249,9 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}))
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   // The last --out / --frames wins, so wrappers (scripts/run.sh) can set defaults.
-  run->add_option("--out", out, "Directory for report.json, detections.json and the bus logs")
+  run->add_option("--out", out,
+                  "Directory for report.json, detections.json, truth.json, the pictures and the "
+                  "bus logs")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   run->add_flag("--realtime", realtime,
                 "Pace frames on the monotonic wall clock (default: as fast as possible on "
@@ -271,6 +277,9 @@ int main(int argc, char** argv) {
   run->add_option("--modbus-linger-s", bus_args.modbus_linger_s,
                   "Keep serving the final detection table this long after the run [s]")
       ->check(CLI::Range(0.0, 86400.0));
+  run->add_option("--trace-events", bus_args.trace_events,
+                  "Write every stage of every frame as Chrome trace-event JSON to FILE (open in "
+                  "https://ui.perfetto.dev or chrome://tracing)");
 
   CLI::App* replay = app.add_subcommand(
       "replay",

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "emulator/canvas.hpp"
+#include "emulator/charts.hpp"
 
 namespace radar_emu::emulator {
 
@@ -79,6 +80,82 @@ void write_bscope_png(const RunResult& result, const Scenario& s,
     }
   }
   c.write_png(path);
+}
+
+void write_timing_png(const timing::StageProfiler& profiler, double period_s,
+                      const std::filesystem::path& path) {
+  using timing::Stage;
+  const double budget_ms = period_s * 1e3;
+  const std::vector<std::int64_t> frame_ns = profiler.history_ns(Stage::kFrame);
+  const std::size_t n = frame_ns.size();
+  Canvas out(kTimingPngWidth, kTimingPngHeight, Rgb{255, 255, 255});
+
+  LineChart stages;
+  stages.title = "stage time per frame, stacked (budget = frame period)";
+  stages.x_label = "frame (of the last " + std::to_string(n) + " kept)";
+  stages.y_label = "time [ms]";
+  std::vector<double> x(n), cumulative(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    x[i] = static_cast<double>(i);
+  for (Stage st :
+       {Stage::kInput, Stage::kSceneUpdate, Stage::kTrace, Stage::kSensor, Stage::kOutput}) {
+    const std::vector<std::int64_t> h = profiler.history_ns(st);
+    Series s;
+    s.label = st == Stage::kInput         ? "input"
+              : st == Stage::kSceneUpdate ? "+scene"
+                                          : "+" + std::string(timing::stage_name(st));
+    s.x = x;
+    s.y.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      cumulative[i] += i < h.size() ? static_cast<double>(h[i]) * 1e-6 : 0.0;
+      s.y[i] = cumulative[i];
+    }
+    stages.series.push_back(std::move(s));
+  }
+  Series frame{"frame", x, std::vector<double>(n)};
+  for (std::size_t i = 0; i < n; ++i)
+    frame.y[i] = static_cast<double>(frame_ns[i]) * 1e-6;
+  stages.series.push_back(std::move(frame));
+  stages.series.push_back(
+      Series{"budget", {0.0, n > 1 ? static_cast<double>(n - 1) : 1.0}, {budget_ms, budget_ms}});
+  stages.y_min = 0.0;
+  out.blit(render_line_chart(stages), 0, 0);
+
+  // Histogram of frame times: 40 bins from 0 to the larger of the slowest frame and the budget,
+  // drawn as a step outline.
+  LineChart hist;
+  hist.title = "frame-time histogram (" + std::to_string(n) + " frames)";
+  hist.x_label = "frame time [ms]";
+  hist.y_label = "frames";
+  constexpr std::size_t kBins = 40;
+  double top_ms = budget_ms;
+  for (std::int64_t v : frame_ns)
+    top_ms = std::max(top_ms, static_cast<double>(v) * 1e-6);
+  top_ms *= 1.05;  // the budget line clear of the frame
+  const double bin_ms = top_ms / static_cast<double>(kBins);
+  std::array<double, kBins> counts{};
+  for (std::int64_t v : frame_ns) {
+    const auto b = static_cast<std::size_t>(static_cast<double>(v) * 1e-6 / bin_ms);
+    counts[std::min(b, kBins - 1)] += 1.0;
+  }
+  Series steps;
+  steps.label = "frames";
+  steps.x.push_back(0.0);
+  steps.y.push_back(0.0);
+  double count_max = 1.0;
+  for (std::size_t b = 0; b < kBins; ++b) {
+    const double lo = static_cast<double>(b) * bin_ms;
+    steps.x.insert(steps.x.end(), {lo, lo + bin_ms});
+    steps.y.insert(steps.y.end(), {counts[b], counts[b]});
+    count_max = std::max(count_max, counts[b]);
+  }
+  steps.x.push_back(top_ms);
+  steps.y.push_back(0.0);
+  hist.series.push_back(std::move(steps));
+  hist.series.push_back(Series{"budget", {budget_ms, budget_ms}, {0.0, count_max}});
+  hist.y_min = 0.0;
+  out.blit(render_line_chart(hist), 0, kTimingPngHeight / 2);
+  out.write_png(path);
 }
 
 }  // namespace radar_emu::emulator

@@ -6,6 +6,7 @@
 
 #include "emulator/closed_loop.hpp"
 #include "emulator/scenario.hpp"
+#include "timing/profiler.hpp"
 
 namespace radar_emu::emulator {
 
@@ -17,6 +18,14 @@ struct BScopeLayout {
   [[nodiscard]] int x_of(double azimuth_deg) const noexcept;
   [[nodiscard]] int y_of(double range_m) const noexcept;
 };
+
+/// timing.png, 1000 x 1280: above, each stage's time per frame stacked in frame order (input,
+/// + scene update, + trace, + sensor, + output) with the whole frame and the budget (the
+/// period) as lines [ms]; below, the histogram of frame times with the budget marked. Throws
+/// std::runtime_error naming the path on failure.
+inline constexpr int kTimingPngWidth = 1000, kTimingPngHeight = 1280;
+void write_timing_png(const timing::StageProfiler& profiler, double period_s,
+                      const std::filesystem::path& path);
 
 /// Writes the B-scope as PNG. Throws std::runtime_error naming the path on failure.
 void write_bscope_png(const RunResult& result, const Scenario& scenario,

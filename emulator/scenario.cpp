@@ -129,6 +129,15 @@ babble_rate_hz = 0.0          # >0: a node floods the bus with babble_id at this
 babble_id = 0
 babble_start_s = 0.0
 babble_end_s = 0.0            # 0: until the end
+
+# [weather]                   # no table: free space. With one, every return loses the two-way
+#                             # attenuation of ITU-R P.676 (gases), P.838 (rain), P.840 (fog)
+# condition = "clear"         # clear (gases only) | rain | fog | rain_fog
+# rain_rate_mmph = 4.0        # rain, rain_fog (default 4: moderate rain)
+# fog_water_gpm3 = 0.05       # fog, rain_fog: liquid water (0.05 medium fog, 0.5 thick)
+# humidity_gpm3 = 7.5         # water-vapour density
+# temperature_c = 15.0
+# pressure_hpa = 1013.25      # dry-air pressure
 )";
 
 class TableReader {
@@ -258,6 +267,43 @@ class TableReader {
   std::set<std::string> allowed_;
 };
 
+// [weather]: the condition picks which precipitation is present; its amount defaults to a
+// typical value: moderate rain 4 mm/h, medium fog 0.05 g/m^3 (visibility about 300 m; ITU-R
+// P.840-4 sec. 2 gives 0.05 g/m^3 for medium and 0.5 g/m^3 for thick fog, about 50 m).
+void apply_weather(Scenario& s, const toml::table& root, const std::string& origin) {
+  if (root.get("weather") == nullptr)
+    return;
+  WeatherSpec& w = s.weather;
+  w.enabled = true;
+  const TableReader t(root, "weather", origin,
+                      {"condition", "rain_rate_mmph", "fog_water_gpm3", "humidity_gpm3",
+                       "temperature_c", "pressure_hpa"});
+  t.string("condition", w.condition);
+  const bool rain = w.condition == "rain" || w.condition == "rain_fog";
+  const bool fog = w.condition == "fog" || w.condition == "rain_fog";
+  if (!rain && !fog && w.condition != "clear") {
+    t.fail("condition", "unknown condition '" + w.condition + "' (clear, rain, fog, rain_fog)");
+  }
+  double rain_mmph = -1.0, fog_gpm3 = -1.0;  // < 0: not given
+  t.number("rain_rate_mmph", rain_mmph, 0.0, 300.0);
+  t.number("fog_water_gpm3", fog_gpm3, 0.0, 5.0);
+  if (rain && rain_mmph == 0.0)
+    t.fail("rain_rate_mmph", "must be > 0 with condition \"" + w.condition + "\"");
+  if (!rain && rain_mmph > 0.0)
+    t.fail("rain_rate_mmph", "must be 0 with condition \"" + w.condition + "\" (or use \"rain\")");
+  if (fog && fog_gpm3 == 0.0)
+    t.fail("fog_water_gpm3", "must be > 0 with condition \"" + w.condition + "\"");
+  if (!fog && fog_gpm3 > 0.0)
+    t.fail("fog_water_gpm3", "must be 0 with condition \"" + w.condition + "\" (or use \"fog\")");
+  w.rain_mm_per_h = rain ? (rain_mmph > 0.0 ? rain_mmph : 4.0) : 0.0;
+  w.fog_water_gm3 = fog ? (fog_gpm3 > 0.0 ? fog_gpm3 : 0.05) : 0.0;
+  t.number("humidity_gpm3", w.humidity_gm3, 0.0, 50.0);
+  double temperature_c = w.temperature_k - 273.15;
+  t.number("temperature_c", temperature_c, -40.0, 50.0);
+  w.temperature_k = temperature_c + 273.15;
+  t.number("pressure_hpa", w.pressure_hpa, 300.0, 1100.0);
+}
+
 void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   toml::table root;
   try {
@@ -270,8 +316,8 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   }
   const TableReader top(root, "", origin, {"name"});
   for (const auto& [key, value] : root) {
-    static const std::set<std::string> kTables{"run",     "scene", "ownship",  "input", "output",
-                                               "antenna", "radar", "detector", "faults"};
+    static const std::set<std::string> kTables{"run",     "scene", "ownship",  "input",  "output",
+                                               "antenna", "radar", "detector", "faults", "weather"};
     if (value.is_table() && !kTables.contains(std::string(key.str()))) {
       top.fail(key.str(), "unknown table");
     }
@@ -508,6 +554,8 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   faults.number("babble_end_s", babble_end_s, 0.0, 1e9);
   if (babble_end_s > 0.0)
     s.babble.end_s = babble_end_s;
+
+  apply_weather(s, root, origin);
 }
 
 }  // namespace

@@ -16,6 +16,19 @@
 
 namespace radar_emu::emulator {
 
+/// [weather]: the atmosphere between the radar and the scene (ITU-R P.676 gases, P.838 rain,
+/// P.840 fog; radar/propagation/itu.hpp), uniform along every path. Without a [weather] table
+/// the paths are free space (no atmospheric loss), as before the table existed.
+struct WeatherSpec {
+  bool enabled = false;             ///< the scenario has a [weather] table
+  std::string condition = "clear";  ///< clear (gases only), rain, fog, rain_fog
+  double rain_mm_per_h = 0.0;       ///< rain rate [mm/h] (rain, rain_fog)
+  double fog_water_gm3 = 0.0;       ///< cloud/fog liquid water density [g/m^3] (fog, rain_fog)
+  double humidity_gm3 = 7.5;        ///< water-vapour density [g/m^3]
+  double temperature_k = 288.15;
+  double pressure_hpa = 1013.25;  ///< dry-air pressure [hPa]
+};
+
 struct Scenario {
   std::string name;
   // [run]
@@ -67,6 +80,7 @@ struct Scenario {
   sim_bus::StaleConfig stale{};
   bool babbling_node = false;  ///< a node floods the bus (babble.rate_hz > 0)
   sim_bus::BabbleConfig babble{};
+  WeatherSpec weather{};
 };
 
 /// The embedded default scenario, as TOML text (printed by `radar-emu run --print-scenario`).

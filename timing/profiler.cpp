@@ -39,11 +39,36 @@ std::int64_t percentile_ns(std::vector<std::int64_t>& samples_ns, double p) {
   return samples_ns[rank - 1];
 }
 
-StageProfiler::StageProfiler(std::size_t capacity_frames) : capacity_(capacity_frames) {
+StageProfiler::StageProfiler(std::size_t capacity_frames, std::size_t event_capacity)
+    : capacity_(capacity_frames) {
   if (capacity_frames == 0)
     throw std::invalid_argument("StageProfiler: capacity_frames must be > 0");
   for (auto& s : series_)
     s.ring_ns.resize(capacity_frames, 0);
+  events_.resize(event_capacity);
+}
+
+void StageProfiler::record_span(Stage stage, std::int64_t start_ns, std::int64_t end_ns) noexcept {
+  record(stage, end_ns - start_ns);
+  if (events_.empty())
+    return;
+  if (events_used_ == events_.size()) {
+    ++events_dropped_;
+    return;
+  }
+  events_[events_used_++] = StageEvent{frame_, start_ns, end_ns - start_ns, stage};
+}
+
+std::vector<std::int64_t> StageProfiler::history_ns(Stage stage) const {
+  const auto& s = series_[static_cast<std::size_t>(stage)];
+  const std::size_t stored = static_cast<std::size_t>(std::min<std::uint64_t>(s.count, capacity_));
+  std::vector<std::int64_t> out;
+  out.reserve(stored);
+  // The ring's oldest sample is at `next` once it has wrapped, at 0 before.
+  const std::size_t first = s.count > capacity_ ? s.next : 0;
+  for (std::size_t i = 0; i < stored; ++i)
+    out.push_back(s.ring_ns[(first + i) % capacity_]);
+  return out;
 }
 
 void StageProfiler::record(Stage stage, std::int64_t duration_ns) noexcept {

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -41,15 +42,37 @@ struct StageSummary {
 /// Nearest-rank percentile (p in [0, 100]) of `samples_ns` (sorted in place). 0 when empty.
 [[nodiscard]] std::int64_t percentile_ns(std::vector<std::int64_t>& samples_ns, double p);
 
+/// One timed span of one frame, for a trace-event timeline (Chrome trace-event "X" events).
+struct StageEvent {
+  std::uint64_t frame = 0;    ///< frame index (set_frame())
+  std::int64_t start_ns = 0;  ///< clock time the stage started [ns]
+  std::int64_t duration_ns = 0;
+  Stage stage = Stage::kFrame;
+};
+
 class StageProfiler {
  public:
-  explicit StageProfiler(std::size_t capacity_frames);
+  /// `event_capacity`: spans kept for a timeline (0: none); more are counted, not kept.
+  explicit StageProfiler(std::size_t capacity_frames, std::size_t event_capacity = 0);
 
   /// Stores one duration [ns] for `stage`. Real-time safe.
   void record(Stage stage, std::int64_t duration_ns) noexcept;
+  /// Stores the duration of the span [start_ns, end_ns] and, when events are kept, the span
+  /// itself under the current frame index. Real-time safe.
+  void record_span(Stage stage, std::int64_t start_ns, std::int64_t end_ns) noexcept;
+  /// Frame index the following spans belong to. Real-time safe.
+  void set_frame(std::uint64_t frame) noexcept { frame_ = frame; }
 
   /// Summary of one stage (teardown/report time: copies and sorts).
   [[nodiscard]] StageSummary summary(Stage stage) const;
+  /// The stored durations of one stage in recording order [ns] (the last capacity_frames;
+  /// teardown/report time: copies).
+  [[nodiscard]] std::vector<std::int64_t> history_ns(Stage stage) const;
+  /// The kept spans, in recording order, and how many did not fit.
+  [[nodiscard]] std::span<const StageEvent> events() const noexcept {
+    return {events_.data(), events_used_};
+  }
+  [[nodiscard]] std::uint64_t events_dropped() const noexcept { return events_dropped_; }
 
  private:
   struct Series {
@@ -61,6 +84,10 @@ class StageProfiler {
   };
   std::size_t capacity_;
   std::array<Series, kStageCount> series_;
+  std::vector<StageEvent> events_;  ///< sized at construction
+  std::size_t events_used_ = 0;
+  std::uint64_t events_dropped_ = 0;
+  std::uint64_t frame_ = 0;
 };
 
 /// Measures one stage: starts at construction, records at destruction. Real-time safe.
@@ -68,7 +95,7 @@ class ScopedStage {
  public:
   ScopedStage(StageProfiler& profiler, const Clock& clock, Stage stage) noexcept
       : profiler_(profiler), clock_(clock), stage_(stage), start_ns_(clock.now_ns()) {}
-  ~ScopedStage() { profiler_.record(stage_, clock_.now_ns() - start_ns_); }
+  ~ScopedStage() { profiler_.record_span(stage_, start_ns_, clock_.now_ns()); }
   ScopedStage(const ScopedStage&) = delete;
   ScopedStage& operator=(const ScopedStage&) = delete;
 

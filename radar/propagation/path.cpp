@@ -1,7 +1,10 @@
 #include "radar/propagation/path.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
+
+#include "radar/em/sbr.hpp"
 
 namespace radar_emu::radar {
 
@@ -51,6 +54,19 @@ double PathAttenuation::two_way_loss_db(std::span<const PathSegment> segments,
   if (woodland > 0.0)  // P.833 eq. (1) with d gamma summed over the woodland crossed
     one_way += woodland_max_db_ * -std::expm1(-woodland / woodland_max_db_);
   return 2.0 * one_way;
+}
+
+void apply_two_way_loss(std::span<Contribution> contributions, double one_way_db_per_m) noexcept {
+  if (!(one_way_db_per_m > 0.0) || !std::isfinite(one_way_db_per_m))
+    return;
+  // Amplitude factor 10^(-2 gamma r / 20) = exp(-a r), a = gamma ln(10) / 10 (power ratio
+  // 10^(-L/10) of the loss L in dB, amplitude its square root).
+  const double a = one_way_db_per_m * std::numbers::ln10 / 10.0;
+  for (Contribution& c : contributions) {
+    if (!(c.range_m >= 0.0) || !std::isfinite(c.range_m))
+      continue;
+    c.amplitude *= std::exp(-a * c.range_m);
+  }
 }
 
 }  // namespace radar_emu::radar

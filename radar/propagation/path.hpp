@@ -12,6 +12,8 @@
 
 namespace radar_emu::radar {
 
+struct Contribution;  // radar/em/sbr.hpp
+
 /// What fills a stretch of the path, at setup.
 struct MediumSpec {
   std::string name;
@@ -50,5 +52,13 @@ class PathAttenuation {
   std::vector<double> woodland_db_per_m_;
   double woodland_max_db_ = 0.0;
 };
+
+/// Two-way loss of a uniform medium applied to scattering returns: each contribution's amplitude
+/// (sqrt of its RCS-like power, radar/em/sbr.hpp) is multiplied by 10^(-L/20) with
+/// L = 2 gamma r [dB] the loss over the two-way path 2 r (r = range_m, the centre of a diffuse
+/// footprint), gamma the one-way specific attenuation [dB/m] (PathAttenuation). Returns with a
+/// non-finite, negative or zero gamma, or a negative or non-finite range, are left as they are.
+/// Real-time safe: no allocation, no throw.
+void apply_two_way_loss(std::span<Contribution> contributions, double one_way_db_per_m) noexcept;
 
 }  // namespace radar_emu::radar

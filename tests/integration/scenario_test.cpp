@@ -174,3 +174,56 @@ TEST(Scenario, TheSeedsEnhancedVisionRadarExampleLoads) {
   EXPECT_LE(200.0 * s.sensor.processing.waveform.pulses * s.sensor.processing.waveform.pri_s,
             1.0 / s.rate_hz);
 }
+
+TEST(Scenario, WeatherTableDefaultsAndRangeChecks) {
+  // No [weather] table: free space. A table: gases always, precipitation by condition, with the
+  // documented typical amounts when not given.
+  const emu::Scenario none = emu::parse_scenario(emu::default_scenario_toml(), "<default>");
+  EXPECT_FALSE(none.weather.enabled);
+  const emu::Scenario clear = emu::parse_scenario("[weather]\n", "test.toml");
+  EXPECT_TRUE(clear.weather.enabled);
+  EXPECT_EQ(clear.weather.condition, "clear");
+  EXPECT_EQ(clear.weather.rain_mm_per_h, 0.0);
+  EXPECT_EQ(clear.weather.fog_water_gm3, 0.0);
+  EXPECT_DOUBLE_EQ(clear.weather.humidity_gm3, 7.5);
+  EXPECT_DOUBLE_EQ(clear.weather.temperature_k, 288.15);
+  EXPECT_DOUBLE_EQ(clear.weather.pressure_hpa, 1013.25);
+  const emu::Scenario fog = emu::parse_scenario("[weather]\ncondition = \"fog\"\n", "test.toml");
+  EXPECT_DOUBLE_EQ(fog.weather.fog_water_gm3, 0.05);
+  const emu::Scenario both = emu::parse_scenario(
+      "[weather]\ncondition = \"rain_fog\"\nrain_rate_mmph = 12.5\ntemperature_c = -5\n",
+      "test.toml");
+  EXPECT_DOUBLE_EQ(both.weather.rain_mm_per_h, 12.5);
+  EXPECT_DOUBLE_EQ(both.weather.fog_water_gm3, 0.05);
+  EXPECT_NEAR(both.weather.temperature_k, 268.15, 1e-12);
+  EXPECT_NE(error_of("[weather]\ncondition = \"snow\"\n")
+                .find("test.toml: [weather] condition: unknown condition 'snow'"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of("[weather]\nrain_rate_mmph = 5.0\n").find("[weather] rain_rate_mmph: must be 0"),
+      std::string::npos);
+  EXPECT_NE(error_of("[weather]\ncondition = \"rain\"\nrain_rate_mmph = 0\n")
+                .find("rain_rate_mmph: must be > 0"),
+            std::string::npos);
+  EXPECT_NE(error_of("[weather]\ncondition = \"fog\"\nfog_water_gpm3 = 9\n")
+                .find("[weather] fog_water_gpm3"),
+            std::string::npos);
+  EXPECT_NE(error_of("[weather]\nhumidity_gpm3 = -1\n").find("[weather] humidity_gpm3"),
+            std::string::npos);
+  EXPECT_NE(error_of("[weather]\npressure_hpa = 5000\n").find("[weather] pressure_hpa"),
+            std::string::npos);
+  EXPECT_NE(error_of("[weather]\ntemperature_c = 80\n").find("[weather] temperature_c"),
+            std::string::npos);
+  EXPECT_NE(error_of("[weather]\nvisibility_m = 50\n").find("unknown key"), std::string::npos);
+}
+
+TEST(Scenario, TheFogApproachExampleLoads) {
+  const char* root = std::getenv("RADAR_EMU_SOURCE_DIR");
+  if (root == nullptr)
+    GTEST_SKIP() << "RADAR_EMU_SOURCE_DIR is not set (ctest sets it)";
+  const emu::Scenario s =
+      emu::load_scenario(std::filesystem::path(root) / "examples" / "fog_approach.toml");
+  EXPECT_TRUE(s.weather.enabled);
+  EXPECT_EQ(s.weather.condition, "fog");
+  EXPECT_DOUBLE_EQ(s.weather.fog_water_gm3, 0.5);
+}

@@ -9,8 +9,10 @@
 #include <cmath>
 #include <iostream>
 #include <stdexcept>
+#include <vector>
 
 #include "radar/constants.hpp"
+#include "radar/em/sbr.hpp"
 #include "radar/propagation/path.hpp"
 
 namespace radar_emu::radar {
@@ -194,3 +196,35 @@ TEST(PathAttenuation, WoodlandSaturatesOverTheDepthCrossed) {
 
 }  // namespace
 }  // namespace radar_emu::radar
+
+TEST(PathAttenuation, TwoWayLossScalesEachReturnsAmplitudeByItsRange) {
+  // gamma = 3 dB/km one way: a return at 500 m loses 2 x 0.5 x 3 = 3 dB of power, its amplitude
+  // 10^(-3/20); at 0 m nothing. Diffuse returns are scaled the same way (their |A|^2 is power);
+  // the phase is kept; a non-finite range is left alone.
+  using radar_emu::radar::apply_two_way_loss;
+  using radar_emu::radar::Contribution;
+  std::vector<Contribution> c(4);
+  c[0].amplitude = {2.0, -1.0};
+  c[0].range_m = 500.0;
+  c[1].amplitude = {0.5, 0.0};
+  c[1].range_m = 0.0;
+  c[2].amplitude = {0.0, 3.0};
+  c[2].range_m = 2000.0;
+  c[2].coherent = false;
+  c[3].amplitude = {1.0, 1.0};
+  c[3].range_m = std::nan("");
+  apply_two_way_loss(c, 3e-3);
+  EXPECT_NEAR(std::abs(c[0].amplitude), std::sqrt(5.0) * std::pow(10.0, -3.0 / 20.0), 1e-12);
+  EXPECT_NEAR(std::arg(c[0].amplitude), std::atan2(-1.0, 2.0), 1e-12);
+  EXPECT_DOUBLE_EQ(c[1].amplitude.real(), 0.5);
+  EXPECT_NEAR(20.0 * std::log10(3.0 / std::abs(c[2].amplitude)), 12.0, 1e-9);  // 2 x 2 km x 3
+  EXPECT_EQ(c[3].amplitude, std::complex<double>(1.0, 1.0));
+  // No medium (gamma 0, negative or NaN): untouched.
+  for (double g : {0.0, -1.0, std::nan("")}) {
+    std::vector<Contribution> d(1);
+    d[0].amplitude = {1.0, 0.0};
+    d[0].range_m = 100.0;
+    apply_two_way_loss(d, g);
+    EXPECT_EQ(d[0].amplitude, std::complex<double>(1.0, 0.0));
+  }
+}

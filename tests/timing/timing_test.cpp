@@ -166,3 +166,43 @@ TEST(Realtime, RefusalsAreWarningsNotCrashes) {
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_NE(r.warnings[0].find("CPU affinity"), std::string::npos);
 }
+
+TEST(StageProfiler, SpansAreKeptInOrderUpToTheBoundThenCounted) {
+  rt::StageProfiler prof(4, 3);
+  prof.set_frame(7);
+  prof.record_span(rt::Stage::kInput, 100, 150);
+  prof.record_span(rt::Stage::kFrame, 90, 400);
+  prof.set_frame(8);
+  prof.record_span(rt::Stage::kTrace, 500, 530);
+  prof.record_span(rt::Stage::kSensor, 530, 560);  // beyond the 3 kept: counted
+  prof.record(rt::Stage::kOutput, 5);              // a duration alone is no span
+  const auto ev = prof.events();
+  ASSERT_EQ(ev.size(), 3u);
+  EXPECT_EQ(prof.events_dropped(), 1u);
+  EXPECT_EQ(ev[0].frame, 7u);
+  EXPECT_EQ(ev[0].stage, rt::Stage::kInput);
+  EXPECT_EQ(ev[0].start_ns, 100);
+  EXPECT_EQ(ev[0].duration_ns, 50);
+  EXPECT_EQ(ev[1].duration_ns, 310);
+  EXPECT_EQ(ev[2].frame, 8u);
+  EXPECT_EQ(ev[2].stage, rt::Stage::kTrace);
+  // The durations still reach the summaries, dropped span included.
+  EXPECT_EQ(prof.summary(rt::Stage::kSensor).count, 1u);
+  // No event capacity: nothing kept, nothing counted.
+  rt::StageProfiler none(4);
+  none.record_span(rt::Stage::kInput, 0, 10);
+  EXPECT_TRUE(none.events().empty());
+  EXPECT_EQ(none.events_dropped(), 0u);
+}
+
+TEST(StageProfiler, HistoryIsInRecordingOrderAfterTheRingWraps) {
+  rt::StageProfiler prof(3);
+  for (std::int64_t v : {1, 2, 3, 4, 5})
+    prof.record(rt::Stage::kFrame, v);
+  EXPECT_EQ(prof.history_ns(rt::Stage::kFrame), (std::vector<std::int64_t>{3, 4, 5}));
+  rt::StageProfiler short_run(5);
+  short_run.record(rt::Stage::kFrame, 9);
+  short_run.record(rt::Stage::kFrame, 8);
+  EXPECT_EQ(short_run.history_ns(rt::Stage::kFrame), (std::vector<std::int64_t>{9, 8}));
+  EXPECT_TRUE(short_run.history_ns(rt::Stage::kTrace).empty());
+}
