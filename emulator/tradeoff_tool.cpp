@@ -320,6 +320,7 @@ void sphere_case(bool quick, const Log& log, std::vector<Row>& rows, std::vector
     auto add = [&](const std::string& metric, double err, const std::string& ref) {
       rows.push_back({"sphere", "ka", ka, s.ms, s.rays, metric, err, ref, validity});
     };
+    add("po_faceted_sigma_over_pi_a2_db", faceted - norm, "none (value, for independent checks)");
     add("po_faceted_minus_po_closed_form_db", faceted - po, ref_po);
     add("po_faceted_minus_mie_db", faceted - mie, ref_mie);
     add("po_closed_form_minus_mie_db", po - mie, ref_mie);
@@ -871,13 +872,17 @@ void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path) 
     throw std::runtime_error(path.string() + ": write failed");
 }
 
+// Errors below this are drawn at it (a frame whose detections all match to 1e-6 dB would
+// otherwise stretch the log axis over six empty decades).
+constexpr double kChartFloorDb = 0.01;
+
 // Error against cost, one series per (case, knob): the vehicle and profile dB RMS, the frame's
 // mean |SNR error| of matched detections. The reference settings (zero error) are left out.
 Plot summary_plot(const std::vector<Row>& rows) {
   Plot p;
   p.title = "radar-emu tradeoff: error against cost, one series per knob";
   p.x_label = "cost [ms] (wall, 2 threads)";
-  p.y_label = "error [dB]";
+  p.y_label = "error [dB] (floored at 0.01 dB)";
   p.log_x = p.log_y = true;
   for (const char* c : {"vehicle", "profile", "frame"}) {
     for (const char* k : {"rays_per_wavelength", "max_bounces", "target_ray_spacing_m",
@@ -891,7 +896,7 @@ Plot summary_plot(const std::vector<Row>& rows) {
         if (r.validity.rfind("reference", 0) == 0)
           continue;
         s.x.push_back(r.cost_ms);
-        s.y.push_back(r.error);
+        s.y.push_back(std::max(r.error, kChartFloorDb));
       }
       if (s.x.empty())
         continue;
