@@ -19,6 +19,7 @@
 #include "emulator/scenario.hpp"
 #include "emulator/scene_tool.hpp"
 #include "emulator/sigma0_tool.hpp"
+#include "emulator/tradeoff_tool.hpp"
 #include "io/candump.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "scene/gltf.hpp"
@@ -461,6 +462,21 @@ int main(int argc, char** argv) {
   sigma0->add_option("--plot", s0_opt.plot_png, "PNG chart");
   sigma0->add_flag("-q,--quiet", s0_opt.quiet, "No summary");
 
+  CLI::App* tradeoff = app.add_subcommand(
+      "tradeoff",
+      "Cost (wall ms, rays) against error for each fidelity knob, and where methods fail");
+  emu::TradeoffOptions to_opt;
+  std::string to_cases;
+  tradeoff->add_option("--out", to_opt.out_dir,
+                       "Output directory: tradeoff.csv, tradeoff.png and one PNG per case "
+                       "(default tradeoff)");
+  tradeoff->add_option("--cases", to_cases,
+                       "Comma-separated cases of vehicle,profile,frame,sphere,grazing,iem "
+                       "(default all)");
+  tradeoff->add_flag("--quick", to_opt.quick,
+                     "Coarse grids: the whole run in well under a minute (the CI test)");
+  tradeoff->add_flag("-q,--quiet", to_opt.quiet, "No progress and no summary");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -498,6 +514,11 @@ int main(int argc, char** argv) {
         s0_opt.eps_loss = parts.second;
       }
       return emu::run_sigma0_tool(s0_opt);
+    }
+    if (tradeoff->parsed()) {
+      if (!to_cases.empty())
+        to_opt.cases = emu::parse_tradeoff_cases(to_cases);
+      return emu::run_tradeoff_tool(to_opt);
     }
     if (ambiguity->parsed())
       return emu::run_ambiguity_tool(amb_opt);

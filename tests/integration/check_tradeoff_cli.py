@@ -1,0 +1,111 @@
+#!/usr/bin/python3
+"""radar-emu tradeoff --quick end to end through the real binary, its CSV checked in Python:
+  - every case is present, every row has the documented columns, and the PNGs are PNGs;
+  - sphere: the PO facet integrator agrees with the PO closed form
+    sigma / (pi a^2) = 1 - sin(2ka)/(ka) + sin^2(ka)/(ka)^2 (Knott, Shaeffer & Tuley 2004,
+    sec. 5.5), recomputed here, within 0.5 dB for ka >= 5; PO against Mie is worse below ka 2
+    than above ka 20, and every row with ka < 10 carries the "PO invalid" flag;
+  - vehicle: the RCS error falls (within 0.5 dB) as rays_per_wavelength grows from 0.5 rays per
+    wavelength (below it the tubes miss most multi-bounce paths: the error is then that of the
+    missing terms, not a sampling error, and is not monotonic), and the finest non-reference
+    setting beats the coarsest;
+  - frame: for every knob, the finest non-reference setting misses or adds fewer detections than
+    the coarsest (the reference row itself is zero by construction and proves nothing);
+  - iem: rows with ks > 3 are flagged as outside the IEM's validity.
+Usage: check_tradeoff_cli.py RADAR_EMU WORK_DIR"""
+import csv
+import math
+import os
+import sys
+
+from cli_check import check, finish, runner
+
+exe, work = sys.argv[1], sys.argv[2]
+os.makedirs(work, exist_ok=True)
+run = runner(exe)
+run("tradeoff", "--quick", "--out", work, "-q")
+
+with open(os.path.join(work, "tradeoff.csv"), newline="") as f:
+    rows = list(csv.DictReader(f))
+columns = ["case", "knob", "value", "cost_ms", "rays", "metric", "error", "reference", "validity"]
+check(rows and list(rows[0].keys()) == columns, f"CSV columns {columns}")
+for case in ("vehicle", "profile", "frame", "sphere", "grazing", "iem"):
+    check(any(r["case"] == case for r in rows), f"case {case} in the CSV")
+for name in ("tradeoff.png", "tradeoff_sphere.png", "tradeoff_grazing.png", "tradeoff_iem.png",
+             "tradeoff_frame.png"):
+    with open(os.path.join(work, name), "rb") as f:
+        check(f.read(8) == b"\x89PNG\r\n\x1a\n", f"{name} is a PNG")
+for r in rows:
+    check(math.isfinite(float(r["error"])) and float(r["cost_ms"]) >= 0.0,
+          f"finite error and cost: {r}")
+
+
+def sel(case, metric=None, knob=None):
+    return [r for r in rows if r["case"] == case and (metric is None or r["metric"] == metric)
+            and (knob is None or r["knob"] == knob)]
+
+
+# Sphere: the closed form computed here, independently of radar/em/mie.cpp.
+def po_closed_db(ka):
+    return 10 * math.log10(1 - math.sin(2 * ka) / ka + math.sin(ka) ** 2 / ka ** 2)
+
+
+closed = sel("sphere", "po_closed_form_minus_mie_db")
+faceted_vs_closed = {float(r["value"]): float(r["error"])
+                     for r in sel("sphere", "po_faceted_minus_po_closed_form_db")}
+faceted_vs_mie = {float(r["value"]): float(r["error"])
+                  for r in sel("sphere", "po_faceted_minus_mie_db")}
+closed_vs_mie = {float(r["value"]): float(r["error"]) for r in closed}
+check(len(faceted_vs_closed) >= 5, "sphere rows")
+faceted_norm = {float(r["value"]): float(r["error"])
+                for r in sel("sphere", "po_faceted_sigma_over_pi_a2_db")}
+for ka, v in faceted_norm.items():
+    # The integrator against the closed form evaluated here, independently of the C++ code.
+    if ka >= 5:
+        check(abs(v - po_closed_db(ka)) <= 0.5,
+              f"sphere ka {ka}: faceted PO {v:.3f} dB within 0.5 dB of the closed form "
+              f"{po_closed_db(ka):.3f} dB")
+for ka, err in faceted_vs_closed.items():
+    # faceted - Mie - (closed - Mie) = faceted - closed: consistent columns
+    check(abs((faceted_vs_mie[ka] - closed_vs_mie[ka]) - err) < 1e-3, f"sphere ka {ka}: columns")
+    if ka >= 5:
+        check(abs(err) <= 0.5, f"sphere ka {ka}: faceted PO within 0.5 dB of the closed form ({err})")
+low = [abs(e) for ka, e in faceted_vs_mie.items() if ka < 2]
+high = [abs(e) for ka, e in faceted_vs_mie.items() if ka > 20]
+check(low and high and min(low) > max(high),
+      f"PO vs Mie worse below ka 2 ({low}) than above ka 20 ({high})")
+for r in sel("sphere"):
+    flagged = "PO invalid" in r["validity"]
+    check(flagged == (float(r["value"]) < 10), f"sphere ka {r['value']}: validity {r['validity']}")
+print("sphere faceted - closed form:", faceted_vs_closed)
+print("sphere faceted - Mie:", faceted_vs_mie)
+
+# Vehicle: error against rays per wavelength.
+veh = sorted(((float(r["value"]), float(r["error"]), r["validity"])
+              for r in sel("vehicle", knob="rays_per_wavelength")))
+print("vehicle rays_per_wavelength:", veh)
+non_ref = [(v, e) for v, e, val in veh if not val.startswith("reference")]
+check(len(non_ref) >= 3, "vehicle rows")
+from_half = [(v, e) for v, e in non_ref if v >= 0.5]
+for (v0, e0), (v1, e1) in zip(from_half, from_half[1:]):
+    check(e1 <= e0 + 0.5, f"vehicle: error at {v1} rays/lambda ({e1:.3f} dB) <= at {v0} ({e0:.3f})")
+check(non_ref[-1][1] < non_ref[0][1], "vehicle: finest non-reference setting beats the coarsest")
+
+# Frame: missed + added, finest non-reference against coarsest, per knob.
+for knob in ("target_ray_spacing_m", "terrain_ray_spacing_rad", "max_bounces", "pulses"):
+    rs = [r for r in sel("frame", "missed_plus_added", knob)
+          if not r["validity"].startswith("reference")]
+    check(len(rs) >= 2, f"frame {knob}: rows")
+    if len(rs) >= 2:
+        # Knob values run coarse to fine in the CSV.
+        coarse, fine = float(rs[0]["error"]), float(rs[-1]["error"])
+        print(f"frame {knob}: missed+added {coarse} at {rs[0]['value']}, {fine} at {rs[-1]['value']}")
+        check(fine < coarse, f"frame {knob}: finest non-reference ({fine}) beats coarsest ({coarse})")
+
+# IEM: validity flags where ks > 3.
+for r in sel("iem"):
+    if r["metric"].startswith("sigma0_vv_iem_db"):
+        ks = float(r["value"])
+        check(("IEM outside validity" in r["validity"]) == (ks > 3),
+              f"iem ks {ks}: validity '{r['validity']}'")
+finish()
