@@ -335,6 +335,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           // Specular reflection: direction, tube edges and field (law of reflection).
           const glm::dvec3 d_r = mirror(d, n);
           const CVec e_v_r = reflect_field(e_v, d, d_r, n, rc, pec);
+          const CVec e_h_r = reflect_field(e_h, d, d_r, n, rc, pec);
           if (on_bounce != nullptr) {
             BounceEvent ev;
             ev.bounce = bounce;
@@ -343,10 +344,12 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             ev.reflected = d_r;
             ev.field_before = norm(e_v);
             ev.field_after = norm(e_v_r);
+            ev.field_h_before = norm(e_h);
+            ev.field_h_after = norm(e_h_r);
             ev.pec = pec;
             (*on_bounce)(ev);
           }
-          e_h = reflect_field(e_h, d, d_r, n, rc, pec);
+          e_h = e_h_r;
           e_v = e_v_r;
           tube_u = mirror(tube_u, n);
           tube_v = mirror(tube_v, n);

@@ -96,6 +96,8 @@ struct BounceEvent {
   glm::dvec3 reflected{0.0};  ///< unit propagation direction after
   double field_before = 0.0;  ///< |E| of the V-transmit field before and after
   double field_after = 0.0;
+  double field_h_before = 0.0;  ///< |E| of the H-transmit field before and after
+  double field_h_after = 0.0;
   bool pec = true;
 };
 

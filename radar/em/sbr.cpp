@@ -191,10 +191,17 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
     return false;
   double az_lo = 1e9, az_hi = -1e9, el_lo = 1e9, el_hi = -1e9;
   bool behind = false;
-  for (int corner = 0; corner < 8; ++corner) {
+  // The box's corners and, with target_ground_image, those of its mirror image in the horizontal
+  // plane of its base: a ray aimed at the image of a target point meets the ground and then that
+  // point (image method), so the ground-first double bounces start there.
+  const double z_image = 2.0 * o.bounds_min_m.z - o.bounds_max_m.z;
+  const int corners = c.target_ground_image ? 12 : 8;
+  for (int corner = 0; corner < corners; ++corner) {
     const glm::dvec3 p((corner & 1) ? o.bounds_max_m.x : o.bounds_min_m.x,
                        (corner & 2) ? o.bounds_max_m.y : o.bounds_min_m.y,
-                       (corner & 4) ? o.bounds_max_m.z : o.bounds_min_m.z);
+                       corner >= 8    ? z_image
+                       : (corner & 4) ? o.bounds_max_m.z
+                                      : o.bounds_min_m.z);
     const glm::dvec3 a = antenna_from_world * (p - pose.position_m);
     if (a.x <= 0.0)
       behind = true;

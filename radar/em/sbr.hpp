@@ -18,7 +18,9 @@
 //     view is sampled by its own, finer bundle alone.
 //   - A path radiates coherently (PO toward the radar) at every hit from its first target hit on:
 //     radar -> target -> ... and radar -> ground -> target -> ... (the target-ground double
-//     bounce, both orders) are all counted, each by the bundle of its first target.
+//     bounce, both orders) are all counted, each by the bundle of its first target (a bundle
+//     also covers the ground image of its target, SbrConfig::target_ground_image, where the
+//     ground-first rays start).
 //     Terrain-only paths (ground -> wall) radiate nothing coherent: terrain is the diffuse
 //     model's.
 //   - The diffuse clutter of a terrain surface is returned only by a terrain-grid ray at its first
@@ -73,6 +75,10 @@ struct SbrConfig {
   std::size_t max_rays_per_target = 50000;  ///< bundles coarsen beyond this (counted)
   double max_range_m = 6000.0;              ///< rays end here (one-way)
   int max_bounces = 3;                      ///< hits per ray, reflections included (1..16)
+  /// Bundles also cover the mirror image of the target's bounding box in the horizontal plane
+  /// of its base (world z up), where the rays of the ground-first double bounce (radar ->
+  /// ground -> target) start; off: only the box (the target-first order is still traced).
+  bool target_ground_image = true;
   /// Antenna polarisation channel, receive first ("HV": receive H, transmit V). V along a ray
   /// of direction d is the antenna's "up" (-z of the antenna frame) projected perpendicular to
   /// d, H = V x d (right of boresight for a level antenna); so V = -theta_hat, H = -phi_hat of
