@@ -154,27 +154,37 @@ TEST(SbrLoopVsRcs, PlateAndDihedralMatchTheRcsEngine) {
   struct Case {
     sc::TargetSpec spec;
     glm::dvec3 dir;
+    double roll_rad;  // target turned about z (the line of sight of the first cases)
   };
   const Case cases[] = {
-      {{sc::TargetKind::kPlate, 0.25, 0.2, 1.0, 0.0}, {0, 0, 1}},
-      {{sc::TargetKind::kPlate, 0.25, 0.2, 1.0, 0.0}, {0.02, 0.01, 1}},
-      {{sc::TargetKind::kDihedral, 0.3, 0.2, 1.0, 0.0}, {0, 0, 1}},
-      {{sc::TargetKind::kDihedral, 0.3, 0.2, 1.0, 0.0}, {0.15, 0.01, 1}},
+      {{sc::TargetKind::kPlate, 0.25, 0.2, 1.0, 0.0}, {0, 0, 1}, 0.0},
+      {{sc::TargetKind::kPlate, 0.25, 0.2, 1.0, 0.0}, {0.02, 0.01, 1}, 0.0},
+      {{sc::TargetKind::kDihedral, 0.3, 0.2, 1.0, 0.0}, {0, 0, 1}, 0.0},
+      {{sc::TargetKind::kDihedral, 0.3, 0.2, 1.0, 0.0}, {0.15, 0.01, 1}, 0.0},
+      // Rolled 30 deg: all four channels are strong (HV = VH by reciprocity).
+      {{sc::TargetKind::kDihedral, 0.3, 0.2, 1.0, 0.0}, {0, 0, 1}, kPi / 6},
   };
   rd::RcsConfig rc;
   rc.max_bounces = 3;
   rc.rays_per_wavelength = 10.0;
   double worst_db = 0.0, worst_deg = 0.0;
   for (const Case& c : cases) {
-    sc::Scene scene(sc::make_target(c.spec));
+    sc::SceneDescription desc = sc::make_target(c.spec);
+    const double cr = std::cos(c.roll_rad), sr = std::sin(c.roll_rad);
+    desc.objects[0].world_from_body[0] = glm::dvec4(cr, sr, 0, 0);
+    desc.objects[0].world_from_body[1] = glm::dvec4(-sr, cr, 0, 0);
+    sc::Scene scene(std::move(desc));
     const rd::RcsEngine engine(scene, {rd::SurfaceModel{}}, rc);
     const rd::Direction dir = rcs_direction(c.dir);
     rd::ScatteringMatrix s;
     rd::RcsStats rs;
     const double f[1] = {kF};
     engine.compute(dir, dir, f, std::span<rd::ScatteringMatrix>(&s, 1), rs);
-    for (rd::Polarisation pol : {rd::Polarisation::kHH, rd::Polarisation::kVV}) {
-      rd::SbrTracer tracer(scene, narrow(0.01, 0.002, pol));
+    for (rd::Polarisation pol : {rd::Polarisation::kHH, rd::Polarisation::kVV,
+                                 rd::Polarisation::kHV, rd::Polarisation::kVH}) {
+      if (c.roll_rad == 0.0 && (pol == rd::Polarisation::kHV || pol == rd::Polarisation::kVH))
+        continue;  // cross-polar nulls: compared on the rolled dihedral
+      rd::SbrTracer tracer(scene, narrow(0.01, 0.0015, pol));
       const rd::RadarPose pose = looking_at_origin_from(c.dir, range);
       const std::complex<double> loop = referred_sum(trace(tracer, pose), range);
       const std::complex<double> ref = in_tracer_channel(s, pose, c.dir, pol);
