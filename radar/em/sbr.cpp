@@ -314,7 +314,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       // cos(theta_i) with dA_perp = L^2 dOmega. Terrain-catalogue materials take sigma0 of the
       // antenna's channel from their setup-time table (radar/clutter/terrain.hpp); the others
       // are constant gamma, sigma0 = gamma cos(theta_i), so sigma = gamma dA_perp
-      // (Richards 2010, sec. 5.3).
+      // (Richards 2010, sec. 5.3), the same in every channel (the placeholder has none).
       const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, -d);
       const double d_omega = glm::length(glm::cross(u, v));
       const int row = sigma0_row_[hit.material_id];
