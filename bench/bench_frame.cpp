@@ -97,6 +97,21 @@ BENCHMARK(BM_TraceTargetSpacing)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// What a fidelity governor pays to budget a frame before tracing it: plan() over the airport's
+// objects (no ray is shot).
+void BM_TracePlan(benchmark::State& state) {
+  Fixture& f = state.range(0) == 0 ? fixture() : airport_fixture();
+  std::vector<std::size_t> per_object(f.scene.objects().size());
+  radar::TracePlan p;
+  for (auto _ : state) {
+    p = f.tracer.plan(f.pose, {}, per_object);
+    benchmark::DoNotOptimize(p);
+  }
+  state.counters["rays"] = static_cast<double>(p.rays());
+  state.counters["bundles"] = static_cast<double>(p.target_bundles);
+}
+BENCHMARK(BM_TracePlan)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
+
 // The sensor on the traced runway frame. Argument 0: noise-only cells drawn (the default);
 // 1: every cell synthesised (SensorConfig::synthesise_every_cell, the reference): the ratio of
 // the two is what drawing the noise cells saves.

@@ -985,7 +985,9 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                   {"hits", r.trace.hits},
                   {"contributions", r.trace.contributions},
                   {"dropped_contributions", r.trace.dropped_contributions},
-                  {"grazing_skipped", r.trace.grazing_skipped}};
+                  {"grazing_skipped", r.trace.grazing_skipped},
+                  {"dielectric_reflections", r.trace.dielectric_reflections},
+                  {"knob_fallbacks", r.trace.knob_fallbacks}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   rep["sensor"] = {
       {"waveform", radar::waveform_name(wf.kind)},

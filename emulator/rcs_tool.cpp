@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include "emulator/charts.hpp"
@@ -246,11 +247,12 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
       t.surfaces.push_back(def->model);
       continue;
     }
-    const auto catalogue = radar::material_catalogue();
-    auto known = std::find_if(catalogue.begin(), catalogue.end(),
-                              [&](const radar::RadarMaterial& r) { return r.name == m.name; });
-    if (known != catalogue.end() && known->conductor) {
-      t.surfaces.push_back(radar::SurfaceModel{});
+    // The shared material mapping (radar/materials.hpp); the tool sweeps frequencies, so it
+    // takes only the frequency-independent conductors from it and asks for a definition of the
+    // rest.
+    const std::optional<radar::SurfaceModel> known = radar::surface_model(m.name, 1e9);
+    if (known && known->kind == radar::SurfaceModel::Kind::kPec) {
+      t.surfaces.push_back(*known);
       continue;
     }
     throw std::invalid_argument(mesh_path + ": material '" + m.name +

@@ -79,6 +79,7 @@ elevation_beamwidth_deg = 8.0
 monopulse = true            # amplitude-comparison sum and difference channels
 squint_fraction = 0.5       # squint of the monopulse beams, in beamwidths
 efficiency = 0.6            # gain = efficiency x 4 pi / (beamwidth_az x beamwidth_el) unless gain_db
+polarisation = "VV"         # VV | HH | HV | VH (receive first; V = antenna up, H = right)
 
 [radar]
 waveform = "pulsed_lfm"     # pulsed_lfm | fmcw
@@ -365,11 +366,12 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   own.number("attitude_rate_hz", s.attitude_rate_hz, 0.1, 1000.0);
   own.number("navigation_rate_hz", s.navigation_rate_hz, 0.1, 1000.0);
 
-  const TableReader ant(root, "antenna", origin,
-                        {"depression_deg", "azimuth_min_deg", "azimuth_max_deg",
-                         "elevation_min_deg", "elevation_max_deg", "azimuth_cell_deg", "gain_db",
-                         "pattern", "pattern_file", "azimuth_beamwidth_deg",
-                         "elevation_beamwidth_deg", "monopulse", "squint_fraction", "efficiency"});
+  const TableReader ant(
+      root, "antenna", origin,
+      {"depression_deg", "azimuth_min_deg", "azimuth_max_deg", "elevation_min_deg",
+       "elevation_max_deg", "azimuth_cell_deg", "gain_db", "pattern", "pattern_file",
+       "azimuth_beamwidth_deg", "elevation_beamwidth_deg", "monopulse", "squint_fraction",
+       "efficiency", "polarisation"});
   ant.degrees("depression_deg", s.antenna_depression_rad, -90.0, 90.0);
   ant.degrees("azimuth_min_deg", s.sbr.azimuth_min_rad, -89.0, 89.0);
   ant.degrees("azimuth_max_deg", s.sbr.azimuth_max_rad, -89.0, 89.0);
@@ -385,6 +387,34 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   ant.string("pattern_file", pattern_file);
   if (!pattern_file.empty())
     s.pattern_file = pattern_file;
+  {
+    // Receive first, as the RCS tool: "HV" = receive H, transmit V (radar/em/sbr.hpp).
+    std::string pol = "VV";
+    switch (s.sbr.polarisation) {
+      case radar::Polarisation::kHH:
+        pol = "HH";
+        break;
+      case radar::Polarisation::kHV:
+        pol = "HV";
+        break;
+      case radar::Polarisation::kVH:
+        pol = "VH";
+        break;
+      case radar::Polarisation::kVV:
+        break;
+    }
+    ant.string("polarisation", pol);
+    if (pol == "HH")
+      s.sbr.polarisation = radar::Polarisation::kHH;
+    else if (pol == "HV")
+      s.sbr.polarisation = radar::Polarisation::kHV;
+    else if (pol == "VH")
+      s.sbr.polarisation = radar::Polarisation::kVH;
+    else if (pol == "VV")
+      s.sbr.polarisation = radar::Polarisation::kVV;
+    else
+      ant.fail("polarisation", "expected \"VV\", \"HH\", \"HV\" or \"VH\", got \"" + pol + "\"");
+  }
   ant.boolean("monopulse", s.sensor.antenna.monopulse);
   ant.number("squint_fraction", s.sensor.antenna.squint_fraction, 0.05, 0.95);
   radar::PatternKind kind{};

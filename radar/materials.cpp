@@ -67,4 +67,20 @@ std::vector<RadarMaterial> resolve_materials(std::span<const scene::Material> sc
   return out;
 }
 
+std::optional<SurfaceModel> surface_model(std::string_view name, double freq_hz) {
+  if (const clutter::TerrainMaterial* t = clutter::find_terrain_material(name)) {
+    if (t->permittivity_model == clutter::PermittivityModel::kConductor)
+      return SurfaceModel{};
+    SurfaceModel m;
+    m.kind = SurfaceModel::Kind::kDielectric;
+    m.relative_permittivity = clutter::permittivity(*t, freq_hz);
+    return m;
+  }
+  for (const RadarMaterial& m : catalogue()) {
+    if (m.name == name && m.conductor)
+      return SurfaceModel{};
+  }
+  return std::nullopt;
+}
+
 }  // namespace radar_emu::radar

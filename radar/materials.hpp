@@ -8,11 +8,13 @@
 // placeholders of the right order for mm-wave land clutter, chosen by us, until the material
 // catalogue of issue 4 replaces them with sourced, frequency- and polarisation-dependent models.
 
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "radar/em/sbr_core.hpp"
 #include "scene/types.hpp"
 
 namespace radar_emu::radar {
@@ -37,5 +39,15 @@ struct RadarMaterial {
 /// unknown (setup).
 [[nodiscard]] std::vector<RadarMaterial> resolve_materials(
     std::span<const scene::Material> scene_materials);
+
+/// How the material named `name` reflects specularly, for the SBR core (the one mapping of
+/// material names to SurfaceModel, used by the frame tracer and the RCS tool): a perfect
+/// conductor for the conductors of either catalogue (metal, steel, aluminium); a dielectric
+/// half-space with the terrain catalogue's permittivity at `freq_hz` for its other materials
+/// (asphalt, concrete, grass, soil_dry, water, ...; radar/clutter/terrain.hpp names the source
+/// of each permittivity); nullopt for names with no known permittivity (the first catalogue's
+/// placeholder "soil", unknown names). Setup only: may throw std::invalid_argument from the
+/// permittivity models for a frequency outside their range.
+[[nodiscard]] std::optional<SurfaceModel> surface_model(std::string_view name, double freq_hz);
 
 }  // namespace radar_emu::radar

@@ -18,65 +18,6 @@ namespace {
 
 using cplx = std::complex<double>;
 
-// A complex 3-vector as real and imaginary parts (GLM's functions need arithmetic types).
-struct CVec {
-  glm::dvec3 re{0.0}, im{0.0};
-};
-CVec operator+(const CVec& a, const CVec& b) {
-  return {a.re + b.re, a.im + b.im};
-}
-CVec operator-(const CVec& a, const CVec& b) {
-  return {a.re - b.re, a.im - b.im};
-}
-CVec scale(cplx s, const glm::dvec3& v) {
-  return {s.real() * v, s.imag() * v};
-}
-CVec cross(const glm::dvec3& a, const CVec& b) {
-  return {glm::cross(a, b.re), glm::cross(a, b.im)};
-}
-CVec cross(const CVec& a, const glm::dvec3& b) {
-  return {glm::cross(a.re, b), glm::cross(a.im, b)};
-}
-cplx dot(const glm::dvec3& a, const CVec& b) {
-  return {glm::dot(a, b.re), glm::dot(a, b.im)};
-}
-double norm(const CVec& v) {
-  return std::sqrt(glm::dot(v.re, v.re) + glm::dot(v.im, v.im));
-}
-
-// The local reflection of field `e` travelling along `d` off a surface with unit normal `n`
-// facing the wave (n.d < 0), in the basis of ReflectionCoefficients.
-CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r, const glm::dvec3& n,
-                   const ReflectionCoefficients& r, bool pec) {
-  if (pec)  // tangential E flips, normal E stays: E_r = -E + 2 (n.E) n
-    return {2.0 * glm::dot(n, e.re) * n - e.re, 2.0 * glm::dot(n, e.im) * n - e.im};
-  glm::dvec3 e_perp = glm::cross(d, n);
-  double len = glm::length(e_perp);
-  if (len < 1e-12) {  // normal incidence: any tangential direction (take one from the field)
-    e_perp = e.re - glm::dot(e.re, d) * d;
-    if (glm::length(e_perp) < 1e-12 * (norm(e) + 1e-300))
-      e_perp = e.im - glm::dot(e.im, d) * d;
-    len = glm::length(e_perp);
-    if (len == 0.0)
-      return {};
-  }
-  e_perp /= len;
-  const glm::dvec3 e_par_i = glm::cross(e_perp, d), e_par_r = glm::cross(e_perp, d_r);
-  return scale(r.perp * dot(e_perp, e), e_perp) + scale(r.par * dot(e_par_i, e), e_par_r);
-}
-
-// eta J - s x M for the PO currents of the local reflection (header), per unit area.
-CVec po_source(const CVec& e, const glm::dvec3& d, const glm::dvec3& n, const glm::dvec3& s,
-               const ReflectionCoefficients& r, bool pec) {
-  if (pec)
-    return {2.0 * glm::cross(n, glm::cross(d, e.re)), 2.0 * glm::cross(n, glm::cross(d, e.im))};
-  const glm::dvec3 d_r = d - 2.0 * glm::dot(n, d) * n;
-  const CVec e_r = reflect_field(e, d, d_r, n, r, false);
-  const CVec eta_j = cross(n, cross(d, e) + cross(d_r, e_r));
-  const CVec m = cross(e + e_r, n);
-  return eta_j - cross(s, m);
-}
-
 void require(bool ok, const std::string& what) {
   if (!ok)
     throw std::invalid_argument("RCS: " + what);
@@ -96,26 +37,6 @@ struct PathTerm {
 };
 
 }  // namespace
-
-ReflectionCoefficients reflection_coefficients(const SurfaceModel& surface, double cos_incidence,
-                                               double k) noexcept {
-  if (surface.kind == SurfaceModel::Kind::kPec)
-    return {};
-  const double c = std::clamp(cos_incidence, 0.0, 1.0);
-  const double sin2 = 1.0 - c * c;
-  const cplx eps = surface.relative_permittivity;
-  const cplx root = std::sqrt(eps - sin2);  // principal branch: Im <= 0 for lossy eps
-  ReflectionCoefficients r;
-  r.perp = (c - root) / (c + root);
-  r.par = (eps * c - root) / (eps * c + root);
-  if (surface.kind == SurfaceModel::Kind::kCoatedPec) {
-    const cplx beta = k * root;
-    const cplx delay = std::exp(cplx(0.0, -2.0) * beta * surface.thickness_m);
-    r.perp = (r.perp - delay) / (1.0 - r.perp * delay);  // r12 = -1
-    r.par = (r.par + delay) / (1.0 + r.par * delay);     // r12 = +1
-  }
-  return r;
-}
 
 glm::dvec3 unit_vector(const Direction& d) noexcept {
   const double st = std::sin(d.theta_rad);
@@ -396,16 +317,14 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             }
             if (seen) {
               // The tube's footprint on this facet: its edge vectors projected along d.
-              const double n_d = glm::dot(n, d);
-              const glm::dvec3 fu = tube_u - d * (glm::dot(n, tube_u) / n_d);
-              const glm::dvec3 fv = tube_v - d * (glm::dot(n, tube_v) / n_d);
+              const TubeFootprint fp = tube_footprint(tube_u, tube_v, d, n, s);
               PathTerm t;
               t.c =
                   coefficients(po_source(e_h, d, n, s, rc, pec), po_source(e_v, d, n, s, rc, pec));
-              t.area_m2 = glm::length(glm::cross(fu, fv));
+              t.area_m2 = fp.area_m2;
               t.phase_len_m = path_m - glm::dot(s, hit.position_m);
-              t.taper_u_m = 0.5 * glm::dot(s - d, fu);
-              t.taper_v_m = 0.5 * glm::dot(s - d, fv);
+              t.taper_u_m = fp.taper_u_m;
+              t.taper_v_m = fp.taper_v_m;
               row_terms[row].push_back(t);
               ++l_paths;
               ++l_by[static_cast<std::size_t>(bounce)];
@@ -414,8 +333,9 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           if (bounce == config_.max_bounces)
             break;
           // Specular reflection: direction, tube edges and field (law of reflection).
-          const glm::dvec3 d_r = d - 2.0 * glm::dot(n, d) * n;
+          const glm::dvec3 d_r = mirror(d, n);
           const CVec e_v_r = reflect_field(e_v, d, d_r, n, rc, pec);
+          const CVec e_h_r = reflect_field(e_h, d, d_r, n, rc, pec);
           if (on_bounce != nullptr) {
             BounceEvent ev;
             ev.bounce = bounce;
@@ -424,13 +344,15 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             ev.reflected = d_r;
             ev.field_before = norm(e_v);
             ev.field_after = norm(e_v_r);
+            ev.field_h_before = norm(e_h);
+            ev.field_h_after = norm(e_h_r);
             ev.pec = pec;
             (*on_bounce)(ev);
           }
-          e_h = reflect_field(e_h, d, d_r, n, rc, pec);
+          e_h = e_h_r;
           e_v = e_v_r;
-          tube_u -= 2.0 * glm::dot(n, tube_u) * n;
-          tube_v -= 2.0 * glm::dot(n, tube_v) * n;
+          tube_u = mirror(tube_u, n);
+          tube_v = mirror(tube_v, n);
           d = d_r;
           ray.origin_m = hit.position_m;
           ray.direction = d;

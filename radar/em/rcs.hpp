@@ -24,12 +24,12 @@
 // amplitude S_pq (receive p, transmit q) is in metres with sigma_pq = |S_pq|^2 [m^2]:
 //   S = sqrt(4 pi) r e^{jkr} (p . E_s) / |E_i|,
 // so a PEC plate of area A at normal incidence gives S_HH = S_VV = -j k A / sqrt(pi).
-// PO radiation: E_s = -j k e^{-jkr} / (4 pi r) integral [eta J_perp - s x M] e^{jk s.r'} dS'
-// (Balanis, Advanced Engineering Electromagnetics, 2nd ed., 2012, sec. 6.7: far fields of
-// electric and magnetic surface currents), with the
-// PO currents eta J = n x (d_i x E_i + d_r x E_r), M = (E_i + E_r) x n of the local reflection
-// (J = 2 n x H_i, M = 0 on a PEC).
-// Offline product code: allocates, uses TBB worker threads; not for the real-time frame path.
+// The ray-tube and PO machinery is the SBR core shared with the frame tracer
+// (radar/em/sbr_core.hpp). PO radiation: E_s = -j k e^{-jkr} / (4 pi r) integral [eta J_perp - s x
+// M] e^{jk s.r'} dS' (Balanis, Advanced Engineering Electromagnetics, 2nd ed., 2012, sec. 6.7: far
+// fields of electric and magnetic surface currents), with the PO currents eta J = n x (d_i x E_i +
+// d_r x E_r), M = (E_i + E_r) x n of the local reflection (J = 2 n x H_i, M = 0 on a PEC). Offline
+// product code: allocates, uses TBB worker threads; not for the real-time frame path.
 
 #include <array>
 #include <complex>
@@ -40,44 +40,12 @@
 #include <string>
 #include <vector>
 
+#include "radar/em/sbr_core.hpp"
 #include "scene/scene.hpp"
 
 namespace radar_emu::radar {
 
-/// How a surface reflects.
-struct SurfaceModel {
-  enum class Kind : std::uint8_t {
-    kPec,         ///< perfect electric conductor
-    kDielectric,  ///< homogeneous half-space of relative permittivity eps
-    kCoatedPec    ///< a layer of permittivity eps and thickness_m on a PEC
-  };
-  Kind kind = Kind::kPec;
-  /// eps' - j eps'' (exp(+j w t): losses have a negative imaginary part); non-magnetic.
-  std::complex<double> relative_permittivity{1.0, 0.0};
-  double thickness_m = 0.0;  ///< coating thickness (kCoatedPec) [m]
-};
-
-/// Local reflection coefficients in the basis e_perp = unit(d_i x n), e_par = e_perp x d
-/// (incident d_i, reflected d_r): E_r = R_perp (E.e_perp) e_perp + R_par (E.e_par_i) e_par_r.
-/// In this basis a PEC has R_perp = -1, R_par = +1 at every angle.
-struct ReflectionCoefficients {
-  std::complex<double> perp{-1.0, 0.0};
-  std::complex<double> par{1.0, 0.0};
-};
-
-/// Fresnel coefficients of `surface` for a wave meeting it at cos(theta_i) = cos_incidence in
-/// (0, 1] and free-space wavenumber k [rad/m] (used by coatings only):
-/// half-space: Balanis 2012, sec. 5.3 (oblique incidence, perpendicular and parallel
-/// polarisation), non-magnetic, written in the basis above,
-///   R_perp = (cos t - sqrt(eps - sin^2 t)) / (cos t + sqrt(eps - sin^2 t)),
-///   R_par  = (eps cos t - sqrt(eps - sin^2 t)) / (eps cos t + sqrt(eps - sin^2 t));
-/// coated PEC: the single-layer (Airy) sum, Orfanidis, Electromagnetic Waves and Antennas, 2016,
-/// sec. 8.1 (single dielectric slab; oblique incidence as in ch. 7) with r_12 = -1 (perp),
-/// +1 (par): R = (r01 + r12 e^{-2 j beta d}) / (1 + r01 r12 e^{-2 j beta d}),
-/// beta = k sqrt(eps - sin^2 t).
-[[nodiscard]] ReflectionCoefficients reflection_coefficients(const SurfaceModel& surface,
-                                                             double cos_incidence,
-                                                             double wavenumber_rad_per_m) noexcept;
+// SurfaceModel, ReflectionCoefficients and reflection_coefficients(): radar/em/sbr_core.hpp.
 
 /// Where the radar is, seen from the target (design.md).
 struct Direction {
@@ -128,6 +96,8 @@ struct BounceEvent {
   glm::dvec3 reflected{0.0};  ///< unit propagation direction after
   double field_before = 0.0;  ///< |E| of the V-transmit field before and after
   double field_after = 0.0;
+  double field_h_before = 0.0;  ///< |E| of the H-transmit field before and after
+  double field_h_after = 0.0;
   bool pec = true;
 };
 

@@ -15,10 +15,6 @@ namespace radar_emu::radar {
 
 namespace {
 
-double sinc(double x) noexcept {
-  return std::abs(x) < 1e-4 ? 1.0 - x * x / 6.0 : std::sin(x) / x;
-}
-
 void require(bool ok, const char* field, const char* what) {
   if (!ok)
     throw std::invalid_argument(std::string("SBR config: ") + field + " " + what);
@@ -33,6 +29,28 @@ glm::dvec3 v_pol(const glm::dvec3& up, const glm::dvec3& boresight, const glm::d
     n = glm::length(v);
   }
   return v / n;
+}
+
+// The antenna's polarisation vector of channel `h` (H: true, V: false) for a wave along `d`
+// (from the radar): V as above, H = V x d (SbrConfig::polarisation).
+glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
+                      const glm::dvec3& d) {
+  const glm::dvec3 v = v_pol(up, boresight, d);
+  return h ? glm::normalize(glm::cross(v, d)) : v;
+}
+
+clutter::Sigma0Table::Pol sigma0_channel(Polarisation p) {
+  switch (p) {
+    case Polarisation::kHH:
+      return clutter::Sigma0Table::kHH;
+    case Polarisation::kHV:
+      return clutter::Sigma0Table::kHV;
+    case Polarisation::kVH:
+      return clutter::Sigma0Table::kVH;
+    case Polarisation::kVV:
+      break;
+  }
+  return clutter::Sigma0Table::kVV;
 }
 
 }  // namespace
@@ -82,8 +100,19 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
       sigma0_ = clutter::Sigma0Table(specs, clutter::Sigma0Model::kTotal, c.carrier_hz);
   }
 
+  // Specular models at the carrier: the one material mapping shared with the RCS tool.
+  surfaces_.assign(materials_.size(), SurfaceModel{});
+  has_surface_.assign(materials_.size(), 0);
+  for (std::size_t i = 0; i < materials_.size(); ++i) {
+    if (const auto m = surface_model(scene.materials()[i].name, c.carrier_hz)) {
+      surfaces_[i] = *m;
+      has_surface_[i] = 1;
+    }
+  }
+
   const auto& desc = scene.description();
   is_target_.assign(desc.objects.size(), 0);
+  bundled_.assign(desc.objects.size(), 0);
   for (std::size_t i = 0; i < desc.objects.size(); ++i) {
     for (std::uint16_t m : desc.objects[i].mesh.triangle_material) {
       if (materials_[m].conductor) {
@@ -101,28 +130,152 @@ std::size_t SbrTracer::max_contributions() const noexcept {
   return counts_.size() * static_cast<std::size_t>(config_.max_bounces);
 }
 
-void SbrTracer::trace_ray(const RadarPose& pose, double az, double el, double daz, double del,
-                          std::uint32_t owner, bool terrain, Contribution* slot,
-                          std::uint8_t& count, TraceStats& stats) const noexcept {
+SbrTracer::Frame SbrTracer::frame_for(const TraceKnobs& knobs, TraceStats* stats) const noexcept {
+  const SbrConfig& c = config_;
+  Frame f;
+  double scale = knobs.terrain_spacing_scale;
+  if (!(std::isfinite(scale) && scale >= 1.0)) {
+    scale = 1.0;
+    if (stats != nullptr)
+      ++stats->knob_fallbacks;
+  }
+  const double spacing = c.terrain_ray_spacing_rad * scale;
+  if (scale == 1.0) {
+    f.terrain_n_az = n_az_;
+    f.terrain_n_el = n_el_;
+  } else {
+    f.terrain_n_az = std::max<std::size_t>(
+        1, static_cast<std::size_t>(
+               std::ceil((c.azimuth_max_rad - c.azimuth_min_rad) / spacing - 1e-9)));
+    f.terrain_n_el = std::max<std::size_t>(
+        1, static_cast<std::size_t>(
+               std::ceil((c.elevation_max_rad - c.elevation_min_rad) / spacing - 1e-9)));
+  }
+  f.terrain_daz_rad = (c.azimuth_max_rad - c.azimuth_min_rad) / static_cast<double>(f.terrain_n_az);
+  f.terrain_del_rad =
+      (c.elevation_max_rad - c.elevation_min_rad) / static_cast<double>(f.terrain_n_el);
+  f.max_bounces = c.max_bounces;
+  if (knobs.max_bounces != 0) {
+    if (knobs.max_bounces >= 1 && knobs.max_bounces <= c.max_bounces)
+      f.max_bounces = knobs.max_bounces;
+    else if (stats != nullptr)
+      ++stats->knob_fallbacks;
+  }
+  return f;
+}
+
+double SbrTracer::target_spacing(const TraceKnobs& knobs, std::uint32_t id,
+                                 TraceStats* stats) const noexcept {
+  if (id >= knobs.target_ray_spacing_m.size())
+    return config_.target_ray_spacing_m;
+  const double s = knobs.target_ray_spacing_m[id];
+  if (s == 0.0)
+    return config_.target_ray_spacing_m;
+  if (!(std::isfinite(s) && s > 0.0)) {
+    if (stats != nullptr)
+      ++stats->knob_fallbacks;
+    return config_.target_ray_spacing_m;
+  }
+  return s;
+}
+
+bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spacing_m, Bundle& b,
+                           bool& coarsened) const noexcept {
+  const SbrConfig& c = config_;
+  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+  const scene::ObjectState& o = scene_->objects()[id];
+  const glm::dvec3 nearest = glm::clamp(pose.position_m, o.bounds_min_m, o.bounds_max_m);
+  const double range = glm::length(nearest - pose.position_m);
+  coarsened = false;
+  if (range > c.max_range_m || range < 1e-6)
+    return false;
+  double az_lo = 1e9, az_hi = -1e9, el_lo = 1e9, el_hi = -1e9;
+  bool behind = false;
+  // The box's corners and, with target_ground_image, those of its mirror image in the horizontal
+  // plane of its base: a ray aimed at the image of a target point meets the ground and then that
+  // point (image method), so the ground-first double bounces start there.
+  const double z_image = 2.0 * o.bounds_min_m.z - o.bounds_max_m.z;
+  const int corners = c.target_ground_image ? 12 : 8;
+  for (int corner = 0; corner < corners; ++corner) {
+    const glm::dvec3 p((corner & 1) ? o.bounds_max_m.x : o.bounds_min_m.x,
+                       (corner & 2) ? o.bounds_max_m.y : o.bounds_min_m.y,
+                       corner >= 8    ? z_image
+                       : (corner & 4) ? o.bounds_max_m.z
+                                      : o.bounds_min_m.z);
+    const glm::dvec3 a = antenna_from_world * (p - pose.position_m);
+    if (a.x <= 0.0)
+      behind = true;
+    const AzEl ae = azel_from_direction(a);
+    az_lo = std::min(az_lo, ae.azimuth_rad);
+    az_hi = std::max(az_hi, ae.azimuth_rad);
+    el_lo = std::min(el_lo, ae.elevation_rad);
+    el_hi = std::max(el_hi, ae.elevation_rad);
+  }
+  if (behind) {  // straddles the antenna plane: cover the whole field of view
+    az_lo = c.azimuth_min_rad;
+    az_hi = c.azimuth_max_rad;
+    el_lo = c.elevation_min_rad;
+    el_hi = c.elevation_max_rad;
+  }
+  az_lo = std::max(az_lo, c.azimuth_min_rad);
+  az_hi = std::min(az_hi, c.azimuth_max_rad);
+  el_lo = std::max(el_lo, c.elevation_min_rad);
+  el_hi = std::min(el_hi, c.elevation_max_rad);
+  if (!(az_lo < az_hi) || !(el_lo < el_hi))
+    return false;
+  double spacing = spacing_m / range;
+  auto cells = [&](double span) {
+    return std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(span / spacing)));
+  };
+  std::size_t n_az = cells(az_hi - az_lo), n_el = cells(el_hi - el_lo);
+  if (n_az * n_el > c.max_rays_per_target) {
+    coarsened = true;
+    spacing *=
+        std::sqrt(static_cast<double>(n_az * n_el) / static_cast<double>(c.max_rays_per_target));
+    do {
+      n_az = cells(az_hi - az_lo);
+      n_el = cells(el_hi - el_lo);
+      spacing *= 1.01;
+    } while (n_az * n_el > c.max_rays_per_target);
+  }
+  b.object_id = id;
+  b.n_az = n_az;
+  b.n_el = n_el;
+  b.daz_rad = (az_hi - az_lo) / static_cast<double>(n_az);
+  b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
+  b.az0_rad = az_lo;
+  b.el0_rad = el_lo;
+  return true;
+}
+
+void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, double el,
+                          double daz, double del, std::uint32_t owner, bool terrain,
+                          Contribution* slot, std::uint8_t& count,
+                          TraceStats& stats) const noexcept {
   const SbrConfig& c = config_;
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const glm::dmat3& r = pose.world_from_antenna;
   const glm::dvec3 boresight = r[0];
   const glm::dvec3 up = -r[2];  // antenna z is down
   const glm::dmat3 antenna_from_world = glm::transpose(r);
+  const bool tx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kVH;
+  const bool rx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kHV;
   const double ce = std::cos(el), se = std::sin(el), ca = std::cos(az), sa = std::sin(az);
   glm::dvec3 d = r * glm::dvec3(ce * ca, ce * sa, -se);
   // Tube edge vectors per unit distance: derivatives of the direction times the spacings
-  // (Ling, Chou & Lee 1989: ray tubes). |u x v| = cos(el) daz del, the tube's solid angle.
+  // (Ling, Chou & Lee 1989: ray tubes). |u x v| = cos(el) daz del, the tube's solid angle; the
+  // spherical wave's tube at unfolded distance L has edges L u, L v.
   glm::dvec3 u = r * glm::dvec3(-ce * sa, ce * ca, 0.0) * daz;
   glm::dvec3 v = r * glm::dvec3(-se * ca, -se * sa, -ce) * del;
-  glm::dvec3 e = v_pol(up, boresight, d);  // transmit polarisation V
+  // Transmitted field, unit amplitude at every hit (the range term is the sensor's).
+  CVec e{pol_vector(tx_h, up, boresight, d), glm::dvec3(0.0)};
   glm::dvec3 origin = pose.position_m;
   glm::dvec3 v_prev = pose.velocity_mps;
   double path_m = 0.0;     // unfolded path length from the radar to the current hit
   double path_rate = 0.0;  // d(path)/dt so far [m/s]
+  bool met_target = false;
   count = 0;
-  for (int bounce = 0; bounce < c.max_bounces; ++bounce) {
+  for (int bounce = 0; bounce < frame.max_bounces; ++bounce) {
     scene::Ray ray;
     ray.origin_m = origin;
     ray.direction = d;
@@ -136,12 +289,12 @@ void SbrTracer::trace_ray(const RadarPose& pose, double az, double el, double da
     if (!scene_->intersect(ray, hit))
       return;
     ++stats.hits;
-    if (bounce == 0) {
-      // Ownership: each surface is counted once, by the grid that samples it.
-      if (terrain && is_target_[hit.object_id])
+    const bool hit_target = is_target_[hit.object_id] != 0;
+    if (hit_target && !met_target) {
+      // Ownership (header): the first target on the path decides which grid counts it.
+      if (terrain ? bundled_[hit.object_id] != 0 : hit.object_id != owner)
         return;
-      if (!terrain && hit.object_id != owner)
-        return;
+      met_target = true;
     }
     const RadarMaterial& mat = materials_[hit.material_id];
     const glm::dvec3 v_obj = scene_->objects()[hit.object_id].velocity_mps;
@@ -151,171 +304,148 @@ void SbrTracer::trace_ray(const RadarPose& pose, double az, double el, double da
     if (glm::dot(n, d) > 0.0)
       n = -n;  // the face the ray meets
     const double n_dot_d = glm::dot(n, d);
-    if (-n_dot_d < 1e-3) {
+    const double cos_i = -n_dot_d;
+    if (cos_i < 1e-3) {
       ++stats.grazing_skipped;
       return;
     }
-    // Footprint of the tube on the facet: edge vectors at this distance, projected along d.
-    const glm::dvec3 uu = u * path_m, vv = v * path_m;
-    const glm::dvec3 up_m = uu - d * (glm::dot(n, uu) / n_dot_d);
-    const glm::dvec3 vp_m = vv - d * (glm::dot(n, vv) / n_dot_d);
-    if (!mat.conductor) {
-      if (bounce == 0 && terrain) {
-        // sigma = sigma0(theta_i) * footprint area, footprint = dA_perp / cos(theta_i) with
-        // dA_perp = L^2 dOmega. Terrain-catalogue materials take sigma0 (VV, the tracer's
-        // polarisation) from their setup-time table (radar/clutter/terrain.hpp); the others
-        // are constant gamma, sigma0 = gamma cos(theta_i), so sigma = gamma dA_perp
-        // (Richards 2010, sec. 5.3).
-        const double d_omega = glm::length(glm::cross(u, v));
-        const double cos_i = -n_dot_d;
-        const int row = sigma0_row_[hit.material_id];
-        const double sigma_m2 =
-            row >= 0 ? static_cast<double>(sigma0_.lookup(static_cast<std::size_t>(row),
-                                                          clutter::Sigma0Table::kVV, cos_i)) *
-                           path_m * path_m * d_omega / cos_i
-                     : mat.gamma * path_m * path_m * d_omega;
-        Contribution& out = slot[count++];
-        out.amplitude = {std::sqrt(sigma_m2), 0.0};
-        out.range_m = path_m;
-        out.range_spread_m = std::abs(glm::dot(up_m, d)) + std::abs(glm::dot(vp_m, d));
-        out.radial_velocity_mps = path_rate;  // out and back along the same line
-        const AzEl ae = azel_from_direction(antenna_from_world * d);
-        out.azimuth_rad = ae.azimuth_rad;
-        out.elevation_rad = ae.elevation_rad;
-        out.object_id = hit.object_id;
-        out.bounces = 1;
-        out.coherent = false;
-      }
-      return;  // no bounce off non-conductors in this first pass
-    }
-    // PO radiation of the footprint back to the radar (Knott, Shaeffer & Tuley, Radar Cross
-    // Section, 2nd ed., 2004, ch. 5: sqrt(sigma) = -j k/sqrt(pi) * int n.(e_r x h_i) e^{...} dS).
-    const glm::dvec3 to_radar = pose.position_m - hit.position_m;
-    const double back_m = glm::length(to_radar);
-    const glm::dvec3 s = to_radar / back_m;
-    bool visible = glm::dot(n, s) > 0.0;
-    if (visible && bounce > 0) {
-      scene::Ray shadow;
-      const double off = 1e-3 * (1.0 + glm::length(hit.position_m) * 1e-3);
-      shadow.origin_m = hit.position_m;
-      shadow.direction = s;
-      shadow.t_near_m = off;
-      shadow.t_far_m = back_m - off;
-      visible = !scene_->occluded(shadow);
-    }
-    if (visible) {
-      const glm::dvec3 g = k * (d - s);  // phase gradient over the footprint
-      const double area = glm::length(glm::cross(up_m, vp_m));
-      const double taper = sinc(0.5 * glm::dot(g, up_m)) * sinc(0.5 * glm::dot(g, vp_m));
-      const glm::dvec3 h_i = glm::cross(d, e);
-      const glm::dvec3 e_r = v_pol(up, boresight, s);
-      const double pol = glm::dot(n, glm::cross(e_r, h_i));
-      const double total_m = path_m + back_m;
-      const double phase = -k * total_m;
-      const double mag = (k / std::sqrt(kPi)) * pol * area * taper;
+    if (bounce == 0 && terrain && !hit_target && !mat.conductor) {
+      // Diffuse clutter: sigma = sigma0(theta_i) * footprint area, footprint = dA_perp /
+      // cos(theta_i) with dA_perp = L^2 dOmega. Terrain-catalogue materials take sigma0 of the
+      // antenna's channel from their setup-time table (radar/clutter/terrain.hpp); the others
+      // are constant gamma, sigma0 = gamma cos(theta_i), so sigma = gamma dA_perp
+      // (Richards 2010, sec. 5.3), the same in every channel (the placeholder has none).
+      const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, -d);
+      const double d_omega = glm::length(glm::cross(u, v));
+      const int row = sigma0_row_[hit.material_id];
+      const double sigma_m2 =
+          row >= 0 ? static_cast<double>(sigma0_.lookup(static_cast<std::size_t>(row),
+                                                        sigma0_channel(c.polarisation), cos_i)) *
+                         path_m * path_m * d_omega / cos_i
+                   : mat.gamma * path_m * path_m * d_omega;
       Contribution& out = slot[count++];
-      // -j * mag * e^{j phase}
-      out.amplitude = {mag * std::sin(phase), -mag * std::cos(phase)};
-      out.range_m = 0.5 * total_m;
-      out.range_spread_m = 0.0;
-      out.radial_velocity_mps = 0.5 * (path_rate + glm::dot(pose.velocity_mps - v_obj, s));
-      const AzEl ae = azel_from_direction(antenna_from_world * (-s));
+      out.amplitude = {std::sqrt(sigma_m2), 0.0};
+      out.range_m = path_m;
+      out.range_spread_m = std::abs(glm::dot(fp.u_m, d)) + std::abs(glm::dot(fp.v_m, d));
+      out.radial_velocity_mps = path_rate;  // out and back along the same line
+      const AzEl ae = azel_from_direction(antenna_from_world * d);
       out.azimuth_rad = ae.azimuth_rad;
       out.elevation_rad = ae.elevation_rad;
       out.object_id = hit.object_id;
-      out.bounces = static_cast<std::uint8_t>(bounce + 1);
-      out.coherent = true;
+      out.bounces = 1;
+      out.coherent = false;
     }
-    // Specular reflection off a perfect conductor: direction, tube and field (E' = -E +
-    // 2 (n.E) n: tangential E flips, normal E stays; R_perp = -1, R_par = +1).
-    d = d - 2.0 * n_dot_d * n;
-    u = u - 2.0 * glm::dot(n, u) * n;
-    v = v - 2.0 * glm::dot(n, v) * n;
-    e = -e + 2.0 * glm::dot(n, e) * n;
+    if (!has_surface_[hit.material_id])
+      return;  // no specular model: the ray ends (header)
+    const SurfaceModel& sm = surfaces_[hit.material_id];
+    const bool pec = sm.kind == SurfaceModel::Kind::kPec;
+    const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
+    if (met_target) {
+      // PO radiation of the footprint back to the radar (sbr_core.hpp).
+      const glm::dvec3 to_radar = pose.position_m - hit.position_m;
+      const double back_m = glm::length(to_radar);
+      const glm::dvec3 s = to_radar / back_m;
+      bool visible = glm::dot(n, s) > 0.0;
+      if (visible && bounce > 0) {
+        scene::Ray shadow;
+        const double off = 1e-3 * (1.0 + glm::length(hit.position_m) * 1e-3);
+        shadow.origin_m = hit.position_m;
+        shadow.direction = s;
+        shadow.t_near_m = off;
+        shadow.t_far_m = back_m - off;
+        visible = !scene_->occluded(shadow);
+      }
+      if (visible) {
+        const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, s);
+        const glm::dvec3 p = pol_vector(rx_h, up, boresight, -s);
+        const double total_m = path_m + back_m;
+        Contribution& out = slot[count++];
+        out.amplitude =
+            po_amplitude_m(k, p, po_source(e, d, n, s, rc, pec), footprint_integral(fp, k)) *
+            std::polar(1.0, -k * total_m);
+        out.range_m = 0.5 * total_m;
+        out.range_spread_m = 0.0;
+        out.radial_velocity_mps = 0.5 * (path_rate + glm::dot(pose.velocity_mps - v_obj, s));
+        const AzEl ae = azel_from_direction(antenna_from_world * (-s));
+        out.azimuth_rad = ae.azimuth_rad;
+        out.elevation_rad = ae.elevation_rad;
+        out.object_id = hit.object_id;
+        out.bounces = static_cast<std::uint8_t>(bounce + 1);
+        out.coherent = true;
+      }
+    } else if (terrain && !frame.terrain_continues) {
+      return;  // no target without a bundle within range: this terrain path can radiate nothing
+    }
+    // Specular reflection (law of reflection) of direction, tube and field (sbr_core.hpp).
+    const glm::dvec3 d_r = mirror(d, n);
+    e = reflect_field(e, d, d_r, n, rc, pec);
+    if (!pec)
+      ++stats.dielectric_reflections;
+    d = d_r;
+    u = mirror(u, n);
+    v = mirror(v, n);
     origin = hit.position_m;
     v_prev = v_obj;
   }
 }
 
-std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
-                             TraceStats& stats) noexcept {
-  const SbrConfig& c = config_;
-  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
-  // Bundles for targets inside the field of view.
-  bundles_.clear();
-  std::size_t next_ray = n_az_ * n_el_;
+TracePlan SbrTracer::plan(const RadarPose& pose, const TraceKnobs& knobs,
+                          std::span<std::size_t> rays_per_object) const noexcept {
+  const Frame f = frame_for(knobs, nullptr);
+  TracePlan p;
+  p.terrain_rays = f.terrain_n_az * f.terrain_n_el;
+  p.max_bounces = f.max_bounces;
   const auto objects = scene_->objects();
   for (std::uint32_t id = 0; id < objects.size(); ++id) {
+    std::size_t rays = 0;
+    Bundle b;
+    bool coarsened = false;
+    if (is_target_[id] && bundle_for(pose, id, target_spacing(knobs, id, nullptr), b, coarsened)) {
+      rays = b.n_az * b.n_el;
+      ++p.target_bundles;
+      p.coarsened_bundles += coarsened ? 1 : 0;
+    }
+    p.target_rays += rays;
+    if (id < rays_per_object.size())
+      rays_per_object[id] = rays;
+  }
+  return p;
+}
+
+std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out, TraceStats& stats,
+                             const TraceKnobs& knobs) noexcept {
+  const SbrConfig& c = config_;
+  Frame frame = frame_for(knobs, &stats);
+  // Bundles for targets inside the field of view.
+  bundles_.clear();
+  const std::size_t terrain_rays = frame.terrain_n_az * frame.terrain_n_el;
+  std::size_t next_ray = terrain_rays;
+  const auto objects = scene_->objects();
+  for (std::uint32_t id = 0; id < objects.size(); ++id) {
+    bundled_[id] = 0;
     if (!is_target_[id])
       continue;
-    const scene::ObjectState& o = objects[id];
-    const glm::dvec3 nearest = glm::clamp(pose.position_m, o.bounds_min_m, o.bounds_max_m);
-    const double range = glm::length(nearest - pose.position_m);
-    if (range > c.max_range_m || range < 1e-6)
-      continue;
-    double az_lo = 1e9, az_hi = -1e9, el_lo = 1e9, el_hi = -1e9;
-    bool behind = false;
-    for (int corner = 0; corner < 8; ++corner) {
-      const glm::dvec3 p((corner & 1) ? o.bounds_max_m.x : o.bounds_min_m.x,
-                         (corner & 2) ? o.bounds_max_m.y : o.bounds_min_m.y,
-                         (corner & 4) ? o.bounds_max_m.z : o.bounds_min_m.z);
-      const glm::dvec3 a = antenna_from_world * (p - pose.position_m);
-      if (a.x <= 0.0)
-        behind = true;
-      const AzEl ae = azel_from_direction(a);
-      az_lo = std::min(az_lo, ae.azimuth_rad);
-      az_hi = std::max(az_hi, ae.azimuth_rad);
-      el_lo = std::min(el_lo, ae.elevation_rad);
-      el_hi = std::max(el_hi, ae.elevation_rad);
-    }
-    if (behind) {  // straddles the antenna plane: cover the whole field of view
-      az_lo = c.azimuth_min_rad;
-      az_hi = c.azimuth_max_rad;
-      el_lo = c.elevation_min_rad;
-      el_hi = c.elevation_max_rad;
-    }
-    az_lo = std::max(az_lo, c.azimuth_min_rad);
-    az_hi = std::min(az_hi, c.azimuth_max_rad);
-    el_lo = std::max(el_lo, c.elevation_min_rad);
-    el_hi = std::min(el_hi, c.elevation_max_rad);
-    if (!(az_lo < az_hi) || !(el_lo < el_hi))
-      continue;
-    double spacing = c.target_ray_spacing_m / range;
-    auto cells = [&](double span) {
-      return std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(span / spacing)));
-    };
-    std::size_t n_az = cells(az_hi - az_lo), n_el = cells(el_hi - el_lo);
-    if (n_az * n_el > c.max_rays_per_target) {
-      ++stats.coarsened_bundles;
-      spacing *=
-          std::sqrt(static_cast<double>(n_az * n_el) / static_cast<double>(c.max_rays_per_target));
-      do {
-        n_az = cells(az_hi - az_lo);
-        n_el = cells(el_hi - el_lo);
-        spacing *= 1.01;
-      } while (n_az * n_el > c.max_rays_per_target);
-    }
     Bundle b;
-    b.object_id = id;
-    b.n_az = n_az;
-    b.n_el = n_el;
-    b.daz_rad = (az_hi - az_lo) / static_cast<double>(n_az);
-    b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
-    b.az0_rad = az_lo;
-    b.el0_rad = el_lo;
+    bool coarsened = false;
+    if (!bundle_for(pose, id, target_spacing(knobs, id, &stats), b, coarsened)) {
+      const scene::ObjectState& o = objects[id];
+      const glm::dvec3 nearest = glm::clamp(pose.position_m, o.bounds_min_m, o.bounds_max_m);
+      frame.terrain_continues |= glm::length(nearest - pose.position_m) <= c.max_range_m;
+      continue;
+    }
+    stats.coarsened_bundles += coarsened ? 1 : 0;
     b.first_ray = next_ray;
-    next_ray += n_az * n_el;
+    next_ray += b.n_az * b.n_el;
     bundles_.push_back(b);
+    bundled_[id] = 1;
     ++stats.target_bundles;
   }
   const std::size_t rays = next_ray;
   const auto per_ray = static_cast<std::size_t>(c.max_bounces);
-  const std::size_t usable_rays = std::min(rays, out.size() / per_ray);
+  const std::size_t usable_rays = std::min({rays, out.size() / per_ray, counts_.size()});
   stats.rays += rays;
-  const double daz_t = (c.azimuth_max_rad - c.azimuth_min_rad) / static_cast<double>(n_az_);
-  const double del_t = (c.elevation_max_rad - c.elevation_min_rad) / static_cast<double>(n_el_);
 
-  std::atomic<std::uint64_t> hits{0}, grazing{0};
+  std::atomic<std::uint64_t> hits{0}, grazing{0}, dielectric{0};
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, usable_rays, 256),
       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -323,11 +453,13 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         std::size_t b = 0;
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
           Contribution* slot = out.data() + i * per_ray;
-          if (i < n_az_ * n_el_) {
-            const std::size_t ia = i % n_az_, ie = i / n_az_;
-            trace_ray(pose, c.azimuth_min_rad + (static_cast<double>(ia) + 0.5) * daz_t,
-                      c.elevation_min_rad + (static_cast<double>(ie) + 0.5) * del_t, daz_t, del_t,
-                      0, true, slot, counts_[i], local);
+          if (i < terrain_rays) {
+            const std::size_t ia = i % frame.terrain_n_az, ie = i / frame.terrain_n_az;
+            trace_ray(pose, frame,
+                      c.azimuth_min_rad + (static_cast<double>(ia) + 0.5) * frame.terrain_daz_rad,
+                      c.elevation_min_rad + (static_cast<double>(ie) + 0.5) * frame.terrain_del_rad,
+                      frame.terrain_daz_rad, frame.terrain_del_rad, 0, true, slot, counts_[i],
+                      local);
             continue;
           }
           while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_ray)
@@ -335,15 +467,17 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
           const Bundle& bd = bundles_[b];
           const std::size_t j = i - bd.first_ray;
           const std::size_t ia = j % bd.n_az, ie = j / bd.n_az;
-          trace_ray(pose, bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad,
+          trace_ray(pose, frame, bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad,
                     bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad, bd.daz_rad,
                     bd.del_rad, bd.object_id, false, slot, counts_[i], local);
         }
         hits += local.hits;
         grazing += local.grazing_skipped;
+        dielectric += local.dielectric_reflections;
       });
   stats.hits += hits.load();
   stats.grazing_skipped += grazing.load();
+  stats.dielectric_reflections += dielectric.load();
   stats.dropped_contributions += (rays - usable_rays) * per_ray;  // upper bound, counted
   // Compact the fixed per-ray slots in ray order: deterministic whatever the threading.
   std::size_t n = 0;

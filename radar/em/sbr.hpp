@@ -1,9 +1,33 @@
 #pragma once
-// First shooting-and-bouncing-rays pass (Ling, Chou & Lee, IEEE TAP 37(2), 1989): ray tubes are
-// shot across the antenna field of view from the radar, bounced specularly off conductors
-// (geometrical optics, up to max_bounces), and at every hit the tube's footprint radiates back
-// to the radar through the physical-optics integral; diffuse terrain returns sigma0 x footprint.
+// The frame tracer: shooting and bouncing rays (Ling, Chou & Lee, IEEE TAP 37(2), 1989) with
+// spherical-wave illumination from the antenna. Ray tubes are fanned from the antenna phase
+// centre across the field of view (diverging with the distance), bounced specularly by
+// geometrical optics off conductors (PEC) and dielectric surfaces (Fresnel coefficients of the
+// terrain catalogue's permittivity at the carrier) up to max_bounces, and at every hit on a path
+// that has met a target the tube's footprint radiates back to the radar through the
+// physical-optics integral, in the antenna's polarisation channel. The field, reflection and PO
+// machinery is the SBR core shared with the offline RCS engine (radar/em/sbr_core.hpp); materials
+// resolve to its SurfaceModel through radar::surface_model() (radar/materials.hpp). Diffuse
+// terrain returns sigma0 x footprint at a terrain ray's first hit (the clutter model).
 // Pure computation: no I/O, clocks or threads of its own.
+//
+// Ownership (each path is counted once, by one grid):
+//   - A path's owner is the first target (object with a conducting triangle) it meets. Rays of a
+//     target's bundle count only paths owned by that target; terrain-grid rays count only paths
+//     owned by a target that has no bundle this frame (outside the field of view), so a target in
+//     view is sampled by its own, finer bundle alone.
+//   - A path radiates coherently (PO toward the radar) at every hit from its first target hit on:
+//     radar -> target -> ... and radar -> ground -> target -> ... (the target-ground double
+//     bounce, both orders) are all counted, each by the bundle of its first target (a bundle
+//     also covers the ground image of its target, SbrConfig::target_ground_image, where the
+//     ground-first rays start).
+//     Terrain-only paths (ground -> wall) radiate nothing coherent: terrain is the diffuse
+//     model's.
+//   - The diffuse clutter of a terrain surface is returned only by a terrain-grid ray at its first
+//     hit (bundle rays first hitting terrain add no clutter; they continue specularly).
+//   - A ray that meets a target it does not count ends there; every ray still shadows what lies
+//     behind its hits. A surface with no specular model (radar::surface_model() nullopt, e.g. the
+//     placeholder "soil") ends the ray.
 
 #include <complex>
 #include <cstddef>
@@ -13,6 +37,7 @@
 #include <vector>
 
 #include "radar/clutter/terrain.hpp"
+#include "radar/em/sbr_core.hpp"
 #include "radar/materials.hpp"
 #include "scene/scene.hpp"
 
@@ -38,9 +63,7 @@ struct AzEl {
 /// Ray densities. Terrain (objects without any conducting triangle) is sampled by one coarse
 /// grid over the whole field of view; each target (an object with a conducting triangle) that
 /// lies inside the field of view gets its own ray bundle over its angular bounds, dense enough
-/// in metres at its range. A coarse ray that first hits a target, and a bundle ray that first hits
-/// anything but its own target, returns nothing (each surface is counted once, by the grid that
-/// owns it); both still shadow what lies behind.
+/// in metres at its range (ownership of paths: header).
 struct SbrConfig {
   double carrier_hz = 94e9;
   double azimuth_min_rad = -0.1745;  ///< field of view, antenna frame
@@ -51,14 +74,49 @@ struct SbrConfig {
   double target_ray_spacing_m = 0.25;       ///< bundle spacing at the target's nearest range
   std::size_t max_rays_per_target = 50000;  ///< bundles coarsen beyond this (counted)
   double max_range_m = 6000.0;              ///< rays end here (one-way)
-  int max_bounces = 3;                      ///< GO bounces off conductors (>= 1)
+  int max_bounces = 3;                      ///< hits per ray, reflections included (1..16)
+  /// Bundles also cover the mirror image of the target's bounding box in the horizontal plane
+  /// of its base (world z up), where the rays of the ground-first double bounce (radar ->
+  /// ground -> target) start; off: only the box (the target-first order is still traced).
+  bool target_ground_image = true;
+  /// Antenna polarisation channel, receive first ("HV": receive H, transmit V). V along a ray
+  /// of direction d is the antenna's "up" (-z of the antenna frame) projected perpendicular to
+  /// d, H = V x d (right of boresight for a level antenna); so V = -theta_hat, H = -phi_hat of
+  /// the RCS engine's frame and S_pq equals its S_pq for every channel.
+  Polarisation polarisation = Polarisation::kVV;
+};
+
+/// Per-frame overrides for the fidelity governor. Defaults leave the configuration as it is.
+/// Invalid values fall back to the configuration (counted in TraceStats::knob_fallbacks; the
+/// frame path cannot throw).
+struct TraceKnobs {
+  /// Terrain grid spacing = config spacing x this factor (>= 1: coarser only).
+  double terrain_spacing_scale = 1.0;
+  /// Hits per ray this frame, 1..config.max_bounces; 0: config.max_bounces.
+  int max_bounces = 0;
+  /// Target bundle spacing [m] at the target's nearest range, indexed by scene object id; an
+  /// empty span, a missing entry or 0 take config.target_ray_spacing_m. Bundles still coarsen
+  /// at config.max_rays_per_target.
+  std::span<const double> target_ray_spacing_m{};
+};
+
+/// What trace() would shoot for a pose and knobs (plan()).
+struct TracePlan {
+  std::size_t terrain_rays = 0;       ///< the terrain grid
+  std::size_t target_rays = 0;        ///< all bundles together
+  std::size_t target_bundles = 0;     ///< targets inside the field of view
+  std::size_t coarsened_bundles = 0;  ///< bundles held at max_rays_per_target
+  int max_bounces = 0;                ///< hits per ray the knobs give
+  [[nodiscard]] std::size_t rays() const noexcept { return terrain_rays + target_rays; }
 };
 
 /// One return: a ray tube's contribution at one hit point, as seen by the radar.
 struct Contribution {
-  /// Complex scattering amplitude [m]: sigma = |A|^2 (m^2), phase exp(-j k L) over the whole
-  /// path L (time convention exp(+j w t)). For diffuse clutter (coherent == false) only |A|^2
-  /// is meaningful and is summed as power.
+  /// Complex scattering amplitude [m] in the configured polarisation channel: sigma = |A|^2
+  /// (m^2), phase exp(-j k L) over the whole path L (time convention exp(+j w t); the RCS
+  /// engine's S_pq of this path referred to the radar instead of the target origin). No range
+  /// term: the sensor applies it. For diffuse clutter (coherent == false) only |A|^2 is
+  /// meaningful and is summed as power.
   std::complex<double> amplitude{0.0, 0.0};
   double range_m = 0.0;  ///< half the total path length [m]
   /// Extent along range of a diffuse footprint [m] (the sensor spreads its power uniformly over
@@ -78,8 +136,10 @@ struct TraceStats {
   std::uint64_t coarsened_bundles = 0;  ///< bundles that hit max_rays_per_target
   std::uint64_t hits = 0;
   std::uint64_t contributions = 0;
-  std::uint64_t dropped_contributions = 0;  ///< output span full
-  std::uint64_t grazing_skipped = 0;        ///< footprints skipped at |cos(theta_i)| < 1e-3
+  std::uint64_t dropped_contributions = 0;   ///< output span full
+  std::uint64_t grazing_skipped = 0;         ///< footprints skipped at |cos(theta_i)| < 1e-3
+  std::uint64_t dielectric_reflections = 0;  ///< specular bounces off dielectric surfaces
+  std::uint64_t knob_fallbacks = 0;          ///< invalid TraceKnobs values replaced by config
 };
 
 class SbrTracer {
@@ -96,8 +156,15 @@ class SbrTracer {
   /// `stats` is added to, not reset, so one TraceStats can total a run.
   /// Real-time safe apart from the worker threads it uses (TBB): no allocation per call. `out`
   /// must hold max_contributions() elements (fewer: the excess is dropped and counted).
+  /// `knobs` (default: the configuration as it is) coarsen the terrain grid, cap the bounces and
+  /// set per-target bundle spacings for this frame only.
   [[nodiscard]] std::size_t trace(const RadarPose& pose, std::span<Contribution> out,
-                                  TraceStats& stats) noexcept;
+                                  TraceStats& stats, const TraceKnobs& knobs = {}) noexcept;
+  /// The rays trace() would shoot for `pose` and `knobs`, without tracing: cheap (one pass over
+  /// the objects' bounds), no allocation. `rays_per_object[id]` (when the span reaches id) gets
+  /// the bundle size of object id, 0 for terrain and targets out of view.
+  [[nodiscard]] TracePlan plan(const RadarPose& pose, const TraceKnobs& knobs = {},
+                               std::span<std::size_t> rays_per_object = {}) const noexcept;
 
   [[nodiscard]] const SbrConfig& config() const noexcept { return config_; }
 
@@ -105,6 +172,9 @@ class SbrTracer {
   const scene::Scene* scene_;
   SbrConfig config_;
   std::vector<RadarMaterial> materials_;
+  /// Specular model per scene material at the carrier; has_surface_[i] == 0: none (ray ends).
+  std::vector<SurfaceModel> surfaces_;
+  std::vector<std::uint8_t> has_surface_;
   /// sigma0 of the terrain-catalogue materials at the carrier (issue 4's models, model "total":
   /// surface + volume), built once here; row per scene material in sigma0_row_ (-1: none).
   clutter::Sigma0Table sigma0_;
@@ -114,15 +184,28 @@ class SbrTracer {
     double az0_rad = 0, el0_rad = 0, daz_rad = 0, del_rad = 0;
     std::size_t n_az = 0, n_el = 0, first_ray = 0;
   };
-  void trace_ray(const RadarPose& pose, double az, double el, double daz, double del,
-                 std::uint32_t owner, bool terrain, Contribution* slot, std::uint8_t& count,
-                 TraceStats& stats) const noexcept;
+  struct Frame {  // per-frame quantities shared by every ray
+    double terrain_daz_rad = 0, terrain_del_rad = 0;
+    std::size_t terrain_n_az = 0, terrain_n_el = 0;
+    int max_bounces = 1;
+    bool terrain_continues = false;  ///< some target in range has no bundle this frame
+  };
+  [[nodiscard]] Frame frame_for(const TraceKnobs& knobs, TraceStats* stats) const noexcept;
+  /// The bundle of target `id` for `pose` at `spacing_m`; false when it is out of view.
+  [[nodiscard]] bool bundle_for(const RadarPose& pose, std::uint32_t id, double spacing_m,
+                                Bundle& b, bool& coarsened) const noexcept;
+  [[nodiscard]] double target_spacing(const TraceKnobs& knobs, std::uint32_t id,
+                                      TraceStats* stats) const noexcept;
+  void trace_ray(const RadarPose& pose, const Frame& frame, double az, double el, double daz,
+                 double del, std::uint32_t owner, bool terrain, Contribution* slot,
+                 std::uint8_t& count, TraceStats& stats) const noexcept;
 
   std::vector<std::uint8_t> is_target_;  ///< per object: has a conducting triangle
   std::size_t n_targets_ = 0;
-  std::size_t n_az_ = 0, n_el_ = 0;   ///< terrain grid
-  std::vector<Bundle> bundles_;       ///< per frame, capacity n_targets_
-  std::vector<std::uint8_t> counts_;  ///< contributions per ray slot
+  std::size_t n_az_ = 0, n_el_ = 0;    ///< terrain grid
+  std::vector<Bundle> bundles_;        ///< per frame, capacity n_targets_
+  std::vector<std::uint8_t> counts_;   ///< contributions per ray slot
+  std::vector<std::uint8_t> bundled_;  ///< per object, per frame: has a bundle
 };
 
 }  // namespace radar_emu::radar

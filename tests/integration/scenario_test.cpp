@@ -89,6 +89,21 @@ TEST(Scenario, BusInputOutputAndFaultKeys) {
             std::string::npos);
 }
 
+TEST(Scenario, AntennaPolarisationKey) {
+  // Default VV (the tracer's behaviour before the key existed); receive first as in the RCS
+  // tool: "HV" = receive H, transmit V.
+  EXPECT_EQ(emu::parse_scenario(emu::default_scenario_toml(), "<default>").sbr.polarisation,
+            radar_emu::radar::Polarisation::kVV);
+  EXPECT_EQ(emu::parse_scenario("[antenna]\npolarisation = \"HH\"\n", "p.toml").sbr.polarisation,
+            radar_emu::radar::Polarisation::kHH);
+  EXPECT_EQ(emu::parse_scenario("[antenna]\npolarisation = \"HV\"\n", "p.toml").sbr.polarisation,
+            radar_emu::radar::Polarisation::kHV);
+  EXPECT_EQ(emu::parse_scenario("[antenna]\npolarisation = \"VH\"\n", "p.toml").sbr.polarisation,
+            radar_emu::radar::Polarisation::kVH);
+  EXPECT_NE(error_of("[antenna]\npolarisation = \"RHC\"\n").find("[antenna] polarisation"),
+            std::string::npos);
+}
+
 TEST(Scenario, UserFileOverridesOnlyWhatItNames) {
   const emu::Scenario s =
       emu::parse_scenario("[run]\nframes = 7\n[radar]\ncarrier_hz = 35.0e9\n", "user.toml");

@@ -1,0 +1,85 @@
+#include "radar/em/sbr_core.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "radar/constants.hpp"
+#include "radar/em/facet_po.hpp"
+
+namespace radar_emu::radar {
+
+using cplx = std::complex<double>;
+
+ReflectionCoefficients reflection_coefficients(const SurfaceModel& surface, double cos_incidence,
+                                               double k) noexcept {
+  if (surface.kind == SurfaceModel::Kind::kPec)
+    return {};
+  const double c = std::clamp(cos_incidence, 0.0, 1.0);
+  const double sin2 = 1.0 - c * c;
+  const cplx eps = surface.relative_permittivity;
+  const cplx root = std::sqrt(eps - sin2);  // principal branch: Im <= 0 for lossy eps
+  ReflectionCoefficients r;
+  r.perp = (c - root) / (c + root);
+  r.par = (eps * c - root) / (eps * c + root);
+  if (surface.kind == SurfaceModel::Kind::kCoatedPec) {
+    const cplx beta = k * root;
+    const cplx delay = std::exp(cplx(0.0, -2.0) * beta * surface.thickness_m);
+    r.perp = (r.perp - delay) / (1.0 - r.perp * delay);  // r12 = -1
+    r.par = (r.par + delay) / (1.0 + r.par * delay);     // r12 = +1
+  }
+  return r;
+}
+
+CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r, const glm::dvec3& n,
+                   const ReflectionCoefficients& r, bool pec) noexcept {
+  if (pec)  // tangential E flips, normal E stays: E_r = -E + 2 (n.E) n
+    return {2.0 * glm::dot(n, e.re) * n - e.re, 2.0 * glm::dot(n, e.im) * n - e.im};
+  glm::dvec3 e_perp = glm::cross(d, n);
+  double len = glm::length(e_perp);
+  if (len < 1e-12) {  // normal incidence: any tangential direction (take one from the field)
+    e_perp = e.re - glm::dot(e.re, d) * d;
+    if (glm::length(e_perp) < 1e-12 * (norm(e) + 1e-300))
+      e_perp = e.im - glm::dot(e.im, d) * d;
+    len = glm::length(e_perp);
+    if (len == 0.0)
+      return {};
+  }
+  e_perp /= len;
+  const glm::dvec3 e_par_i = glm::cross(e_perp, d), e_par_r = glm::cross(e_perp, d_r);
+  return scale(r.perp * dot(e_perp, e), e_perp) + scale(r.par * dot(e_par_i, e), e_par_r);
+}
+
+CVec po_source(const CVec& e, const glm::dvec3& d, const glm::dvec3& n, const glm::dvec3& s,
+               const ReflectionCoefficients& r, bool pec) noexcept {
+  if (pec)  // eta J = 2 n x (d x E), M = 0
+    return {2.0 * glm::cross(n, glm::cross(d, e.re)), 2.0 * glm::cross(n, glm::cross(d, e.im))};
+  const glm::dvec3 d_r = mirror(d, n);
+  const CVec e_r = reflect_field(e, d, d_r, n, r, false);
+  const CVec eta_j = cross(n, cross(d, e) + cross(d_r, e_r));
+  const CVec m = cross(e + e_r, n);
+  return eta_j - cross(s, m);
+}
+
+TubeFootprint tube_footprint(const glm::dvec3& tube_u_m, const glm::dvec3& tube_v_m,
+                             const glm::dvec3& d, const glm::dvec3& n,
+                             const glm::dvec3& s) noexcept {
+  const double n_d = glm::dot(n, d);
+  TubeFootprint f;
+  f.u_m = tube_u_m - d * (glm::dot(n, tube_u_m) / n_d);
+  f.v_m = tube_v_m - d * (glm::dot(n, tube_v_m) / n_d);
+  f.area_m2 = glm::length(glm::cross(f.u_m, f.v_m));
+  f.taper_u_m = 0.5 * glm::dot(s - d, f.u_m);
+  f.taper_v_m = 0.5 * glm::dot(s - d, f.v_m);
+  return f;
+}
+
+double footprint_integral(const TubeFootprint& f, double k) noexcept {
+  return f.area_m2 * sinc(k * f.taper_u_m) * sinc(k * f.taper_v_m);
+}
+
+cplx po_amplitude_m(double k, const glm::dvec3& p, const CVec& source,
+                    double integral_m2) noexcept {
+  return cplx(0.0, -k / std::sqrt(kPi)) * (0.5 * dot(p, source)) * integral_m2;
+}
+
+}  // namespace radar_emu::radar
