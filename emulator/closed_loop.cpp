@@ -46,22 +46,6 @@ constexpr std::size_t kTimelineStagesPerFrame = 6;
 // Bound on the truth.json entries a run keeps (40 bytes each); beyond it they are counted.
 constexpr std::size_t kTruthEntriesMax = 1u << 20;
 
-scene::SceneDescription scene_description(const Scenario& s) {
-  if (!s.scene_file.empty())
-    return scene::load_gltf(s.scene_file);
-  if (s.scene_builtin == "airport") {
-    scene::AirportSpec spec;
-    spec.seed = s.scene_seed;
-    return scene::generate_airport(spec);
-  }
-  if (s.scene_builtin == "terrain") {
-    scene::TerrainSpec spec;
-    spec.seed = s.scene_seed;
-    return scene::generate_terrain(spec);
-  }
-  return scene::default_scene();  // parse_scenario() accepts only these built-ins
-}
-
 // The scripted ownship: the scenario's straight line in anchor ENU, sampled every second as the
 // INS would report it (geodetic position; velocity and attitude in the local ENU frame).
 sim_bus::Trajectory ownship_trajectory(const Scenario& s, const scene::wgs84::EnuFrame& enu) {
@@ -122,6 +106,22 @@ radar::SensorConfig sensor_config(const Scenario& s, const radar::SbrTracer& tra
 }
 
 }  // namespace
+
+scene::SceneDescription scene_description(const Scenario& s) {
+  if (!s.scene_file.empty())
+    return scene::load_gltf(s.scene_file);
+  if (s.scene_builtin == "airport") {
+    scene::AirportSpec spec;
+    spec.seed = s.scene_seed;
+    return scene::generate_airport(spec);
+  }
+  if (s.scene_builtin == "terrain") {
+    scene::TerrainSpec spec;
+    spec.seed = s.scene_seed;
+    return scene::generate_terrain(spec);
+  }
+  return scene::default_scene();  // parse_scenario() accepts only these built-ins
+}
 
 struct ClosedLoop::Impl {
   Impl(const Scenario& s, const RunOptions& o)

@@ -17,6 +17,7 @@
 #include "io/detection_icd.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
+#include "scene/scene.hpp"
 #include "sim_bus/fault_injector.hpp"
 #include "timing/profiler.hpp"
 #include "timing/realtime.hpp"
@@ -118,6 +119,10 @@ struct RunResult {
   /// Objects in the beam per recorded frame (FrameRecord::first_truth / truth_count).
   std::vector<ObjectTruth> truth;
 };
+
+/// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop
+/// builds it. Throws with context when a file cannot be loaded.
+[[nodiscard]] scene::SceneDescription scene_description(const Scenario& scenario);
 
 class ClosedLoop {
  public:

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "emulator/canvas.hpp"
+#include "emulator/closed_loop.hpp"
 #include "emulator/ownship.hpp"
 #include "emulator/scenario.hpp"
 #include "radar/clutter/surface.hpp"
@@ -29,12 +30,8 @@
 #include "radar/products/range_profile.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "radar/sensor/waveform.hpp"
-#include "scene/airport_gen.hpp"
-#include "scene/default_scene.hpp"
-#include "scene/gltf.hpp"
 #include "scene/scene.hpp"
 #include "scene/targets.hpp"
-#include "scene/terrain_gen.hpp"
 
 namespace radar_emu::emulator {
 
@@ -479,28 +476,11 @@ struct FrameResult {
   std::uint64_t rays = 0, coarsened = 0, contributions = 0;
 };
 
-scene::SceneDescription scenario_scene(const Scenario& s) {
-  // As the closed loop builds it (emulator/closed_loop.cpp, scene_description()).
-  if (!s.scene_file.empty())
-    return scene::load_gltf(s.scene_file);
-  if (s.scene_builtin == "airport") {
-    scene::AirportSpec spec;
-    spec.seed = s.scene_seed;
-    return scene::generate_airport(spec);
-  }
-  if (s.scene_builtin == "terrain") {
-    scene::TerrainSpec spec;
-    spec.seed = s.scene_seed;
-    return scene::generate_terrain(spec);
-  }
-  return scene::default_scene();
-}
-
 class FrameBench {
  public:
   FrameBench(std::size_t max_rays_per_target)
       : s_(parse_scenario(default_scenario_toml(), "<default scenario>")),
-        scene_(scenario_scene(s_)),
+        scene_(scene_description(s_)),
         max_rays_per_target_(max_rays_per_target) {
     // The scenario's start pose (bench/bench_frame.cpp).
     pose_.position_m = s_.ownship_start_enu_m;
