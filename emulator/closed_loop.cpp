@@ -105,6 +105,15 @@ radar::SensorConfig sensor_config(const Scenario& s, const radar::SbrTracer& tra
   return c;
 }
 
+// The scenario's governor with its mode resolved: "auto" learns from the measured stage times
+// only when frames are paced on the wall clock (elsewhere the run must be reproducible).
+GovernorConfig governor_config(const Scenario& s, const RunOptions& o) {
+  GovernorConfig g = s.governor;
+  if (g.mode == GovernorConfig::Mode::kAuto)
+    g.mode = o.realtime ? GovernorConfig::Mode::kMeasured : GovernorConfig::Mode::kModel;
+  return g;
+}
+
 }  // namespace
 
 scene::SceneDescription scene_description(const Scenario& s) {
@@ -131,6 +140,7 @@ struct ClosedLoop::Impl {
         enu(scene.anchor()),
         tracer(scene, s.sbr),
         sensor(sensor_config(s, tracer)),
+        governor(governor_config(s, o), scene, tracer, sensor, 1.0 / s.rate_hz),
         ins(bus.add_endpoint("ins", 1 << 16)),
         faulty_ep(bus.add_endpoint("faulty", 16)),
         replay_ep(bus.add_endpoint("replay", 16)),
@@ -323,6 +333,7 @@ struct ClosedLoop::Impl {
   scene::wgs84::EnuFrame enu;
   radar::SbrTracer tracer;
   radar::Sensor sensor;
+  FidelityGovernor governor;
   sim_bus::LoopbackCanBus bus;
   sim_bus::LoopbackEndpoint& ins;
   sim_bus::LoopbackEndpoint& faulty_ep;
@@ -527,12 +538,17 @@ RunResult ClosedLoop::run() {
         ++r.view.frames;
       }
     }
-    // ---- trace: shoot and bounce ----
+    // ---- trace: the governor sets the fidelity, then shoot and bounce ----
     std::size_t n_contrib = 0;
+    const std::uint64_t rays_before = r.trace.rays;
+    const std::uint64_t cells_before = r.sensor.cells_synthesised;
+    const GovernorDecision* decision = nullptr;
     {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kTrace);
-      if (valid)
-        n_contrib = m.tracer.trace(pose, m.contributions, r.trace);  // accumulates
+      if (valid) {
+        decision = &m.governor.decide(pose);
+        n_contrib = m.tracer.trace(pose, m.contributions, r.trace, decision->knobs);  // adds
+      }
       // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
       radar::apply_two_way_loss(std::span(m.contributions.data(), n_contrib), m.weather_db_per_m);
     }
@@ -545,6 +561,16 @@ RunResult ClosedLoop::run() {
         n_det = m.sensor.process(std::span(m.contributions.data(), n_contrib), m.detections,
                                  r.sensor);  // accumulates
       }
+    }
+    if (valid) {
+      m.governor.observe(static_cast<double>(m.profiler.last_ns(timing::Stage::kTrace)) * 1e-6,
+                         static_cast<double>(m.profiler.last_ns(timing::Stage::kSensor)) * 1e-6,
+                         r.trace.rays - rays_before, n_contrib,
+                         r.sensor.cells_synthesised - cells_before);
+      ++r.governor.level_frames[static_cast<std::size_t>(decision->level)];
+      r.governor.frames_degraded += decision->degraded ? 1 : 0;
+      r.governor.frames_predicted_late += decision->over_deadline ? 1 : 0;
+      r.governor.max_level = std::max(r.governor.max_level, decision->level);
     }
     // ---- output: ICD frames on the bus ----
     {
@@ -560,6 +586,8 @@ RunResult ClosedLoop::run() {
         h.status |= io::icd::status::kOverrun;
       if (r.sensor.truncated > truncated_before)
         h.status |= io::icd::status::kTruncated;
+      if (decision != nullptr && decision->degraded)
+        h.status |= io::icd::status::kDegraded;
       // A stale state sends an empty list flagged OWNSHIP_INVALID, or nothing ("silent").
       const bool send_list = valid || !s.stale_output_silent;
       io::icd::EncodeResult enc{};
@@ -600,6 +628,12 @@ RunResult ClosedLoop::run() {
         rec.sent = send_list;
         rec.ownship_valid = valid;
         rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
+        if (decision != nullptr) {
+          rec.governor_level = decision->level;
+          rec.governor_predicted_ms = decision->predicted_ms;
+          rec.governor_error_db = decision->estimated_snr_error_db;
+          rec.rays = decision->rays;
+        }
         rec.first_truth = static_cast<std::uint32_t>(r.truth.size());
         if (valid) {
           // Ground truth: each target whose box centre is inside the field of view and range.
@@ -978,6 +1012,48 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                  {"two_way_loss_db_at_max_range", 2.0 * m.weather_db_per_m * s.sbr.max_range_m}};
     }
     rep["weather"] = std::move(weather);
+  }
+  {
+    // The fidelity governor: its settings, how often each level was chosen, and per recorded
+    // frame the level, the predicted cost and the estimated error.
+    const GovernorConfig& g = m.governor.config();
+    nlohmann::ordered_json levels = nlohmann::ordered_json::array();
+    for (std::size_t k = 0; k <= static_cast<std::size_t>(r.governor.max_level); ++k)
+      levels.push_back(r.governor.level_frames[k]);
+    nlohmann::ordered_json level = nlohmann::ordered_json::array(),
+                           predicted = nlohmann::ordered_json::array(),
+                           error = nlohmann::ordered_json::array(),
+                           rays = nlohmann::ordered_json::array();
+    for (const FrameRecord& rec : r.records) {
+      level.push_back(rec.governor_level);
+      predicted.push_back(rec.governor_predicted_ms);
+      error.push_back(rec.governor_error_db);
+      rays.push_back(rec.rays);
+    }
+    rep["governor"] = {
+        {"enabled", g.enabled},
+        {"mode", g.mode == GovernorConfig::Mode::kMeasured ? "measured" : "model"},
+        {"deadline_ms", g.compute_fraction * 1e3 / s.rate_hz},
+        {"compute_fraction", g.compute_fraction},
+        {"cost_model",
+         {{"trace_ns_per_ray", g.trace_ns_per_ray},
+          {"sensor_ns_per_cell", g.sensor_ns_per_cell},
+          {"sensor_ns_per_return", g.sensor_ns_per_return},
+          {"final_trace_factor", m.governor.trace_factor()},
+          {"final_sensor_factor", m.governor.sensor_factor()}}},
+        {"max_level", g.max_level},
+        {"frames_at_level", std::move(levels)},
+        {"frames_degraded", r.governor.frames_degraded},
+        {"frames_predicted_late", r.governor.frames_predicted_late},
+        {"per_frame",
+         {{"note",
+           "recorded frames, in order; level 0 is the scenario's fidelity; "
+           "estimated_snr_error_db is the mean |SNR error| measured at that level on the "
+           "default scenario (radar-emu tradeoff), an estimate, not a bound"},
+          {"level", std::move(level)},
+          {"predicted_ms", std::move(predicted)},
+          {"estimated_snr_error_db", std::move(error)},
+          {"rays", std::move(rays)}}}};
   }
   rep["trace"] = {{"rays", r.trace.rays},
                   {"target_bundles", r.trace.target_bundles},

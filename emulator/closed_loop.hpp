@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "emulator/governor.hpp"
 #include "emulator/scenario.hpp"
 #include "emulator/truth.hpp"
 #include "io/can_frame.hpp"
@@ -63,7 +64,11 @@ struct FrameRecord {
   bool late = false;
   bool sent = true;  ///< false: stale state with stale_output "silent", nothing was sent
   bool ownship_valid = false;
-  glm::dvec3 ownship_enu_m{0.0};  ///< antenna position used by the frame (scene ENU) [m]
+  glm::dvec3 ownship_enu_m{0.0};       ///< antenna position used by the frame (scene ENU) [m]
+  int governor_level = 0;              ///< fidelity level the governor chose (0: the scenario's)
+  double governor_predicted_ms = 0.0;  ///< its predicted trace + sensor time [ms]
+  double governor_error_db = 0.0;      ///< its estimated SNR error at that level [dB]
+  std::uint64_t rays = 0;              ///< rays traced
 };
 
 struct RunResult {
@@ -95,7 +100,14 @@ struct RunResult {
     std::array<std::uint64_t, 4> lod_groups_at_level{};
     std::uint64_t triangles_active = 0;
   } view{};
-  radar::SensorStats sensor{};       ///< summed over frames
+  radar::SensorStats sensor{};  ///< summed over frames
+  /// The fidelity governor over the valid frames.
+  struct GovernorTotals {
+    std::array<std::uint64_t, FidelityGovernor::kMaxLevel + 1> level_frames{};  ///< by level
+    std::uint64_t frames_degraded = 0;        ///< level > 0 (flagged DEGRADED)
+    std::uint64_t frames_predicted_late = 0;  ///< even the coarsest level was predicted late
+    int max_level = 0;
+  } governor{};
   std::uint64_t bus_frames_in = 0;   ///< frames the radar received
   std::uint64_t bus_frames_out = 0;  ///< frames the radar sent
   std::uint64_t bus_rx_overflows = 0;

@@ -131,6 +131,19 @@ babble_id = 0
 babble_start_s = 0.0
 babble_end_s = 0.0            # 0: until the end
 
+[governor]
+# The fidelity governor: before each frame is traced it picks the finest level of detail whose
+# predicted trace + sensor time fits compute_fraction of the frame period. Each level halves the
+# target rays (the weakest targets first) and thins the terrain grid; a frame below the
+# scenario's own fidelity is flagged DEGRADED (status 0x10) in the detection list header.
+enabled = true
+compute_fraction = 0.4      # the rest of the period absorbs the cost model's error and jitter
+mode = "auto"               # auto (measured with --realtime, else model) | model | measured
+trace_ns_per_ray = 180.0    # cost model, measured on the project's 2-core machine
+sensor_ns_per_cell = 18.0
+sensor_ns_per_return = 110.0
+max_level = 12              # coarsest: target rays / 64, terrain grid spacing x 8
+
 # [weather]                   # no table: free space. With one, every return loses the two-way
 #                             # attenuation of ITU-R P.676 (gases), P.838 (rain), P.840 (fog)
 # condition = "clear"         # clear (gases only) | rain | fog | rain_fog
@@ -305,6 +318,30 @@ void apply_weather(Scenario& s, const toml::table& root, const std::string& orig
   t.number("pressure_hpa", w.pressure_hpa, 300.0, 1100.0);
 }
 
+// [governor] (emulator/governor.hpp).
+void apply_governor(Scenario& s, const toml::table& root, const std::string& origin) {
+  GovernorConfig& g = s.governor;
+  const TableReader t(root, "governor", origin,
+                      {"enabled", "compute_fraction", "mode", "trace_ns_per_ray",
+                       "sensor_ns_per_cell", "sensor_ns_per_return", "max_level"});
+  t.boolean("enabled", g.enabled);
+  t.number("compute_fraction", g.compute_fraction, 0.01, 1.0);
+  std::string mode;
+  t.string("mode", mode);
+  if (mode == "auto")
+    g.mode = GovernorConfig::Mode::kAuto;
+  else if (mode == "model")
+    g.mode = GovernorConfig::Mode::kModel;
+  else if (mode == "measured")
+    g.mode = GovernorConfig::Mode::kMeasured;
+  else if (!mode.empty())
+    t.fail("mode", "unknown mode '" + mode + "' (auto, model, measured)");
+  t.number("trace_ns_per_ray", g.trace_ns_per_ray, 1e-3, 1e6);
+  t.number("sensor_ns_per_cell", g.sensor_ns_per_cell, 0.0, 1e6);
+  t.number("sensor_ns_per_return", g.sensor_ns_per_return, 0.0, 1e6);
+  t.integer("max_level", g.max_level, 0, FidelityGovernor::kMaxLevel);
+}
+
 void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   toml::table root;
   try {
@@ -317,8 +354,9 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   }
   const TableReader top(root, "", origin, {"name"});
   for (const auto& [key, value] : root) {
-    static const std::set<std::string> kTables{"run",     "scene", "ownship",  "input",  "output",
-                                               "antenna", "radar", "detector", "faults", "weather"};
+    static const std::set<std::string> kTables{"run",    "scene",   "ownship", "input",
+                                               "output", "antenna", "radar",   "detector",
+                                               "faults", "weather", "governor"};
     if (value.is_table() && !kTables.contains(std::string(key.str()))) {
       top.fail(key.str(), "unknown table");
     }
@@ -586,6 +624,7 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     s.babble.end_s = babble_end_s;
 
   apply_weather(s, root, origin);
+  apply_governor(s, root, origin);
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <string>
 #include <string_view>
 
+#include "emulator/governor.hpp"
 #include "io/canaerospace.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
@@ -81,6 +82,8 @@ struct Scenario {
   bool babbling_node = false;  ///< a node floods the bus (babble.rate_hz > 0)
   sim_bus::BabbleConfig babble{};
   WeatherSpec weather{};
+  /// [governor]: the fidelity governor (emulator/governor.hpp).
+  GovernorConfig governor{};
 };
 
 /// The embedded default scenario, as TOML text (printed by `radar-emu run --print-scenario`).

@@ -12,6 +12,7 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -468,6 +469,9 @@ void iem_case(bool quick, const Log& log, std::vector<Row>& rows, const IemSurfa
 struct FrameSetting {
   double target_spacing_m, terrain_spacing_rad;
   int bounces, pulses;
+  /// >= 0: the scenario's own sampling (the first four fields ignored but pulses) at this level
+  /// of the fidelity governor (emulator/governor.hpp).
+  int governor_level = -1;
 };
 
 struct FrameResult {
@@ -493,10 +497,12 @@ class FrameBench {
 
   FrameResult run(const FrameSetting& f) {
     radar::SbrConfig c = s_.sbr;
-    c.target_ray_spacing_m = f.target_spacing_m;
-    c.terrain_ray_spacing_rad = f.terrain_spacing_rad;
-    c.max_bounces = f.bounces;
-    c.max_rays_per_target = max_rays_per_target_;
+    if (f.governor_level < 0) {
+      c.target_ray_spacing_m = f.target_spacing_m;
+      c.terrain_ray_spacing_rad = f.terrain_spacing_rad;
+      c.max_bounces = f.bounces;
+      c.max_rays_per_target = max_rays_per_target_;
+    }
     // The closed loop's view volume (emulator/closed_loop.cpp): terrain level of detail follows
     // the terrain ray spacing.
     scene::ViewVolume view;
@@ -514,18 +520,24 @@ class FrameBench {
     std::vector<radar::Contribution> contributions(tracer.max_contributions());
     FrameResult r;
     radar::TraceStats ts;
+    radar::SensorConfig sc = s_.sensor;
+    sc.thermal_noise = false;  // deterministic comparison
+    sc.processing.waveform.pulses = f.pulses;
+    sc.max_contributions = std::max<std::size_t>(sc.max_contributions, contributions.size());
+    sc.max_detections = 512;  // no truncation difference between settings
+    radar::Sensor sensor(sc);
+    radar::TraceKnobs knobs;
+    std::optional<FidelityGovernor> governor;
+    if (f.governor_level >= 0) {
+      governor.emplace(s_.governor, scene_, tracer, sensor, 1.0 / s_.rate_hz);
+      knobs = governor->decide_at(pose_, f.governor_level).knobs;
+    }
     auto t0 = Clock::now();
-    const std::size_t n = tracer.trace(pose_, contributions, ts);
+    const std::size_t n = tracer.trace(pose_, contributions, ts, knobs);
     r.trace_ms = ms_since(t0);
     r.rays = ts.rays;
     r.coarsened = ts.coarsened_bundles;
     r.contributions = n;
-    radar::SensorConfig sc = s_.sensor;
-    sc.thermal_noise = false;  // deterministic comparison
-    sc.processing.waveform.pulses = f.pulses;
-    sc.max_contributions = std::max<std::size_t>(sc.max_contributions, n);
-    sc.max_detections = 512;  // no truncation difference between settings
-    radar::Sensor sensor(sc);
     r.detections.resize(sc.max_detections);
     radar::SensorStats ss;
     t0 = Clock::now();
@@ -608,7 +620,7 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
   // scenario caps bundles at 20,000 rays and coarsens the larger ones).
   FrameSetting ref_setting{0.05, 0.5e-3, 4, 64};
   std::size_t cap = 100'000;
-  std::vector<FrameKnob> knobs(4);
+  std::vector<FrameKnob> knobs(5);
   knobs[0].name = "target_ray_spacing_m";
   knobs[0].values = {0.4, 0.2, 0.1, 0.05};
   knobs[1].name = "terrain_ray_spacing_rad";
@@ -617,11 +629,17 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
   knobs[2].values = {1, 2, 3, 4};
   knobs[3].name = "pulses";
   knobs[3].values = {8, 16, 32, 64};
+  // The governor's levels over the scenario's own sampling, coarse to fine; the last value is
+  // level 0 (not the reference: the reference is finer).
+  knobs[4].name = "governor_level";
+  knobs[4].values = {8, 6, 5, 4, 3, 2, 1, 0};
   if (quick) {
     ref_setting = {0.1, 1e-3, 3, 32};
     cap = 20'000;
     for (FrameKnob& k : knobs)
-      k.values.pop_back();
+      if (k.name != "governor_level")
+        k.values.pop_back();
+    knobs[4].values = {4, 2, 0};
   }
   FrameBench bench(cap);
   log("frame: default scenario (%s) at its start pose, thermal noise off\n",
@@ -642,7 +660,7 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
       az_gate_rad / kDeg);
   for (const FrameKnob& k : knobs) {
     for (std::size_t i = 0; i < k.values.size(); ++i) {
-      const bool is_ref = i + 1 == k.values.size();
+      const bool is_ref = i + 1 == k.values.size() && k.name != "governor_level";
       FrameSetting fs = ref_setting;
       if (k.name == "target_ray_spacing_m")
         fs.target_spacing_m = k.values[i];
@@ -650,6 +668,8 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
         fs.terrain_spacing_rad = k.values[i];
       else if (k.name == "max_bounces")
         fs.bounces = static_cast<int>(k.values[i]);
+      else if (k.name == "governor_level")
+        fs.governor_level = static_cast<int>(k.values[i]);
       else
         fs.pulses = static_cast<int>(k.values[i]);
       // The reference setting is run again for its cost (and its zero error is a check of
@@ -1010,8 +1030,8 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
     p.x_label = "frame cost: trace + sensor [ms] (wall, 2 threads)";
     p.y_label = "missed + added detections";
     p.log_x = true;
-    for (const char* k :
-         {"target_ray_spacing_m", "terrain_ray_spacing_rad", "max_bounces", "pulses"}) {
+    for (const char* k : {"target_ray_spacing_m", "terrain_ray_spacing_rad", "max_bounces",
+                          "pulses", "governor_level"}) {
       PlotSeries s{k, {}, {}};
       double missed = 0.0;
       for (const Row& r : rows) {

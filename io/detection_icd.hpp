@@ -63,6 +63,8 @@ inline constexpr std::uint8_t kOwnshipInvalid = 0x01;  ///< ownship state stale 
 inline constexpr std::uint8_t kOverrun = 0x02;         ///< the previous frame missed its deadline
 inline constexpr std::uint8_t kTruncated = 0x04;       ///< more detections than the list carries
 inline constexpr std::uint8_t kDropped = 0x08;  ///< some detections were outside the ICD ranges
+/// The fidelity governor computed the frame below the scenario's fidelity to hold its deadline.
+inline constexpr std::uint8_t kDegraded = 0x10;
 }  // namespace status
 
 /// One detection in ICD units (the edge of the system: degrees and dB live here).

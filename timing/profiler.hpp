@@ -73,6 +73,11 @@ class StageProfiler {
     return {events_.data(), events_used_};
   }
   [[nodiscard]] std::uint64_t events_dropped() const noexcept { return events_dropped_; }
+  /// The duration last recorded for `stage` [ns] (0 before any). Real-time safe.
+  [[nodiscard]] std::int64_t last_ns(Stage stage) const noexcept {
+    const Series& s = series_[static_cast<std::size_t>(stage)];
+    return s.count == 0 ? 0 : s.ring_ns[(s.next + capacity_ - 1) % capacity_];
+  }
 
  private:
   struct Series {

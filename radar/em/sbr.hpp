@@ -167,6 +167,10 @@ class SbrTracer {
                                std::span<std::size_t> rays_per_object = {}) const noexcept;
 
   [[nodiscard]] const SbrConfig& config() const noexcept { return config_; }
+  /// Whether scene object `id` is a target (has a conducting triangle: it gets a ray bundle).
+  [[nodiscard]] bool is_target(std::uint32_t id) const noexcept {
+    return id < is_target_.size() && is_target_[id] != 0;
+  }
 
  private:
   const scene::Scene* scene_;

@@ -54,6 +54,11 @@ Cfar2d::Cfar2d(const CfarConfig& c, std::size_t range_bins, std::size_t velocity
       os_scale_[n] = e;
     }
   }
+  inv_n_.assign(n_full_ + 1, 0.0);
+  for (std::size_t n = 1; n <= n_full_; ++n)
+    inv_n_[n] = 1.0 / static_cast<double>(n);
+  window_rows_.resize(wv);
+  window_guard_.resize(wv);
   pfa_.assign(n_full_ + 1, 0.0);
   for (std::size_t n = 1; n <= n_full_; ++n) {
     pfa_[n] = c.kind == CfarKind::kCellAveraging ? c.pfa : os_cfar_pfa(n, os_k_[n], alpha_[n]);
@@ -134,28 +139,35 @@ std::size_t Cfar2d::detect(std::span<const double> power, std::span<const RowSpa
       for (std::uint32_t l = n.begin; l < n.end; ++l)
         p[l + 1] = p[l] + src[l];
     }
-    // Sum of row jj over bins a..b (inclusive), all inside need_[jj].
-    auto row_sum = [&](std::size_t jj, long a, long b) {
-      const double* p = prefix_.data() + jj * w;
-      return p[b + 1] - p[a];
-    };
+    // The window's rows of a cell-under-test row: their running sums, guard rows flagged (set
+    // once a row: no modulo or division per cell).
+    const auto n_rows = static_cast<std::size_t>(2 * pad + 1);
     for (long j = 0; j < nv; ++j) {
       const RowSpan c = cuts[static_cast<std::size_t>(j)];
+      if (c.empty())
+        continue;
       const double* row = power.data() + static_cast<std::size_t>(j) * n_range_;
+      for (long dj = -pad; dj <= pad; ++dj) {
+        const auto k = static_cast<std::size_t>(dj + pad);
+        window_rows_[k] = prefix_.data() + wrap(j + dj) * w;
+        window_guard_[k] = dj >= -gv && dj <= gv ? 1 : 0;
+      }
       for (long l = c.begin; l < static_cast<long>(c.end); ++l) {
         const long o0 = std::max<long>(0, l - tr - grd), o1 = std::min<long>(nr - 1, l + tr + grd);
         const long g0 = std::max<long>(0, l - grd), g1 = std::min<long>(nr - 1, l + grd);
-        const std::size_t n = training_at(l);
+        // training_at(l), from the bounds at hand
+        const auto n =
+            static_cast<std::size_t>((o1 - o0 + 1) * (2 * pad + 1) - (g1 - g0 + 1) * (2 * gv + 1));
         if (n == 0)
           continue;
-        double sum = 0.0;
-        for (long dj = -pad; dj <= pad; ++dj) {
-          const std::size_t jj = wrap(j + dj);
-          sum += row_sum(jj, o0, o1);
-          if (dj >= -gv && dj <= gv)
-            sum -= row_sum(jj, g0, g1);
+        double sum = 0.0;  // each row's sum over bins o0..o1 less its guard bins g0..g1
+        for (std::size_t k = 0; k < n_rows; ++k) {
+          const double* p = window_rows_[k];
+          sum += p[o1 + 1] - p[o0];
+          if (window_guard_[k] != 0)
+            sum -= p[g1 + 1] - p[g0];
         }
-        const double mean = sum / static_cast<double>(n);
+        const double mean = sum * inv_n_[n];
         if (row[l] > alpha_[n] * mean)
           emit(j, l, row[l], mean);
       }

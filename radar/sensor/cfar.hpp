@@ -109,15 +109,18 @@ class Cfar2d {
  private:
   CfarConfig config_;
   std::size_t n_range_, n_vel_, n_full_ = 0;
-  std::vector<double> alpha_;      ///< by number of training cells
-  std::vector<double> os_scale_;   ///< OS: E[x_(k)] for unit exponentials, by N
-  std::vector<std::size_t> os_k_;  ///< OS: rank by N
-  std::vector<double> pfa_;        ///< exact Pfa of the threshold used, by N
-  double pfa_max_ = 0.0;           ///< largest of pfa_ (geometric skips, then thinning)
-  std::vector<double> prefix_;     ///< CA: per-row running sums, n_range_ + 1 a row
-  std::vector<double> scratch_;    ///< training cells of one cell under test
-  std::vector<RowSpan> full_;      ///< every cell of every row
-  std::vector<RowSpan> need_;      ///< per row: where detect() reads power
+  std::vector<double> alpha_;               ///< by number of training cells
+  std::vector<double> inv_n_;               ///< 1 / N, by number of training cells
+  std::vector<const double*> window_rows_;  ///< CA detect(): running sums of the window's rows
+  std::vector<std::uint8_t> window_guard_;  ///< ... and whether the row crosses the guard
+  std::vector<double> os_scale_;            ///< OS: E[x_(k)] for unit exponentials, by N
+  std::vector<std::size_t> os_k_;           ///< OS: rank by N
+  std::vector<double> pfa_;                 ///< exact Pfa of the threshold used, by N
+  double pfa_max_ = 0.0;                    ///< largest of pfa_ (geometric skips, then thinning)
+  std::vector<double> prefix_;              ///< CA: per-row running sums, n_range_ + 1 a row
+  std::vector<double> scratch_;             ///< training cells of one cell under test
+  std::vector<RowSpan> full_;               ///< every cell of every row
+  std::vector<RowSpan> need_;               ///< per row: where detect() reads power
   /// Number of training cells of a cell under test at range bin l (velocity wraps).
   [[nodiscard]] std::size_t training_at(long l) const noexcept;
 };

@@ -1,5 +1,6 @@
 #include "radar/sensor/sensor.hpp"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
@@ -170,6 +171,8 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
                                (std::pow(4.0 * kPi, 3) * c.system_losses) / noise_power_w());
   // A beam considers returns where its two-way gain is above the floor.
   az_extent_rad_ = antenna_.extent_az_rad(0.5 * c.beam_floor_db);
+  beams_ascending_ =
+      std::is_sorted(c.antenna.beam_azimuth_rad.begin(), c.antenna.beam_azimuth_rad.end());
 }
 
 Sensor::~Sensor() = default;
@@ -258,7 +261,17 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
       continue;
     bool prepared = false;
     int n_taps = 0;
-    for (std::size_t b = w; b < n_beams; b += n_workers) {
+    // The beams within the azimuth extent of the return (gains_of() tests it again).
+    std::size_t b_first = w, b_end = n_beams;
+    if (beams_ascending_) {
+      const std::vector<double>& az = config_.antenna.beam_azimuth_rad;
+      const auto lo = static_cast<std::size_t>(
+          std::lower_bound(az.begin(), az.end(), item.azimuth_rad - az_extent_rad_) - az.begin());
+      b_end = static_cast<std::size_t>(
+          std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) - az.begin());
+      b_first = lo + (w + n_workers - lo % n_workers) % n_workers;  // first b >= lo, b = w mod W
+    }
+    for (std::size_t b = b_first; b < b_end; b += n_workers) {
       Gains g;
       if (!gains_of(item, b, g))
         continue;
@@ -630,13 +643,15 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     return static_cast<std::size_t>(
         std::clamp<long>(std::lround(it.pos.range_bin), 0, static_cast<long>(nr) - 1));
   };
-  for (std::size_t i = 0; i < contributions.size(); ++i) {
+  // Independent per item: prepared in parallel, counted after in order.
+  auto prepare = [&](std::size_t i) {
     const Contribution& c = contributions[i];
     Item& it = items_[i];
     it.usable = false;
+    it.reject = 0;
     if (!finite(c) || !(c.range_m > 0.0)) {
-      ++stats.rejected_input;
-      continue;
+      it.reject = 1;
+      return;
     }
     it.amplitude = c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
     it.pos = proc.position_of(c.range_m, c.radial_velocity_mps);
@@ -653,10 +668,19 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     const bool visible =
         it.coherent ? it.pos.in_swath : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5;
     if (!visible) {
-      ++stats.out_of_grid;
-      continue;
+      it.reject = 2;
+      return;
     }
     it.usable = true;
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        prepare(i);
+                    });
+  for (std::size_t i = 0; i < contributions.size(); ++i) {
+    stats.rejected_input += items_[i].reject == 1 ? 1u : 0u;
+    stats.out_of_grid += items_[i].reject == 2 ? 1u : 0u;
   }
   if (config_.merge_step_bins > 0.0)
     merge_returns(stats);

@@ -139,6 +139,7 @@ class Sensor {
     std::uint32_t object_id = 0;
     bool coherent = true;
     bool usable = false;
+    std::uint8_t reject = 0;  ///< why not usable: 1 not finite / no range, 2 off the image
   };
   struct Candidate {
     std::complex<double> sum{0.0, 0.0};  ///< Sigma channel at the cell (signal + clutter + noise)
@@ -197,6 +198,9 @@ class Sensor {
   double az_extent_rad_ = 0.0;
   double gain_floor_ = 0.0;  ///< beam_floor_db as a linear two-way power ratio
   std::size_t n_workers_ = 1;
+  /// The scan's beam azimuths ascend: a return's beams are found by bisection, not by testing
+  /// every beam.
+  bool beams_ascending_ = false;
   double range_energy_ = 1.0;
   std::uint64_t frame_ = 0;
 };

@@ -58,8 +58,8 @@ def main():
             fail(f"header mismatch {h} vs {want}")
         status = want["status"]
         bits = [int(h[k]) for k in ("StatusOwnshipInvalid", "StatusOverrun", "StatusTruncated",
-                                    "StatusDropped")]
-        if int(h["Status"]) != status or bits != [(status >> i) & 1 for i in range(4)]:
+                                    "StatusDropped", "StatusDegraded")]
+        if int(h["Status"]) != status or bits != [(status >> i) & 1 for i in range(5)]:
             fail(f"status mismatch {h} vs {status}")
         if int(h["DetectionCount"]) != len(want["detections"]):
             fail("detection count mismatch")

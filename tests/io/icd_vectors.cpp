@@ -75,7 +75,7 @@ int main(int argc, char** argv) {
     }
     icd::Header h;
     h.frame_counter = static_cast<std::uint16_t>(list * 331);
-    h.status = static_cast<std::uint8_t>(rng() % 16);
+    h.status = static_cast<std::uint8_t>(rng() % 32);
     h.time_ms = static_cast<std::uint32_t>(list * 50);
     const icd::EncodeResult r = icd::encode(h, dets, frames);
     for (std::size_t i = 0; i < r.frames; ++i) {
@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
     }
     icd::Header h;
     h.frame_counter = static_cast<std::uint16_t>(list * 4099 + 17);
-    h.status = static_cast<std::uint8_t>(rng() % 16);
+    h.status = static_cast<std::uint8_t>(rng() % 32);
     h.time_ms = static_cast<std::uint32_t>(list * 50 + 3);
     const icd::EncodeResult r = icd::encode_fd(h, dets, fd_frames);
     if (r.encoded != dets.size()) {
