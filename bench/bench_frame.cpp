@@ -196,6 +196,43 @@ void BM_ClosedLoop50Frames(benchmark::State& state) {
 }
 BENCHMARK(BM_ClosedLoop50Frames)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The frame budget (issue 15): whole closed-loop runs of a scenario as fast as possible (the
+// governor in its reproducible model mode), the frame time's percentiles as fractions of the
+// frame period. Argument 0: the default scenario; 1: examples/ev_radar_94ghz.toml (10 Hz);
+// 2: examples/terrain_movers.toml (the 207k-polygon terrain, three moving targets). Goals:
+// p99 / budget <= 0.5 (default), <= 0.8 (the others).
+void BM_FrameBudget(benchmark::State& state) {
+  static constexpr const char* kFiles[] = {nullptr, "ev_radar_94ghz.toml", "terrain_movers.toml"};
+  const char* file = kFiles[state.range(0)];
+  emu::Scenario s = file == nullptr
+                        ? emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>")
+                        : emu::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/" + file);
+  s.frames = 100;
+  emu::RunResult r;
+  for (auto _ : state) {
+    state.PauseTiming();
+    emu::ClosedLoop loop(s, {});
+    state.ResumeTiming();
+    r = loop.run();
+  }
+  const double budget_ms = 1e3 / s.rate_hz;
+  const auto& frame = r.stages[static_cast<std::size_t>(radar_emu::timing::Stage::kFrame)];
+  state.counters["budget_ms"] = budget_ms;
+  state.counters["p50_ms"] = frame.p50_s * 1e3;
+  state.counters["p99_ms"] = frame.p99_s * 1e3;
+  state.counters["p50_over_budget"] = frame.p50_s * 1e3 / budget_ms;
+  state.counters["p99_over_budget"] = frame.p99_s * 1e3 / budget_ms;
+  state.counters["over_budget"] = static_cast<double>(r.frames_over_budget);
+  state.counters["degraded"] = static_cast<double>(r.governor.frames_degraded);
+  state.counters["max_level"] = r.governor.max_level;
+  state.SetLabel(s.name.substr(0, 40));
+}
+BENCHMARK(BM_FrameBudget)
+    ->DenseRange(0, 2)
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace
 
 BENCHMARK_MAIN();

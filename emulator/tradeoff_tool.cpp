@@ -495,6 +495,12 @@ class FrameBench {
     scene_.set_time(0.0);
   }
 
+  /// The pose and the scene at scenario time t_s along the ownship's straight flight.
+  void set_time(double t_s) {
+    pose_.position_m = s_.ownship_start_enu_m + t_s * s_.ownship_velocity_enu_mps;
+    scene_.set_time(t_s);
+  }
+
   FrameResult run(const FrameSetting& f) {
     radar::SbrConfig c = s_.sbr;
     if (f.governor_level < 0) {
@@ -620,7 +626,7 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
   // scenario caps bundles at 20,000 rays and coarsens the larger ones).
   FrameSetting ref_setting{0.05, 0.5e-3, 4, 64};
   std::size_t cap = 100'000;
-  std::vector<FrameKnob> knobs(5);
+  std::vector<FrameKnob> knobs(4);
   knobs[0].name = "target_ray_spacing_m";
   knobs[0].values = {0.4, 0.2, 0.1, 0.05};
   knobs[1].name = "terrain_ray_spacing_rad";
@@ -629,17 +635,12 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
   knobs[2].values = {1, 2, 3, 4};
   knobs[3].name = "pulses";
   knobs[3].values = {8, 16, 32, 64};
-  // The governor's levels over the scenario's own sampling, coarse to fine; the last value is
-  // level 0 (not the reference: the reference is finer).
-  knobs[4].name = "governor_level";
-  knobs[4].values = {8, 6, 5, 4, 3, 2, 1, 0};
+
   if (quick) {
     ref_setting = {0.1, 1e-3, 3, 32};
     cap = 20'000;
     for (FrameKnob& k : knobs)
-      if (k.name != "governor_level")
-        k.values.pop_back();
-    knobs[4].values = {4, 2, 0};
+      k.values.pop_back();
   }
   FrameBench bench(cap);
   log("frame: default scenario (%s) at its start pose, thermal noise off\n",
@@ -660,7 +661,7 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
       az_gate_rad / kDeg);
   for (const FrameKnob& k : knobs) {
     for (std::size_t i = 0; i < k.values.size(); ++i) {
-      const bool is_ref = i + 1 == k.values.size() && k.name != "governor_level";
+      const bool is_ref = i + 1 == k.values.size();
       FrameSetting fs = ref_setting;
       if (k.name == "target_ray_spacing_m")
         fs.target_spacing_m = k.values[i];
@@ -668,8 +669,6 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
         fs.terrain_spacing_rad = k.values[i];
       else if (k.name == "max_bounces")
         fs.bounces = static_cast<int>(k.values[i]);
-      else if (k.name == "governor_level")
-        fs.governor_level = static_cast<int>(k.values[i]);
       else
         fs.pulses = static_cast<int>(k.values[i]);
       // The reference setting is run again for its cost (and its zero error is a check of
@@ -695,6 +694,66 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
           static_cast<unsigned long long>(r.rays), r.detections.size(), m.matched, m.missed,
           m.added, m.range_m, m.azimuth_deg, m.snr_db);
     }
+  }
+
+  // The fidelity governor's levels over the scenario's own sampling (level 0 is the scenario,
+  // not the reference), pooled over frames along the approach: each frame against the
+  // reference at the same pose. The mean |SNR error| per level is the governor's estimated
+  // error (emulator/governor.cpp, kLevelSnrError_db).
+  const std::vector<double> times_s =
+      quick ? std::vector<double>{0.0} : std::vector<double>{0.0, 3.0, 6.0, 9.0};
+  const std::vector<int> levels =
+      quick ? std::vector<int>{4, 2, 0} : std::vector<int>{10, 8, 6, 5, 4, 3, 2, 1, 0};
+  struct Pool {
+    std::size_t detections = 0, matched = 0, missed = 0, added = 0;
+    double range_m = 0, azimuth_deg = 0, snr_db = 0, cost_ms = 0;
+    std::uint64_t rays = 0;
+  };
+  std::vector<Pool> pools(levels.size());
+  for (double t : times_s) {
+    bench.set_time(t);
+    const FrameResult rt = bench.run(ref_setting);
+    for (std::size_t i = 0; i < levels.size(); ++i) {
+      FrameSetting fs = ref_setting;
+      fs.governor_level = levels[i];
+      const FrameResult r = bench.run(fs);
+      const MatchStats m = match(rt.detections, r.detections, range_gate_m, az_gate_rad);
+      Pool& p = pools[i];
+      p.detections += r.detections.size();
+      p.matched += m.matched;
+      p.missed += m.missed;
+      p.added += m.added;
+      const auto n = static_cast<double>(m.matched);
+      p.range_m += m.range_m * n;
+      p.azimuth_deg += m.azimuth_deg * n;
+      p.snr_db += m.snr_db * n;
+      p.cost_ms += (r.trace_ms + r.sensor_ms) / static_cast<double>(times_s.size());
+      p.rays += r.rays / times_s.size();
+    }
+  }
+  bench.set_time(0.0);
+  std::string ref_pooled = std::string(ref_text) + "; pooled over frames at t =";
+  for (double t : times_s)
+    ref_pooled += " " + std::to_string(static_cast<int>(t)) + " s";
+  for (std::size_t i = 0; i < levels.size(); ++i) {
+    const Pool& p = pools[i];
+    const double n = p.matched > 0 ? static_cast<double>(p.matched) : 1.0;
+    auto add = [&](const char* metric, double v) {
+      rows.push_back({"frame", "governor_level", static_cast<double>(levels[i]), p.cost_ms, p.rays,
+                      metric, v, ref_pooled, "ok"});
+    };
+    add("detections", static_cast<double>(p.detections));
+    add("matched", static_cast<double>(p.matched));
+    add("missed", static_cast<double>(p.missed));
+    add("added", static_cast<double>(p.added));
+    add("missed_plus_added", static_cast<double>(p.missed + p.added));
+    add("mean_abs_range_error_m", p.range_m / n);
+    add("mean_abs_azimuth_error_deg", p.azimuth_deg / n);
+    add("mean_abs_snr_error_db", p.snr_db / n);
+    log("  frame governor_level %d (%zu frames): %.0f ms a frame, %llu rays: %zu detections, %zu "
+        "matched, %zu missed, %zu added; |dR| %.3f m, |dAz| %.4f deg, |dSNR| %.2f dB\n",
+        levels[i], times_s.size(), p.cost_ms, static_cast<unsigned long long>(p.rays), p.detections,
+        p.matched, p.missed, p.added, p.range_m / n, p.azimuth_deg / n, p.snr_db / n);
   }
 }
 
