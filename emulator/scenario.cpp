@@ -145,6 +145,20 @@ babble_end_s = 0.0            # 0: until the end
 # humidity_gpm3 = 7.5         # water-vapour density
 # temperature_c = 15.0
 # pressure_hpa = 1013.25      # dry-air pressure
+
+# [[target]]                  # none by default. Each [[target]] table adds one object to the
+#                             # scene above (built-in or file), docs/scene_format.md
+# name = "fuel_truck"         # in truth.json and detections.json (default "target_N")
+# builtin = "truck"           # plate, dihedral, trihedral-square, trihedral-tri, sphere,
+#                             # cylinder, box, vehicle, truck, jeep, helicopter,
+#                             # transport_aircraft; or mesh_file = "x.glb" (.gltf, .obj, .stl)
+# size_m = [8.0, 2.5, 3.4]    # the kind's dimensions (vehicles and aircraft have defaults)
+# material = "metal"          # a radar material (the default)
+# position_enu_m = [60.0, 150.0, 0.0]  # scene East-North-Up [m], or waypoints_enu_m = [[e, n, u],
+#                             # ...] with speed_mps, turn_radius_m, closed (nose along the path)
+# on_ground = true            # u: height of its lowest point above the ground below it
+# heading_deg = 270.0         # nose, clockwise from north (90 = east)
+# speed_mps = 5.0             # 0: fixed; > 0: straight line along course_deg (default heading_deg)
 )";
 
 class TableReader {

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -254,6 +255,23 @@ TEST(ScenarioTargets, TablesBecomePlacementsInSiUnits) {
   namespace sc = radar_emu::scene;
   EXPECT_TRUE(emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>")
                   .targets.empty());  // the default's example is commented out
+  {
+    // The default's commented-out example, uncommented, is a valid table.
+    const std::string text(emu::default_scenario_toml());
+    const std::size_t at = text.find("# [[target]]");
+    ASSERT_NE(at, std::string::npos);
+    std::istringstream lines(text.substr(at));
+    std::string uncommented, line;
+    while (std::getline(lines, line))
+      uncommented += line.substr(std::min<std::size_t>(2, line.size())) + "\n";
+    const emu::Scenario ex = emu::parse_scenario(uncommented, "example.toml");
+    ASSERT_EQ(ex.targets.size(), 1u);
+    EXPECT_EQ(ex.targets[0].name, "fuel_truck");
+    EXPECT_EQ(ex.targets[0].speed_mps, 5.0);
+    EXPECT_NEAR(ex.targets[0].course_rad, 1.5 * std::numbers::pi, 1e-15);
+    const auto d = emu::scene_description(ex);  // the airport, plus the truck on its ground
+    EXPECT_EQ(d.objects.back().name, "fuel_truck");
+  }
   const emu::Scenario s = emu::parse_scenario(R"(
 [scene]
 builtin = "terrain"
@@ -503,4 +521,49 @@ TEST(ScenarioTargets, EveryBadTableIsOneLineNamingTheTableAndTheKey) {
             "test.toml: target: expected [[target]] tables (an array of tables), one per target");
   EXPECT_EQ(error_of("target = 3\n"),
             "test.toml: target: expected [[target]] tables (an array of tables), one per target");
+}
+
+TEST(ScenarioTargets, TheExamplesLoad) {
+  const char* root = std::getenv("RADAR_EMU_SOURCE_DIR");
+  if (root == nullptr)
+    GTEST_SKIP() << "RADAR_EMU_SOURCE_DIR is not set (ctest sets it)";
+  const std::filesystem::path examples = std::filesystem::path(root) / "examples";
+  // examples/terrain_movers.toml: three vehicles on the terrain's roads (the loop run and its
+  // detections are checked by the terrain_movers_example test).
+  const emu::Scenario movers = emu::load_scenario(examples / "terrain_movers.toml");
+  EXPECT_EQ(movers.scene_builtin, "terrain");
+  ASSERT_EQ(movers.targets.size(), 3u);
+  for (const auto& t : movers.targets) {
+    EXPECT_TRUE(t.on_ground) << t.name;
+    EXPECT_GE(t.waypoints_m.size(), 3u) << t.name;
+  }
+  EXPECT_EQ(movers.targets[0].name, "truck_road_1");
+  EXPECT_EQ(movers.targets[1].name, "tank_road_1");
+  EXPECT_EQ(movers.targets[2].name, "jeep_road_2");
+
+  // examples/gltf_targets.toml on examples/scene_extras.gltf: the file's nodes with their extras
+  // (the schema of docs/scene_format.md), then the two tables' targets.
+  const emu::Scenario g = emu::load_scenario(examples / "gltf_targets.toml");
+  EXPECT_EQ(g.scene_file, examples / "scene_extras.gltf");
+  const radar_emu::scene::SceneDescription d = emu::scene_description(g);
+  ASSERT_EQ(d.objects.size(), 6u);
+  EXPECT_EQ(d.objects[0].name, "ground");
+  EXPECT_EQ(d.objects[0].area, "airport");
+  EXPECT_EQ(d.objects[1].name, "hangar");
+  EXPECT_EQ(glm::dvec3(d.objects[1].world_from_body[3]), glm::dvec3(150, 900, 0));
+  ASSERT_TRUE(d.objects[2].motion.has_value());
+  EXPECT_EQ(d.objects[2].motion->velocity_mps, glm::dvec3(-5, 0, 0));
+  EXPECT_EQ(d.objects[2].motion->start_position_m, glm::dvec3(100, 600, 0));
+  ASSERT_TRUE(d.objects[3].trajectory.has_value());
+  EXPECT_TRUE(d.objects[3].trajectory->loop);
+  EXPECT_EQ(d.objects[3].trajectory->turn_radius_m, 20.0);
+  // "yellow paint" is metal by its radar_material extras.
+  EXPECT_EQ(d.materials[d.objects[2].mesh.triangle_material[0]].name, "metal");
+  EXPECT_NEAR(d.anchor.latitude_rad, 43.6 * kDeg, 1e-12);
+  EXPECT_EQ(d.objects[4].name, "parked_a320");
+  EXPECT_EQ(d.objects[5].name, "westbound_jeep");
+  ASSERT_TRUE(d.objects[5].motion.has_value());
+  EXPECT_NEAR(d.objects[5].motion->velocity_mps.x, -8.0, 1e-12);  // west
+  // on_ground on the file's flat ground (z = 0): the jeep's wheels (its lowest point) at z = 0.
+  EXPECT_NEAR(d.objects[5].motion->start_position_m.z, 0.0, 1e-6);
 }
