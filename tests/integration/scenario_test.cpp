@@ -539,7 +539,7 @@ TEST(ScenarioTargets, TheExamplesLoad) {
   }
   EXPECT_EQ(movers.targets[0].name, "truck_road_1");
   EXPECT_EQ(movers.targets[1].name, "tank_road_1");
-  EXPECT_EQ(movers.targets[2].name, "jeep_road_2");
+  EXPECT_EQ(movers.targets[2].name, "jeep_road_1");
 
   // examples/gltf_targets.toml on examples/scene_extras.gltf: the file's nodes with their extras
   // (the schema of docs/scene_format.md), then the two tables' targets.
