@@ -117,19 +117,45 @@ GovernorConfig governor_config(const Scenario& s, const RunOptions& o) {
 }  // namespace
 
 scene::SceneDescription scene_description(const Scenario& s) {
-  if (!s.scene_file.empty())
-    return scene::load_gltf(s.scene_file);
-  if (s.scene_builtin == "airport") {
+  scene::SceneDescription d;
+  if (!s.scene_file.empty()) {
+    d = scene::load_gltf(s.scene_file);
+  } else if (s.scene_builtin == "airport") {
     scene::AirportSpec spec;
     spec.seed = s.scene_seed;
-    return scene::generate_airport(spec);
-  }
-  if (s.scene_builtin == "terrain") {
+    d = scene::generate_airport(spec);
+  } else if (s.scene_builtin == "terrain") {
     scene::TerrainSpec spec;
     spec.seed = s.scene_seed;
-    return scene::generate_terrain(spec);
+    d = scene::generate_terrain(spec);
+  } else {
+    d = scene::default_scene();  // parse_scenario() accepts only these built-ins
   }
-  return scene::default_scene();  // parse_scenario() accepts only these built-ins
+  // [[target]] tables: appended after the database's own objects, in table order. A mesh
+  // file's own material names must be radar materials too (a [[target]] material was checked
+  // when the scenario was read).
+  const std::size_t first_target = d.objects.size();
+  scene::add_targets(d, s.targets);
+  for (std::size_t i = first_target; i < d.objects.size(); ++i) {
+    std::vector<bool> used(d.materials.size(), false);
+    for (std::uint16_t k : d.objects[i].mesh.triangle_material)
+      used[k] = true;
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      if (!used[k])
+        continue;
+      try {
+        (void)radar::resolve_materials(std::span<const scene::Material>(&d.materials[k], 1));
+      } catch (const std::invalid_argument& e) {
+        const std::string what = e.what();
+        const std::size_t known = what.find("(known:");
+        throw std::runtime_error(s.targets[i - first_target].context + ": mesh_file material '" +
+                                 d.materials[k].name + "' is not a radar material " +
+                                 (known == std::string::npos ? "" : what.substr(known)) +
+                                 "; set material = \"NAME\" in the table");
+      }
+    }
+  }
+  return d;
 }
 
 struct ClosedLoop::Impl {

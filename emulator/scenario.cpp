@@ -2,6 +2,8 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -9,6 +11,10 @@
 #include <set>
 #include <sstream>
 #include <stdexcept>
+
+#include "radar/materials.hpp"
+#include "scene/targets.hpp"
+#include "scene/trajectory.hpp"
 
 namespace radar_emu::emulator {
 
@@ -152,6 +158,20 @@ max_level = 12              # coarsest: target rays / 64, terrain grid spacing x
 # humidity_gpm3 = 7.5         # water-vapour density
 # temperature_c = 15.0
 # pressure_hpa = 1013.25      # dry-air pressure
+
+# [[target]]                  # none by default. Each [[target]] table adds one object to the
+#                             # scene above (built-in or file), docs/scene_format.md
+# name = "fuel_truck"         # in truth.json and detections.json (default "target_N")
+# builtin = "truck"           # plate, dihedral, trihedral-square, trihedral-tri, sphere,
+#                             # cylinder, box, vehicle, truck, jeep, helicopter,
+#                             # transport_aircraft; or mesh_file = "x.glb" (.gltf, .obj, .stl)
+# size_m = [8.0, 2.5, 3.4]    # the kind's dimensions (vehicles and aircraft have defaults)
+# material = "metal"          # a radar material (the default)
+# position_enu_m = [60.0, 150.0, 0.0]  # scene East-North-Up [m], or waypoints_enu_m = [[e, n, u],
+#                             # ...] with speed_mps, turn_radius_m, closed (nose along the path)
+# on_ground = true            # u: height of its lowest point above the ground below it
+# heading_deg = 270.0         # nose, clockwise from north (90 = east)
+# speed_mps = 5.0             # 0: fixed; > 0: straight line along course_deg (default heading_deg)
 )";
 
 class TableReader {
@@ -342,6 +362,334 @@ void apply_governor(Scenario& s, const toml::table& root, const std::string& ori
   t.integer("max_level", g.max_level, 0, FidelityGovernor::kMaxLevel);
 }
 
+// [[target]] tables (docs/scene_format.md): objects added to the scene. Errors are one line,
+// "ORIGIN: [[target]] #N: what", N counted from 1 in file order.
+class TargetReader {
+ public:
+  TargetReader(const toml::table& table, std::string context)
+      : table_(table), context_(std::move(context)) {}
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error(context_ + ": " + what);
+  }
+  const std::string& context() const { return context_; }
+  const toml::node* node(std::string_view key) const { return table_.get(key); }
+  bool has(std::string_view key) const { return table_.contains(key); }
+
+  static std::string show(double v) {
+    std::ostringstream os;
+    os << v;
+    return os.str();
+  }
+
+  // A finite number; `lo_open` excludes lo itself ("must be > lo").
+  bool number(std::string_view key, double& out, double lo, double hi, bool lo_open = false) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return false;
+    const std::optional<double> v = n->value<double>();
+    if (!v)
+      fail(std::string(key) + " must be a number");
+    check(key, *v, lo, hi, lo_open);
+    out = *v;
+    return true;
+  }
+
+  void check(std::string_view key, double v, double lo, double hi, bool lo_open) const {
+    if (!std::isfinite(v))
+      fail(std::string(key) + " must be a finite number (got " + show(v) + ")");
+    if (lo_open ? !(v > lo) : !(v >= lo))
+      fail(std::string(key) + " must be " + (lo_open ? "> " : ">= ") + show(lo) + " (got " +
+           show(v) + ")");
+    if (v > hi)
+      fail(std::string(key) + " must be <= " + show(hi) + " (got " + show(v) + ")");
+  }
+
+  bool boolean(std::string_view key, bool& out) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return false;
+    if (!n->is_boolean())
+      fail(std::string(key) + " must be true or false");
+    out = *n->value<bool>();
+    return true;
+  }
+
+  bool string(std::string_view key, std::string& out) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return false;
+    if (!n->is_string())
+      fail(std::string(key) + " must be a string");
+    out = *n->value<std::string>();
+    return true;
+  }
+
+  // [e, n, u] in metres, each within +-1000 km.
+  glm::dvec3 point(const toml::node& n, const std::string& what) const {
+    const toml::array* a = n.as_array();
+    if (a == nullptr || a->size() != 3)
+      fail(what + " must be an array of 3 numbers [e, n, u]");
+    glm::dvec3 p(0.0);
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::optional<double> v = (*a)[i].value<double>();
+      if (!v)
+        fail(what + " must be an array of 3 numbers [e, n, u]");
+      check(what + " element " + std::to_string(i), *v, -1e6, 1e6, false);
+      p[static_cast<glm::length_t>(i)] = *v;
+    }
+    return p;
+  }
+
+ private:
+  const toml::table& table_;
+  std::string context_;
+};
+
+// Dimensions each built-in kind reads from size_m (scene/targets.hpp: a, b, c), their meaning
+// for messages, and the default size of the vehicles and aircraft (the examples of targets.hpp).
+struct KindSize {
+  std::size_t dims;
+  const char* meaning;
+  std::optional<std::array<double, 3>> default_m;
+};
+KindSize kind_size(scene::TargetKind k) {
+  using K = scene::TargetKind;
+  switch (k) {
+    case K::kSphere:
+      return {1, "[radius]", std::nullopt};
+    case K::kTrihedralSquare:
+    case K::kTrihedralTriangular:
+      return {1, "[edge]", std::nullopt};
+    case K::kPlate:
+      return {2, "[length x, width y]", std::nullopt};
+    case K::kDihedral:
+      return {2, "[fold length, face width]", std::nullopt};
+    case K::kCylinder:
+      return {2, "[radius, length]", std::nullopt};
+    case K::kBox:
+      return {3, "[length, width, height]", std::nullopt};
+    case K::kVehicle:
+      return {3, "[length, width, height]", std::array{7.0, 3.5, 2.5}};
+    case K::kTruck:
+      return {3, "[length, width, height]", std::array{8.0, 2.5, 3.4}};
+    case K::kJeep:
+      return {3, "[length, width, height]", std::array{4.0, 1.8, 1.9}};
+    case K::kHelicopter:
+      return {3, "[length, rotor diameter, height]", std::array{12.7, 14.6, 4.4}};
+    case K::kTransportAircraft:
+      return {3, "[length, wing span, height]", std::array{37.6, 35.8, 11.8}};
+  }
+  return {3, "[a, b, c]", std::nullopt};
+}
+
+constexpr std::array<std::string_view, 18> kTargetKeys{
+    "name",          "builtin",         "size_m",       "facet_m",   "mesh_file",
+    "mesh_scale",    "mesh_front_axis", "mesh_up_axis", "material",  "position_enu_m",
+    "on_ground",     "heading_deg",     "course_deg",   "speed_mps", "waypoints_enu_m",
+    "turn_radius_m", "closed",          "bank"};
+
+// The radar material catalogue decides which names exist (radar/materials.hpp).
+void check_material(const TargetReader& r, const std::string& name) {
+  try {
+    const scene::Material m{name, {}};
+    (void)radar::resolve_materials(std::span<const scene::Material>(&m, 1));
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const std::size_t known = what.find("(known:");
+    r.fail("material: unknown radar material '" + name + "' " +
+           (known == std::string::npos ? "" : what.substr(known)));
+  }
+}
+
+scene::TargetPlacement parse_target(const TargetReader& r, const toml::table& table,
+                                    std::size_t number) {
+  for (const auto& [key, value] : table) {
+    (void)value;
+    const std::string_view k = key.str();
+    if (std::find(kTargetKeys.begin(), kTargetKeys.end(), k) == kTargetKeys.end()) {
+      std::string known;
+      for (std::string_view n : kTargetKeys)
+        known += (known.empty() ? "" : ", ") + std::string(n);
+      r.fail("unknown key '" + std::string(k) + "' (known: " + known + ")");
+    }
+  }
+  scene::TargetPlacement t;
+  t.context = r.context();
+  t.name = "target_" + std::to_string(number);
+  if (r.string("name", t.name) && t.name.empty())
+    r.fail("name must not be empty");
+
+  // What it is: a built-in target or a mesh file.
+  std::string builtin, mesh_file;
+  const bool has_builtin = r.string("builtin", builtin);
+  const bool has_mesh = r.string("mesh_file", mesh_file);
+  if (has_builtin == has_mesh) {
+    r.fail(has_builtin ? "builtin and mesh_file are exclusive"
+                       : "needs builtin = \"KIND\" (" + scene::target_names() +
+                             ") or mesh_file = \"FILE\" (.glb, .gltf, .obj, .stl)");
+  }
+  if (has_builtin) {
+    const std::optional<scene::TargetKind> kind = scene::target_kind_from_name(builtin);
+    if (!kind)
+      r.fail("builtin: unknown target '" + builtin + "' (known: " + scene::target_names() + ")");
+    scene::TargetSpec spec;
+    spec.kind = *kind;
+    const KindSize ks = kind_size(*kind);
+    std::vector<double> size;
+    if (const toml::node* n = r.node("size_m")) {
+      if (const toml::array* a = n->as_array()) {
+        for (const toml::node& e : *a) {
+          const std::optional<double> v = e.value<double>();
+          if (!v)
+            r.fail("size_m must be a number or an array of numbers");
+          size.push_back(*v);
+        }
+      } else if (const std::optional<double> v = n->value<double>()) {
+        size.push_back(*v);
+      } else {
+        r.fail("size_m must be a number or an array of numbers");
+      }
+      if (size.size() != ks.dims) {
+        r.fail("size_m: a " + builtin + " takes " + std::to_string(ks.dims) + " dimension" +
+               (ks.dims > 1 ? "s " : " ") + ks.meaning + " in metres, got " +
+               std::to_string(size.size()));
+      }
+      for (double v : size)
+        r.check("size_m", v, 0.0, 1e4, true);
+    } else if (ks.default_m) {
+      size.assign(ks.default_m->begin(), ks.default_m->end());
+    } else {
+      r.fail("size_m is required for a " + builtin + ": " + ks.meaning + " in metres");
+    }
+    spec.a_m = size[0];
+    spec.b_m = size.size() > 1 ? size[1] : 1.0;
+    spec.c_m = size.size() > 2 ? size[2] : 1.0;
+    t.builtin = spec;
+    r.number("facet_m", t.facet_m, 0.0, 1e4);
+    for (const char* key : {"mesh_scale", "mesh_front_axis", "mesh_up_axis"}) {
+      if (r.has(key))
+        r.fail(std::string(key) + " applies to mesh_file only");
+    }
+  } else {
+    if (mesh_file.empty())
+      r.fail("mesh_file must not be empty");
+    t.mesh_file = mesh_file;
+    r.number("mesh_scale", t.mesh_scale, 0.0, 1e6, true);
+    for (auto [key, out] : {std::pair{"mesh_front_axis", &t.mesh_front_axis},
+                            std::pair{"mesh_up_axis", &t.mesh_up_axis}}) {
+      std::string axis;
+      if (r.string(key, axis)) {
+        *out = scene::mesh_axis_from_name(axis);
+        if (!*out)
+          r.fail(std::string(key) +
+                 ": expected \"+x\", \"-x\", \"+y\", \"-y\", \"+z\" or \"-z\", got \"" + axis +
+                 "\"");
+      }
+    }
+    if (t.mesh_front_axis && t.mesh_up_axis &&
+        static_cast<int>(*t.mesh_front_axis) / 2 == static_cast<int>(*t.mesh_up_axis) / 2) {
+      r.fail("mesh_front_axis and mesh_up_axis must be different axes");
+    }
+    for (const char* key : {"size_m", "facet_m"}) {
+      if (r.has(key))
+        r.fail(std::string(key) + " applies to builtin targets only");
+    }
+  }
+  if (r.string("material", t.material)) {
+    if (t.material.empty())
+      r.fail("material must not be empty");
+    check_material(r, t.material);
+  }
+
+  // Where and how it moves.
+  r.boolean("on_ground", t.on_ground);
+  r.number("speed_mps", t.speed_mps, 0.0, 1000.0);
+  const toml::node* wp = r.node("waypoints_enu_m");
+  if (wp != nullptr) {
+    for (const char* key : {"position_enu_m", "heading_deg", "course_deg"}) {
+      if (r.has(key)) {
+        r.fail(std::string(key) +
+               " does not go with waypoints_enu_m (the path places the "
+               "target and turns its nose along the velocity)");
+      }
+    }
+    const toml::array* a = wp->as_array();
+    if (a == nullptr || a->size() < 2)
+      r.fail("waypoints_enu_m must be an array of at least 2 [e, n, u] points");
+    for (std::size_t i = 0; i < a->size(); ++i)
+      t.waypoints_m.push_back(r.point((*a)[i], "waypoints_enu_m[" + std::to_string(i) + "]"));
+    for (std::size_t i = 0; i + 1 < t.waypoints_m.size(); ++i) {
+      const glm::dvec3 d = t.waypoints_m[i + 1] - t.waypoints_m[i];
+      if (std::hypot(d.x, d.y) < 1e-6) {
+        r.fail("waypoints_enu_m[" + std::to_string(i) + "] and [" + std::to_string(i + 1) +
+               "] are at the same (e, n): waypoints must be distinct (no vertical legs)");
+      }
+    }
+    if (!r.has("speed_mps"))
+      r.fail("speed_mps is required with waypoints_enu_m");
+    if (!(t.speed_mps > 0.0))
+      r.fail("speed_mps must be > 0 with waypoints_enu_m (got " + TargetReader::show(t.speed_mps) +
+             ")");
+    r.number("turn_radius_m", t.turn_radius_m, 0.0, 1e5);
+    r.boolean("closed", t.closed);
+    r.boolean("bank", t.bank);
+    scene::Trajectory tr;
+    tr.waypoints_m = t.waypoints_m;
+    tr.speed_mps = t.speed_mps;
+    tr.turn_radius_m = t.turn_radius_m;
+    tr.loop = t.closed;
+    try {
+      (void)scene::TrajectoryPath(tr);
+    } catch (const std::invalid_argument& e) {
+      r.fail(std::string("waypoints_enu_m: ") + e.what());
+    }
+  } else {
+    for (const char* key : {"turn_radius_m", "closed", "bank"}) {
+      if (r.has(key))
+        r.fail(std::string(key) + " applies to waypoints_enu_m only");
+    }
+    const toml::node* pos = r.node("position_enu_m");
+    if (pos == nullptr)
+      r.fail("needs position_enu_m = [e, n, u] or waypoints_enu_m = [[e, n, u], ...]");
+    t.position_m = r.point(*pos, "position_enu_m");
+    double heading_deg = 0.0, course_deg = 0.0;
+    const bool has_heading = r.number("heading_deg", heading_deg, -360.0, 360.0);
+    const bool has_course = r.number("course_deg", course_deg, -360.0, 360.0);
+    if (has_course && !(t.speed_mps > 0.0))
+      r.fail("course_deg needs speed_mps > 0 (a fixed target has a heading_deg only)");
+    // A moving target faces its velocity unless both angles are given.
+    t.heading_rad = (has_heading ? heading_deg : course_deg) * kRadPerDeg;
+    t.course_rad = (has_course ? course_deg : heading_deg) * kRadPerDeg;
+  }
+  return t;
+}
+
+void apply_targets(Scenario& s, const toml::table& root, const std::string& origin) {
+  const toml::node* n = root.get("target");
+  if (n == nullptr)
+    return;
+  const toml::array* a = n->as_array();
+  if (a != nullptr && a->empty()) {
+    s.targets.clear();
+    return;
+  }
+  if (a == nullptr || !a->is_array_of_tables()) {
+    throw std::runtime_error(origin +
+                             ": target: expected [[target]] tables (an array of tables), one "
+                             "per target");
+  }
+  s.targets.clear();
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const TargetReader r(*(*a)[i].as_table(), origin + ": [[target]] #" + std::to_string(i + 1));
+    scene::TargetPlacement t = parse_target(r, *(*a)[i].as_table(), i + 1);
+    if (!names.insert(t.name).second)
+      r.fail("name '" + t.name + "' is already used by another [[target]]");
+    s.targets.push_back(std::move(t));
+  }
+}
+
 void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   toml::table root;
   try {
@@ -352,8 +700,10 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
        << e.description();
     throw std::runtime_error(os.str());
   }
-  const TableReader top(root, "", origin, {"name"});
+  const TableReader top(root, "", origin, {"name", "target"});
   for (const auto& [key, value] : root) {
+    if (key.str() == "target")
+      continue;  // [[target]] tables: apply_targets()
     static const std::set<std::string> kTables{"run",    "scene",   "ownship", "input",
                                                "output", "antenna", "radar",   "detector",
                                                "faults", "weather", "governor"};
@@ -625,6 +975,7 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
 
   apply_weather(s, root, origin);
   apply_governor(s, root, origin);
+  apply_targets(s, root, origin);
 }
 
 }  // namespace
@@ -742,6 +1093,15 @@ Scenario parse_impl(std::string_view toml_text, const std::string& origin,
     s.scene_file = base_dir / s.scene_file;  // relative to the scenario file
   if (!s.pattern_file.empty() && s.pattern_file.is_relative() && !base_dir.empty())
     s.pattern_file = base_dir / s.pattern_file;
+  for (scene::TargetPlacement& t : s.targets) {
+    if (t.mesh_file.empty())
+      continue;
+    if (t.mesh_file.is_relative() && !base_dir.empty())
+      t.mesh_file = base_dir / t.mesh_file;  // relative to the scenario file
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(t.mesh_file, ec))
+      throw std::runtime_error(t.context + ": mesh_file: cannot open " + t.mesh_file.string());
+  }
   derive_sensor(s, origin);
   return s;
 }

@@ -8,11 +8,13 @@
 #include <glm/glm.hpp>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "emulator/governor.hpp"
 #include "io/canaerospace.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
+#include "scene/placement.hpp"
 #include "sim_bus/fault_injector.hpp"
 
 namespace radar_emu::emulator {
@@ -47,6 +49,9 @@ struct Scenario {
   std::string scene_builtin = "airport";
   std::uint64_t scene_seed = 1;  ///< generator seed of the built-in database
   std::filesystem::path scene_file;
+  /// [[target]] tables: objects added to whichever scene the [scene] table names
+  /// (docs/scene_format.md), in table order, named "target_N" (N from 1) unless named.
+  std::vector<scene::TargetPlacement> targets;
   // [ownship]: constant-velocity straight flight in the scene's ENU frame
   glm::dvec3 ownship_start_enu_m{0.0, -4000.0, 230.0};
   glm::dvec3 ownship_velocity_enu_mps{0.0, 70.0, -3.67};

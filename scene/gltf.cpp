@@ -220,6 +220,52 @@ const tinygltf::Value* radar_extras(const tinygltf::Value& extras, const char* k
   return &r.Get(key);
 }
 
+// The keys an extras.radar_emu object may hold where it is read (docs/scene_format.md): an
+// unknown key is an error, so that a typo ("velocity" for "velocity_mps") cannot leave an
+// object silently static. Extras outside "radar_emu" belong to other tools and are ignored.
+constexpr std::array<std::string_view, 7> kNodeExtras{
+    "area",         "lod_group",        "lod_level", "lod_facet_m",
+    "velocity_mps", "start_position_m", "trajectory"};
+constexpr std::array<std::string_view, 6> kTrajectoryExtras{
+    "waypoints_m", "speed_mps", "turn_radius_m", "turn_rate_rad_s", "loop", "bank"};
+constexpr std::array<std::string_view, 1> kMaterialExtras{"radar_material"};
+constexpr std::array<std::string_view, 1> kSceneExtras{"anchor_deg_m"};
+
+std::string known_list(std::span<const std::string_view> keys) {
+  std::string s;
+  for (std::string_view k : keys)
+    s += (s.empty() ? "" : ", ") + std::string(k);
+  return s;
+}
+
+// Throws "FILE: WHAT: unknown key 'K' (known: ...)" for a key of `object` outside `allowed`.
+void check_keys(const tinygltf::Value& object, std::span<const std::string_view> allowed,
+                const std::filesystem::path& path, const std::string& what) {
+  if (!object.IsObject())
+    fail(path, what + " must be an object");
+  for (const std::string& key : object.Keys()) {
+    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
+      fail(path, what + ": unknown key '" + key + "' (known: " + known_list(allowed) + ")");
+  }
+}
+
+// extras.radar_emu of a node, material or scene, when present: an object of known keys.
+void check_radar_extras(const tinygltf::Value& extras, std::span<const std::string_view> allowed,
+                        const std::filesystem::path& path, const std::string& where) {
+  if (extras.IsObject() && extras.Has("radar_emu"))
+    check_keys(extras.Get("radar_emu"), allowed, path, where + " extras radar_emu");
+}
+
+// extras.radar_emu where nothing reads it (meshes, primitives): an error, not a silent no-op.
+void reject_radar_extras(const tinygltf::Value& extras, const std::filesystem::path& path,
+                         const std::string& where) {
+  if (extras.IsObject() && extras.Has("radar_emu")) {
+    fail(path, where +
+                   " extras radar_emu: not read here (radar_emu extras belong on nodes, "
+                   "materials and the scene)");
+  }
+}
+
 // Reads an optional [x, y, z] from extras: false when absent; throws when present but broken.
 bool read_vec3(const tinygltf::Value* v, glm::dvec3& out, const std::filesystem::path& path,
                const std::string& what) {
@@ -289,8 +335,7 @@ const tinygltf::Value* member(const tinygltf::Value& object, const char* key) {
 // "speed_mps": v, "turn_radius_m": r, "turn_rate_rad_s": w, "loop": bool, "bank": bool}.
 Trajectory read_trajectory(const tinygltf::Value& v, const std::filesystem::path& path,
                            const std::string& what) {
-  if (!v.IsObject())
-    fail(path, what + " must be an object");
+  check_keys(v, kTrajectoryExtras, path, what);
   Trajectory t;
   const tinygltf::Value* wp = member(v, "waypoints_m");
   if (!wp || !wp->IsArray() || wp->ArrayLen() < 2)
@@ -335,6 +380,7 @@ struct Loader {
     if (const auto it = material_of_gltf.find(gltf_index); it != material_of_gltf.end())
       return it->second;
     const tinygltf::Material& m = model.materials[static_cast<std::size_t>(gltf_index)];
+    check_radar_extras(m.extras, kMaterialExtras, path, "material " + std::to_string(gltf_index));
     Material out;
     out.name = m.name;
     // extras {"radar_emu": {"radar_material": NAME}} overrides the glTF name.
@@ -370,6 +416,7 @@ struct Loader {
     if (depth > kMaxNodeDepth)
       fail(path, "node hierarchy deeper than " + std::to_string(kMaxNodeDepth));
     const tinygltf::Node& n = model.nodes[i];
+    check_radar_extras(n.extras, kNodeExtras, path, "node " + std::to_string(index));
     const glm::dmat4 global = parent * local_matrix(n, path, index);
     if (!finite(global))
       fail(path, "node " + std::to_string(index) + " has a non-finite transform");
@@ -436,6 +483,13 @@ struct Loader {
     const bool mirrored = glm::determinant(glm::dmat3(gltf_global)) < 0.0;
 
     const tinygltf::Mesh& mesh = model.meshes[static_cast<std::size_t>(n.mesh)];
+    // radar_emu extras are read on nodes, materials and the scene only: elsewhere they would
+    // do nothing, so they are an error rather than a silent no-op.
+    const std::string mesh_name = "mesh " + std::to_string(n.mesh);
+    reject_radar_extras(mesh.extras, path, mesh_name);
+    for (std::size_t p = 0; p < mesh.primitives.size(); ++p)
+      reject_radar_extras(mesh.primitives[p].extras, path,
+                          mesh_name + " primitive " + std::to_string(p));
     std::map<int, std::uint32_t> base_of_accessor;  // primitives sharing POSITION share vertices
     for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
       const tinygltf::Primitive& prim = mesh.primitives[p];
@@ -677,6 +731,7 @@ SceneDescription load_gltf(const std::filesystem::path& path, std::vector<std::s
       fail(path, "default scene " + std::to_string(s) + " does not exist");
     for (int n : model.scenes[s].nodes)
       l.node(n, glm::dmat4(1.0), 0);
+    check_radar_extras(model.scenes[s].extras, kSceneExtras, path, "scene " + std::to_string(s));
     glm::dvec3 anchor(0.0);
     if (read_vec3(radar_extras(model.scenes[s].extras, "anchor_deg_m"), anchor, path,
                   "scene extras radar_emu.anchor_deg_m")) {

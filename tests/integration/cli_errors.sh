@@ -26,6 +26,13 @@ expect_error "carrier_hz: expected a number" run "$dir/type.toml"
 expect_error "syntax.toml:1" run "$dir/syntax.toml"
 expect_error "missing.glb" run "$dir/scene.toml"
 expect_error "nope.toml" run "$dir/nope.toml"
+# [[target]] tables: the file, the table's number and the key (docs/scene_format.md).
+printf '[[target]]\nbuiltin = "jeep"\nposition_enu_m = [0, 0, 0]\n[[target]]\nbuiltin = "box"\nsize_m = [1, -1, 2]\nposition_enu_m = [0, 0, 0]\n' > "$dir/target_size.toml"
+printf '[[target]]\nbuiltin = "jeep"\nposition_enu_m = [0, 0, 0]\nspeed = 3\n' > "$dir/target_key.toml"
+printf '[scene]\nbuiltin = "default"\n[[target]]\nbuiltin = "jeep"\nposition_enu_m = [9000, 0, 0]\non_ground = true\n' > "$dir/target_ground.toml"
+expect_error "target_size.toml: \[\[target\]\] #2: size_m must be > 0 (got -1)" run "$dir/target_size.toml"
+expect_error "target_key.toml: \[\[target\]\] #1: unknown key 'speed'" run "$dir/target_key.toml"
+expect_error "target_ground.toml: \[\[target\]\] #1: on_ground: no ground below" run "$dir/target_ground.toml"
 expect_error "frames" run --frames 0
 expect_error "unknown target 'cone'" scene target cone --out "$dir/x.obj"
 expect_error "a_m must be a positive number" scene target plate --a-m -1 --out "$dir/x.obj"

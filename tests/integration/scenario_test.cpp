@@ -4,14 +4,20 @@
 #include "emulator/scenario.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
+
+#include "emulator/closed_loop.hpp"
 
 namespace emu = radar_emu::emulator;
 
@@ -241,4 +247,323 @@ TEST(Scenario, TheFogApproachExampleLoads) {
   EXPECT_TRUE(s.weather.enabled);
   EXPECT_EQ(s.weather.condition, "fog");
   EXPECT_DOUBLE_EQ(s.weather.fog_water_gm3, 0.5);
+}
+
+// [[target]] tables (docs/scene_format.md): what each key becomes, and one error per way to get
+// a table wrong, each naming the file, the table's number (from 1) and the key.
+TEST(ScenarioTargets, TablesBecomePlacementsInSiUnits) {
+  namespace sc = radar_emu::scene;
+  EXPECT_TRUE(emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>")
+                  .targets.empty());  // the default's example is commented out
+  {
+    // The default's commented-out example, uncommented, is a valid table.
+    const std::string text(emu::default_scenario_toml());
+    const std::size_t at = text.find("# [[target]]");
+    ASSERT_NE(at, std::string::npos);
+    std::istringstream lines(text.substr(at));
+    std::string uncommented, line;
+    while (std::getline(lines, line))
+      uncommented += line.substr(std::min<std::size_t>(2, line.size())) + "\n";
+    const emu::Scenario ex = emu::parse_scenario(uncommented, "example.toml");
+    ASSERT_EQ(ex.targets.size(), 1u);
+    EXPECT_EQ(ex.targets[0].name, "fuel_truck");
+    EXPECT_EQ(ex.targets[0].speed_mps, 5.0);
+    EXPECT_NEAR(ex.targets[0].course_rad, 1.5 * std::numbers::pi, 1e-15);
+    const auto d = emu::scene_description(ex);  // the airport, plus the truck on its ground
+    EXPECT_EQ(d.objects.back().name, "fuel_truck");
+  }
+  const emu::Scenario s = emu::parse_scenario(R"(
+[scene]
+builtin = "terrain"
+
+[[target]]
+builtin = "truck"
+position_enu_m = [100.0, -200.0, 0.0]
+heading_deg = 90.0
+on_ground = true
+
+[[target]]
+name = "corner"
+builtin = "trihedral-square"
+size_m = 0.5
+material = "steel"
+facet_m = 0.05
+position_enu_m = [1, 2, 3]
+
+[[target]]
+name = "crab"
+builtin = "box"
+size_m = [4, 2, 1.5]
+position_enu_m = [0, 0, 0]
+speed_mps = 5
+course_deg = 0
+heading_deg = 270
+
+[[target]]
+name = "patrol"
+builtin = "helicopter"
+waypoints_enu_m = [[0, 0, 50], [500, 0, 50], [500, 500, 60]]
+speed_mps = 30
+turn_radius_m = 100
+closed = true
+bank = true
+
+[[target]]
+name = "east"
+builtin = "jeep"
+position_enu_m = [0, 0, 0]
+speed_mps = 12
+heading_deg = 90
+)",
+                                              "t.toml");
+  ASSERT_EQ(s.targets.size(), 5u);
+  const sc::TargetPlacement& a = s.targets[0];
+  EXPECT_EQ(a.name, "target_1");  // the default name counts tables from 1
+  EXPECT_EQ(a.context, "t.toml: [[target]] #1");
+  ASSERT_TRUE(a.builtin.has_value());
+  EXPECT_EQ(a.builtin->kind, sc::TargetKind::kTruck);
+  // The documented default size of a truck (scene/targets.hpp's example).
+  EXPECT_EQ(a.builtin->a_m, 8.0);
+  EXPECT_EQ(a.builtin->b_m, 2.5);
+  EXPECT_EQ(a.builtin->c_m, 3.4);
+  EXPECT_EQ(a.position_m, glm::dvec3(100, -200, 0));
+  EXPECT_NEAR(a.heading_rad, std::numbers::pi / 2, 1e-15);
+  EXPECT_TRUE(a.on_ground);
+  EXPECT_EQ(a.speed_mps, 0.0);
+  EXPECT_TRUE(a.material.empty());  // metal
+  const sc::TargetPlacement& b = s.targets[1];
+  EXPECT_EQ(b.name, "corner");
+  EXPECT_EQ(b.builtin->kind, sc::TargetKind::kTrihedralSquare);
+  EXPECT_EQ(b.builtin->a_m, 0.5);
+  EXPECT_EQ(b.facet_m, 0.05);
+  EXPECT_EQ(b.material, "steel");
+  EXPECT_FALSE(b.on_ground);
+  const sc::TargetPlacement& c = s.targets[2];
+  EXPECT_EQ(c.builtin->c_m, 1.5);
+  EXPECT_EQ(c.speed_mps, 5.0);
+  EXPECT_EQ(c.course_rad, 0.0);
+  EXPECT_NEAR(c.heading_rad, 270.0 * kDeg, 1e-15);
+  const sc::TargetPlacement& d = s.targets[3];
+  ASSERT_EQ(d.waypoints_m.size(), 3u);
+  EXPECT_EQ(d.waypoints_m[2], glm::dvec3(500, 500, 60));
+  EXPECT_EQ(d.speed_mps, 30.0);
+  EXPECT_EQ(d.turn_radius_m, 100.0);
+  EXPECT_TRUE(d.closed);
+  EXPECT_TRUE(d.bank);
+  // A straight-line mover with a heading only faces its velocity: course = heading.
+  const sc::TargetPlacement& e = s.targets[4];
+  EXPECT_NEAR(e.heading_rad, std::numbers::pi / 2, 1e-15);
+  EXPECT_EQ(e.course_rad, e.heading_rad);
+}
+
+TEST(ScenarioTargets, MeshFilesAreFoundBesideTheScenario) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("radar_emu_target_mesh_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "meshes");
+  {
+    std::ofstream obj(dir / "meshes" / "tri.obj");
+    obj << "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::ofstream toml(dir / "s.toml");
+    toml << "[[target]]\nmesh_file = \"meshes/tri.obj\"\nmesh_scale = 0.001\n"
+            "mesh_front_axis = \"-y\"\nmesh_up_axis = \"+z\"\nposition_enu_m = [0, 0, 0]\n"
+            "[[target]]\nmesh_file = \"meshes/none.stl\"\nposition_enu_m = [0, 0, 0]\n";
+  }
+  try {
+    (void)emu::load_scenario(dir / "s.toml");
+    FAIL() << "a missing mesh file was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), (dir / "s.toml").string() +
+                                         ": [[target]] #2: mesh_file: cannot open " +
+                                         (dir / "meshes" / "none.stl").string());
+  }
+  {
+    std::ofstream toml(dir / "s.toml");
+    toml << "[[target]]\nmesh_file = \"meshes/tri.obj\"\nmesh_scale = 0.001\n"
+            "mesh_front_axis = \"-y\"\nmesh_up_axis = \"+z\"\nposition_enu_m = [0, 0, 0]\n";
+  }
+  const emu::Scenario s = emu::load_scenario(dir / "s.toml");
+  ASSERT_EQ(s.targets.size(), 1u);
+  EXPECT_EQ(s.targets[0].mesh_file, dir / "meshes" / "tri.obj");
+  EXPECT_EQ(s.targets[0].mesh_scale, 0.001);
+  EXPECT_EQ(s.targets[0].mesh_front_axis, radar_emu::scene::MeshAxis::kMinusY);
+  EXPECT_EQ(s.targets[0].mesh_up_axis, radar_emu::scene::MeshAxis::kPlusZ);
+  EXPECT_FALSE(s.targets[0].builtin.has_value());
+  // The loop's scene: the database's objects, then the targets. The OBJ has no usemtl, so its
+  // triangles take the loader's default, metal.
+  const auto plain = emu::scene_description(emu::parse_scenario("", "p.toml"));
+  const auto with = emu::scene_description(s);
+  ASSERT_EQ(with.objects.size(), plain.objects.size() + 1);
+  EXPECT_EQ(with.objects.back().name, "target_1");
+  EXPECT_EQ(with.objects.back().area, "target");
+  // A mesh file's own material names must be radar materials, unless the table sets one.
+  {
+    std::ofstream obj(dir / "meshes" / "tri.obj");
+    obj << "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl unobtainium\nf 1 2 3\n";
+  }
+  try {
+    (void)emu::scene_description(emu::load_scenario(dir / "s.toml"));
+    FAIL() << "an unknown material in a mesh file was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind((dir / "s.toml").string() +
+                                              ": [[target]] #1: mesh_file material "
+                                              "'unobtainium' is not a radar material (known: ",
+                                          0),
+              0u)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("; set material = \"NAME\" in the table"),
+              std::string::npos);
+  }
+  {
+    std::ofstream toml(dir / "s.toml", std::ios::app);
+    toml << "material = \"aluminium\"\n";
+  }
+  const auto fixed = emu::scene_description(emu::load_scenario(dir / "s.toml"));
+  EXPECT_EQ(fixed.materials[fixed.objects.back().mesh.triangle_material[0]].name, "aluminium");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ScenarioTargets, EveryBadTableIsOneLineNamingTheTableAndTheKey) {
+  // Table #1 is always good, so the messages must count to #2.
+  const std::string good =
+      "[[target]]\nbuiltin = \"sphere\"\nsize_m = 1\nposition_enu_m = [0, 0, 0]\n";
+  const auto second = [&](const std::string& body) {
+    return error_of(good + "[[target]]\n" + body);
+  };
+  const std::string pos = "position_enu_m = [0, 0, 0]\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"builtin = \"box\"\nsize_m = [1, -1, 2]\n" + pos,
+       "test.toml: [[target]] #2: size_m must be > 0 (got -1)"},
+      {"builtin = \"box\"\nsize_m = [1, 2]\n" + pos,
+       "test.toml: [[target]] #2: size_m: a box takes 3 dimensions [length, width, height] in "
+       "metres, got 2"},
+      {"builtin = \"sphere\"\n" + pos,
+       "test.toml: [[target]] #2: size_m is required for a sphere: [radius] in metres"},
+      {"builtin = \"sphere\"\nsize_m = nan\n" + pos,
+       "test.toml: [[target]] #2: size_m must be a finite number (got nan)"},
+      {"builtin = \"sphere\"\nsize_m = \"big\"\n" + pos,
+       "test.toml: [[target]] #2: size_m must be a number or an array of numbers"},
+      {"builtin = \"tank\"\n" + pos,
+       "test.toml: [[target]] #2: builtin: unknown target 'tank' "
+       "(known: plate|dihedral|trihedral-square|trihedral-tri|"
+       "sphere|cylinder|box|vehicle|truck|jeep|helicopter|"
+       "transport_aircraft)"},
+      {pos, "test.toml: [[target]] #2: needs builtin = \"KIND\" ("},
+      {"builtin = \"jeep\"\nmesh_file = \"a.obj\"\n" + pos,
+       "test.toml: [[target]] #2: builtin and mesh_file are exclusive"},
+      {"builtin = \"jeep\"\nsize = [4, 2, 2]\n" + pos,
+       "test.toml: [[target]] #2: unknown key 'size' (known: name, builtin, size_m, "},
+      {"builtin = \"jeep\"\nmaterial = \"kryptonite\"\n" + pos,
+       "test.toml: [[target]] #2: material: unknown radar material 'kryptonite' (known: "},
+      {"builtin = \"jeep\"\nfacet_m = -0.1\n" + pos,
+       "test.toml: [[target]] #2: facet_m must be >= 0 (got -0.1)"},
+      {"builtin = \"jeep\"\nmesh_scale = 2\n" + pos,
+       "test.toml: [[target]] #2: mesh_scale applies to mesh_file only"},
+      {"mesh_file = \"a.obj\"\nsize_m = 2\n" + pos,
+       "test.toml: [[target]] #2: size_m applies to builtin targets only"},
+      {"mesh_file = \"a.obj\"\nmesh_scale = 0\n" + pos,
+       "test.toml: [[target]] #2: mesh_scale must be > 0 (got 0)"},
+      {"mesh_file = \"a.obj\"\nmesh_front_axis = \"forward\"\n" + pos,
+       "test.toml: [[target]] #2: mesh_front_axis: expected \"+x\", \"-x\", \"+y\", \"-y\", "
+       "\"+z\" or \"-z\", got \"forward\""},
+      {"mesh_file = \"a.obj\"\nmesh_front_axis = \"+y\"\nmesh_up_axis = \"-y\"\n" + pos,
+       "test.toml: [[target]] #2: mesh_front_axis and mesh_up_axis must be different axes"},
+      {"builtin = \"jeep\"\n",
+       "test.toml: [[target]] #2: needs position_enu_m = [e, n, u] or waypoints_enu_m = "
+       "[[e, n, u], ...]"},
+      {"builtin = \"jeep\"\nposition_enu_m = [0, 0]\n",
+       "test.toml: [[target]] #2: position_enu_m must be an array of 3 numbers [e, n, u]"},
+      {"builtin = \"jeep\"\nposition_enu_m = [0, inf, 0]\n",
+       "test.toml: [[target]] #2: position_enu_m element 1 must be a finite number (got inf)"},
+      {"builtin = \"jeep\"\nspeed_mps = -3\n" + pos,
+       "test.toml: [[target]] #2: speed_mps must be >= 0 (got -3)"},
+      {"builtin = \"jeep\"\nheading_deg = 400\n" + pos,
+       "test.toml: [[target]] #2: heading_deg must be <= 360 (got 400)"},
+      {"builtin = \"jeep\"\ncourse_deg = 90\n" + pos,
+       "test.toml: [[target]] #2: course_deg needs speed_mps > 0 (a fixed target has a "
+       "heading_deg only)"},
+      {"builtin = \"jeep\"\nclosed = true\n" + pos,
+       "test.toml: [[target]] #2: closed applies to waypoints_enu_m only"},
+      {"builtin = \"jeep\"\non_ground = 1\n" + pos,
+       "test.toml: [[target]] #2: on_ground must be true or false"},
+      {"builtin = \"jeep\"\nname = \"\"\n" + pos,
+       "test.toml: [[target]] #2: name must not be empty"},
+      {"builtin = \"jeep\"\nname = \"target_1\"\n" + pos,
+       "test.toml: [[target]] #2: name 'target_1' is already used by another [[target]]"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0]]\nspeed_mps = 5\n",
+       "test.toml: [[target]] #2: waypoints_enu_m must be an array of at least 2 [e, n, u] "
+       "points"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0], [0, 0, 5]]\nspeed_mps = 5\n",
+       "test.toml: [[target]] #2: waypoints_enu_m[0] and [1] are at the same (e, n): waypoints "
+       "must be distinct (no vertical legs)"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0], [10, 0, 0]]\n",
+       "test.toml: [[target]] #2: speed_mps is required with waypoints_enu_m"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0], [10, 0, 0]]\nspeed_mps = 0\n",
+       "test.toml: [[target]] #2: speed_mps must be > 0 with waypoints_enu_m (got 0)"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0], [10, 0, 0]]\nspeed_mps = 5\n" + pos,
+       "test.toml: [[target]] #2: position_enu_m does not go with waypoints_enu_m"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0], [10, 0, 0]]\nspeed_mps = 5\n"
+       "heading_deg = 3\n",
+       "test.toml: [[target]] #2: heading_deg does not go with waypoints_enu_m"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0], [10, 0, 0], [10, 10, 0]]\n"
+       "speed_mps = 5\nturn_radius_m = 20\n",
+       "test.toml: [[target]] #2: waypoints_enu_m: trajectory: leg 0"},
+      {"builtin = \"jeep\"\nwaypoints_enu_m = [[0, 0, 0], [10, 0]]\nspeed_mps = 5\n",
+       "test.toml: [[target]] #2: waypoints_enu_m[1] must be an array of 3 numbers [e, n, u]"},
+  };
+  for (const auto& [body, expected] : cases) {
+    const std::string e = second(body);
+    EXPECT_EQ(e.rfind(expected, 0), 0u) << "table:\n"
+                                        << body << "expected: " << expected << "\ngot:      " << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
+  }
+  // [target] as a single table, or a plain key, is not the array of tables.
+  EXPECT_EQ(error_of("[target]\nbuiltin = \"jeep\"\n"),
+            "test.toml: target: expected [[target]] tables (an array of tables), one per target");
+  EXPECT_EQ(error_of("target = 3\n"),
+            "test.toml: target: expected [[target]] tables (an array of tables), one per target");
+}
+
+TEST(ScenarioTargets, TheExamplesLoad) {
+  const char* root = std::getenv("RADAR_EMU_SOURCE_DIR");
+  if (root == nullptr)
+    GTEST_SKIP() << "RADAR_EMU_SOURCE_DIR is not set (ctest sets it)";
+  const std::filesystem::path examples = std::filesystem::path(root) / "examples";
+  // examples/terrain_movers.toml: three vehicles on the terrain's roads (the loop run and its
+  // detections are checked by the terrain_movers_example test).
+  const emu::Scenario movers = emu::load_scenario(examples / "terrain_movers.toml");
+  EXPECT_EQ(movers.scene_builtin, "terrain");
+  ASSERT_EQ(movers.targets.size(), 3u);
+  for (const auto& t : movers.targets) {
+    EXPECT_TRUE(t.on_ground) << t.name;
+    EXPECT_GE(t.waypoints_m.size(), 3u) << t.name;
+  }
+  EXPECT_EQ(movers.targets[0].name, "truck_road_1");
+  EXPECT_EQ(movers.targets[1].name, "tank_road_1");
+  EXPECT_EQ(movers.targets[2].name, "jeep_road_1");
+
+  // examples/gltf_targets.toml on examples/scene_extras.gltf: the file's nodes with their extras
+  // (the schema of docs/scene_format.md), then the two tables' targets.
+  const emu::Scenario g = emu::load_scenario(examples / "gltf_targets.toml");
+  EXPECT_EQ(g.scene_file, examples / "scene_extras.gltf");
+  const radar_emu::scene::SceneDescription d = emu::scene_description(g);
+  ASSERT_EQ(d.objects.size(), 6u);
+  EXPECT_EQ(d.objects[0].name, "ground");
+  EXPECT_EQ(d.objects[0].area, "airport");
+  EXPECT_EQ(d.objects[1].name, "hangar");
+  EXPECT_EQ(glm::dvec3(d.objects[1].world_from_body[3]), glm::dvec3(150, 900, 0));
+  ASSERT_TRUE(d.objects[2].motion.has_value());
+  EXPECT_EQ(d.objects[2].motion->velocity_mps, glm::dvec3(-5, 0, 0));
+  EXPECT_EQ(d.objects[2].motion->start_position_m, glm::dvec3(100, 600, 0));
+  ASSERT_TRUE(d.objects[3].trajectory.has_value());
+  EXPECT_TRUE(d.objects[3].trajectory->loop);
+  EXPECT_EQ(d.objects[3].trajectory->turn_radius_m, 20.0);
+  // "yellow paint" is metal by its radar_material extras.
+  EXPECT_EQ(d.materials[d.objects[2].mesh.triangle_material[0]].name, "metal");
+  EXPECT_NEAR(d.anchor.latitude_rad, 43.6 * kDeg, 1e-12);
+  EXPECT_EQ(d.objects[4].name, "parked_a320");
+  EXPECT_EQ(d.objects[5].name, "westbound_jeep");
+  ASSERT_TRUE(d.objects[5].motion.has_value());
+  EXPECT_NEAR(d.objects[5].motion->velocity_mps.x, -8.0, 1e-12);  // west
+  // on_ground on the file's flat ground (z = 0): the jeep's wheels (its lowest point) at z = 0.
+  EXPECT_NEAR(d.objects[5].motion->start_position_m.z, 0.0, 1e-6);
 }

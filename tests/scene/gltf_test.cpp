@@ -330,6 +330,52 @@ TEST(Gltf, TrajectoryAreaLodAndRadarMaterialFromExtras) {
                "material 0 extras radar_emu.radar_material must be a string");
 }
 
+TEST(Gltf, UnknownRadarEmuExtrasKeysAreErrorsNamingTheKey) {
+  // A typo must not leave an object silently static or a material silently renamed: every key
+  // of a radar_emu object outside the documented schema (docs/scene_format.md) is an error
+  // naming the file, the node / material / scene and the key, on one line.
+  const auto expect_key_error = [](json j, const std::string& name, const std::string& what) {
+    const fs::path p = write_fixture(name, j);
+    expect_error(p, what);
+    EXPECT_EQ(error_of(p).find('\n'), std::string::npos);
+  };
+  json j = make_fixture();
+  j["nodes"][0]["extras"] = json::parse(R"({"radar_emu": {"velocity": [1, 0, 0]}})");
+  expect_key_error(j, "unknown_node_key.gltf", "node 0 extras radar_emu: unknown key 'velocity'");
+  EXPECT_NE(error_of(tmp("unknown_node_key.gltf")).find("known: area, lod_group"),
+            std::string::npos);
+  j = make_fixture();
+  j["nodes"][0]["extras"] = json::parse(
+      R"({"radar_emu": {"trajectory": {"waypoints_m": [[0, 0, 0], [9, 0, 0]], "speed_mps": 1,
+          "closed": true}}})");
+  expect_key_error(j, "unknown_trajectory_key.gltf",
+                   "node 0 extras radar_emu.trajectory: unknown key 'closed'");
+  j = make_fixture();
+  j["materials"][0]["extras"] = json::parse(R"({"radar_emu": {"material": "steel"}})");
+  expect_key_error(j, "unknown_material_key.gltf",
+                   "material 0 extras radar_emu: unknown key 'material' (known: radar_material)");
+  j = make_fixture();
+  j["scenes"][0]["extras"] = json::parse(R"({"radar_emu": {"anchor_deg": [43, 1, 0]}})");
+  expect_key_error(j, "unknown_scene_key.gltf",
+                   "scene 0 extras radar_emu: unknown key 'anchor_deg' (known: anchor_deg_m)");
+  j = make_fixture();
+  j["nodes"][0]["extras"] = json::parse(R"({"radar_emu": [1, 2]})");
+  expect_key_error(j, "radar_emu_not_object.gltf", "node 0 extras radar_emu must be an object");
+  // radar_emu extras where nothing reads them (a mesh, a primitive) are errors too.
+  j = make_fixture();
+  j["meshes"][0]["extras"] = json::parse(R"({"radar_emu": {"velocity_mps": [1, 0, 0]}})");
+  expect_key_error(j, "mesh_extras.gltf", "mesh 0 extras radar_emu: not read here");
+  j = make_fixture();
+  j["meshes"][0]["primitives"][0]["extras"] =
+      json::parse(R"({"radar_emu": {"radar_material": "steel"}})");
+  expect_key_error(j, "primitive_extras.gltf", "mesh 0 primitive 0 extras radar_emu: not read");
+  // Other tools' extras beside radar_emu stay allowed.
+  j = make_fixture();
+  j["nodes"][0]["extras"] =
+      json::parse(R"({"blender_id": 7, "radar_emu": {"area": "airport"}, "notes": "x"})");
+  EXPECT_EQ(sc::load_gltf(write_fixture("foreign_extras.gltf", j)).objects[0].area, "airport");
+}
+
 TEST(Gltf, TrajectoriesAndDatabaseFieldsRoundTrip) {
   sc::SceneDescription d = sc::default_scene();
   d.objects[0].area = "surround";
