@@ -210,11 +210,13 @@ class ClosedLoopDefault : public ::testing::Test {
     // The stage timeline too: its buffer is preallocated, so it adds no allocation.
     trace_file_ = temp_dir("default_trace") / "trace.json";
     options.trace_events_file = trace_file_;
+    // The outputs stream during the run: the writer thread must not allocate either.
+    out_ = temp_dir("default");
+    options.out_dir = out_;
     loop_ = new emu::ClosedLoop(*scenario_, options);
     result_ = new emu::RunResult(loop_->run());
     allocations_ = radar_emu::test::stop_counting_allocations();  // the count frozen at the end
-    out_ = temp_dir("default");
-    loop_->write_outputs(*result_, out_);
+    loop_->write_outputs(*result_);
     loop_->write_trace_events();
   }
   static void TearDownTestSuite() {
@@ -694,13 +696,11 @@ TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {
   emu::Scenario s = default_scenario();
   s.frames = 40;
   const fs::path a = temp_dir("repeat_a"), b = temp_dir("repeat_b");
-  {
-    emu::ClosedLoop loop(s, {});
-    loop.write_outputs(loop.run(), a);
-  }
-  {
-    emu::ClosedLoop loop(s, {});
-    loop.write_outputs(loop.run(), b);
+  for (const fs::path& dir : {a, b}) {
+    emu::RunOptions options;
+    options.out_dir = dir;
+    emu::ClosedLoop loop(s, options);
+    loop.write_outputs(loop.run());
   }
   for (const char* f : {"bus_out.log", "bus_in.log", "detections.json"}) {
     const std::string x = slurp(a / f), y = slurp(b / f);
@@ -713,7 +713,10 @@ TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
   emu::Scenario s = default_scenario();
   s.frames = 40;
   s.malformed_every_n_frames = 3;  // frames 0, 3, ..., 39: 14 malformed frames
-  emu::ClosedLoop loop(s, {});
+  const fs::path out = temp_dir("malformed");
+  emu::RunOptions options;
+  options.out_dir = out;
+  emu::ClosedLoop loop(s, options);
   const emu::RunResult r = loop.run();
   const std::uint64_t injected = r.injected_malformed[0] + r.injected_malformed[1] +
                                  r.injected_malformed[2] + r.injected_malformed[3];
@@ -726,8 +729,7 @@ TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
   // The good data still flow: every frame valid, detections still produced.
   EXPECT_EQ(r.frames_valid, r.frames);
   EXPECT_GT(r.detections_total, 0u);
-  const fs::path out = temp_dir("malformed");
-  loop.write_outputs(r, out);
+  loop.write_outputs(r);
   std::ifstream in(out / "report.json");
   const nlohmann::json rep = nlohmann::json::parse(in);
   EXPECT_EQ(rep["input"]["rejected"].get<std::uint64_t>(), injected);
