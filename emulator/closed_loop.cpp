@@ -755,7 +755,7 @@ RunResult ClosedLoop::run() {
 }
 
 OutputCounters ClosedLoop::output_counters() const {
-  return impl_->outputs ? impl_->outputs->finish() : OutputCounters{};
+  return impl_->outputs ? impl_->outputs->counters() : OutputCounters{};
 }
 
 void ClosedLoop::write_outputs(const RunResult& r) {

@@ -271,13 +271,23 @@ const OutputCounters& OutputStream::finish() {
   return counters_;
 }
 
+OutputCounters OutputStream::counters() const {
+  if (finished_)
+    return counters_;
+  OutputCounters c;
+  c.frames_dropped = frames_dropped_;
+  c.bus_frames_dropped = bus_frames_dropped_;
+  c.waits = waits_;
+  return c;
+}
+
 // ---- the frame thread --------------------------------------------------------------------
 
 void OutputStream::push_bus(const io::CanFrame& frame, bool out) noexcept {
   const BusEntry e{frame, out};
   if (bus_ring_.push(e))
     return;
-  if (!config_.wait_when_full) {
+  if (!config_.wait_when_full || finished_) {  // no writer left to wait for
     ++bus_frames_dropped_;
     return;
   }
@@ -287,7 +297,7 @@ void OutputStream::push_bus(const io::CanFrame& frame, bool out) noexcept {
 }
 
 void OutputStream::wait_for_room() noexcept {
-  if (!config_.wait_when_full)
+  if (!config_.wait_when_full || finished_)
     return;
   const std::size_t need = std::min(config_.bus_frames_per_frame, bus_ring_.capacity());
   if (bus_ring_.capacity() - bus_ring_.size() >= need)
@@ -311,8 +321,8 @@ void OutputStream::frame(const FrameRecord& record,
            detection_ring_.capacity() - detection_ring_.size() >= detections.size() &&
            truth_ring_.capacity() - truth_ring_.size() >= truth.size();
   };
-  if (!room()) {
-    if (!config_.wait_when_full) {
+  if (!room() || finished_) {
+    if (!config_.wait_when_full || finished_) {
       ++frames_dropped_;
       return;
     }

@@ -85,7 +85,12 @@ class OutputStream {
   // ---- teardown ----
   /// Stops the writer once it has written everything handed over, closes the JSON documents and
   /// the files, writes detections.png. Idempotent; never throws for a write failure (counted).
+  /// Frames handed over afterwards are dropped and counted. Call it from the frame thread.
   const OutputCounters& finish();
+  [[nodiscard]] bool finished() const noexcept { return finished_; }
+  /// After finish(): what was written and lost. Before: the frame thread's drop and wait
+  /// counts only.
+  [[nodiscard]] OutputCounters counters() const;
   [[nodiscard]] const std::filesystem::path& dir() const noexcept { return config_.dir; }
 
   /// A buffered output file: write errors are counted, never thrown (after open).
