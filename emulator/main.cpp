@@ -247,12 +247,16 @@ int run_command(const std::string& scenario_file, std::uint64_t frames, const st
 int replay_command(const std::string& log_file, const std::string& scenario_file,
                    std::uint64_t frames, const std::string& out, bool quiet) {
   emu::Scenario scenario = load_scenario_or_default(scenario_file);
-  std::vector<radar_emu::io::CandumpLine> lines = radar_emu::io::read_candump_file(log_file);
   emu::RunOptions options;
   options.replay = true;
-  options.replay_input.reserve(lines.size());
-  for (const auto& line : lines)
-    options.replay_input.push_back(line.frame);
+  {
+    // The parsed lines are freed before the run: a long log is held once, as frames.
+    const std::vector<radar_emu::io::CandumpLine> lines =
+        radar_emu::io::read_candump_file(log_file);
+    options.replay_input.reserve(lines.size());
+    for (const auto& line : lines)
+      options.replay_input.push_back(line.frame);
+  }
   if (options.replay_input.empty())
     throw std::runtime_error(log_file + ": no frames to replay");
   // The log's time stamps are bus times: scenario time 0 is the scenario's epoch. A log recorded
