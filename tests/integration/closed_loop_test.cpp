@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <stb/stb_image.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -36,7 +37,10 @@ constexpr double kC_mps = 299792458.0;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("radar_emu_it_" + name);
+  // One directory per process: CTest runs each test of a suite as its own process, in parallel,
+  // and the outputs are written while the run goes (a shared directory would be clobbered).
+  const fs::path p =
+      fs::temp_directory_path() / ("radar_emu_it_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
@@ -223,6 +227,8 @@ class ClosedLoopDefault : public ::testing::Test {
     delete result_;
     delete loop_;
     delete scenario_;
+    fs::remove_all(out_);
+    fs::remove_all(trace_file_.parent_path());
   }
   static emu::Scenario* scenario_;
   static emu::ClosedLoop* loop_;
@@ -707,6 +713,8 @@ TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {
     EXPECT_FALSE(x.empty()) << f;
     EXPECT_TRUE(x == y) << f << " differs between two runs with the same inputs";
   }
+  fs::remove_all(a);
+  fs::remove_all(b);
 }
 
 TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
@@ -735,6 +743,7 @@ TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
   EXPECT_EQ(rep["input"]["rejected"].get<std::uint64_t>(), injected);
   EXPECT_EQ(rep["input"]["rejected_by_reason"]["not_a_number"].get<std::uint64_t>(),
             r.injected_malformed[2]);
+  fs::remove_all(out);
 }
 
 TEST(ClosedLoop, StaleStateMarksOutputInvalidAndEmitsNoDetections) {

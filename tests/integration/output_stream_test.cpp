@@ -30,7 +30,10 @@ namespace icd = radar_emu::io::icd;
 namespace {
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("radar_emu_os_" + name);
+  // One directory per process: CTest runs each test of a suite as its own process, in parallel,
+  // and the outputs are written while the run goes (a shared directory would be clobbered).
+  const fs::path p =
+      fs::temp_directory_path() / ("radar_emu_os_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
@@ -144,6 +147,7 @@ TEST(OutputStream, EveryFrameIsWrittenAndReadsBack) {
   EXPECT_EQ(t.at("frames")[3].at("objects")[0].at("object"), "truck");
   EXPECT_EQ(lines_of(dir / "frames.csv"), 101u);
   EXPECT_TRUE(fs::exists(dir / "detections.png"));
+  fs::remove_all(dir);
 }
 
 TEST(OutputStream, AFullDiskIsCountedPerFileAndTheOtherFilesStayValid) {
@@ -170,6 +174,7 @@ TEST(OutputStream, AFullDiskIsCountedPerFileAndTheOtherFilesStayValid) {
   }
   EXPECT_EQ(read_json(dir / "detections.json").at("frames").size(), 50u);
   EXPECT_EQ(radar_emu::io::read_candump_file(dir / "bus_in.log").size(), 2000u);
+  fs::remove_all(dir);
 }
 
 TEST(OutputStream, AStalledWriterMakesARealTimeProducerDropNotWait) {
@@ -222,6 +227,7 @@ TEST(OutputStream, AStalledWriterMakesARealTimeProducerDropNotWait) {
   const nlohmann::json d = read_json(dir / "detections.json");
   EXPECT_EQ(d.at("frames").size(), counters.frames_written);
   EXPECT_EQ(d.at("frames_dropped").get<std::uint64_t>(), frames_dropped);
+  fs::remove_all(dir);
 }
 
 TEST(OutputStream, OnTheSimulatedClockTheProducerWaitsAndNothingIsLost) {
@@ -246,6 +252,7 @@ TEST(OutputStream, OnTheSimulatedClockTheProducerWaitsAndNothingIsLost) {
   ASSERT_EQ(d.at("frames").size(), 300u);
   for (std::size_t k = 0; k < 300; ++k)
     ASSERT_EQ(d.at("frames")[k].at("frame_counter").get<std::size_t>(), k);
+  fs::remove_all(dir);
 }
 
 TEST(OutputStream, AnOutputDirectoryThatCannotBeMadeFailsAtSetupWithItsPath) {
@@ -258,4 +265,5 @@ TEST(OutputStream, AnOutputDirectoryThatCannotBeMadeFailsAtSetupWithItsPath) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("file/out"), std::string::npos) << e.what();
   }
+  fs::remove_all(dir);
 }
