@@ -1,8 +1,14 @@
 #include "emulator/closed_loop.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -10,9 +16,9 @@
 #include <stdexcept>
 
 #include "emulator/bus_backends.hpp"
+#include "emulator/output_stream.hpp"
 #include "emulator/ownship.hpp"
 #include "emulator/plot.hpp"
-#include "io/candump.hpp"
 #include "io/modbus.hpp"
 #include "io/modbus_map.hpp"
 #include "radar/materials.hpp"
@@ -43,8 +49,40 @@ constexpr std::uint8_t kFaultyNodeId = 99;
 // Spans a frame puts on the --trace-events timeline: input, scene_update, trace, sensor, output,
 // frame.
 constexpr std::size_t kTimelineStagesPerFrame = 6;
-// Bound on the truth.json entries a run keeps (40 bytes each); beyond it they are counted.
+// Bound on the truth entries RunResult keeps in memory (40 bytes each); beyond it they are
+// counted (truth.json, streamed, has them all).
 constexpr std::size_t kTruthEntriesMax = 1u << 20;
+
+// Output paths, checked before any other setup (the scene can take seconds to build): the
+// output directory is created, the trace-event file created empty. Throws with the path.
+struct OutputPaths {
+  explicit OutputPaths(const RunOptions& o) {
+    std::error_code ec;
+    if (!o.out_dir.empty()) {
+      std::filesystem::create_directories(o.out_dir, ec);
+      if (ec || !std::filesystem::is_directory(o.out_dir)) {
+        throw std::runtime_error(o.out_dir.string() + ": cannot create the output directory" +
+                                 (ec ? ": " + ec.message() : std::string()));
+      }
+    }
+    if (!o.trace_events_file.empty()) {
+      const std::filesystem::path& p = o.trace_events_file;
+      if (p.has_parent_path())
+        std::filesystem::create_directories(p.parent_path(), ec);
+      trace_events = std::fopen(p.c_str(), "wb");
+      if (trace_events == nullptr) {
+        throw std::runtime_error(p.string() + ": cannot open for writing: " + std::strerror(errno));
+      }
+    }
+  }
+  ~OutputPaths() {
+    if (trace_events != nullptr)
+      std::fclose(trace_events);
+  }
+  OutputPaths(const OutputPaths&) = delete;
+  OutputPaths& operator=(const OutputPaths&) = delete;
+  std::FILE* trace_events = nullptr;  ///< --trace-events, open from setup to the end
+};
 
 // The scripted ownship: the scenario's straight line in anchor ENU, sampled every second as the
 // INS would report it (geodetic position; velocity and attitude in the local ENU frame).
@@ -160,7 +198,8 @@ scene::SceneDescription scene_description(const Scenario& s) {
 
 struct ClosedLoop::Impl {
   Impl(const Scenario& s, const RunOptions& o)
-      : scenario(s),
+      : paths(o),
+        scenario(s),
         options(o),
         scene(scene_description(s)),
         enu(scene.anchor()),
@@ -177,12 +216,11 @@ struct ClosedLoop::Impl {
         sink(std::min<std::uint64_t>(s.frames, o.record_frames_max)),
         decoder(s.input),
         recorded_frames(std::min<std::uint64_t>(s.frames, o.record_frames_max)),
-        rx_log("can0", static_cast<std::size_t>(recorded_frames * input_frames_per_frame(s))),
-        tx_log("can0", static_cast<std::size_t>(recorded_frames * list_frames(s))),
-        profiler(static_cast<std::size_t>(std::max<std::uint64_t>(recorded_frames, 1)),
+        timed_frames(std::max<std::uint64_t>(std::min(s.frames, o.timing_frames_max), 1)),
+        profiler(static_cast<std::size_t>(timed_frames),
                  o.trace_events_file.empty()
                      ? 0
-                     : static_cast<std::size_t>(recorded_frames) * kTimelineStagesPerFrame) {
+                     : static_cast<std::size_t>(timed_frames) * kTimelineStagesPerFrame) {
     if (s.frames == 0)
       throw std::runtime_error("scenario: frames must be >= 1");
     contributions.resize(tracer.max_contributions());
@@ -220,6 +258,27 @@ struct ClosedLoop::Impl {
     }
     truth_capacity = std::min<std::size_t>(
         static_cast<std::size_t>(recorded_frames) * truth_objects.size(), kTruthEntriesMax);
+    frame_truth.resize(truth_objects.size());
+    if (!o.out_dir.empty())
+      setup_outputs(o);
+  }
+
+  // The streamed outputs (emulator/output_stream.hpp): real-time runs drop what the writer
+  // cannot take in time (counted); simulated-clock runs wait for it between frames.
+  void setup_outputs(const RunOptions& o) {
+    OutputStreamConfig c;
+    c.dir = o.out_dir;
+    c.scenario = &scenario;
+    c.frames_planned = scenario.frames;
+    for (const auto& obj : scene.description().objects)
+      c.object_names.push_back(obj.name);
+    c.truth_objects = truth_objects;
+    c.max_detections = detections.size();
+    c.bus_frames_per_frame =
+        static_cast<std::size_t>(input_frames_per_frame(scenario)) + list_frames(scenario);
+    c.wait_when_full = !o.realtime;
+    c.wake_latency = o.realtime;
+    outputs = std::make_unique<OutputStream>(std::move(c));
   }
 
   // [weather]: the one-way specific attenuation at the carrier, built once from the ITU-R
@@ -353,6 +412,7 @@ struct ClosedLoop::Impl {
     return static_cast<std::uint64_t>(std::ceil(per_s / s.rate_hz)) + 12;
   }
 
+  OutputPaths paths;  ///< first: checked before the rest of the setup
   Scenario scenario;
   RunOptions options;
   scene::Scene scene;
@@ -375,11 +435,12 @@ struct ClosedLoop::Impl {
   sim_bus::LoopbackEndpoint* babble_ep = nullptr;
   sim_bus::AvionicsSink sink;
   io::canas::Decoder decoder;
-  std::uint64_t recorded_frames;
-  io::CandumpRecorder rx_log;
-  io::CandumpRecorder tx_log;
+  std::uint64_t recorded_frames;  ///< frames RunResult keeps in memory
+  std::uint64_t timed_frames;     ///< frames whose stage times are kept one by one
   timing::StageProfiler profiler;
-  double weather_db_per_m = 0.0;  ///< one-way specific attenuation [dB/m]; 0: free space
+  std::unique_ptr<OutputStream> outputs;  ///< null without an output directory
+  std::vector<ObjectTruth> frame_truth;   ///< the current frame's objects in view
+  double weather_db_per_m = 0.0;          ///< one-way specific attenuation [dB/m]; 0: free space
   double weather_gas_db_per_km = 0.0, weather_rain_db_per_km = 0.0, weather_fog_db_per_km = 0.0;
   std::vector<std::uint32_t> truth_objects;  ///< objects truth.json covers
   std::size_t truth_capacity = 0;
@@ -431,6 +492,7 @@ RunResult ClosedLoop::run() {
   Impl& m = *impl_;
   const Scenario& s = m.scenario;
   RunResult r;
+  r.frames_planned = s.frames;
   r.records.reserve(static_cast<std::size_t>(m.recorded_frames));
   r.detections.reserve(static_cast<std::size_t>(m.recorded_frames) * s.sensor.max_detections);
   r.sensor_detections.reserve(r.detections.capacity());
@@ -463,8 +525,24 @@ RunResult ClosedLoop::run() {
   const std::int64_t run_start_wall = wall.now_ns();
   std::uint16_t frame_counter = 0;
 
+  // A stop request ends the run at a frame boundary: before the wait, or after it (a real-time
+  // run may sleep a period in between).
+  auto stop_requested = [&] {
+    const int sig = m.options.stop ? m.options.stop->load(std::memory_order_relaxed) : 0;
+    if (sig != 0) {
+      r.interrupted = true;
+      r.stop_signal = sig;
+    }
+    return sig != 0;
+  };
   for (std::uint64_t done = 0; done < s.frames; ++done) {
+    if (stop_requested())
+      break;
+    if (m.outputs)
+      m.outputs->wait_for_room();  // simulated clock only: the writer keeps up
     const timing::Tick tick = scheduler.wait_next();
+    if (stop_requested())
+      break;
     const std::int64_t frame_start_wall = wall.now_ns();
     m.profiler.set_frame(done);
     const std::int64_t since_start_ns = tick.deadline_ns - start_ns;
@@ -508,7 +586,8 @@ RunResult ClosedLoop::run() {
         // Reception times are kept to the microsecond, the resolution of the candump log, so
         // that a replay of bus_in.log decodes exactly what this run decoded.
         f.timestamp_ns -= f.timestamp_ns % 1000;
-        (void)m.rx_log.record(f);
+        if (m.outputs)
+          m.outputs->bus_in(f);
         (void)m.decoder.decode(f, f.timestamp_ns);
       }
       // The ownship state: CANaerospace from the bus, or the Modbus navigation map.
@@ -599,6 +678,8 @@ RunResult ClosedLoop::run() {
       r.governor.max_level = std::max(r.governor.max_level, decision->level);
     }
     // ---- output: ICD frames on the bus ----
+    FrameRecord rec;
+    std::size_t n_truth = 0;
     {
       timing::ScopedStage stage(m.profiler, wall, timing::Stage::kOutput);
       for (std::size_t i = 0; i < n_det; ++i)
@@ -632,7 +713,8 @@ RunResult ClosedLoop::run() {
         f.timestamp_ns = bus_now_ns;
         if (tx.send(f))
           ++r.bus_frames_out;
-        (void)m.tx_log.record(f);
+        if (m.outputs)
+          m.outputs->bus_out(f);
       }
       if (m.modbus_server) {
         // The Modbus table is state, not a message: it is published every frame, stale or not.
@@ -642,59 +724,53 @@ RunResult ClosedLoop::run() {
         (void)te;
         (void)m.modbus_server->publish(m.table_regs);
       }
-      if (r.records.size() < m.recorded_frames) {
-        FrameRecord rec;
-        rec.frame_index = tick.period_index;
-        rec.time_s = t_s;
-        rec.header = h;
-        rec.header.detection_count = static_cast<std::uint8_t>(enc.encoded);
-        rec.first_detection = static_cast<std::uint32_t>(r.detections.size());
-        rec.detection_count = static_cast<std::uint32_t>(n_det);
-        rec.late = tick.late;
-        rec.sent = send_list;
-        rec.ownship_valid = valid;
-        rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
-        if (decision != nullptr) {
-          rec.governor_level = decision->level;
-          rec.governor_predicted_ms = decision->predicted_ms;
-          rec.governor_error_db = decision->estimated_snr_error_db;
-          rec.rays = decision->rays;
-        }
-        rec.first_truth = static_cast<std::uint32_t>(r.truth.size());
-        if (valid) {
-          // Ground truth: each target whose box centre is inside the field of view and range.
-          const std::span<const scene::ObjectState> states = m.scene.objects();
-          for (std::uint32_t id : m.truth_objects) {
-            const scene::ObjectState& st = states[id];
-            const ObjectTruth t =
-                point_truth(pose, 0.5 * (st.bounds_min_m + st.bounds_max_m), st.velocity_mps);
-            if (t.range_m > s.sbr.max_range_m || t.azimuth_rad < s.sbr.azimuth_min_rad ||
-                t.azimuth_rad > s.sbr.azimuth_max_rad ||
-                t.elevation_rad < s.sbr.elevation_min_rad ||
-                t.elevation_rad > s.sbr.elevation_max_rad) {
-              continue;
-            }
-            if (r.truth.size() == r.truth.capacity()) {
-              ++r.truth_overflows;
-              continue;
-            }
-            r.truth.push_back(t);
-            r.truth.back().object_id = id;
-            ++rec.truth_count;
-          }
-        }
-        r.records.push_back(rec);
-        r.detections.insert(r.detections.end(), m.icd_detections.begin(),
-                            m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
-        r.sensor_detections.insert(r.sensor_detections.end(), m.detections.begin(),
-                                   m.detections.begin() + static_cast<std::ptrdiff_t>(n_det));
-      }
+      // Ground truth: each target whose box centre is inside the field of view and range.
+      n_truth =
+          valid ? objects_in_view(pose, m.scene.objects(), m.truth_objects, s.sbr, m.frame_truth)
+                : 0;
+      rec.frame_index = tick.period_index;
+      rec.time_s = t_s;
+      rec.header = h;
+      rec.header.detection_count = static_cast<std::uint8_t>(enc.encoded);
+      rec.detection_count = static_cast<std::uint32_t>(n_det);
+      rec.truth_count = static_cast<std::uint32_t>(n_truth);
+      rec.late = tick.late;
+      rec.sent = send_list;
+      rec.ownship_valid = valid;
+      rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
+      rec.governor_level = decision != nullptr ? decision->level : 0;
+      rec.governor_predicted_ms = decision != nullptr ? decision->predicted_ms : 0.0;
+      rec.governor_error_db = decision != nullptr ? decision->estimated_snr_error_db : 0.0;
+      rec.rays = decision != nullptr ? decision->rays : 0;
     }
     const std::int64_t frame_end_wall = wall.now_ns();
     const std::int64_t frame_ns = frame_end_wall - frame_start_wall;
     m.profiler.record_span(timing::Stage::kFrame, frame_start_wall, frame_end_wall);
     if (frame_ns > period_ns)
       ++r.frames_over_budget;
+
+    // The frame's record: to the writer thread, and to memory for the first recorded_frames.
+    const std::span<const ObjectTruth> truth(m.frame_truth.data(), n_truth);
+    if (m.outputs) {
+      std::array<std::int64_t, timing::kStageCount> stage_ns{};
+      for (std::size_t k = 0; k < timing::kStageCount; ++k)
+        stage_ns[k] = m.profiler.last_ns(static_cast<timing::Stage>(k));
+      m.outputs->frame(rec, stage_ns, std::span(m.icd_detections.data(), n_det),
+                       std::span(m.detections.data(), n_det), truth);
+    }
+    if (r.records.size() < m.recorded_frames) {
+      rec.first_detection = static_cast<std::uint32_t>(r.detections.size());
+      rec.first_truth = static_cast<std::uint32_t>(r.truth.size());
+      const std::size_t room = r.truth.capacity() - r.truth.size();
+      rec.truth_count = static_cast<std::uint32_t>(std::min(n_truth, room));
+      r.truth_overflows += n_truth - rec.truth_count;
+      r.truth.insert(r.truth.end(), truth.begin(), truth.begin() + rec.truth_count);
+      r.records.push_back(rec);
+      r.detections.insert(r.detections.end(), m.icd_detections.begin(),
+                          m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
+      r.sensor_detections.insert(r.sensor_detections.end(), m.detections.begin(),
+                                 m.detections.begin() + static_cast<std::ptrdiff_t>(n_det));
+    }
 
     // The avionics under test read what the radar sent.
     (void)m.sink.poll(m.avionics);
@@ -721,7 +797,7 @@ RunResult ClosedLoop::run() {
   if (m.options.replay)
     r.replay_frames_left = m.options.replay_input.size() - m.replay_next;
   r.bus_rx_overflows = m.radar_ep.rx_overflows() + m.avionics.rx_overflows();
-  r.record_overflows = m.rx_log.overflowed() + m.tx_log.overflowed();
+  r.record_overflows = m.outputs ? m.outputs->bus_frames_dropped() : 0;
   r.trace_events_dropped = m.profiler.events_dropped();
   r.sink_lists = m.sink.lists_completed();
   r.sink_malformed = m.sink.decoder().malformed() + m.sink.decoder().orphans();
@@ -736,13 +812,18 @@ RunResult ClosedLoop::run() {
   return r;
 }
 
-void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& dir) const {
-  const Impl& m = *impl_;
+OutputCounters ClosedLoop::output_counters() const {
+  return impl_->outputs ? impl_->outputs->counters() : OutputCounters{};
+}
+
+void ClosedLoop::write_outputs(const RunResult& r) {
+  Impl& m = *impl_;
   const Scenario& s = m.scenario;
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec)
-    throw std::runtime_error(dir.string() + ": cannot create directory: " + ec.message());
+  if (!m.outputs)
+    throw std::runtime_error("write_outputs: no output directory (RunOptions::out_dir)");
+  const std::filesystem::path& dir = m.options.out_dir;
+  // The streamed files first: the writer finishes what the run handed it.
+  const OutputCounters& oc = m.outputs->finish();
 
   auto write_json = [&](const std::filesystem::path& path, const nlohmann::ordered_json& j) {
     std::ofstream out(path, std::ios::binary);
@@ -751,116 +832,21 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
       throw std::runtime_error(path.string() + ": write failed");
   };
 
-  // Scene object names (scene::SceneDescription), "clutter" when no object dominates the cell.
-  auto object_name = [&](std::uint32_t id) -> std::string {
-    if (id == radar::kNoObject)
-      return "clutter";
-    const auto& objects = m.scene.description().objects;
-    return id < objects.size() ? objects[id].name : "unknown";
-  };
-
-  // detections.json: what the radar sent, frame by frame (values before ICD quantisation).
-  nlohmann::ordered_json dets;
-  dets["scenario"] = s.name;
-  dets["units"] = {
-      {"range", "m"},
-      {"azimuth", "deg, positive right of boresight"},
-      {"elevation", "deg, positive up"},
-      {"radial_velocity", "m/s, positive receding"},
-      {"snr", "dB"},
-      {"rcs", "dBsm"},
-      {"*_std", "one-sigma thermal-noise accuracy, same unit as the value"},
-      {"range_ambiguous / velocity_ambiguous",
-       "the waveform may have folded this value (unambiguous interval in report.json)"},
-      {"object_id / object",
-       "scene object whose return dominates the cell (truth.json); null / \"clutter\" when "
-       "clutter or noise dominates"}};
-  nlohmann::ordered_json frames = nlohmann::ordered_json::array();
-  for (const FrameRecord& rec : r.records) {
-    nlohmann::ordered_json f;
-    f["frame_counter"] = rec.header.frame_counter;
-    f["time_s"] = rec.time_s;
-    f["status"] = rec.header.status;
-    if (!rec.sent)
-      f["sent"] = false;  // stale_output = "silent": nothing went on the bus
-    if (rec.ownship_valid) {
-      f["ownship_enu_m"] = {rec.ownship_enu_m.x, rec.ownship_enu_m.y, rec.ownship_enu_m.z};
-    }
-    nlohmann::ordered_json list = nlohmann::ordered_json::array();
-    for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
-      const io::icd::Detection& d = r.detections[rec.first_detection + i];
-      const radar::Detection& q = r.sensor_detections[rec.first_detection + i];
-      list.push_back(
-          {{"range_m", d.range_m},
-           {"azimuth_deg", d.azimuth_deg},
-           {"elevation_deg", d.elevation_deg},
-           {"radial_velocity_mps", d.radial_velocity_mps},
-           {"snr_db", d.snr_db},
-           {"rcs_dbsm", d.rcs_dbsm},
-           {"range_std_m", q.range_std_m},
-           {"azimuth_std_deg", q.azimuth_std_rad * kDegPerRad},
-           {"elevation_std_deg", q.elevation_std_rad * kDegPerRad},
-           {"radial_velocity_std_mps", q.velocity_std_mps},
-           {"range_ambiguous", q.range_ambiguous},
-           {"velocity_ambiguous", q.velocity_ambiguous},
-           {"object_id", q.object_id == radar::kNoObject ? nlohmann::ordered_json(nullptr)
-                                                         : nlohmann::ordered_json(q.object_id)},
-           {"object", object_name(q.object_id)}});
-    }
-    f["detections"] = std::move(list);
-    frames.push_back(std::move(f));
-  }
-  dets["frames"] = std::move(frames);
-  write_json(dir / "detections.json", dets);
-
-  // truth.json: where the scene's targets really were, frame by frame.
-  {
-    nlohmann::ordered_json truth;
-    truth["scenario"] = s.name;
-    truth["definition"] = {
-        {"objects",
-         "scene objects with a conducting material (the tracer's targets; pure terrain is left "
-         "out) whose reference point is inside the field of view and within max_range_m"},
-        {"reference_point", "centre of the object's world axis-aligned bounding box at the frame"},
-        {"range_m", "antenna phase centre to the reference point"},
-        {"azimuth_deg", "antenna frame, positive right of boresight"},
-        {"elevation_deg", "antenna frame, positive up"},
-        {"radial_velocity_mps",
-         "range rate of the reference point, positive receding, ownship motion included"}};
-    nlohmann::ordered_json objs = nlohmann::ordered_json::array();
-    for (std::uint32_t id : m.truth_objects)
-      objs.push_back({{"object_id", id}, {"object", object_name(id)}});
-    truth["objects"] = std::move(objs);
-    truth["overflowed"] = r.truth_overflows;
-    nlohmann::ordered_json tframes = nlohmann::ordered_json::array();
-    for (const FrameRecord& rec : r.records) {
-      nlohmann::ordered_json f;
-      f["frame_counter"] = rec.header.frame_counter;
-      f["time_s"] = rec.time_s;
-      f["ownship_valid"] = rec.ownship_valid;
-      nlohmann::ordered_json list = nlohmann::ordered_json::array();
-      for (std::uint32_t i = 0; i < rec.truth_count; ++i) {
-        const ObjectTruth& t = r.truth[rec.first_truth + i];
-        list.push_back({{"object_id", t.object_id},
-                        {"object", object_name(t.object_id)},
-                        {"range_m", t.range_m},
-                        {"azimuth_deg", t.azimuth_rad * kDegPerRad},
-                        {"elevation_deg", t.elevation_rad * kDegPerRad},
-                        {"radial_velocity_mps", t.radial_velocity_mps}});
-      }
-      f["objects"] = std::move(list);
-      tframes.push_back(std::move(f));
-    }
-    truth["frames"] = std::move(tframes);
-    write_json(dir / "truth.json", truth);
-  }
-
   // report.json: the run's summary.
   nlohmann::ordered_json rep;
   rep["scenario"] = s.name;
   rep["mode"] = m.options.realtime ? "realtime" : "as-fast-as-possible";
   rep["rate_hz"] = s.rate_hz;
   rep["frames"] = r.frames;
+  rep["frames_planned"] = r.frames_planned;
+  // A stop request (SIGINT, SIGTERM) ended the run at a frame boundary: every output holds the
+  // frames run until then.
+  rep["interrupted"] = r.interrupted;
+  if (r.interrupted) {
+    rep["stop_signal"] = r.stop_signal == SIGINT    ? "SIGINT"
+                         : r.stop_signal == SIGTERM ? "SIGTERM"
+                                                    : std::to_string(r.stop_signal);
+  }
   rep["frames_valid"] = r.frames_valid;
   rep["backends"] = {
       {"can", m.options.replay ? std::string("replay") : m.can_spec.text},
@@ -921,9 +907,19 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
         {"p50_ms", st.p50_s * 1e3},
         {"p99_ms", st.p99_s * 1e3},
         {"max_ms", st.max_s * 1e3},
-        {"mean_ms", st.mean_s * 1e3}};
+        {"mean_ms", st.mean_s * 1e3},
+        {"percentiles", st.percentiles_exact ? "exact" : "histogram (within 0.4 %)"}};
   }
   rep["stage_timing"] = std::move(stages);
+  // What a run keeps of its per-frame timing (docs/performance.md, "Long runs").
+  rep["timing_record"] = {
+      {"summaries",
+       "every frame (stage_timing: count, mean, max exact; percentiles exact up "
+       "to frames_kept frames, beyond from a log histogram of every frame)"},
+      {"frames_csv", "every frame's stage times [ms]"},
+      {"frames_kept", std::min<std::uint64_t>(r.frames, m.profiler.capacity_frames())},
+      {"timing_png", "the last frames_kept frames"},
+      {"trace_events", m.options.trace_events_file.empty() ? "off" : "the first frames_kept"}};
   rep["schedule"] = {{"period_ms", 1e3 / s.rate_hz},
                      {"frames_over_budget", r.frames_over_budget},
                      {"overruns", r.overruns},
@@ -1135,8 +1131,28 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
                        {"pinned", r.realtime.pinned},
                        {"warnings", r.realtime.warnings}};
   }
-  rep["outputs"] = {"report.json", "detections.json", "truth.json", "detections.png",
-                    "timing.png",  "bus_in.log",      "bus_out.log"};
+  rep["outputs"] = {"report.json",    "detections.json", "truth.json", "frames.csv",
+                    "detections.png", "timing.png",      "bus_in.log", "bus_out.log"};
+  {
+    nlohmann::ordered_json files;
+    for (const OutputFileCounters& f : oc.files) {
+      files[f.name] = {{"bytes", f.bytes_written},
+                       {"write_errors", f.write_errors},
+                       {"bytes_lost", f.bytes_lost},
+                       {"first_error", f.first_error}};
+    }
+    rep["output_stream"] = {
+        {"complete", oc.complete()},
+        {"policy", m.options.realtime ? "real time: drop what the writer cannot take, count it"
+                                      : "simulated clock: wait for the writer between frames"},
+        {"frames_written", oc.frames_written},
+        {"frames_dropped", oc.frames_dropped},
+        {"bus_frames_written", oc.bus_frames_written},
+        {"bus_frames_dropped", oc.bus_frames_dropped},
+        {"detections_written", oc.detections_written},
+        {"writer_waits", oc.waits},
+        {"files", std::move(files)}};
+  }
   if (!m.options.trace_events_file.empty()) {
     rep["trace_events"] = {{"file", m.options.trace_events_file.string()},
                            {"events", m.profiler.events().size()},
@@ -1144,10 +1160,7 @@ void ClosedLoop::write_outputs(const RunResult& r, const std::filesystem::path& 
   }
   write_json(dir / "report.json", rep);
 
-  write_bscope_png(r, s, dir / "detections.png");
   write_timing_png(m.profiler, 1.0 / s.rate_hz, dir / "timing.png");
-  m.rx_log.write_file(dir / "bus_in.log");
-  m.tx_log.write_file(dir / "bus_out.log");
 }
 
 void ClosedLoop::write_trace_events() const {
@@ -1178,14 +1191,17 @@ void ClosedLoop::write_trace_events() const {
   doc["otherData"] = {{"scenario", m.scenario.name},
                       {"rate_hz", m.scenario.rate_hz},
                       {"dropped_events", m.profiler.events_dropped()}};
-  if (path.has_parent_path()) {
-    std::error_code ec;
-    std::filesystem::create_directories(path.parent_path(), ec);
+  // The file was opened (and the path checked) at setup.
+  std::FILE* f = m.paths.trace_events;
+  const std::string text = doc.dump() + '\n';
+  if (f != nullptr) {
+    std::rewind(f);  // a second call replaces the first
+    (void)::ftruncate(::fileno(f), 0);
   }
-  std::ofstream out(path, std::ios::binary);
-  out << doc.dump() << '\n';
-  if (!out)
+  if (f == nullptr || std::fwrite(text.data(), 1, text.size(), f) != text.size() ||
+      std::fflush(f) != 0) {
     throw std::runtime_error(path.string() + ": write failed");
+  }
 }
 
 }  // namespace radar_emu::emulator

@@ -3,6 +3,7 @@
 // over the bus, on a fixed-rate schedule, with per-stage timing. This is where the modules meet.
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -26,9 +27,22 @@
 namespace radar_emu::emulator {
 
 struct RunOptions {
-  bool realtime = false;                     ///< pace frames on the monotonic wall clock
-  timing::RealtimeOptions rt{};              ///< bring-up when realtime
-  std::uint64_t record_frames_max = 20'000;  ///< frames kept for logs and detections.json
+  bool realtime = false;         ///< pace frames on the monotonic wall clock
+  timing::RealtimeOptions rt{};  ///< bring-up when realtime
+  /// Frames whose records, detections and truth RunResult keeps in memory (for callers of the
+  /// library; the files in out_dir hold every frame whatever this is). `radar-emu run` sets 0.
+  std::uint64_t record_frames_max = 20'000;
+  /// Frames whose stage times are kept one by one: the ring of the last ones (timing.png) and
+  /// the first ones' spans for trace_events_file. Memory for them is taken at setup. Summaries
+  /// (report.json) and frames.csv cover every frame whatever this is.
+  std::uint64_t timing_frames_max = 20'000;
+  /// Output directory: bus_in.log, bus_out.log, detections.json, truth.json and frames.csv are
+  /// written while the run goes (emulator/output_stream.hpp); report.json, detections.png and
+  /// timing.png by write_outputs(). Created and opened at setup. "" = no files.
+  std::filesystem::path out_dir;
+  /// Stop request, polled at every frame boundary (a signal handler sets it to the signal
+  /// number): the run ends there, RunResult::interrupted. nullptr = never.
+  const std::atomic<int>* stop = nullptr;
   /// Called between frames (outside every timed stage) with (frames done, frames total).
   std::function<void(std::uint64_t, std::uint64_t)> progress;
   /// Replay: input frames recorded by an earlier run (its bus_in.log, in reception order). When
@@ -47,8 +61,8 @@ struct RunOptions {
   /// Serve the detection table as Modbus holding registers: "" (off), "HOST:PORT", ":PORT"
   /// (127.0.0.1), "rtu:DEV:BAUD". Port 0 picks a free port (see modbus_server_address()).
   std::string modbus_server;
-  /// Chrome trace-event JSON of every stage of every kept frame (record_frames_max frames),
-  /// written by write_trace_events(); "" = no timeline is recorded.
+  /// Chrome trace-event JSON of every stage of the first timing_frames_max frames, written by
+  /// write_trace_events() (the path is checked, and the file created, at setup); "" = none.
   std::filesystem::path trace_events_file;
 };
 
@@ -71,8 +85,36 @@ struct FrameRecord {
   std::uint64_t rays = 0;              ///< rays traced
 };
 
+/// What the streamed outputs (emulator/output_stream.hpp) wrote and lost.
+struct OutputFileCounters {
+  std::string name;  ///< file name in the output directory
+  std::uint64_t bytes_written = 0;
+  std::uint64_t write_errors = 0;  ///< failed writes (the data in them is lost)
+  std::uint64_t bytes_lost = 0;
+  std::string first_error;  ///< "" when none
+};
+struct OutputCounters {
+  std::uint64_t frames_written = 0;      ///< frames in detections.json, truth.json, frames.csv
+  std::uint64_t frames_dropped = 0;      ///< no room in the rings (real time only)
+  std::uint64_t bus_frames_written = 0;  ///< candump lines, both logs
+  std::uint64_t bus_frames_dropped = 0;  ///< no room in the ring (real time only)
+  std::uint64_t detections_written = 0;
+  std::uint64_t waits = 0;  ///< times the loop waited for the writer (simulated clock only)
+  std::vector<OutputFileCounters> files;
+  /// Every frame handed over was written, and every write succeeded.
+  [[nodiscard]] bool complete() const noexcept {
+    bool ok = frames_dropped == 0 && bus_frames_dropped == 0;
+    for (const OutputFileCounters& f : files)
+      ok = ok && f.write_errors == 0;
+    return ok;
+  }
+};
+
 struct RunResult {
   std::uint64_t frames = 0;
+  std::uint64_t frames_planned = 0;      ///< the scenario's frames
+  bool interrupted = false;              ///< stopped early by RunOptions::stop
+  int stop_signal = 0;                   ///< its value (the signal number) when interrupted
   std::uint64_t frames_valid = 0;        ///< frames with a fresh ownship state
   std::uint64_t lists_suppressed = 0;    ///< stale frames that sent nothing (stale_output "silent")
   std::uint64_t frames_over_budget = 0;  ///< compute time of the frame exceeded the period
@@ -111,9 +153,9 @@ struct RunResult {
   std::uint64_t bus_frames_in = 0;   ///< frames the radar received
   std::uint64_t bus_frames_out = 0;  ///< frames the radar sent
   std::uint64_t bus_rx_overflows = 0;
-  std::uint64_t record_overflows = 0;      ///< frames not kept in logs (record_frames_max)
+  std::uint64_t record_overflows = 0;      ///< bus frames not written to the logs (no room)
   std::uint64_t trace_events_dropped = 0;  ///< stage spans not kept for --trace-events
-  std::uint64_t truth_overflows = 0;       ///< in-beam objects not kept in truth.json (bound)
+  std::uint64_t truth_overflows = 0;       ///< in-beam objects not kept in `truth` (bound)
   std::uint64_t sink_lists = 0;            ///< detection lists the avionics sink reassembled
   std::uint64_t sink_malformed = 0;
   std::array<std::uint64_t, 4> injected_malformed{};  ///< by sim_bus::MalformedKind
@@ -123,7 +165,7 @@ struct RunResult {
   std::array<timing::StageSummary, timing::kStageCount> stages{};
   timing::RealtimeReport realtime{};
   double wall_time_s = 0.0;
-  std::vector<FrameRecord> records;            ///< first record_frames_max frames
+  std::vector<FrameRecord> records;            ///< first record_frames_max frames (memory)
   std::vector<io::icd::Detection> detections;  ///< as sent (before ICD quantisation)
   /// The sensor's own view of each recorded detection (same index as `detections`): its
   /// one-sigma accuracies and ambiguity flags, which the ICD does not carry.
@@ -145,12 +187,16 @@ class ClosedLoop {
   ClosedLoop(const ClosedLoop&) = delete;
   ClosedLoop& operator=(const ClosedLoop&) = delete;
 
-  /// Runs scenario.frames frames.
+  /// Runs scenario.frames frames, or fewer when options.stop is raised.
   RunResult run();
 
-  /// Writes report.json, detections.json, truth.json, detections.png, timing.png, bus_in.log
-  /// and bus_out.log into `dir` (created).
-  void write_outputs(const RunResult& result, const std::filesystem::path& dir) const;
+  /// Completes the outputs in options.out_dir: waits for the writer to write what the run handed
+  /// it (bus_in.log, bus_out.log, detections.json, truth.json, frames.csv, detections.png), then
+  /// writes report.json and timing.png. Throws std::runtime_error when there is no out_dir or
+  /// report.json cannot be written; the streamed files' failures are counted in the report.
+  void write_outputs(const RunResult& result);
+  /// What the streamed outputs wrote and lost (complete once write_outputs() has run).
+  [[nodiscard]] OutputCounters output_counters() const;
   /// Writes the stage timeline as Chrome trace-event JSON ({"traceEvents": [...]}, "X" complete
   /// events, ts and dur in microseconds from the first frame's start, args.frame the frame index)
   /// to options.trace_events_file. Does nothing when that is empty.

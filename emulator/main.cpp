@@ -1,10 +1,15 @@
 // radar-emu: command-line entry point. Parses options and orchestrates; all work lives in the
 // libraries (style.md item 1).
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -30,8 +35,31 @@ namespace emu = radar_emu::emulator;
 
 namespace {
 
-void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r,
-                   const std::string& out_dir) {
+// SIGINT / SIGTERM during a run: the first asks the loop to stop at the next frame boundary and
+// write every output; a second exits at once (status 128 + signal), outputs as they are.
+std::atomic<int> g_stop_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
+
+extern "C" void on_stop_signal(int sig) {
+  if (g_stop_signal.exchange(sig) != 0)
+    _exit(128 + sig);
+  static constexpr char kMsg[] =
+      "\nradar-emu: stopping at the next frame boundary and writing the outputs (again: exit "
+      "at once)\n";
+  (void)!write(STDERR_FILENO, kMsg, sizeof kMsg - 1);
+}
+
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;  // other threads' blocking calls carry on
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r, const std::string& out_dir,
+                   const emu::OutputCounters& oc) {
   using radar_emu::timing::Stage;
   using radar_emu::timing::stage_name;
   const auto& s = loop.scenario();
@@ -88,11 +116,32 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r,
   }
   for (const auto& w : r.realtime.warnings)
     std::printf("  warning     %s\n", w.c_str());
-  if (!out_dir.empty())
+  if (r.interrupted) {
+    std::printf("  interrupted by %s after %llu of %llu frames\n",
+                r.stop_signal == SIGINT    ? "SIGINT"
+                : r.stop_signal == SIGTERM ? "SIGTERM"
+                                           : "a stop",
+                static_cast<unsigned long long>(r.frames),
+                static_cast<unsigned long long>(r.frames_planned));
+  }
+  if (!out_dir.empty()) {
     std::printf(
-        "  outputs     %s/{report.json,detections.json,truth.json,detections.png,timing.png,"
-        "bus_in.log,bus_out.log}\n",
+        "  outputs     %s/{report.json,detections.json,truth.json,frames.csv,detections.png,"
+        "timing.png,bus_in.log,bus_out.log}\n",
         out_dir.c_str());
+    std::uint64_t write_errors = 0;
+    for (const auto& f : oc.files)
+      write_errors += f.write_errors;
+    std::printf(
+        "              %s: %llu frames and %llu bus frames written, %llu and %llu dropped, %llu "
+        "write errors\n",
+        oc.complete() ? "complete" : "INCOMPLETE",
+        static_cast<unsigned long long>(oc.frames_written),
+        static_cast<unsigned long long>(oc.bus_frames_written),
+        static_cast<unsigned long long>(oc.frames_dropped),
+        static_cast<unsigned long long>(oc.bus_frames_dropped),
+        static_cast<unsigned long long>(write_errors));
+  }
 }
 
 emu::Scenario load_scenario_or_default(const std::string& scenario_file) {
@@ -102,13 +151,21 @@ emu::Scenario load_scenario_or_default(const std::string& scenario_file) {
 }
 
 // Runs the loop, writes the outputs and prints the summary (run and replay). With a Modbus
-// server, the final detection table stays served for `linger_s` seconds after the run.
+// server, the final detection table stays served for `linger_s` seconds after the run. The
+// outputs stream into `out` during the run; SIGINT or SIGTERM ends the run at a frame boundary
+// with every output written, report.json marked "interrupted", and exit status 128 + signal.
 int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const std::string& out,
                  bool quiet, double linger_s = 0.0) {
+  install_stop_handlers();
+  options.stop = &g_stop_signal;
+  options.out_dir = out;
+  // Everything is in the files: nothing needs to stay in memory, whatever the run's length.
+  options.record_frames_max = 0;
   const bool show_progress = !quiet && scenario.frames >= 100;
   if (show_progress) {
     options.progress = [](std::uint64_t done, std::uint64_t total) {
-      if (done == total || done % (total / 10 == 0 ? 1 : total / 10) == 0) {
+      if (done == total || done % (total / 10 == 0 ? 1 : total / 10) == 0 ||
+          g_stop_signal.load(std::memory_order_relaxed) != 0) {
         std::fprintf(stderr, "\r  frame %llu/%llu", static_cast<unsigned long long>(done),
                      static_cast<unsigned long long>(total));
         if (done == total)
@@ -126,16 +183,31 @@ int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const s
     std::fflush(stderr);
   }
   const emu::RunResult result = loop.run();
+  if (show_progress && result.interrupted)
+    std::fputc('\n', stderr);
   if (!out.empty())
-    loop.write_outputs(result, out);
+    loop.write_outputs(result);
   loop.write_trace_events();
+  const emu::OutputCounters oc = loop.output_counters();
   if (!quiet)
-    print_summary(loop, result, out);
-  if (!modbus.empty() && linger_s > 0.0) {
+    print_summary(loop, result, out, oc);
+  if (!modbus.empty() && linger_s > 0.0 && !result.interrupted) {
     std::fprintf(stderr, "radar-emu: run complete; serving the final table on %s for %.1f s\n",
                  modbus.c_str(), linger_s);
     std::fflush(stderr);
-    std::this_thread::sleep_for(std::chrono::duration<double>(linger_s));
+    // In steps, so that a stop request ends the linger too.
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(linger_s);
+    while (std::chrono::steady_clock::now() < until &&
+           g_stop_signal.load(std::memory_order_relaxed) == 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  if (result.interrupted) {
+    std::fprintf(stderr, "radar-emu: interrupted after %llu of %llu frames; outputs written%s\n",
+                 static_cast<unsigned long long>(result.frames),
+                 static_cast<unsigned long long>(result.frames_planned),
+                 out.empty() ? " (none: no --out)" : (" to " + out).c_str());
+    return 128 + result.stop_signal;
   }
   return 0;
 }
@@ -175,12 +247,16 @@ int run_command(const std::string& scenario_file, std::uint64_t frames, const st
 int replay_command(const std::string& log_file, const std::string& scenario_file,
                    std::uint64_t frames, const std::string& out, bool quiet) {
   emu::Scenario scenario = load_scenario_or_default(scenario_file);
-  std::vector<radar_emu::io::CandumpLine> lines = radar_emu::io::read_candump_file(log_file);
   emu::RunOptions options;
   options.replay = true;
-  options.replay_input.reserve(lines.size());
-  for (const auto& line : lines)
-    options.replay_input.push_back(line.frame);
+  {
+    // The parsed lines are freed before the run: a long log is held once, as frames.
+    const std::vector<radar_emu::io::CandumpLine> lines =
+        radar_emu::io::read_candump_file(log_file);
+    options.replay_input.reserve(lines.size());
+    for (const auto& line : lines)
+      options.replay_input.push_back(line.frame);
+  }
   if (options.replay_input.empty())
     throw std::runtime_error(log_file + ": no frames to replay");
   // The log's time stamps are bus times: scenario time 0 is the scenario's epoch. A log recorded

@@ -17,7 +17,7 @@ namespace radar_emu::emulator {
 namespace {
 
 // Blue (start of the run) to red (end).
-Rgb time_colour(double f) {
+Rgb time_colour(double f) noexcept {
   f = std::clamp(f, 0.0, 1.0);
   return {static_cast<std::uint8_t>(40 + 215 * f),
           static_cast<std::uint8_t>(90 + 60 * (1 - std::abs(2 * f - 1))),
@@ -36,50 +36,70 @@ int BScopeLayout::y_of(double range_m) const noexcept {
   return kHeight - kBottom - static_cast<int>(std::lround(f * (kHeight - kTop - kBottom - 1)));
 }
 
-void write_bscope_png(const RunResult& result, const Scenario& s,
-                      const std::filesystem::path& path) {
+namespace {
+const Rgb kBScopeBackground{16, 20, 28}, kBScopeGrid{55, 62, 78}, kBScopeInk{210, 215, 225};
+}  // namespace
+
+BScope::BScope(const Scenario& s, std::uint64_t frames_planned)
+    : canvas_(BScopeLayout::kWidth, BScopeLayout::kHeight, kBScopeBackground),
+      colour_scale_(1.0 / std::max(1.0, static_cast<double>(frames_planned) - 1.0)) {
   constexpr double kDeg = 180.0 / std::numbers::pi;
-  BScopeLayout L;
+  BScopeLayout& L = layout_;
   L.azimuth_min_deg = s.sbr.azimuth_min_rad * kDeg;
   L.azimuth_max_deg = s.sbr.azimuth_max_rad * kDeg;
   L.range_max_m = s.sensor.max_range_m;
-  const Rgb bg{16, 20, 28}, grid{55, 62, 78}, ink{210, 215, 225};
-  Canvas c(BScopeLayout::kWidth, BScopeLayout::kHeight, bg);
+  Canvas& c = canvas_;
   char label[64];
   // Range grid every 500 m (labelled every km), azimuth grid every 2 deg.
   for (double r = 0.0; r <= L.range_max_m + 1e-9; r += 500.0) {
     const int y = L.y_of(r);
-    c.rect(BScopeLayout::kLeft, y, BScopeLayout::kWidth - BScopeLayout::kRight - 1, y, grid);
+    c.rect(BScopeLayout::kLeft, y, BScopeLayout::kWidth - BScopeLayout::kRight - 1, y, kBScopeGrid);
     if (std::fmod(r, 1000.0) < 1e-9) {
       std::snprintf(label, sizeof label, "%.0f km", r / 1000.0);
-      c.text(8, y - 6, label, ink, 2);
+      c.text(8, y - 6, label, kBScopeInk, 2);
     }
   }
   for (double a = std::ceil(L.azimuth_min_deg / 2.0) * 2.0; a <= L.azimuth_max_deg + 1e-9;
        a += 2.0) {
     const int x = L.x_of(a);
-    c.rect(x, BScopeLayout::kTop, x, BScopeLayout::kHeight - BScopeLayout::kBottom - 1, grid);
+    c.rect(x, BScopeLayout::kTop, x, BScopeLayout::kHeight - BScopeLayout::kBottom - 1,
+           kBScopeGrid);
     std::snprintf(label, sizeof label, "%+.0f", a);
-    c.text(x - 12, BScopeLayout::kHeight - BScopeLayout::kBottom + 8, label, ink, 2);
+    c.text(x - 12, BScopeLayout::kHeight - BScopeLayout::kBottom + 8, label, kBScopeInk, 2);
   }
   c.text(BScopeLayout::kWidth / 2 - 120, BScopeLayout::kHeight - 18,
-         "azimuth [deg], right of boresight", ink, 1);
-  std::snprintf(label, sizeof label,
-                "radar-emu: %llu frames, %llu detections (blue: first, red: last)",
-                static_cast<unsigned long long>(result.records.size()),
-                static_cast<unsigned long long>(result.detections_total));
-  c.text(BScopeLayout::kLeft, 12, label, ink, 2);
-  const double n = std::max<double>(1.0, static_cast<double>(result.records.size()) - 1.0);
-  for (std::size_t k = 0; k < result.records.size(); ++k) {
-    const FrameRecord& rec = result.records[k];
-    const Rgb col = time_colour(static_cast<double>(k) / n);
-    for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
-      const io::icd::Detection& d = result.detections[rec.first_detection + i];
-      const int x = L.x_of(d.azimuth_deg), y = L.y_of(d.range_m);
-      c.rect(x - 2, y - 2, x + 2, y + 2, col);
-    }
+         "azimuth [deg], right of boresight", kBScopeInk, 1);
+}
+
+void BScope::add_frame(std::span<const io::icd::Detection> detections) noexcept {
+  const Rgb col = time_colour(static_cast<double>(frames_) * colour_scale_);
+  for (const io::icd::Detection& d : detections) {
+    const int x = layout_.x_of(d.azimuth_deg), y = layout_.y_of(d.range_m);
+    canvas_.rect(x - 2, y - 2, x + 2, y + 2, col);
   }
-  c.write_png(path);
+  ++frames_;
+  detections_ += detections.size();
+}
+
+void BScope::write_png(const std::filesystem::path& path) {
+  // The title band (above kTop) is left free by the grid: the title is written last, once the
+  // frames and detections are known.
+  char label[96];
+  std::snprintf(
+      label, sizeof label, "radar-emu: %llu frames, %llu detections (blue: first, red: last)",
+      static_cast<unsigned long long>(frames_), static_cast<unsigned long long>(detections_));
+  canvas_.text(BScopeLayout::kLeft, 12, label, kBScopeInk, 2);
+  canvas_.write_png(path);
+}
+
+void write_bscope_png(const RunResult& result, const Scenario& s,
+                      const std::filesystem::path& path) {
+  BScope b(s, result.records.size());
+  for (const FrameRecord& rec : result.records) {
+    b.add_frame(std::span<const io::icd::Detection>(result.detections)
+                    .subspan(rec.first_detection, rec.detection_count));
+  }
+  b.write_png(path);
 }
 
 void write_timing_png(const timing::StageProfiler& profiler, double period_s,

@@ -2,8 +2,11 @@
 // Pictures of a run, for people who would rather look than read: a B-scope (azimuth across,
 // range up) of every detection the radar sent, coloured by time.
 
+#include <cstdint>
 #include <filesystem>
+#include <span>
 
+#include "emulator/canvas.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/scenario.hpp"
 #include "timing/profiler.hpp"
@@ -27,7 +30,32 @@ inline constexpr int kTimingPngWidth = 1000, kTimingPngHeight = 1280;
 void write_timing_png(const timing::StageProfiler& profiler, double period_s,
                       const std::filesystem::path& path);
 
-/// Writes the B-scope as PNG. Throws std::runtime_error naming the path on failure.
+/// The B-scope drawn frame by frame, as a run's outputs stream (emulator/output_stream.hpp):
+/// the grid at construction (setup: allocates the canvas), each frame's detections as they come
+/// (add_frame(): no allocation), the title when written.
+class BScope {
+ public:
+  /// `frames_planned` sets the colour scale: frame k of n is drawn at k / (n - 1) from blue to
+  /// red (an interrupted run stops short of red).
+  BScope(const Scenario& scenario, std::uint64_t frames_planned);
+  /// Draws the detections of the next frame. Real-time safe.
+  void add_frame(std::span<const io::icd::Detection> detections) noexcept;
+  /// Titles the picture with the frames and detections drawn and writes it. Throws
+  /// std::runtime_error naming the path on failure.
+  void write_png(const std::filesystem::path& path);
+  [[nodiscard]] std::uint64_t frames() const noexcept { return frames_; }
+  [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
+
+ private:
+  BScopeLayout layout_;
+  Canvas canvas_;
+  double colour_scale_;
+  std::uint64_t frames_ = 0;
+  std::uint64_t detections_ = 0;
+};
+
+/// Writes the B-scope of the frames `result` keeps in memory as PNG. Throws std::runtime_error
+/// naming the path on failure.
 void write_bscope_png(const RunResult& result, const Scenario& scenario,
                       const std::filesystem::path& path);
 

@@ -21,4 +21,27 @@ ObjectTruth point_truth(const radar::RadarPose& pose, const glm::dvec3& point_m,
   return t;
 }
 
+std::size_t objects_in_view(const radar::RadarPose& pose,
+                            std::span<const scene::ObjectState> states,
+                            std::span<const std::uint32_t> ids, const radar::SbrConfig& fov,
+                            std::span<ObjectTruth> out) noexcept {
+  std::size_t n = 0;
+  for (std::uint32_t id : ids) {
+    if (n == out.size())
+      break;
+    if (id >= states.size())
+      continue;
+    const scene::ObjectState& st = states[id];
+    ObjectTruth t = point_truth(pose, 0.5 * (st.bounds_min_m + st.bounds_max_m), st.velocity_mps);
+    if (t.range_m > fov.max_range_m || t.azimuth_rad < fov.azimuth_min_rad ||
+        t.azimuth_rad > fov.azimuth_max_rad || t.elevation_rad < fov.elevation_min_rad ||
+        t.elevation_rad > fov.elevation_max_rad) {
+      continue;
+    }
+    t.object_id = id;
+    out[n++] = t;
+  }
+  return n;
+}
+
 }  // namespace radar_emu::emulator

@@ -2,10 +2,13 @@
 // Ground truth of a run: where each scene object really is, seen from the radar, frame by frame
 // (truth.json), to score the detections against.
 
+#include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <span>
 
 #include "radar/em/sbr.hpp"
+#include "scene/types.hpp"
 
 namespace radar_emu::emulator {
 
@@ -24,5 +27,15 @@ struct ObjectTruth {
 /// rate (v - v_radar) . d. Real-time safe. A point at the antenna gives range 0, angles 0.
 [[nodiscard]] ObjectTruth point_truth(const radar::RadarPose& pose, const glm::dvec3& point_m,
                                       const glm::dvec3& velocity_mps) noexcept;
+
+/// Ground truth of one frame: of the objects `ids` (indices into `states`), those whose
+/// reference point, the centre of the world bounding box, is inside the field of view of `fov`
+/// (azimuth and elevation limits, antenna frame) and within its max_range_m. Written to `out` in
+/// `ids` order, at most out.size() of them; returns how many. Real-time safe.
+[[nodiscard]] std::size_t objects_in_view(const radar::RadarPose& pose,
+                                          std::span<const scene::ObjectState> states,
+                                          std::span<const std::uint32_t> ids,
+                                          const radar::SbrConfig& fov,
+                                          std::span<ObjectTruth> out) noexcept;
 
 }  // namespace radar_emu::emulator

@@ -8,8 +8,9 @@ fails=0
 expect_error() {  # expect_error PATTERN ARGS...
   local pattern="$1"; shift
   local err rc
-  err=$("$exe" "$@" 2>&1 >/dev/null); rc=$?
+  err=$(timeout 120 "$exe" "$@" 2>&1 >/dev/null); rc=$?
   if [ $rc -eq 0 ]; then echo "FAIL: '$*' exited 0"; fails=$((fails+1)); return; fi
+  if [ $rc -eq 124 ]; then echo "FAIL: '$*' did not fail within 120 s"; fails=$((fails+1)); return; fi
   if [ "$(printf '%s\n' "$err" | grep -c .)" -gt 2 ]; then
     echo "FAIL: '$*' printed more than a short error:"; printf '%s\n' "$err"; fails=$((fails+1))
   fi
@@ -34,6 +35,10 @@ expect_error "target_size.toml: \[\[target\]\] #2: size_m must be > 0 (got -1)" 
 expect_error "target_key.toml: \[\[target\]\] #1: unknown key 'speed'" run "$dir/target_key.toml"
 expect_error "target_ground.toml: \[\[target\]\] #1: on_ground: no ground below" run "$dir/target_ground.toml"
 expect_error "frames" run --frames 0
+# Output paths are checked at setup, before any frame runs: a million-frame run (hours) with a
+# bad --out or --trace-events path fails at once instead of at its end.
+expect_error "zero.toml/out: cannot create the output directory" run --frames 1000000 --out "$dir/zero.toml/out"
+expect_error "zero.toml/t.json: cannot open for writing" run --frames 1000000 --trace-events "$dir/zero.toml/t.json"
 expect_error "unknown target 'cone'" scene target cone --out "$dir/x.obj"
 expect_error "a_m must be a positive number" scene target plate --a-m -1 --out "$dir/x.obj"
 expect_error "cannot open for writing" scene target box --out "$dir/no/such/dir/x.stl"

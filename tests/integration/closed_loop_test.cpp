@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <stb/stb_image.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -36,7 +37,10 @@ constexpr double kC_mps = 299792458.0;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 fs::path temp_dir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() / ("radar_emu_it_" + name);
+  // One directory per process: CTest runs each test of a suite as its own process, in parallel,
+  // and the outputs are written while the run goes (a shared directory would be clobbered).
+  const fs::path p =
+      fs::temp_directory_path() / ("radar_emu_it_" + name + "_" + std::to_string(getpid()));
   fs::remove_all(p);
   fs::create_directories(p);
   return p;
@@ -210,17 +214,21 @@ class ClosedLoopDefault : public ::testing::Test {
     // The stage timeline too: its buffer is preallocated, so it adds no allocation.
     trace_file_ = temp_dir("default_trace") / "trace.json";
     options.trace_events_file = trace_file_;
+    // The outputs stream during the run: the writer thread must not allocate either.
+    out_ = temp_dir("default");
+    options.out_dir = out_;
     loop_ = new emu::ClosedLoop(*scenario_, options);
     result_ = new emu::RunResult(loop_->run());
     allocations_ = radar_emu::test::stop_counting_allocations();  // the count frozen at the end
-    out_ = temp_dir("default");
-    loop_->write_outputs(*result_, out_);
+    loop_->write_outputs(*result_);
     loop_->write_trace_events();
   }
   static void TearDownTestSuite() {
     delete result_;
     delete loop_;
     delete scenario_;
+    fs::remove_all(out_);
+    fs::remove_all(trace_file_.parent_path());
   }
   static emu::Scenario* scenario_;
   static emu::ClosedLoop* loop_;
@@ -694,26 +702,29 @@ TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {
   emu::Scenario s = default_scenario();
   s.frames = 40;
   const fs::path a = temp_dir("repeat_a"), b = temp_dir("repeat_b");
-  {
-    emu::ClosedLoop loop(s, {});
-    loop.write_outputs(loop.run(), a);
-  }
-  {
-    emu::ClosedLoop loop(s, {});
-    loop.write_outputs(loop.run(), b);
+  for (const fs::path& dir : {a, b}) {
+    emu::RunOptions options;
+    options.out_dir = dir;
+    emu::ClosedLoop loop(s, options);
+    loop.write_outputs(loop.run());
   }
   for (const char* f : {"bus_out.log", "bus_in.log", "detections.json"}) {
     const std::string x = slurp(a / f), y = slurp(b / f);
     EXPECT_FALSE(x.empty()) << f;
     EXPECT_TRUE(x == y) << f << " differs between two runs with the same inputs";
   }
+  fs::remove_all(a);
+  fs::remove_all(b);
 }
 
 TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
   emu::Scenario s = default_scenario();
   s.frames = 40;
   s.malformed_every_n_frames = 3;  // frames 0, 3, ..., 39: 14 malformed frames
-  emu::ClosedLoop loop(s, {});
+  const fs::path out = temp_dir("malformed");
+  emu::RunOptions options;
+  options.out_dir = out;
+  emu::ClosedLoop loop(s, options);
   const emu::RunResult r = loop.run();
   const std::uint64_t injected = r.injected_malformed[0] + r.injected_malformed[1] +
                                  r.injected_malformed[2] + r.injected_malformed[3];
@@ -726,13 +737,13 @@ TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
   // The good data still flow: every frame valid, detections still produced.
   EXPECT_EQ(r.frames_valid, r.frames);
   EXPECT_GT(r.detections_total, 0u);
-  const fs::path out = temp_dir("malformed");
-  loop.write_outputs(r, out);
+  loop.write_outputs(r);
   std::ifstream in(out / "report.json");
   const nlohmann::json rep = nlohmann::json::parse(in);
   EXPECT_EQ(rep["input"]["rejected"].get<std::uint64_t>(), injected);
   EXPECT_EQ(rep["input"]["rejected_by_reason"]["not_a_number"].get<std::uint64_t>(),
             r.injected_malformed[2]);
+  fs::remove_all(out);
 }
 
 TEST(ClosedLoop, StaleStateMarksOutputInvalidAndEmitsNoDetections) {

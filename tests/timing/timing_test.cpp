@@ -136,15 +136,60 @@ TEST(StageProfiler, SummaryOfKnownDurations) {
   EXPECT_EQ(prof.summary(rt::Stage::kSensor).count, 0u);
 }
 
-TEST(StageProfiler, RingKeepsLatestForPercentilesAndWholeRunForMax) {
+TEST(StageProfiler, PercentilesCoverTheWholeRunBeyondTheRing) {
   rt::StageProfiler prof(10);
-  prof.record(rt::Stage::kInput, 1'000'000'000);  // one huge early sample
+  prof.record(rt::Stage::kInput, 1'000'000'000);  // one huge early sample, then 10 small ones
   for (int i = 0; i < 10; ++i)
     prof.record(rt::Stage::kInput, 1000);
   const rt::StageSummary s = prof.summary(rt::Stage::kInput);
   EXPECT_EQ(s.count, 11u);
-  EXPECT_DOUBLE_EQ(s.p99_s, 1e-6);  // the ring holds only the last 10 samples
-  EXPECT_DOUBLE_EQ(s.max_s, 1.0);   // the maximum covers the whole run
+  EXPECT_FALSE(s.percentiles_exact);  // 11 samples, a ring of 10: from the histogram
+  // Nearest rank over all 11 samples: p99 is rank ceil(10.89) = 11, the 1 s sample (clamped to
+  // the maximum); p50 is rank 6, a 1000 ns sample (bin width 8 ns at 1000: midpoint 1003).
+  EXPECT_DOUBLE_EQ(s.p99_s, 1.0);
+  EXPECT_NEAR(s.p50_s, 1e-6, 1e-6 / 256.0);
+  EXPECT_DOUBLE_EQ(s.max_s, 1.0);
+  EXPECT_EQ(prof.history_ns(rt::Stage::kInput).size(), 10u);  // the ring: the last 10
+  EXPECT_EQ(prof.last_ns(rt::Stage::kInput), 1000);
+  EXPECT_EQ(prof.last_ns(rt::Stage::kTrace), -1);
+}
+
+TEST(DurationHistogram, BinsAreExactBelow128AndAtMost1Over128OfTheValueWideAbove) {
+  using H = rt::DurationHistogram;
+  EXPECT_EQ(H::bin_of(0), 0u);
+  EXPECT_EQ(H::bin_of(-5), 0u);
+  EXPECT_EQ(H::bin_of(127), 127u);
+  EXPECT_EQ(H::bin_of(128), 128u);
+  EXPECT_EQ(H::bin_of(255), 255u);
+  EXPECT_EQ(H::bin_of(256), 256u);  // next octave: bins 2 ns wide
+  EXPECT_EQ(H::bin_of(257), 256u);
+  EXPECT_EQ(H::bin_of(258), 257u);
+  EXPECT_EQ(H::bin_of(std::int64_t{1} << 50), H::kBins - 1);  // beyond 2^41 ns: the last bin
+  // Every bin holds exactly the values [low, low + width), the bins tile the axis without gaps,
+  // and a bin is at most 1/128 of its lowest value wide.
+  for (std::size_t b = 0; b + 1 < H::kBins; ++b) {
+    const std::int64_t lo = H::bin_low_ns(b), w = H::bin_width_ns(b);
+    ASSERT_EQ(H::bin_of(lo), b);
+    ASSERT_EQ(H::bin_of(lo + w - 1), b);
+    ASSERT_EQ(H::bin_low_ns(b + 1), lo + w) << b;
+    if (lo >= 128) {
+      ASSERT_LE(static_cast<double>(w) / static_cast<double>(lo), 1.0 / 128.0);
+    }
+  }
+}
+
+TEST(DurationHistogram, PercentilesOfAUniformRampWithinHalfABin) {
+  // 1, 2, ..., 100000 us: the nearest-rank p50 is 50000 us and p99 99000 us exactly; the
+  // histogram returns its bin's midpoint, within half a bin (1/256 of the value).
+  rt::DurationHistogram h;
+  for (std::int64_t i = 1; i <= 100'000; ++i)
+    h.add(i * 1000);
+  EXPECT_EQ(h.count(), 100'000u);
+  EXPECT_NEAR(static_cast<double>(h.percentile_ns(50.0)), 50'000'000.0, 50'000'000.0 / 256.0);
+  EXPECT_NEAR(static_cast<double>(h.percentile_ns(99.0)), 99'000'000.0, 99'000'000.0 / 256.0);
+  EXPECT_EQ(h.percentile_ns(100.0), 100'000'000);  // clamped to the maximum
+  EXPECT_EQ(h.percentile_ns(0.0), 1000);           // rank 1: the minimum
+  EXPECT_EQ(rt::DurationHistogram{}.percentile_ns(50.0), 0);
 }
 
 TEST(StageProfiler, ScopedStageRecordsClockDifference) {
