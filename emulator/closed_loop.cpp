@@ -497,6 +497,9 @@ RunResult ClosedLoop::run() {
   r.detections.reserve(static_cast<std::size_t>(m.recorded_frames) * s.sensor.max_detections);
   r.sensor_detections.reserve(r.detections.capacity());
   r.truth.reserve(m.truth_capacity);
+  r.governor.per_frame_level.reserve(
+      static_cast<std::size_t>(std::min<std::uint64_t>(s.frames, RunResult::kGovernorFramesKept)));
+  r.governor.per_frame_predicted_ms.reserve(r.governor.per_frame_level.capacity());
   r.detections_min = std::numeric_limits<std::uint64_t>::max();
   r.field_age_max_s.fill(0.0);
   r.field_stale_frames.fill(0);
@@ -676,6 +679,13 @@ RunResult ClosedLoop::run() {
       r.governor.frames_degraded += decision->degraded ? 1 : 0;
       r.governor.frames_predicted_late += decision->over_deadline ? 1 : 0;
       r.governor.max_level = std::max(r.governor.max_level, decision->level);
+    }
+    if (r.governor.per_frame_level.size() < r.governor.per_frame_level.capacity()) {
+      // Every frame, valid or not (-1: no state, nothing traced), up to kGovernorFramesKept.
+      r.governor.per_frame_level.push_back(
+          static_cast<std::int8_t>(decision != nullptr ? decision->level : -1));
+      r.governor.per_frame_predicted_ms.push_back(
+          decision != nullptr ? static_cast<float>(decision->predicted_ms) : 0.0f);
     }
     // ---- output: ICD frames on the bus ----
     FrameRecord rec;
@@ -1044,13 +1054,16 @@ void ClosedLoop::write_outputs(const RunResult& r) {
       levels.push_back(r.governor.level_frames[k]);
     nlohmann::ordered_json level = nlohmann::ordered_json::array(),
                            predicted = nlohmann::ordered_json::array(),
-                           error = nlohmann::ordered_json::array(),
-                           rays = nlohmann::ordered_json::array();
-    for (const FrameRecord& rec : r.records) {
-      level.push_back(rec.governor_level);
-      predicted.push_back(rec.governor_predicted_ms);
-      error.push_back(rec.governor_error_db);
-      rays.push_back(rec.rays);
+                           error = nlohmann::ordered_json::array();
+    for (std::size_t i = 0; i < r.governor.per_frame_level.size(); ++i) {
+      const int l = r.governor.per_frame_level[i];
+      level.push_back(l);
+      predicted.push_back(
+          std::round(static_cast<double>(r.governor.per_frame_predicted_ms[i]) * 1e3) * 1e-3);
+      if (l < 0)
+        error.push_back(nullptr);
+      else
+        error.push_back(FidelityGovernor::kLevelSnrError_db[static_cast<std::size_t>(l)]);
     }
     rep["governor"] = {
         {"enabled", g.enabled},
@@ -1069,13 +1082,13 @@ void ClosedLoop::write_outputs(const RunResult& r) {
         {"frames_predicted_late", r.governor.frames_predicted_late},
         {"per_frame",
          {{"note",
-           "recorded frames, in order; level 0 is the scenario's fidelity; "
+           "every frame in order (the first 1,048,576; frames.csv has them all and the rays); "
+           "level 0 is the scenario's fidelity, -1 a frame without an ownship state; "
            "estimated_snr_error_db is the mean |SNR error| measured at that level on the "
            "default scenario (radar-emu tradeoff), an estimate, not a bound"},
           {"level", std::move(level)},
           {"predicted_ms", std::move(predicted)},
-          {"estimated_snr_error_db", std::move(error)},
-          {"rays", std::move(rays)}}}};
+          {"estimated_snr_error_db", std::move(error)}}}};
   }
   rep["trace"] = {{"rays", r.trace.rays},
                   {"target_bundles", r.trace.target_bundles},

@@ -149,7 +149,11 @@ struct RunResult {
     std::uint64_t frames_degraded = 0;        ///< level > 0 (flagged DEGRADED)
     std::uint64_t frames_predicted_late = 0;  ///< even the coarsest level was predicted late
     int max_level = 0;
+    std::vector<std::int8_t> per_frame_level;  ///< every frame (-1: no state), first kept
+    std::vector<float> per_frame_predicted_ms;
   } governor{};
+  /// Frames whose governor level and prediction RunResult keeps (report.json).
+  static constexpr std::uint64_t kGovernorFramesKept = 1u << 20;
   std::uint64_t bus_frames_in = 0;   ///< frames the radar received
   std::uint64_t bus_frames_out = 0;  ///< frames the radar sent
   std::uint64_t bus_rx_overflows = 0;

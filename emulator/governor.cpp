@@ -47,9 +47,27 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
   require(std::isfinite(frame_period_s) && frame_period_s > 0.0, "frame period", "must be > 0");
   deadline_ms_ = config.compute_fraction * frame_period_s * 1e3;
   const std::size_t n = scene.objects().size();
-  for (std::uint32_t id = 0; id < n; ++id)
-    if (tracer.is_target(id))
-      targets_.push_back(id);
+  // Each target's mean projected area over all directions: a quarter of its surface for a
+  // convex body (Cauchy's surface area formula), used as its size in the ranking.
+  mean_area_m2_.assign(n, 0.0);
+  const scene::SceneDescription& desc = scene.description();
+  for (std::uint32_t id = 0; id < n; ++id) {
+    if (!tracer.is_target(id))
+      continue;
+    targets_.push_back(id);
+    if (id >= desc.objects.size())
+      continue;
+    const scene::ObjectDesc& o = desc.objects[id];
+    const glm::dmat3 linear(o.world_from_body);
+    double area_m2 = 0.0;
+    for (const auto& t : o.mesh.triangles) {
+      const glm::dvec3 a = linear * glm::dvec3(o.mesh.positions_m[t[0]]);
+      const glm::dvec3 b = linear * glm::dvec3(o.mesh.positions_m[t[1]]);
+      const glm::dvec3 c = linear * glm::dvec3(o.mesh.positions_m[t[2]]);
+      area_m2 += 0.5 * glm::length(glm::cross(b - a, c - a));
+    }
+    mean_area_m2_[id] = 0.25 * area_m2;
+  }
   rank_.assign(n, 0);
   spacing_m_.assign(n, 0.0);
   decision_.deadline_ms = deadline_ms_;
@@ -96,15 +114,12 @@ const GovernorDecision& FidelityGovernor::decide(const radar::RadarPose& pose) n
   double best_db = -1e300;
   for (std::uint32_t id : targets_) {
     const scene::ObjectState& o = objects[id];
-    const glm::dvec3 size = o.bounds_max_m - o.bounds_min_m;
     const glm::dvec3 los = 0.5 * (o.bounds_min_m + o.bounds_max_m) - pose.position_m;
     const double range_m = glm::length(los);
     double snr_db = -1e300;
     if (range_m > 1e-6) {
       const glm::dvec3 u = los / range_m;
-      // Bounding box area seen along the line of sight.
-      const double area_m2 = std::abs(u.x) * size.y * size.z + std::abs(u.y) * size.x * size.z +
-                             std::abs(u.z) * size.x * size.y;
+      const double area_m2 = mean_area_m2_[id];
       const radar::AzEl ae = radar::azel_from_direction(antenna_from_world * u);
       snr_db = db10(sensor_->expected_snr(std::max(area_m2, 1e-6), range_m) *
                     sensor_->two_way_gain(0.0, ae.elevation_rad));

@@ -12,9 +12,10 @@
 // the strongest target's, one more for every further kRankStep_db below (at most kMaxRank). So
 // the strongest returns keep the finest sampling and rays leave the weak ones first (issue 15:
 // "spending rays where the return is strongest"). The expected SNR is the radar equation
-// (Sensor::expected_snr) of the target's bounding box area seen from the radar (a size, not a
-// prediction of its RCS) at its range, with the two-way elevation gain of the beam at its
-// direction.
+// (Sensor::expected_snr) at the target's range, with the two-way elevation gain of the beam at
+// its direction, of an RCS equal to its mean projected area: a quarter of its surface (Cauchy's
+// surface area formula for convex bodies; a size, not a prediction of its RCS; a thin wire's
+// bounding box would be much larger than its surface).
 //
 // Cost model. predicted = trace + sensor, with
 //   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
@@ -122,6 +123,7 @@ class FidelityGovernor {
   double deadline_ms_;
   std::vector<std::uint32_t> targets_;  ///< object ids of the tracer's targets
   std::vector<int> rank_;               ///< per object id
+  std::vector<double> mean_area_m2_;    ///< per object id: surface / 4 (targets)
   std::vector<double> spacing_m_;       ///< per object id, for TraceKnobs
   GovernorDecision decision_{};
   // The previous frame, for the sensor term.
