@@ -9,7 +9,9 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -715,6 +717,50 @@ TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {
   }
   fs::remove_all(a);
   fs::remove_all(b);
+}
+
+TEST(ClosedLoop, AStopRequestEndsTheRunAtAFrameBoundaryWithValidOutputs) {
+  // The stop flag (what radar-emu's SIGINT / SIGTERM handler sets) is polled at each frame
+  // boundary: raised before the first frame, the run does none and still writes every output;
+  // raised after frame 3 (from the progress callback, between frames), it ends after 3.
+  emu::Scenario s = default_scenario();
+  s.frames = 40;
+  for (const std::uint64_t stop_after : {std::uint64_t{0}, std::uint64_t{3}}) {
+    const fs::path out = temp_dir("stop_" + std::to_string(stop_after));
+    std::atomic<int> stop{stop_after == 0 ? SIGTERM : 0};
+    emu::RunOptions options;
+    options.out_dir = out;
+    options.stop = &stop;
+    options.progress = [&stop, stop_after](std::uint64_t done, std::uint64_t) {
+      if (done == stop_after)
+        stop.store(SIGINT);
+    };
+    emu::ClosedLoop loop(s, options);
+    const emu::RunResult r = loop.run();
+    EXPECT_EQ(r.frames, stop_after);
+    EXPECT_TRUE(r.interrupted);
+    EXPECT_EQ(r.stop_signal, stop_after == 0 ? SIGTERM : SIGINT);
+    loop.write_outputs(r);
+    std::ifstream in(out / "report.json");
+    const nlohmann::json rep = nlohmann::json::parse(in);
+    EXPECT_TRUE(rep.at("interrupted").get<bool>());
+    EXPECT_EQ(rep.at("stop_signal"), stop_after == 0 ? "SIGTERM" : "SIGINT");
+    EXPECT_EQ(rep.at("frames").get<std::uint64_t>(), stop_after);
+    EXPECT_EQ(rep.at("frames_planned").get<std::uint64_t>(), 40u);
+    EXPECT_TRUE(rep.at("output_stream").at("complete").get<bool>());
+    for (const char* f : {"detections.json", "truth.json"}) {
+      std::ifstream doc(out / f);
+      EXPECT_EQ(nlohmann::json::parse(doc).at("frames").size(), stop_after) << f;
+    }
+    EXPECT_EQ(radar_emu::io::read_candump_file(out / "bus_out.log").empty(), stop_after == 0);
+    for (const char* png : {"detections.png", "timing.png"}) {
+      int w = 0, h = 0, channels = 0;
+      unsigned char* px = stbi_load((out / png).c_str(), &w, &h, &channels, 3);
+      EXPECT_NE(px, nullptr) << png;
+      stbi_image_free(px);
+    }
+    fs::remove_all(out);
+  }
 }
 
 TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
