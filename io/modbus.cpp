@@ -1029,9 +1029,15 @@ void ModbusServer::run_tcp() noexcept {
         close_connection(c);
         continue;
       }
-      // Complete requests left (a pipelining client past its share): next round at once.
-      if (c.rx_len >= kMbapBytes && c.rx_len >= 6 + static_cast<std::size_t>(be16(c.rx.data() + 4)))
-        pending = true;
+      // A complete request, or a malformed header, left (a pipelining client past its share):
+      // next round at once.
+      if (c.rx_len >= kMbapBytes) {
+        const std::size_t length = be16(c.rx.data() + 4);
+        if (be16(c.rx.data() + 2) != 0 || length < kMinMbapLength || length > kMaxMbapLength ||
+            c.rx_len >= 6 + length) {
+          pending = true;
+        }
+      }
     }
     if (n > 0 && (m.fds[1].revents & POLLIN) != 0)
       accept_clients(now);

@@ -224,6 +224,30 @@ TEST(ModbusHostile, MalformedMbapClosesTheConnectionOnly) {
   EXPECT_TRUE(eventually([&] { return f.server.counters().replies == 6; }));  // the good one's
 }
 
+TEST(ModbusHostile, PipelinedRequestsAreAllAnsweredAndAMalformedOneAfterThemCounted) {
+  Fixture f(Fixture::config());
+  Raw c(f.server.port());
+  ASSERT_TRUE(c.ok());
+  // Ten reads in one segment (more than one round's share), then a header with protocol id 9.
+  Bytes burst;
+  for (std::uint16_t i = 0; i < 10; ++i) {
+    const Bytes r = adu(i, read_pdu(static_cast<std::uint16_t>(100 + i), 1));
+    burst.insert(burst.end(), r.begin(), r.end());
+  }
+  const Bytes bad = adu(99, read_pdu(100, 1), 9);
+  burst.insert(burst.end(), bad.begin(), bad.end());
+  ASSERT_TRUE(c.send(burst));
+  const Bytes answers = c.recv(10 * 11);
+  ASSERT_EQ(answers.size(), 110u);
+  for (std::size_t i = 0; i < 10; ++i) {
+    EXPECT_EQ(answers[11 * i + 1], i);                              // transaction id
+    EXPECT_EQ(answers[11 * i + 10], static_cast<std::uint8_t>(i));  // register 0xB00i
+  }
+  EXPECT_TRUE(c.closed_by_server(500));  // at once, not after the request time-out
+  EXPECT_EQ(f.server.counters().malformed_mbap, 1u);
+  EXPECT_EQ(f.server.counters().incomplete, 0u);
+}
+
 TEST(ModbusHostile, StalledRequestNeitherBlocksOthersNorHoldsItsSlot) {
   auto cfg = Fixture::config();
   cfg.request_timeout_s = 0.3;
