@@ -9,7 +9,20 @@ if(RADAR_EMU_WERROR)
 endif()
 
 add_library(radar_emu_sanitizers INTERFACE)
-if(RADAR_EMU_SANITIZE)
+if(RADAR_EMU_FUZZ)
+  # libFuzzer (tests/fuzz, scripts/fuzz.sh): every project library gets coverage instrumentation
+  # and ASan+UBSan; the harness executables add -fsanitize=fuzzer (libFuzzer's main).
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "RADAR_EMU_FUZZ needs clang (Debian 12: clang-14); configure a separate "
+                        "build tree with -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++")
+  endif()
+  # -O1 with line tables (what OSS-Fuzz builds with): quick to build, fast enough to fuzz, stack
+  # traces with lines; configure with CMAKE_BUILD_TYPE=Debug so that assertions stay on.
+  target_compile_options(radar_emu_sanitizers INTERFACE
+    -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+    -O1 -gline-tables-only)
+  target_link_options(radar_emu_sanitizers INTERFACE -fsanitize=address,undefined)
+elseif(RADAR_EMU_SANITIZE)
   target_compile_options(radar_emu_sanitizers INTERFACE
     -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   target_link_options(radar_emu_sanitizers INTERFACE -fsanitize=address,undefined)

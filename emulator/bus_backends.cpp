@@ -1,6 +1,7 @@
 #include "emulator/bus_backends.hpp"
 
 #include <charconv>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -151,6 +152,80 @@ std::string can_backend_report_json(const io::CanEndpoint& endpoint) {
          {"rx_malformed", st.rx_malformed},
          {"errors", errors_json(g->error_counters(), g->bus_state())}};
   }
+  return j.dump();
+}
+
+std::string nav_link_message(const std::string& endpoint, const io::modbus::NavLinkEvent& e,
+                             const std::string& error, double retry_max_s) {
+  using Kind = io::modbus::NavLinkEvent::Kind;
+  char buf[512];
+  const std::string why = error.empty() ? std::string() : " (" + error + ")";
+  switch (e.kind) {
+    case Kind::kUnreachable:
+      std::snprintf(buf, sizeof buf,
+                    "radar-emu: warning: navigation source %s unreachable%s: no valid ownship "
+                    "state until it answers; retrying (back-off up to %.1f s)",
+                    endpoint.c_str(), why.c_str(), retry_max_s);
+      break;
+    case Kind::kLost:
+      std::snprintf(buf, sizeof buf,
+                    "radar-emu: warning: navigation source %s lost%s: frames go invalid once "
+                    "the state is older than state_timeout_s; retrying (back-off up to %.1f s)",
+                    endpoint.c_str(), why.c_str(), retry_max_s);
+      break;
+    case Kind::kRecovered:
+      std::snprintf(buf, sizeof buf,
+                    "radar-emu: navigation source %s answers again after %.2f s (%llu failed "
+                    "polls)",
+                    endpoint.c_str(), e.outage_s, static_cast<unsigned long long>(e.failed_polls));
+      break;
+  }
+  return buf;
+}
+
+std::string nav_link_report_json(const io::modbus::NavPollerCounters& p,
+                                 io::modbus::NavLinkState state,
+                                 const io::modbus::ModbusClientCounters& c,
+                                 const std::string& last_error, double retry_max_s,
+                                 std::uint64_t frames_source_down) {
+  using io::modbus::NavLinkState;
+  const char* state_name = !p.ever_up                   ? "never_answered"
+                           : state == NavLinkState::kUp ? "up"
+                                                        : "down";
+  const nlohmann::ordered_json j = {{"state", state_name},
+                                    {"first_read_s", p.first_read_s},
+                                    {"outages", p.outages},
+                                    {"outage_s_total", p.outage_s_total},
+                                    {"longest_outage_s", p.longest_outage_s},
+                                    {"frames_source_down", frames_source_down},
+                                    {"connect_failures", c.connect_failures},
+                                    {"reconnects", c.reconnects},
+                                    {"retry_max_interval_s", retry_max_s},
+                                    {"last_error", last_error}};
+  return j.dump();
+}
+
+std::string modbus_server_report_json(const std::string& address,
+                                      const io::modbus::ModbusServerCounters& c) {
+  const nlohmann::ordered_json j = {{"address", address},
+                                    {"requests", c.requests},
+                                    {"replies", c.replies},
+                                    {"reads", c.reads},
+                                    {"refused_writes", c.refused_writes},
+                                    {"unknown_function", c.unknown_function},
+                                    {"bad_length", c.bad_length},
+                                    {"illegal_quantity", c.illegal_quantity},
+                                    {"illegal_address", c.illegal_address},
+                                    {"malformed_mbap", c.malformed_mbap},
+                                    {"incomplete", c.incomplete},
+                                    {"idle_closed", c.idle_closed},
+                                    {"send_failures", c.send_failures},
+                                    {"errors", c.errors},
+                                    {"clients_accepted", c.clients_accepted},
+                                    {"clients_refused", c.clients_refused},
+                                    {"clients_evicted", c.clients_evicted},
+                                    {"clients_closed", c.clients_closed},
+                                    {"publishes", c.publishes}};
   return j.dump();
 }
 

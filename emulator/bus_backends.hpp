@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "io/can_frame.hpp"
+#include "io/modbus.hpp"
 
 namespace radar_emu::emulator {
 
@@ -41,6 +42,27 @@ struct CanSpec {
 /// Counters and state of a hardware CAN endpoint opened by open_can(), as JSON text for
 /// report.json ("{}" for other endpoints).
 [[nodiscard]] std::string can_backend_report_json(const io::CanEndpoint& endpoint);
+
+// ---- Modbus status for stderr and report.json (docs/icd/modbus.md, "Lost sources" and
+// "Serving hostile clients"): the keys live here, in one place.
+
+/// The line printed on stderr when the navigation source `endpoint` becomes unreachable, is
+/// lost or answers again (NavPoller's on_link). `error`: the client's last error text.
+[[nodiscard]] std::string nav_link_message(const std::string& endpoint,
+                                           const io::modbus::NavLinkEvent& event,
+                                           const std::string& error, double retry_max_s);
+
+/// report.json "nav_modbus" "link": the source's state, its outages and retries, and the
+/// frames the loop ran while it was not answering. JSON text.
+[[nodiscard]] std::string nav_link_report_json(const io::modbus::NavPollerCounters& poller,
+                                               io::modbus::NavLinkState state,
+                                               const io::modbus::ModbusClientCounters& client,
+                                               const std::string& last_error, double retry_max_s,
+                                               std::uint64_t frames_source_down);
+
+/// report.json "modbus_server": every counter of the detection-table server. JSON text.
+[[nodiscard]] std::string modbus_server_report_json(const std::string& address,
+                                                    const io::modbus::ModbusServerCounters& c);
 
 /// `--modbus-server` value "HOST:PORT", ":PORT" or "PORT" (bind to 127.0.0.1 unless a host is
 /// given), or "rtu:DEV:BAUD": the endpoint string io::modbus understands. Throws

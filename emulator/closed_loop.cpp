@@ -363,6 +363,7 @@ struct ClosedLoop::Impl {
       io::modbus::ModbusClientConfig cc;
       cc.endpoint = o.nav_modbus;
       nav_client = std::make_unique<io::modbus::ModbusClient>(cc);
+      nav_retry_max_s = cc.reconnect_max_interval_s;
       io::modbus::NavPollerConfig pc;
       pc.map = nav_map;
       std::atomic<std::int64_t>* offset = &bus_from_monotonic_ns;
@@ -371,6 +372,13 @@ struct ClosedLoop::Impl {
         clock_gettime(CLOCK_MONOTONIC, &ts);
         return offset->load(std::memory_order_relaxed) +
                static_cast<std::int64_t>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
+      };
+      // The source's state on stderr as it changes (from the poller's thread, never the loop).
+      pc.on_link = [client = nav_client.get(), endpoint = o.nav_modbus,
+                    retry = cc.reconnect_max_interval_s](const io::modbus::NavLinkEvent& e) {
+        const std::string line = nav_link_message(endpoint, e, client->last_error_text(), retry);
+        std::fprintf(stderr, "%s\n", line.c_str());
+        std::fflush(stderr);
       };
       nav_poller = std::make_unique<io::modbus::NavPoller>(*nav_client, pc);
     }
@@ -464,6 +472,8 @@ struct ClosedLoop::Impl {
   std::uint64_t nav_read_failures = 0;
   std::unique_ptr<io::modbus::ModbusClient> nav_client;
   std::unique_ptr<io::modbus::NavPoller> nav_poller;
+  std::uint64_t nav_frames_source_down = 0;  ///< frames run while the nav source did not answer
+  double nav_retry_max_s = 0.0;              ///< the client's back-off ceiling (retry period)
   std::atomic<std::int64_t> bus_from_monotonic_ns{0};  ///< bus time - CLOCK_MONOTONIC [ns]
   io::canas::OwnshipState nav_state{};                 ///< last state from the poller
   io::modbus::DetectionTableConfig table_config{};
@@ -482,6 +492,16 @@ const Scenario& ClosedLoop::scenario() const noexcept {
 
 std::string ClosedLoop::modbus_server_address() const {
   return impl_->modbus_server ? impl_->modbus_server->address() : std::string();
+}
+
+std::string ClosedLoop::nav_source_failure() const {
+  const Impl& m = *impl_;
+  if (!m.nav_poller || m.nav_poller->counters().ever_up)
+    return {};
+  const std::string error = m.nav_client->last_error_text();
+  return "navigation source " + m.options.nav_modbus + " never answered" +
+         (error.empty() ? "" : " (" + error + ")") +
+         ": no frame had a valid ownship state (report.json nav_modbus.link)";
 }
 
 const std::vector<std::string>& ClosedLoop::setup_warnings() const noexcept {
@@ -607,6 +627,8 @@ RunResult ClosedLoop::run() {
       } else if (m.nav_poller) {
         (void)m.nav_poller->latest(m.nav_state);
         state = &m.nav_state;
+        if (m.nav_poller->link_state() != io::modbus::NavLinkState::kUp)
+          ++m.nav_frames_source_down;  // reported with the link (report.json nav_modbus.link)
       }
       valid = radar_pose_from_state(*state, bus_now_ns, timeout_ns, m.enu, s.antenna_depression_rad,
                                     pose);
@@ -887,18 +909,15 @@ void ClosedLoop::write_outputs(const RunResult& r) {
       nav["disconnected"] = pc.disconnected;
       nav["read_errors"] = pc.read_errors;
       nav["missed_periods"] = pc.missed_periods;
+      nav["link"] = nlohmann::ordered_json::parse(nav_link_report_json(
+          pc, m.nav_poller->link_state(), m.nav_client->counters(), m.nav_client->last_error_text(),
+          m.nav_retry_max_s, m.nav_frames_source_down));
     }
     rep["nav_modbus"] = std::move(nav);
   }
   if (m.modbus_server) {
-    const io::modbus::ModbusServerCounters sc = m.modbus_server->counters();
-    rep["modbus_server"] = {{"address", m.modbus_server->address()},
-                            {"requests", sc.requests},
-                            {"replies", sc.replies},
-                            {"refused_writes", sc.refused_writes},
-                            {"errors", sc.errors},
-                            {"clients_accepted", sc.clients_accepted},
-                            {"publishes", sc.publishes}};
+    rep["modbus_server"] = nlohmann::ordered_json::parse(
+        modbus_server_report_json(m.modbus_server->address(), m.modbus_server->counters()));
   }
   rep["wall_time_s"] = r.wall_time_s;
   rep["detections"] = {

@@ -210,6 +210,9 @@ class ClosedLoop {
   /// "HOST:PORT" the Modbus detection table is served on ("" when not serving). The server
   /// keeps serving the last table until the ClosedLoop is destroyed.
   [[nodiscard]] std::string modbus_server_address() const;
+  /// After run(): "" unless an external Modbus navigation source (--nav-modbus) never answered
+  /// a read during the whole run; then one line saying so (the CLI exits with status 3).
+  [[nodiscard]] std::string nav_source_failure() const;
   /// Warnings from backend setup (bit rate not set, ...), for the summary.
   [[nodiscard]] const std::vector<std::string>& setup_warnings() const noexcept;
 

@@ -209,6 +209,12 @@ int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const s
                  out.empty() ? " (none: no --out)" : (" to " + out).c_str());
     return 128 + result.stop_signal;
   }
+  // A navigation source that never answered: the run happened (outputs written) but could
+  // not do its job. Exit status 3 (README, "Exit status").
+  if (const std::string failure = loop.nav_source_failure(); !failure.empty()) {
+    std::fprintf(stderr, "radar-emu: error: %s\n", failure.c_str());
+    return 3;
+  }
   return 0;
 }
 

@@ -1034,6 +1034,17 @@ void derive_sensor(Scenario& s, const std::string& origin) {
           std::min(std::ceil(c.max_range_m / radar::range_resolution_m(w) - 1e-9), 1048576.0));
     }
     radar::validate(w);
+    // One beam's range-Doppler map has range_bins x pulses cells, and the sensor's buffers and
+    // the CFAR's running sums grow with it: bounded, so that a scenario cannot ask for
+    // gigabytes (found by fuzzing: pulses = 65536 over 1502 bins took 0.8 GB to check).
+    constexpr double kMaxMapCells = 16777216.0;  // 2^24 (256 MiB of complex samples)
+    const double cells = static_cast<double>(w.range_bins) * static_cast<double>(w.pulses);
+    if (cells > kMaxMapCells) {
+      throw std::invalid_argument(
+          "range_bins x pulses = " + std::to_string(w.range_bins) + " x " +
+          std::to_string(w.pulses) + " cells per beam exceeds 16777216 (2^24): fewer pulses, " +
+          "or fewer range bins (max_range_m - swath_start_m, bandwidth_hz)");
+    }
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(origin + ": [radar] " + e.what());
   }

@@ -57,6 +57,10 @@ struct ModbusClientConfig {
   int unit_id = 1;                    ///< unit identifier (TCP 0..255) / slave address (RTU 1..247)
   double response_timeout_s = 0.1;    ///< per request, and per TCP connection attempt
   double reconnect_interval_s = 0.2;  ///< least time between connection attempts while down
+  /// Back-off: after each failed connection attempt the interval doubles, up to this ceiling
+  /// (the retry period of an unreachable source); a success resets it. A link that breaks is
+  /// retried at once, then backs off the same way.
+  double reconnect_max_interval_s = 2.0;
   int timeouts_before_reconnect = 3;  ///< consecutive timeouts after which a TCP link is dropped
 };
 
@@ -95,6 +99,15 @@ class ModbusClient final : public RegisterBank {
   [[nodiscard]] bool connected() const noexcept { return connected_.load(); }
   /// Thread-safe snapshot.
   [[nodiscard]] ModbusClientCounters counters() const noexcept;
+  /// errno of the last failed connection attempt or transaction (0: none yet). Thread-safe.
+  [[nodiscard]] int last_error() const noexcept { return last_error_.load(); }
+  /// The last error as one line ("Connection refused", "Connection timed out", "Modbus
+  /// exception 2 (illegal data address)", ...; "" when none). Not real-time safe.
+  [[nodiscard]] std::string last_error_text() const;
+  /// Current wait between connection attempts while down [s] (see reconnect_max_interval_s).
+  [[nodiscard]] double reconnect_interval_s() const noexcept {
+    return static_cast<double>(backoff_ns_.load()) * 1e-9;
+  }
   [[nodiscard]] const ModbusEndpoint& endpoint() const noexcept { return endpoint_; }
 
  private:
@@ -112,6 +125,8 @@ class ModbusClient final : public RegisterBank {
   ModbusClientConfig config_;
   std::unique_ptr<Impl> impl_;
   std::atomic<bool> connected_{false};
+  std::atomic<int> last_error_{0};
+  std::atomic<std::int64_t> backoff_ns_{0};
   bool ever_connected_ = false;
   bool link_lost_ = false;
   int consecutive_timeouts_ = 0;
@@ -124,13 +139,40 @@ class ModbusClient final : public RegisterBank {
 
 // ---- Navigation poller ----------------------------------------------------------------------
 
+/// A change of the navigation source's state, as the poller saw it (NavPollerConfig::on_link).
+struct NavLinkEvent {
+  enum class Kind : std::uint8_t {
+    kUnreachable = 0,  ///< the first read(s) failed: the source never answered yet
+    kLost,             ///< reads failed after the source had answered
+    kRecovered,        ///< a read succeeded after failed ones
+  };
+  Kind kind = Kind::kUnreachable;
+  RegisterStatus status = RegisterStatus::kOk;  ///< of the failed read (kUnreachable, kLost)
+  double outage_s = 0.0;                        ///< kRecovered: time from the first failed read [s]
+  std::uint64_t failed_polls = 0;               ///< kRecovered: failed reads in the outage
+};
+
 struct NavPollerConfig {
   NavMapConfig map{};
   double period_s = 0.02;  ///< poll period (absolute deadlines; missed periods are skipped)
   /// Time stamp given to decoded fields (OwnshipState::updated_ns). It must be the clock the
   /// frame path compares against; empty = CLOCK_MONOTONIC [ns].
   std::function<std::int64_t()> clock_ns{};
+  /// Called from the poller's thread (never from the frame path) when the source becomes
+  /// unreachable, is lost or recovers: where a program reports it (stderr, a log). Optional.
+  std::function<void(const NavLinkEvent&)> on_link{};
 };
+
+/// State of the navigation source as the poller sees it.
+enum class NavLinkState : std::uint8_t {
+  kNotYet = 0,  ///< no read finished yet
+  kUp,          ///< answering (reads succeed; fewer than kFailedReadsForDown failed since)
+  kDown,        ///< not answering: refused or broken connection, or kFailedReadsForDown reads
+                ///< in a row timed out or got exceptions; until the next good read
+};
+/// Failed reads in a row (time-outs, exceptions) that make a source down; a refused or broken
+/// connection does at once. The outage is dated from the first of them.
+inline constexpr std::uint64_t kFailedReadsForDown = 3;
 
 struct NavPollerCounters {
   std::uint64_t polls = 0;           ///< read attempts
@@ -141,6 +183,11 @@ struct NavPollerCounters {
   std::uint64_t recoveries = 0;      ///< first good read after failed ones
   std::uint64_t missed_periods = 0;  ///< poll periods skipped because a read overran
   std::uint64_t published = 0;       ///< states handed to the frame path
+  std::uint64_t outages = 0;         ///< times the source went down after having answered
+  bool ever_up = false;              ///< the source answered at least once
+  double first_read_s = -1.0;        ///< time from start to the first good read [s]; -1: none
+  double outage_s_total = 0.0;       ///< time spent down after having answered [s] (so far)
+  double longest_outage_s = 0.0;     ///< longest such outage [s] (the current one included)
   NavDecoderCounters decoder{};      ///< samples: stale, rejected by reason, ...
 };
 
@@ -163,11 +210,14 @@ class NavPoller {
   bool latest(canas::OwnshipState& out) noexcept;
   /// Thread-safe snapshot. Real-time safe.
   [[nodiscard]] NavPollerCounters counters() const noexcept;
+  /// The source's state after the last read. Real-time safe (one atomic load).
+  [[nodiscard]] NavLinkState link_state() const noexcept { return link_.load(); }
   /// Stops and joins the thread (idempotent; also done by the destructor).
   void stop() noexcept;
 
  private:
   void run() noexcept;
+  void track_link(RegisterStatus status, std::int64_t now_ns) noexcept;
 
   RegisterBank& bank_;
   NavPollerConfig config_;
@@ -178,10 +228,17 @@ class NavPoller {
   std::condition_variable wake_;
   struct AtomicCounters {
     std::atomic<std::uint64_t> polls{0}, reads_ok{0}, timeouts{0}, disconnected{0}, read_errors{0},
-        recoveries{0}, missed_periods{0}, published{0};
+        recoveries{0}, missed_periods{0}, published{0}, outages{0};
     std::atomic<std::uint64_t> samples{0}, new_samples{0}, fields_accepted{0}, stale{0},
         wrong_size{0}, not_a_number{0}, out_of_range{0}, flagged_invalid{0}, counter_gaps{0};
+    // Link timing [ns, CLOCK_MONOTONIC]: start, first good read (0: none), start of the current
+    // outage after having been up (0: none), closed outages' total and longest.
+    std::atomic<std::int64_t> start_ns{0}, first_ok_ns{0}, down_since_ns{0}, outage_total_ns{0},
+        longest_outage_ns{0};
   } counters_;
+  std::atomic<NavLinkState> link_{NavLinkState::kNotYet};
+  std::int64_t failing_since_ns_ = 0;  // poller thread only: first failed read of this run
+  std::uint64_t failed_polls_ = 0;     // poller thread only: failed reads in this run
   std::thread thread_;
 };
 
@@ -193,31 +250,72 @@ struct ModbusServerConfig {
   std::uint16_t start_address = 0;  ///< protocol address of the first register
   std::size_t register_count = 0;   ///< 1 .. 65536 - start_address
   int unit_id = 1;                  ///< RTU: the slave address answered; TCP answers any unit
-  int max_clients = 8;              ///< TCP connections served at once; more are closed
+  int max_clients = 32;             ///< TCP connections served at once (1..1024)
+  /// TCP: a connection that sent part of a request and nothing more for this long is closed
+  /// (`incomplete`): a stalled or half-open client cannot hold a slot or the server.
+  double request_timeout_s = 1.0;
+  /// TCP: a connection silent for this long is closed (`idle_closed`).
+  double idle_timeout_s = 60.0;
+  /// TCP: with every slot taken, a new connection takes the place of the connection silent for
+  /// longest if that one has been silent for at least this long (`clients_evicted`); else the
+  /// new one is closed (`clients_refused`). Clients that poll keep their slots.
+  double evict_idle_s = 1.0;
 };
 
+/// What the server saw. TCP requests are framed by their MBAP header (Modbus messaging on
+/// TCP/IP implementation guide v1.0b, sec. 3.1.3): transaction id, protocol id 0, length of
+/// what follows (unit id + PDU: 2..254 bytes), unit id. Every request lands in exactly one of
+/// replies (read answered, or an exception), malformed_mbap, send_failures.
 struct ModbusServerCounters {
-  std::uint64_t requests = 0;            ///< requests received
-  std::uint64_t replies = 0;             ///< answers sent (normal or exception)
-  std::uint64_t refused_writes = 0;      ///< write requests answered with exception 1
-  std::uint64_t errors = 0;              ///< malformed requests, receive or send failures
+  std::uint64_t requests = 0;        ///< complete requests received (and RTU frames)
+  std::uint64_t replies = 0;         ///< answers sent (normal or exception)
+  std::uint64_t reads = 0;           ///< function 0x03 answered with registers
+  std::uint64_t refused_writes = 0;  ///< write requests answered with exception 1
+  /// TCP: function codes the server does not implement (anything but 0x03 and the writes),
+  /// answered with exception 1 (illegal function).
+  std::uint64_t unknown_function = 0;
+  /// TCP: a PDU whose length does not fit its function (0x03 takes 5 bytes), answered with
+  /// exception 3 (illegal data value).
+  std::uint64_t bad_length = 0;
+  std::uint64_t illegal_quantity = 0;  ///< TCP: 0x03 quantity 0 or > 125: exception 3
+  std::uint64_t illegal_address = 0;   ///< TCP: 0x03 outside the table: exception 2
+  /// TCP: MBAP header with a protocol id other than 0 or a length outside 2..254: the stream
+  /// cannot be framed any more; the connection is closed, nothing answered.
+  std::uint64_t malformed_mbap = 0;
+  std::uint64_t incomplete = 0;     ///< TCP: connections closed with a request unfinished
+                                    ///< after request_timeout_s (stalled, half-open)
+  std::uint64_t idle_closed = 0;    ///< TCP: connections closed after idle_timeout_s of silence
+  std::uint64_t send_failures = 0;  ///< TCP: answers the peer would not take at once (it does
+                                    ///< not read): connection closed
+  std::uint64_t errors = 0;         ///< other failures (RTU garbage or CRC errors, socket errors)
   std::uint64_t clients_accepted = 0;    ///< TCP connections accepted
-  std::uint64_t clients_refused = 0;     ///< TCP connections closed at once (max_clients)
+  std::uint64_t clients_refused = 0;     ///< TCP connections closed at once (all slots busy)
+  std::uint64_t clients_evicted = 0;     ///< idle TCP connections closed for a new one
+  std::uint64_t clients_closed = 0;      ///< TCP connections the peer closed (or reset)
   std::uint64_t publishes = 0;           ///< images published
   std::uint64_t publishes_rejected = 0;  ///< publish() with the wrong image size
 };
 
 /// Serves `register_count` holding registers (function 0x03) from a background thread. The
 /// table is read-only for clients: write functions (0x05, 0x06, 0x0F, 0x10, 0x16, 0x17) get
-/// exception 1 (illegal function); reads outside it get exception 2 (libmodbus). The producer
-/// (the frame path, or a scripted player through the RegisterBank interface) hands over
-/// complete images through a wait-free triple buffer: a request is always answered from one
-/// complete image, the newest published before it arrived.
+/// exception 1 (illegal function); reads outside it get exception 2. The producer (the frame
+/// path, or a scripted player through the RegisterBank interface) hands over complete images
+/// through a wait-free triple buffer: a request is always answered from one complete image, the
+/// newest published before it arrived, and nothing a client does can block the producer.
+///
+/// TCP is served without libmodbus, on non-blocking sockets from one poll() loop: no client can
+/// hold the thread (a partial request waits in its connection's buffer; an answer the peer does
+/// not take at once closes that connection), each connection gets at most a few requests per
+/// round (a flooding client cannot starve the others), and malformed MBAP headers, wrong
+/// lengths, unknown functions, stalled or half-open connections and connection floods are
+/// each answered or closed as documented in ModbusServerCounters, and counted there. RTU is
+/// served through libmodbus (one master on a serial line).
 class ModbusServer final : public RegisterBank {
  public:
   /// Listens (TCP) or opens the serial device (RTU) before it returns, then starts the thread.
   /// Throws std::invalid_argument (settings) or std::runtime_error ("modbus server: cannot
   /// listen on 127.0.0.1:502: Permission denied"), one line each. Registers start at zero.
+  /// Allocates everything it needs here: serving allocates nothing.
   explicit ModbusServer(const ModbusServerConfig& config);
   ~ModbusServer() override;
   ModbusServer(const ModbusServer&) = delete;
@@ -245,8 +343,15 @@ class ModbusServer final : public RegisterBank {
 
  private:
   struct Impl;
-  void run() noexcept;
-  void serve_request(int length) noexcept;
+  struct Connection;
+  void run_rtu() noexcept;
+  void run_tcp() noexcept;
+  void serve_rtu_request(int length) noexcept;
+  // TCP: reads what the peer sent; answers up to a few complete requests. False: closed.
+  bool serve_connection(Connection& c, bool readable, std::int64_t now_ns) noexcept;
+  void answer(Connection& c, const std::uint8_t* adu, std::size_t length) noexcept;
+  void accept_clients(std::int64_t now_ns) noexcept;
+  void close_connection(Connection& c) noexcept;
 
   ModbusServerConfig config_;
   ModbusEndpoint endpoint_;
@@ -256,8 +361,11 @@ class ModbusServer final : public RegisterBank {
   std::vector<std::uint16_t> working_;  // producer's image
   TripleBuffer<std::vector<std::uint16_t>> images_;
   struct AtomicCounters {
-    std::atomic<std::uint64_t> requests{0}, replies{0}, refused_writes{0}, errors{0},
-        clients_accepted{0}, clients_refused{0}, publishes{0}, publishes_rejected{0};
+    std::atomic<std::uint64_t> requests{0}, replies{0}, reads{0}, refused_writes{0},
+        unknown_function{0}, bad_length{0}, illegal_quantity{0}, illegal_address{0},
+        malformed_mbap{0}, incomplete{0}, idle_closed{0}, send_failures{0}, errors{0},
+        clients_accepted{0}, clients_refused{0}, clients_evicted{0}, clients_closed{0},
+        publishes{0}, publishes_rejected{0};
   } counters_;
   std::thread thread_;
 };

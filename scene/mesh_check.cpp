@@ -35,8 +35,12 @@ MeshCheck check_mesh(const Mesh& m) {
   std::vector<std::uint32_t> welded(m.positions_m.size());
   for (std::size_t i = 0; i < m.positions_m.size(); ++i) {
     const glm::dvec3 q = glm::round((glm::dvec3(m.positions_m[i]) - lo) / quantum);
-    const std::array<long long, 3> key{static_cast<long long>(q.x), static_cast<long long>(q.y),
-                                       static_cast<long long>(q.z)};
+    // q is within 0 .. 1e7 for finite positions; a non-finite one (a loader's bug) must not
+    // reach the integer conversion (undefined behaviour): it gets a key of its own.
+    const auto to_key = [](double x) {
+      return x >= 0.0 && x <= 1e15 ? static_cast<long long>(x) : -1;
+    };
+    const std::array<long long, 3> key{to_key(q.x), to_key(q.y), to_key(q.z)};
     welded[i] = ids.emplace(key, static_cast<std::uint32_t>(ids.size())).first->second;
   }
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edges;

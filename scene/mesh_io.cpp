@@ -54,6 +54,13 @@ bool parse_double(std::string_view s, double& out) {
   return r.ec == std::errc() && r.ptr == s.data() + s.size() && std::isfinite(out);
 }
 
+// Vertices are stored in single precision (scene::Mesh): a finite coordinate beyond float's
+// range would become infinite there.
+bool fits_float(const glm::dvec3& v) {
+  constexpr auto kMax = static_cast<double>(std::numeric_limits<float>::max());
+  return std::abs(v.x) <= kMax && std::abs(v.y) <= kMax && std::abs(v.z) <= kMax;
+}
+
 std::vector<std::string_view> split(std::string_view s) {
   std::vector<std::string_view> out;
   std::size_t i = 0;
@@ -90,7 +97,10 @@ void load_obj(const std::filesystem::path& path, const MeshFileOptions& o, Build
                    "' is not a finite number");
         }
       }
-      b.obj.mesh.positions_m.emplace_back(xyz[0] * o.scale, xyz[1] * o.scale, xyz[2] * o.scale);
+      const glm::dvec3 p(xyz[0] * o.scale, xyz[1] * o.scale, xyz[2] * o.scale);
+      if (!fits_float(p))
+        fail(path, line_no, "vertex beyond the single-precision range (|coordinate| > 3.4e38 m)");
+      b.obj.mesh.positions_m.emplace_back(p);
     } else if (tok[0] == "f") {
       if (tok.size() < 4)
         fail(path, line_no, "face needs at least 3 vertices");
@@ -139,6 +149,10 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
     fail(path, 0, "read error");
   const std::uint16_t mat = b.material(o.default_material, path, 0);
   auto add = [&](const glm::dvec3 v[3], std::size_t line) {
+    for (int k = 0; k < 3; ++k) {  // binary STL: a float vertex times a scale > 1
+      if (!fits_float(v[k] * o.scale))
+        fail(path, line, "vertex beyond the single-precision range (|coordinate| > 3.4e38 m)");
+    }
     b.lines.push_back(line);
     const auto base = static_cast<unsigned>(b.obj.mesh.positions_m.size());
     for (int k = 0; k < 3; ++k)
@@ -194,6 +208,8 @@ void load_stl(const std::filesystem::path& path, const MeshFileOptions& o, Build
           fail(path, line_no, "vertex coordinate is not a finite number");
         }
       }
+      if (!fits_float(v[nv] * o.scale))
+        fail(path, line_no, "vertex beyond the single-precision range (|coordinate| > 3.4e38 m)");
       ++nv;
     } else if (tok[0] == "endloop") {
       if (nv != 3)

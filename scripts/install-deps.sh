@@ -10,6 +10,8 @@ PACKAGES=(
   libembree-dev libglm-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libtbb-dev
   libusb-1.0-0-dev libsocketcan-dev libmodbus-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # coverage-guided fuzzing (tests/fuzz, scripts/fuzz.sh): clang 14 and its libFuzzer runtime
+  clang libclang-rt-14-dev
   # independent peers used by the tests (buses.md)
   python3 python3-can python3-canmatrix python3-pymodbus python3-serial-asyncio mbpoll socat
 )

@@ -142,6 +142,13 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
   EXPECT_NE(error_of("[radar]\npulse_width_s = 60e-6\n").find("[radar]"), std::string::npos);
   // Syntax errors carry line and column.
   EXPECT_NE(error_of("[run]\nframes = = 3\n").find("test.toml:2:"), std::string::npos);
+  // Found by fuzzing (tests/fuzz/regressions/scenario_toml/): a range-Doppler map of 1502 x
+  // 65536 cells took 0.8 GB and seconds to check; above 2^24 cells it is a clear error.
+  EXPECT_NE(error_of("[radar]\npulses = 65536\n")
+                .find("test.toml: [radar] range_bins x pulses = 1502 x 65536 cells per beam "
+                      "exceeds 16777216"),
+            std::string::npos);
+  EXPECT_EQ(error_of("[radar]\npulses = 8192\n"), "");  // 12.3 M cells: allowed
 }
 
 TEST(Scenario, MissingFileNamesThePath) {

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -372,6 +373,109 @@ TEST(ModbusNavPoller, CountsTimeoutsAndPublishesNothing) {
     EXPECT_FALSE(f.received);
   EXPECT_EQ(poller.counters().published, 0u);
   poller.stop();  // returns although a read may be blocked in its timeout
+}
+
+// A bank whose reads follow a script (then repeat its last entry): what a source does over
+// time, without timing.
+class ScriptedBank final : public RegisterBank {
+ public:
+  explicit ScriptedBank(std::vector<RegisterStatus> script) : script_(std::move(script)) {}
+  RegisterStatus read_holding(std::uint16_t, std::span<std::uint16_t> out) noexcept override {
+    std::fill(out.begin(), out.end(), std::uint16_t{0});
+    const std::size_t i = std::min(next_.fetch_add(1), script_.size() - 1);
+    return script_[i];
+  }
+  RegisterStatus write_holding(std::uint16_t, std::span<const std::uint16_t>) noexcept override {
+    return RegisterStatus::kError;
+  }
+  [[nodiscard]] bool done() const { return next_.load() >= script_.size() + 2; }
+
+ private:
+  std::vector<RegisterStatus> script_;
+  std::atomic<std::size_t> next_{0};
+};
+
+TEST(ModbusNavPoller, ReportsUnreachableLostAndRecoveredSources) {
+  using S = RegisterStatus;
+  using K = NavLinkEvent::Kind;
+  // Refused twice (unreachable), up; two time-outs (not an outage: fewer than
+  // kFailedReadsForDown), up; three time-outs (lost), up; a broken link (lost at once), up.
+  ScriptedBank bank({S::kDisconnected, S::kDisconnected, S::kOk, S::kOk, S::kTimeout, S::kTimeout,
+                     S::kOk, S::kTimeout, S::kTimeout, S::kTimeout, S::kOk, S::kOk,
+                     S::kDisconnected, S::kDisconnected, S::kOk});
+  std::mutex m;
+  std::vector<NavLinkEvent> events;
+  NavPoller poller(bank, {.period_s = 0.001, .on_link = [&](const NavLinkEvent& e) {
+                            std::lock_guard<std::mutex> lock(m);
+                            events.push_back(e);
+                          }});
+  ASSERT_TRUE(eventually([&] { return bank.done(); }));
+  poller.stop();
+  ASSERT_EQ(events.size(), 6u);
+  EXPECT_EQ(events[0].kind, K::kUnreachable);
+  EXPECT_EQ(events[0].status, S::kDisconnected);
+  EXPECT_EQ(events[1].kind, K::kRecovered);
+  EXPECT_EQ(events[1].failed_polls, 2u);
+  EXPECT_EQ(events[2].kind, K::kLost);
+  EXPECT_EQ(events[2].status, S::kTimeout);
+  EXPECT_EQ(events[3].kind, K::kRecovered);
+  EXPECT_EQ(events[3].failed_polls, 3u);
+  EXPECT_EQ(events[4].kind, K::kLost);
+  EXPECT_EQ(events[4].status, S::kDisconnected);
+  EXPECT_EQ(events[5].kind, K::kRecovered);
+  EXPECT_EQ(events[5].failed_polls, 2u);
+  const NavPollerCounters c = poller.counters();
+  EXPECT_EQ(c.outages, 2u);  // the unreachable start is not an outage (first_read_s says it)
+  EXPECT_TRUE(c.ever_up);
+  EXPECT_GT(c.first_read_s, 0.0);
+  EXPECT_GT(c.outage_s_total, 0.0);
+  EXPECT_LE(c.longest_outage_s, c.outage_s_total);
+  EXPECT_EQ(poller.link_state(), NavLinkState::kUp);
+  EXPECT_EQ(c.timeouts, 5u);
+  EXPECT_EQ(c.disconnected, 4u);
+}
+
+TEST(ModbusNavPoller, ASourceThatNeverAnswersIsUnreachableOnce) {
+  ScriptedBank bank({RegisterStatus::kTimeout});
+  std::atomic<int> unreachable{0}, other{0};
+  NavPoller poller(bank, {.period_s = 0.001, .on_link = [&](const NavLinkEvent& e) {
+                            ++(e.kind == NavLinkEvent::Kind::kUnreachable ? unreachable : other);
+                          }});
+  ASSERT_TRUE(eventually([&] { return poller.counters().polls >= 20; }));
+  poller.stop();
+  EXPECT_EQ(unreachable.load(), 1);
+  EXPECT_EQ(other.load(), 0);
+  EXPECT_FALSE(poller.counters().ever_up);
+  EXPECT_EQ(poller.counters().first_read_s, -1.0);
+  EXPECT_EQ(poller.counters().outages, 0u);
+  EXPECT_EQ(poller.link_state(), NavLinkState::kDown);
+}
+
+TEST(ModbusTcp, ConnectionAttemptsBackOff) {
+  std::uint16_t port = 0;
+  {
+    SilentListener gone;  // a free port nobody listens on
+    port = gone.port();
+  }
+  // 0.05 s doubling to 0.4 s: attempts at 0 (constructor), 0.05, 0.15, 0.35, 0.75, 1.15 s in
+  // 1.2 s of polling every 5 ms; a fixed 0.05 s interval would make 25.
+  ModbusClient client(
+      {.endpoint = tcp(port), .reconnect_interval_s = 0.05, .reconnect_max_interval_s = 0.4});
+  std::array<std::uint16_t, 1> out{};
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(1200);
+  while (std::chrono::steady_clock::now() < until) {
+    EXPECT_EQ(client.read_holding(0, out), RegisterStatus::kDisconnected);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  EXPECT_GE(client.counters().connect_failures, 4u);
+  EXPECT_LE(client.counters().connect_failures, 8u);
+  EXPECT_DOUBLE_EQ(client.reconnect_interval_s(), 0.4);
+  EXPECT_EQ(client.last_error(), ECONNREFUSED);
+  EXPECT_EQ(client.last_error_text(), "Connection refused");
+  EXPECT_THROW(
+      ModbusClient(
+          {.endpoint = tcp(port), .reconnect_interval_s = 1.0, .reconnect_max_interval_s = 0.5}),
+      std::invalid_argument);
 }
 
 TEST(ModbusNavPoller, RejectsBadSettings) {

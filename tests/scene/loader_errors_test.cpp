@@ -265,6 +265,20 @@ TEST(LoaderErrors, Stl) {
   expect_one_line(mesh, write("asc_cut.stl", "solid s\n" + facet),
                   "the file ends inside a facet (2 vertices, no endloop)");
   expect_one_line(mesh, write("asc_none.stl", "solid s\nendsolid s\n"), "no triangles");
+  // Found by fuzzing (tests/fuzz/regressions/stl/): a finite coordinate beyond float's range
+  // became an infinite vertex, then undefined behaviour in the mesh check.
+  expect_one_line(mesh,
+                  write("asc_huge.stl", "solid s\n" + facet + "  vertex 1" + std::string(60, '2') +
+                                            " 0 1\n endloop\n"),
+                  "asc_huge.stl:6: vertex beyond the single-precision range");
+  const float big = std::numeric_limits<float>::max();
+  std::vector<float> large = two;
+  large[4] = big;
+  const fs::path scaled = write("scaled.stl", binary("bin", 2, large));
+  EXPECT_EQ(sc::load_mesh_file(scaled).objects.size(), 1u);  // at float's top: still fine
+  const std::string e =
+      error_of([](const fs::path& p) { (void)sc::load_mesh_file(p, {.scale = 10.0}); }, scaled);
+  EXPECT_NE(e.find("vertex beyond the single-precision range"), std::string::npos) << e;
 }
 
 TEST(LoaderErrors, Obj) {
@@ -286,6 +300,9 @@ TEST(LoaderErrors, Obj) {
                   "num_nan.obj:1: vertex coordinate 'nan' is not a finite number");
   expect_one_line(mesh, write("num_inf.obj", "v 1e999 0 0\n"),
                   "num_inf.obj:1: vertex coordinate '1e999' is not a finite number");
+  // Found by fuzzing (tests/fuzz/regressions/obj/): 8.9e49 is a finite double but no float.
+  expect_one_line(mesh, write("num_huge.obj", "v 0 0" + std::string(50, '8') + " 1\n"),
+                  "num_huge.obj:1: vertex beyond the single-precision range");
   expect_one_line(mesh, write("num_two.obj", "v 0 0\n"),
                   "num_two.obj:1: vertex needs 3 coordinates");
   expect_one_line(mesh, write("face_two.obj", v + "f 1 2\n"),

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -55,6 +56,18 @@ TEST(MeshCheck, ClosedOpenAndNonManifold) {
   bad.triangles.push_back({0, 1, 99});
   bad.triangle_material.assign(bad.triangles.size(), 0);
   EXPECT_EQ(sc::check_mesh(bad).degenerate, (std::vector<std::size_t>{1, 2, 3, 4}));
+}
+
+TEST(MeshCheck, NonFiniteVerticesAreDegenerateNotUndefinedBehaviour) {
+  // Found by fuzzing (tests/fuzz/regressions/obj/): an infinite vertex made the weld quantum
+  // NaN and its conversion to an integer key undefined. The loaders now refuse such vertices;
+  // the check itself stays defined (this runs under UBSan, label "sanitize").
+  sc::Mesh m;
+  m.positions_m = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, std::numeric_limits<float>::infinity(), 1}};
+  m.triangles = {{0, 1, 2}, {0, 1, 3}};
+  m.triangle_material = {0, 0};
+  const sc::MeshCheck c = sc::check_mesh(m);
+  EXPECT_EQ(c.degenerate, (std::vector<std::size_t>{1}));
 }
 
 TEST(MeshCheck, TJunctionsCloseASeamTessellatedDifferentlyOnEachSide) {
