@@ -82,4 +82,30 @@ cplx po_amplitude_m(double k, const glm::dvec3& p, const CVec& source,
   return cplx(0.0, -k / std::sqrt(kPi)) * (0.5 * dot(p, source)) * integral_m2;
 }
 
+std::array<glm::dvec3, kFacetSamples> facet_samples(const glm::dvec3& v0, const glm::dvec3& v1,
+                                                    const glm::dvec3& v2,
+                                                    const glm::dvec3& lit_normal,
+                                                    double offset_m) noexcept {
+  const glm::dvec3 c = (v0 + v1 + v2) / 3.0, lift = offset_m * lit_normal;
+  auto inset = [&](const glm::dvec3& p) { return p + kFacetSampleInset * (c - p) + lift; };
+  return {c + lift,
+          inset(v0),
+          inset(v1),
+          inset(v2),
+          inset(0.5 * (v0 + v1)),
+          inset(0.5 * (v1 + v2)),
+          inset(0.5 * (v2 + v0))};
+}
+
+int facet_subdivisions(double longest_edge_m, double resolution_m) noexcept {
+  const double m = std::ceil(longest_edge_m / resolution_m);
+  if (!(m < kMaxFacetSubdivisions))  // also NaN
+    return kMaxFacetSubdivisions;
+  return std::max(1, static_cast<int>(m));
+}
+
+bool facet_in_far_field(double rho_m, double range_m, double k) noexcept {
+  return k * rho_m * rho_m <= 0.125 * kPi * range_m;
+}
+
 }  // namespace radar_emu::radar
