@@ -88,6 +88,8 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
+    const std::vector<std::int8_t> closed = closed_part_winding(mesh.positions_m, mesh.triangles);
+    const std::int8_t mirrored = glm::determinant(glm::dmat3(m)) < 0.0 ? -1 : 1;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3 tri = mesh.triangles[t];
       auto world = [&](unsigned i) { return glm::dvec3(m * glm::dvec4(mesh.positions_m[i], 1.0)); };
@@ -107,6 +109,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       f.area_m2 = 0.5 * twice_area;
       f.centroid = (f.v0 + f.v1 + f.v2) / 3.0;
       f.surface = mesh.triangle_material[t];
+      f.outward = static_cast<std::int8_t>(closed[t] * mirrored);
       facets_.push_back(f);
       for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
         lo = glm::min(lo, v);
@@ -235,9 +238,12 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             ++n_edge;
             continue;
           }
-          const FacetLight l = shadowing
-                                   ? facet_light(facet_samples(f.v0, f.v1, f.v2, n, eps), blocked)
-                                   : FacetLight::kLit;
+          // The inside of a closed part is never lit (sbr_core.hpp, closed_part_winding).
+          const bool inside = f.outward != 0 && f.outward * glm::dot(f.normal, r_t) <= 0.0;
+          const FacetLight l = !shadowing ? FacetLight::kLit
+                               : inside
+                                   ? FacetLight::kDark
+                                   : facet_light(facet_samples(f.v0, f.v1, f.v2, n, eps), blocked);
           if (l == FacetLight::kDark) {
             ++n_shadow;
             continue;

@@ -155,6 +155,9 @@ class RcsEngine {
     glm::dvec3 v0, v1, v2, centroid, normal;
     double area_m2;
     std::uint16_t surface;
+    /// +1: `normal` points out of the closed part the facet belongs to, -1: into it, 0: open
+    /// part (sbr_core.hpp, closed_part_winding).
+    std::int8_t outward;
   };
   const scene::Scene* scene_;
   std::vector<SurfaceModel> surfaces_;

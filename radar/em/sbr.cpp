@@ -130,6 +130,15 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     facet_first_[i + 1] =
         facet_first_[i] + (is_target_[i] ? desc.objects[i].mesh.triangles.size() : 0);
   }
+  facet_outward_.assign(facet_first_.back(), 0);
+  for (std::size_t i = 0; i < desc.objects.size(); ++i) {
+    if (!is_target_[i])
+      continue;
+    const scene::Mesh& mesh = desc.objects[i].mesh;
+    const std::vector<std::int8_t> closed = closed_part_winding(mesh.positions_m, mesh.triangles);
+    std::copy(closed.begin(), closed.end(),
+              facet_outward_.begin() + static_cast<std::ptrdiff_t>(facet_first_[i]));
+  }
   facet_light_.assign(facet_first_.back(), kLightByRays);
   facet_out_.assign(facet_first_.back(), Contribution{});
   frame_world_from_body_.assign(desc.objects.size(), glm::dmat4(1.0));
@@ -174,6 +183,12 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   const glm::dvec3 s = to_radar / range_m, d = -s;
   glm::dvec3 n = nn / twice_area;
   double cos_i = glm::dot(n, s);
+  // The inside of a closed part is never lit (sbr_core.hpp, closed_part_winding); a mirroring
+  // placement turns the winding over.
+  const int outward =
+      facet_outward_[facet_first_[id] + t] * (glm::determinant(glm::dmat3(xf)) < 0.0 ? -1 : 1);
+  if (outward != 0 && outward * cos_i <= 0.0)
+    return dark;
   if (cos_i < 0.0) {  // two-sided: the face the wave meets
     n = -n;
     cos_i = -cos_i;

@@ -221,6 +221,9 @@ class SbrTracer {
   /// otherwise.
   static constexpr std::uint8_t kLightByRays = 255;  ///< near field or out of view: the rays'
   std::vector<std::size_t> facet_first_;
+  /// Per facet: +1 / -1 when its wound normal points out of / into its closed part, 0: open part
+  /// (sbr_core.hpp, closed_part_winding; body frame).
+  std::vector<std::int8_t> facet_outward_;
   std::vector<std::uint8_t> facet_light_;
   std::vector<Contribution> facet_out_;
   std::vector<glm::dmat4> frame_world_from_body_;  ///< per object, this frame (bundled targets)

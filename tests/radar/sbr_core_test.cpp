@@ -12,6 +12,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <functional>
@@ -258,6 +259,41 @@ TEST(SbrLoopVsRcs, VehicleMatchesTheRcsEngineInTheFarField) {
     // The 1 / R law: at 4 R the loop sits halfway between S(2R) and S_inf.
     EXPECT_LT(std::abs(at[2] - 0.5 * (far + at[1])), 0.002 * std::abs(far)) << pol_name(pol);
   }
+}
+
+TEST(SbrCore, ClosedPartsAndTheirWinding) {
+  // closed_part_winding: every triangle of the box (its faces' vertices repeated per face, welded
+  // by position) is on a closed, outward-wound part; the box wound the other way is inward;
+  // sheets (plate, dihedral) and a box with one triangle missing are open.
+  auto winding = [](const sc::SceneDescription& d) {
+    return rd::closed_part_winding(d.objects[0].mesh.positions_m, d.objects[0].mesh.triangles);
+  };
+  auto count = [](const std::vector<std::int8_t>& w, int v) {
+    return static_cast<std::size_t>(std::count(w.begin(), w.end(), static_cast<std::int8_t>(v)));
+  };
+  sc::SceneDescription box = sc::make_target({sc::TargetKind::kBox, 0.3, 0.2, 0.1, 0.05});
+  const auto wb = winding(box);
+  EXPECT_EQ(count(wb, 1), wb.size());
+  sc::SceneDescription inverted = box;
+  for (glm::uvec3& t : inverted.objects[0].mesh.triangles)
+    std::swap(t.y, t.z);
+  const auto wi = winding(inverted);
+  EXPECT_EQ(count(wi, -1), wi.size());
+  sc::SceneDescription holed = box;
+  holed.objects[0].mesh.triangles.pop_back();
+  const auto wh = winding(holed);
+  EXPECT_EQ(count(wh, 0), wh.size());
+  for (sc::TargetKind k : {sc::TargetKind::kPlate, sc::TargetKind::kDihedral}) {
+    const auto w = winding(sc::make_target({k, 0.3, 0.2, 1.0, 0.0}));
+    EXPECT_EQ(count(w, 0), w.size()) << sc::target_name(k);
+  }
+  // The vehicle: its parts are outward-wound, but some meet their caps at T-junctions (open
+  // edges), so only part of it qualifies; none is found inward.
+  const auto wv = winding(sc::make_target({sc::TargetKind::kVehicle, 7.0, 3.5, 2.5, 0.0}));
+  std::cout << "vehicle: " << count(wv, 1) << " of " << wv.size()
+            << " triangles on closed outward-wound parts\n";
+  EXPECT_GT(count(wv, 1), wv.size() / 4);
+  EXPECT_EQ(count(wv, -1), 0u);
 }
 
 namespace {
