@@ -1117,6 +1117,7 @@ void ClosedLoop::write_outputs(const RunResult& r) {
                   {"dropped_contributions", r.trace.dropped_contributions},
                   {"grazing_skipped", r.trace.grazing_skipped},
                   {"dielectric_reflections", r.trace.dielectric_reflections},
+                  {"pruned_paths", r.trace.pruned_paths},
                   {"knob_fallbacks", r.trace.knob_fallbacks}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   rep["sensor"] = {

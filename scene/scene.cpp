@@ -128,8 +128,7 @@ bool to_embree(const Ray& ray, RTCRay& r) noexcept {
   return true;
 }
 
-// Does the ray cross the box [lo, hi] somewhere in [t0, t1]? (Slab test in double, the box
-// padded by a relative 1e-6 so that float traversal inside it cannot be culled wrongly.)
+// Does the ray cross the box [lo, hi] somewhere in [t0, t1]? (ray_crosses_box)
 bool crosses_box(const Ray& ray, const glm::dvec3& lo, const glm::dvec3& hi, double t0,
                  double t1) noexcept {
   const double pad = 1e-6 * (1.0 + std::max(glm::length(lo), glm::length(hi)));
@@ -687,6 +686,10 @@ Scene::Scene(SceneDescription description) : impl_(std::make_unique<Impl>()) {
 Scene::~Scene() = default;
 Scene::Scene(Scene&&) noexcept = default;
 Scene& Scene::operator=(Scene&&) noexcept = default;
+
+bool ray_crosses_box(const Ray& ray, const glm::dvec3& lo, const glm::dvec3& hi) noexcept {
+  return crosses_box(ray, lo, hi, ray.t_near_m, ray.t_far_m);
+}
 
 bool Scene::intersect(const Ray& ray, Hit& hit) const noexcept {
   const Impl& m = *impl_;

@@ -135,4 +135,10 @@ class Scene {
   std::unique_ptr<Impl> impl_;
 };
 
+/// Whether `ray` crosses the axis-aligned box [lo, hi] somewhere in [t_near_m, t_far_m] (slab
+/// test in double; the box is padded by a relative 1e-6 so that float traversal inside it
+/// cannot be culled wrongly). Cheap: used to cull queries that cannot reach an object.
+[[nodiscard]] bool ray_crosses_box(const Ray& ray, const glm::dvec3& lo,
+                                   const glm::dvec3& hi) noexcept;
+
 }  // namespace radar_emu::scene

@@ -123,6 +123,7 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     n_targets_ += is_target_[i];
   }
   bundles_.reserve(n_targets_);
+  unbundled_in_range_.reserve(n_targets_);
   counts_.assign(n_az_ * n_el_ + n_targets_ * c.max_rays_per_target, 0);
 }
 
@@ -248,6 +249,18 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   return true;
 }
 
+bool SbrTracer::may_reach_owner(const scene::Ray& ray, const Frame& frame, std::uint32_t owner,
+                                bool terrain) const noexcept {
+  const auto objects = scene_->objects();
+  if (!terrain)
+    return scene::ray_crosses_box(ray, objects[owner].bounds_min_m, objects[owner].bounds_max_m);
+  for (const std::uint32_t id : frame.unbundled_in_range) {
+    if (scene::ray_crosses_box(ray, objects[id].bounds_min_m, objects[id].bounds_max_m))
+      return true;
+  }
+  return false;
+}
+
 void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, double el,
                           double daz, double del, std::uint32_t owner, bool terrain,
                           Contribution* slot, std::uint8_t& count,
@@ -274,6 +287,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
   double path_m = 0.0;     // unfolded path length from the radar to the current hit
   double path_rate = 0.0;  // d(path)/dt so far [m/s]
   bool met_target = false;
+  std::uint32_t path_owner = owner;  // the first target met (header: ownership)
   count = 0;
   for (int bounce = 0; bounce < frame.max_bounces; ++bounce) {
     scene::Ray ray;
@@ -285,6 +299,10 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
     ray.t_far_m = bounce == 0 ? c.max_range_m : 2.0 * c.max_range_m - path_m;
     if (ray.t_far_m <= ray.t_near_m)
       return;
+    if (bounce > 0 && !met_target && !may_reach_owner(ray, frame, owner, terrain)) {
+      ++stats.pruned_paths;
+      return;
+    }
     scene::Hit hit;
     if (!scene_->intersect(ray, hit))
       return;
@@ -295,6 +313,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       if (terrain ? bundled_[hit.object_id] != 0 : hit.object_id != owner)
         return;
       met_target = true;
+      path_owner = hit.object_id;
     }
     const RadarMaterial& mat = materials_[hit.material_id];
     const glm::dvec3 v_obj = scene_->objects()[hit.object_id].velocity_mps;
@@ -337,6 +356,8 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
     }
     if (!has_surface_[hit.material_id])
       return;  // no specular model: the ray ends (header)
+    if (terrain && !met_target && frame.unbundled_in_range.empty())
+      return;  // no target without a bundle within range: this terrain path can radiate nothing
     const SurfaceModel& sm = surfaces_[hit.material_id];
     const bool pec = sm.kind == SurfaceModel::Kind::kPec;
     const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
@@ -369,12 +390,11 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
         const AzEl ae = azel_from_direction(antenna_from_world * (-s));
         out.azimuth_rad = ae.azimuth_rad;
         out.elevation_rad = ae.elevation_rad;
-        out.object_id = hit.object_id;
+        out.object_id = path_owner;
+        out.radiated_by_owner = hit.object_id == path_owner;
         out.bounces = static_cast<std::uint8_t>(bounce + 1);
         out.coherent = true;
       }
-    } else if (terrain && !frame.terrain_continues) {
-      return;  // no target without a bundle within range: this terrain path can radiate nothing
     }
     // Specular reflection (law of reflection) of direction, tube and field (sbr_core.hpp).
     const glm::dvec3 d_r = mirror(d, n);
@@ -418,6 +438,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   Frame frame = frame_for(knobs, &stats);
   // Bundles for targets inside the field of view.
   bundles_.clear();
+  unbundled_in_range_.clear();
   const std::size_t terrain_rays = frame.terrain_n_az * frame.terrain_n_el;
   std::size_t next_ray = terrain_rays;
   const auto objects = scene_->objects();
@@ -430,7 +451,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     if (!bundle_for(pose, id, target_spacing(knobs, id, &stats), b, coarsened)) {
       const scene::ObjectState& o = objects[id];
       const glm::dvec3 nearest = glm::clamp(pose.position_m, o.bounds_min_m, o.bounds_max_m);
-      frame.terrain_continues |= glm::length(nearest - pose.position_m) <= c.max_range_m;
+      if (glm::length(nearest - pose.position_m) <= c.max_range_m)
+        unbundled_in_range_.push_back(id);  // within the capacity reserved at setup
       continue;
     }
     stats.coarsened_bundles += coarsened ? 1 : 0;
@@ -440,12 +462,13 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     bundled_[id] = 1;
     ++stats.target_bundles;
   }
+  frame.unbundled_in_range = unbundled_in_range_;
   const std::size_t rays = next_ray;
   const auto per_ray = static_cast<std::size_t>(c.max_bounces);
   const std::size_t usable_rays = std::min({rays, out.size() / per_ray, counts_.size()});
   stats.rays += rays;
 
-  std::atomic<std::uint64_t> hits{0}, grazing{0}, dielectric{0};
+  std::atomic<std::uint64_t> hits{0}, grazing{0}, dielectric{0}, pruned{0};
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, usable_rays, 256),
       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -474,10 +497,12 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         hits += local.hits;
         grazing += local.grazing_skipped;
         dielectric += local.dielectric_reflections;
+        pruned += local.pruned_paths;
       });
   stats.hits += hits.load();
   stats.grazing_skipped += grazing.load();
   stats.dielectric_reflections += dielectric.load();
+  stats.pruned_paths += pruned.load();
   stats.dropped_contributions += (rays - usable_rays) * per_ray;  // upper bound, counted
   // Compact the fixed per-ray slots in ray order: deterministic whatever the threading.
   std::size_t n = 0;

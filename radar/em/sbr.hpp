@@ -26,8 +26,17 @@
 //   - The diffuse clutter of a terrain surface is returned only by a terrain-grid ray at its first
 //     hit (bundle rays first hitting terrain add no clutter; they continue specularly).
 //   - A ray that meets a target it does not count ends there; every ray still shadows what lies
-//     behind its hits. A surface with no specular model (radar::surface_model() nullopt, e.g. the
-//     placeholder "soil") ends the ray.
+//     behind its hits.
+//   - A ray that has not met a target yet is followed past a hit only if its next segment
+//     crosses the bounding box of a target it may count (the bundle's own target; for terrain
+//     rays, the targets in range without a bundle). Everything else such a segment could reach
+//     radiates nothing coherent, so only paths with two or more non-target hits before their
+//     target are lost (counted in TraceStats::pruned_paths with every culled segment); the
+//     cull spares the long, grazing upward queries of rays reflected off the ground.
+//   - Every return is labelled with its path's owner (Contribution::object_id), whichever
+//     surface the path last met: radar -> target -> ground -> radar is the target's echo. A surface
+//     with no specular model (radar::surface_model() nullopt, e.g. the placeholder "soil") ends the
+//     ray.
 
 #include <complex>
 #include <cstddef>
@@ -125,9 +134,13 @@ struct Contribution {
   double radial_velocity_mps = 0.0;  ///< half the rate of change of the path [m/s], + receding
   double azimuth_rad = 0.0;          ///< direction of arrival at the radar, antenna frame
   double elevation_rad = 0.0;
-  std::uint32_t object_id = 0;  ///< object of the last hit
-  std::uint8_t bounces = 0;     ///< 1 = single bounce
-  bool coherent = true;         ///< false: diffuse clutter power
+  /// The path's owner (the first target it met: header); diffuse clutter: the terrain object.
+  std::uint32_t object_id = 0;
+  std::uint8_t bounces = 0;  ///< 1 = single bounce
+  bool coherent = true;      ///< false: diffuse clutter power
+  /// Whether the hit that radiates this return is on the owner itself (false: the path went on
+  /// from its owner to another surface, e.g. radar -> target -> ground -> radar).
+  bool radiated_by_owner = true;
 };
 
 struct TraceStats {
@@ -140,6 +153,9 @@ struct TraceStats {
   std::uint64_t grazing_skipped = 0;         ///< footprints skipped at |cos(theta_i)| < 1e-3
   std::uint64_t dielectric_reflections = 0;  ///< specular bounces off dielectric surfaces
   std::uint64_t knob_fallbacks = 0;          ///< invalid TraceKnobs values replaced by config
+  /// Rays ended before a target because their next segment could reach no countable target
+  /// (header: ownership).
+  std::uint64_t pruned_paths = 0;
 };
 
 class SbrTracer {
@@ -192,7 +208,8 @@ class SbrTracer {
     double terrain_daz_rad = 0, terrain_del_rad = 0;
     std::size_t terrain_n_az = 0, terrain_n_el = 0;
     int max_bounces = 1;
-    bool terrain_continues = false;  ///< some target in range has no bundle this frame
+    /// Targets in range without a bundle this frame: what terrain rays may still reach.
+    std::span<const std::uint32_t> unbundled_in_range{};
   };
   [[nodiscard]] Frame frame_for(const TraceKnobs& knobs, TraceStats* stats) const noexcept;
   /// The bundle of target `id` for `pose` at `spacing_m`; false when it is out of view.
@@ -206,10 +223,14 @@ class SbrTracer {
 
   std::vector<std::uint8_t> is_target_;  ///< per object: has a conducting triangle
   std::size_t n_targets_ = 0;
-  std::size_t n_az_ = 0, n_el_ = 0;    ///< terrain grid
-  std::vector<Bundle> bundles_;        ///< per frame, capacity n_targets_
-  std::vector<std::uint8_t> counts_;   ///< contributions per ray slot
-  std::vector<std::uint8_t> bundled_;  ///< per object, per frame: has a bundle
+  std::size_t n_az_ = 0, n_el_ = 0;                ///< terrain grid
+  std::vector<Bundle> bundles_;                    ///< per frame, capacity n_targets_
+  std::vector<std::uint8_t> counts_;               ///< contributions per ray slot
+  std::vector<std::uint8_t> bundled_;              ///< per object, per frame: has a bundle
+  std::vector<std::uint32_t> unbundled_in_range_;  ///< per frame, capacity n_targets_
+  /// Whether a segment that has met no target yet can still reach one it may count (header).
+  [[nodiscard]] bool may_reach_owner(const scene::Ray& ray, const Frame& frame, std::uint32_t owner,
+                                     bool terrain) const noexcept;
 };
 
 }  // namespace radar_emu::radar
