@@ -67,6 +67,9 @@ void BM_Trace(benchmark::State& state) {
   state.counters["bundles"] = static_cast<double>(stats.target_bundles);
   state.counters["coarsened"] = static_cast<double>(stats.coarsened_bundles);
   state.counters["contributions"] = static_cast<double>(n);
+  state.counters["lit_facets"] = static_cast<double>(stats.lit_facets);
+  state.counters["partial_facets"] = static_cast<double>(stats.partial_facets);
+  state.counters["facet_queries"] = static_cast<double>(stats.facet_queries);
   state.counters["Mrays_per_s"] = benchmark::Counter(static_cast<double>(stats.rays) * 1e-6,
                                                      benchmark::Counter::kIsIterationInvariantRate);
 }

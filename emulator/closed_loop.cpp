@@ -1118,6 +1118,9 @@ void ClosedLoop::write_outputs(const RunResult& r) {
                   {"grazing_skipped", r.trace.grazing_skipped},
                   {"dielectric_reflections", r.trace.dielectric_reflections},
                   {"pruned_paths", r.trace.pruned_paths},
+                  {"lit_facets", r.trace.lit_facets},
+                  {"partial_facets", r.trace.partial_facets},
+                  {"facet_queries", r.trace.facet_queries},
                   {"knob_fallbacks", r.trace.knob_fallbacks}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   rep["sensor"] = {

@@ -417,8 +417,11 @@ int main(int argc, char** argv) {
     cmd->add_option("--theta-deg", t.theta,
                     "Radar direction from +z: A or A:B:N [deg] (default 0)");
     cmd->add_option("--phi-deg", t.phi, "Radar direction from +x toward +y: A or A:B:N [deg]");
-    cmd->add_option("--bounces", bounces, "Bounces: 1 = facet PO only, up to 16 (default 3)")
-        ->check(CLI::Range(1, 16));
+    cmd->add_option("--bounces", bounces,
+                    "Bounces: 1 = facet PO only, up to " +
+                        std::to_string(radar_emu::radar::kMaxRcsBounces) +
+                        " (default 3; the summary counts the ray tubes still bouncing at the cap)")
+        ->check(CLI::Range(1, radar_emu::radar::kMaxRcsBounces));
     cmd->add_option("--rays-per-wavelength", rpw,
                     "Ray-tube density for bounces >= 2 at the highest frequency (default 4)")
         ->check(CLI::PositiveNumber);

@@ -99,6 +99,37 @@ class Progress {
 };
 
 // Physical optics is an asymptotic (high-frequency) method: flag small electrical sizes.
+// Sums the counters of one compute() call into a run's total.
+void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
+  total.facets_lit += one.facets_lit;
+  total.facets_partial += one.facets_partial;
+  total.lit_subfacets += one.lit_subfacets;
+  total.facets_shadowed += one.facets_shadowed;
+  total.facets_edge_on += one.facets_edge_on;
+  total.rays += one.rays;
+  total.ray_hits += one.ray_hits;
+  total.paths += one.paths;
+  total.grazing_stops += one.grazing_stops;
+  total.tubes_cut_off += one.tubes_cut_off;
+  total.occlusion_queries += one.occlusion_queries;
+  total.segments += one.segments;
+  for (std::size_t b = 0; b <= static_cast<std::size_t>(radar::kMaxRcsBounces); ++b)
+    total.paths_by_bounce[b] += one.paths_by_bounce[b];
+}
+
+// Tubes still bouncing at the cap: the return may still be growing (a cavity).
+void warn_cut_off(const radar::RcsStats& stats, int bounces) {
+  if (stats.tubes_cut_off == 0 || stats.rays == 0)
+    return;
+  std::fprintf(stderr,
+               "radar-emu: note: %llu of %llu ray tubes (%.2g %%) were still bouncing at the cap "
+               "of %d bounces; raise --bounces (up to %d) if the return has not converged\n",
+               static_cast<unsigned long long>(stats.tubes_cut_off),
+               static_cast<unsigned long long>(stats.rays),
+               100.0 * static_cast<double>(stats.tubes_cut_off) / static_cast<double>(stats.rays),
+               bounces, radar::kMaxRcsBounces);
+}
+
 void warn_electrical_size(const radar::RcsEngine& engine, double f_min_hz, bool quiet) {
   const double ka =
       2.0 * radar::kPi * f_min_hz / radar::kSpeedOfLight_mps * engine.bounding_radius_m();
@@ -336,6 +367,11 @@ int run_rcs_tool(const RcsToolOptions& o) {
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
   std::vector<radar::ScatteringMatrix> s(nt * np * nf);  // [theta][phi][freq]
   radar::RcsStats stats;
+  // Per direction, for the CSV: how bounce 1 was lit and how many tubes the bounce cap cut off.
+  struct DirectionStats {
+    std::uint64_t facets_lit = 0, facets_partial = 0, tubes_cut_off = 0;
+  };
+  std::vector<DirectionStats> per_direction(nt * np);
   Progress progress(!o.quiet && nt * np > 4, "direction", nt * np);
   const auto t0 = std::chrono::steady_clock::now();
   for (std::size_t it = 0; it < nt; ++it) {
@@ -345,8 +381,11 @@ int run_rcs_tool(const RcsToolOptions& o) {
           o.bistatic_theta_deg
               ? radar::Direction{*o.bistatic_theta_deg * kDegToRad, *o.bistatic_phi_deg * kDegToRad}
               : tx;
+      radar::RcsStats one;
       engine.compute(tx, rx, o.freqs_hz,
-                     std::span<radar::ScatteringMatrix>(s.data() + (it * np + ip) * nf, nf), stats);
+                     std::span<radar::ScatteringMatrix>(s.data() + (it * np + ip) * nf, nf), one);
+      per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off};
+      add_stats(stats, one);
       progress.update(it * np + ip + 1);
     }
   }
@@ -360,9 +399,10 @@ int run_rcs_tool(const RcsToolOptions& o) {
       const std::string n(pol_name(p));
       std::fprintf(f.get(), ",rcs_%s_dbsm,re_%s,im_%s", n.c_str(), n.c_str(), n.c_str());
     }
-    std::fputc('\n', f.get());
+    std::fprintf(f.get(), ",facets_lit,facets_partial,tubes_cut_off\n");
     for (std::size_t it = 0; it < nt; ++it) {
       for (std::size_t ip = 0; ip < np; ++ip) {
+        const DirectionStats& ds = per_direction[it * np + ip];
         for (std::size_t k = 0; k < nf; ++k) {
           const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
           std::fprintf(f.get(), "%.10g,%.10g,%.10g", o.freqs_hz[k], o.theta_deg[it], o.phi_deg[ip]);
@@ -370,7 +410,9 @@ int run_rcs_tool(const RcsToolOptions& o) {
             const std::complex<double> a = component(m, p);
             std::fprintf(f.get(), ",%.6f,%.9e,%.9e", radar::dbsm(a), a.real(), a.imag());
           }
-          std::fputc('\n', f.get());
+          std::fprintf(f.get(), ",%llu,%llu,%llu\n", static_cast<unsigned long long>(ds.facets_lit),
+                       static_cast<unsigned long long>(ds.facets_partial),
+                       static_cast<unsigned long long>(ds.tubes_cut_off));
         }
       }
     }
@@ -474,11 +516,14 @@ int run_rcs_tool(const RcsToolOptions& o) {
 
   if (!o.quiet) {
     std::printf(
-        "%zu directions x %zu frequencies in %.2f s: %llu lit facets, %llu shadowed, %llu rays, "
-        "%llu multi-bounce paths\n",
+        "%zu directions x %zu frequencies in %.2f s: %llu lit facets, %llu partly lit, %llu "
+        "shadowed, %llu rays, %llu multi-bounce paths, %llu tubes cut off at the bounce cap (%d)\n",
         nt * np, nf, elapsed_s, static_cast<unsigned long long>(stats.facets_lit),
+        static_cast<unsigned long long>(stats.facets_partial),
         static_cast<unsigned long long>(stats.facets_shadowed),
-        static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths));
+        static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths),
+        static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
+    warn_cut_off(stats, o.bounces);
     std::printf("wrote %s", o.out_csv.c_str());
     if (!stats_path.empty())
       std::printf(", %s", stats_path.c_str());
@@ -651,8 +696,12 @@ int run_profile_tool(const ProfileToolOptions& o) {
     }
   }
   if (!o.quiet) {
-    std::printf("%zu angle(s) x %zu frequencies in %.2f s (%llu multi-bounce paths)\n", na, nf,
-                elapsed_s, static_cast<unsigned long long>(stats.paths));
+    std::printf(
+        "%zu angle(s) x %zu frequencies in %.2f s (%llu multi-bounce paths, %llu tubes cut off "
+        "at the bounce cap (%d))\n",
+        na, nf, elapsed_s, static_cast<unsigned long long>(stats.paths),
+        static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
+    warn_cut_off(stats, o.bounces);
     std::printf(
         "range resolution c/2B = %.4g m, sample spacing %.4g m, unambiguous window %.4g m\n",
         centre.resolution_m, centre.bin_m, centre.unambiguous_m);

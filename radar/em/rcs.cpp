@@ -75,7 +75,8 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
                 (std::isfinite(s.thickness_m) && s.thickness_m > 0.0),
             name + ": coating thickness must be > 0");
   }
-  require(config_.max_bounces >= 1 && config_.max_bounces <= 16, "bounces must be in 1..16");
+  require(config_.max_bounces >= 1 && config_.max_bounces <= kMaxRcsBounces,
+          "bounces must be in 1.." + std::to_string(kMaxRcsBounces));
   require(std::isfinite(config_.rays_per_wavelength) && config_.rays_per_wavelength > 0.0,
           "rays per wavelength must be > 0");
   require(std::isfinite(config_.coating_reference_hz) && config_.coating_reference_hz >= 0.0,
@@ -87,6 +88,8 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
+    const std::vector<std::int8_t> closed = closed_part_winding(mesh.positions_m, mesh.triangles);
+    const std::int8_t mirrored = glm::determinant(glm::dmat3(m)) < 0.0 ? -1 : 1;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3 tri = mesh.triangles[t];
       auto world = [&](unsigned i) { return glm::dvec3(m * glm::dvec4(mesh.positions_m[i], 1.0)); };
@@ -106,6 +109,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       f.area_m2 = 0.5 * twice_area;
       f.centroid = (f.v0 + f.v1 + f.v2) / 3.0;
       f.surface = mesh.triangle_material[t];
+      f.outward = static_cast<std::int8_t>(closed[t] * mirrored);
       facets_.push_back(f);
       for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
         lo = glm::min(lo, v);
@@ -188,7 +192,6 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
   const glm::dvec3 d_i = -r_t, s = r_r, w = s - d_i;
   const glm::dvec3 tx_h = phi_hat(tx), tx_v = theta_hat(tx);
   const glm::dvec3 rx_h = phi_hat(rx), rx_v = theta_hat(rx);
-  const bool monostatic = glm::length(r_t - r_r) < 1e-12;
   const bool shadowing = config_.shadowing;
   const double eps = epsilon_m_;
 
@@ -196,72 +199,106 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     return std::array<cplx, 4>{0.5 * dot(rx_h, src_h), 0.5 * dot(rx_h, src_v),
                                0.5 * dot(rx_v, src_h), 0.5 * dot(rx_v, src_v)};
   };
-  auto visible = [&](const glm::dvec3& from, const glm::dvec3& toward) {
+  // Is the path from `from` toward the unit direction `toward` (the plane wave's source or the
+  // receiver) free? Callers lift `from` off the surface along its lit normal.
+  auto clear = [&](const glm::dvec3& from, const glm::dvec3& toward) {
     scene::Ray ray;
     ray.origin_m = from;
     ray.direction = toward;
-    ray.t_near_m = eps;
+    ray.t_near_m = 0.0;
     ray.t_far_m = std::numeric_limits<double>::infinity();
     return !scene_->occluded(ray);
   };
 
-  // --- Bounce 1: the exact PO integral over every lit facet. -------------------------------
-  std::vector<FacetTerm> facet_terms(facets_.size());
-  std::vector<std::uint8_t> facet_active(facets_.size(), 0);
-  std::atomic<std::uint64_t> lit{0}, shadowed{0}, edge_on{0}, occl{0};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, facets_.size(), 512),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      std::uint64_t n_lit = 0, n_shadow = 0, n_edge = 0, n_occl = 0;
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const Facet& f = facets_[i];
-                        glm::dvec3 n = f.normal;
-                        double cos_i = -glm::dot(n, d_i);
-                        if (cos_i < 0.0) {  // two-sided: the face the wave meets
-                          n = -n;
-                          cos_i = -cos_i;
-                        }
-                        if (cos_i < 1e-12) {
-                          ++n_edge;
-                          continue;
-                        }
-                        if (shadowing) {
-                          ++n_occl;
-                          bool seen = visible(f.centroid, r_t);
-                          if (seen && !monostatic) {
-                            ++n_occl;
-                            seen = visible(f.centroid, r_r);
-                          }
-                          if (!seen) {
-                            ++n_shadow;
-                            continue;
-                          }
-                        }
-                        const SurfaceModel& sm = surfaces_[f.surface];
-                        const bool pec = sm.kind == SurfaceModel::Kind::kPec;
-                        const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k_ref);
-                        const CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
-                        FacetTerm& t = facet_terms[i];
-                        t.c = coefficients(po_source(e_h, d_i, n, s, rc, pec),
-                                           po_source(e_v, d_i, n, s, rc, pec));
-                        t.area_m2 = f.area_m2;
-                        t.b0_m = glm::dot(w, f.v0);
-                        t.b1_m = glm::dot(w, f.v1);
-                        t.b2_m = glm::dot(w, f.v2);
-                        facet_active[i] = 1;
-                        ++n_lit;
-                      }
-                      lit += n_lit;
-                      shadowed += n_shadow;
-                      edge_on += n_edge;
-                      occl += n_occl;
-                    });
-  std::size_t n_facet_terms = 0;
-  for (std::size_t i = 0; i < facet_terms.size(); ++i) {
-    if (facet_active[i])
-      facet_terms[n_facet_terms++] = facet_terms[i];
+  // --- Bounce 1: classical PO over the lit surface (sbr_core.hpp, FacetLight). ----------------
+  // Lit facets: the exact integral; partly lit facets: the exact integrals of their lit
+  // sub-triangles; dark facets: nothing. No receiver-visibility cut: the lit currents radiate
+  // toward the receiver wherever it is (forward scatter included).
+  // Partly lit facets are resolved as finely as the tubes are spaced (sbr_core.hpp).
+  const double resolution_m = kSpeedOfLight_mps / f_hi / config_.rays_per_wavelength;
+  std::vector<std::vector<FacetTerm>> facet_terms(facets_.size());
+  std::atomic<std::uint64_t> lit{0}, partly{0}, shadowed{0}, edge_on{0}, occl{0}, subs{0};
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, facets_.size(), 512),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        std::uint64_t n_lit = 0, n_partial = 0, n_shadow = 0, n_edge = 0, n_occl = 0, n_subs = 0;
+        auto blocked = [&](const glm::dvec3& p) {
+          ++n_occl;
+          return !clear(p, r_t);
+        };
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          const Facet& f = facets_[i];
+          glm::dvec3 n = f.normal;
+          double cos_i = -glm::dot(n, d_i);
+          if (cos_i < 0.0) {  // two-sided: the face the wave meets
+            n = -n;
+            cos_i = -cos_i;
+          }
+          if (cos_i <= kEdgeOnCos) {
+            ++n_edge;
+            continue;
+          }
+          // The inside of a closed part is never lit (sbr_core.hpp, closed_part_winding).
+          const bool inside = f.outward != 0 && f.outward * glm::dot(f.normal, r_t) <= 0.0;
+          const FacetLight l = !shadowing ? FacetLight::kLit
+                               : inside
+                                   ? FacetLight::kDark
+                                   : facet_light(facet_samples(f.v0, f.v1, f.v2, n, eps), blocked);
+          if (l == FacetLight::kDark) {
+            ++n_shadow;
+            continue;
+          }
+          const SurfaceModel& sm = surfaces_[f.surface];
+          const bool pec = sm.kind == SurfaceModel::Kind::kPec;
+          const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k_ref);
+          const CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
+          const std::array<cplx, 4> c =
+              coefficients(po_source(e_h, d_i, n, s, rc, pec), po_source(e_v, d_i, n, s, rc, pec));
+          auto add = [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
+            FacetTerm t;
+            t.c = c;
+            t.area_m2 = 0.5 * glm::length(glm::cross(b - a, v - a));
+            t.b0_m = glm::dot(w, a);
+            t.b1_m = glm::dot(w, b);
+            t.b2_m = glm::dot(w, v);
+            facet_terms[i].push_back(t);
+          };
+          if (l == FacetLight::kLit) {
+            ++n_lit;
+            add(f.v0, f.v1, f.v2);
+            continue;
+          }
+          ++n_partial;
+          const double longest = std::max(
+              {glm::length(f.v1 - f.v0), glm::length(f.v2 - f.v1), glm::length(f.v0 - f.v2)});
+          const int m = facet_subdivisions(longest, resolution_m);
+          facet_terms[i].reserve(static_cast<std::size_t>(m * m));
+          for_each_lit_subtriangle(
+              f.v0, f.v1, f.v2, n, eps, m, blocked,
+              [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
+                ++n_subs;
+                add(a, b, v);
+              });
+        }
+        lit += n_lit;
+        partly += n_partial;
+        shadowed += n_shadow;
+        edge_on += n_edge;
+        occl += n_occl;
+        subs += n_subs;
+      });
+  std::vector<FacetTerm> facet_list;
+  {
+    std::size_t total = 0;
+    for (const auto& v : facet_terms)
+      total += v.size();
+    facet_list.reserve(total);
+    for (const auto& v : facet_terms)
+      facet_list.insert(facet_list.end(), v.begin(), v.end());
   }
-  facet_terms.resize(n_facet_terms);
   stats.facets_lit += lit;
+  stats.facets_partial += partly;
+  stats.lit_subfacets += subs;
   stats.facets_shadowed += shadowed;
   stats.facets_edge_on += edge_on;
 
@@ -273,12 +310,12 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     const glm::dvec3 tube_u0 = grid.du_m, tube_v0 = grid.dv_m;
     const auto rows = static_cast<std::size_t>(n_rows);
     std::vector<std::vector<PathTerm>> row_terms(rows);
-    std::atomic<std::uint64_t> hits{0}, n_paths{0}, grazing{0}, segments{0};
-    std::array<std::atomic<std::uint64_t>, 17> by_bounce{};
+    std::atomic<std::uint64_t> hits{0}, n_paths{0}, grazing{0}, segments{0}, cut{0};
+    std::array<std::atomic<std::uint64_t>, kMaxRcsBounces + 1> by_bounce{};
     tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t row) {
       row_terms[row].reserve(static_cast<std::size_t>(cols / 8));
-      std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0;
-      std::array<std::uint64_t, 17> l_by{};
+      std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0, l_cut = 0;
+      std::array<std::uint64_t, kMaxRcsBounces + 1> l_by{};
       const glm::dvec3 row_origin = grid.origin_m + static_cast<double>(row) * grid.dv_m;
       for (std::uint64_t col = 0; col < cols; ++col) {
         scene::Ray ray;
@@ -289,51 +326,66 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         glm::dvec3 d = d_i, tube_u = tube_u0, tube_v = tube_v0;
         CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
         double path_m = glm::dot(d_i, ray.origin_m);  // plane-wave phase path at the origin
+        glm::dvec3 last_hit(0.0);
         for (int bounce = 1; bounce <= config_.max_bounces; ++bounce) {
           scene::Hit hit;
           ++l_segments;
           if (!scene_->intersect(ray, hit))
             break;
           ++l_hits;
-          path_m += hit.t_m;
+          if (bounce == 1) {
+            path_m += hit.t_m;
+          } else {  // shot lifted off the surface: back onto the ray from the previous hit
+            hit.position_m = onto_ray(last_hit, d, hit.position_m, hit.normal);
+            path_m += glm::length(hit.position_m - last_hit);
+          }
+          last_hit = hit.position_m;
           glm::dvec3 n = hit.normal;
           double cos_i = -glm::dot(n, d);
           if (cos_i < 0.0) {
             n = -n;
             cos_i = -cos_i;
           }
-          if (cos_i < 1e-6) {
+          if (cos_i < kGrazingCos) {
             ++l_grazing;
             break;
           }
           const SurfaceModel& sm = surfaces_[hit.material_id];
           const bool pec = sm.kind == SurfaceModel::Kind::kPec;
           const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k_ref);
-          if (bounce >= 2) {
-            bool seen = true;
-            if (shadowing) {
-              ++l_occl;
-              seen = visible(hit.position_m, r_r);
-            }
-            if (seen) {
-              // The tube's footprint on this facet: its edge vectors projected along d.
-              const TubeFootprint fp = tube_footprint(tube_u, tube_v, d, n, s);
-              PathTerm t;
-              t.c =
-                  coefficients(po_source(e_h, d, n, s, rc, pec), po_source(e_v, d, n, s, rc, pec));
-              t.area_m2 = fp.area_m2;
-              t.phase_len_m = path_m - glm::dot(s, hit.position_m);
-              t.taper_u_m = fp.taper_u_m;
-              t.taper_v_m = fp.taper_v_m;
-              row_terms[row].push_back(t);
-              ++l_paths;
-              ++l_by[static_cast<std::size_t>(bounce)];
-            }
+          // Bounce 1 is the facets' (above). Later hits radiate when the receiver sees the lit
+          // side of the hit (sbr_core.hpp, kGrazingCos) and nothing is in the way.
+          bool radiate = bounce >= 2 && glm::dot(n, s) >= kGrazingCos;
+          if (radiate && shadowing) {
+            ++l_occl;
+            radiate = clear(hit.position_m + eps * n, s);
           }
-          if (bounce == config_.max_bounces)
-            break;
+          if (radiate) {
+            ++l_paths;
+            ++l_by[static_cast<std::size_t>(bounce)];
+            // The tube's footprint on this facet: its edge vectors projected along d.
+            const TubeFootprint fp = tube_footprint(tube_u, tube_v, d, n, s);
+            PathTerm t;
+            t.c = coefficients(po_source(e_h, d, n, s, rc, pec), po_source(e_v, d, n, s, rc, pec));
+            t.area_m2 = fp.area_m2;
+            t.phase_len_m = path_m - glm::dot(s, hit.position_m);
+            t.taper_u_m = fp.taper_u_m;
+            t.taper_v_m = fp.taper_v_m;
+            row_terms[row].push_back(t);
+          }
           // Specular reflection: direction, tube edges and field (law of reflection).
           const glm::dvec3 d_r = mirror(d, n);
+          if (bounce == config_.max_bounces) {
+            // The cap: is this tube still bouncing (would its reflection meet the target)?
+            scene::Ray next;
+            next.origin_m = hit.position_m + eps * n;
+            next.direction = d_r;
+            next.t_near_m = 0.0;
+            next.t_far_m = std::numeric_limits<double>::infinity();
+            ++l_occl;
+            l_cut += scene_->occluded(next) ? 1u : 0u;
+            break;
+          }
           const CVec e_v_r = reflect_field(e_v, d, d_r, n, rc, pec);
           const CVec e_h_r = reflect_field(e_h, d, d_r, n, rc, pec);
           if (on_bounce != nullptr) {
@@ -354,15 +406,16 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           tube_u = mirror(tube_u, n);
           tube_v = mirror(tube_v, n);
           d = d_r;
-          ray.origin_m = hit.position_m;
+          ray.origin_m = hit.position_m + eps * n;  // lifted to the lit side: no self-hit
           ray.direction = d;
-          ray.t_near_m = eps;
+          ray.t_near_m = 0.0;
         }
       }
       hits += l_hits;
       segments += l_segments;
       n_paths += l_paths;
       grazing += l_grazing;
+      cut += l_cut;
       occl += l_occl;
       for (std::size_t b = 0; b < l_by.size(); ++b)
         by_bounce[b] += l_by[b];
@@ -378,7 +431,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     stats.segments += segments;
     stats.paths += n_paths;
     stats.grazing_stops += grazing;
-    for (std::size_t b = 0; b < 17; ++b)
+    stats.tubes_cut_off += cut;
+    for (std::size_t b = 0; b < by_bounce.size(); ++b)
       stats.paths_by_bounce[b] += by_bounce[b];
   }
   stats.occlusion_queries += occl;
@@ -396,7 +450,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     uniform = std::abs(freqs_hz[i] - (freqs_hz[0] + df * static_cast<double>(i))) <= 1e-9 * f_hi;
   }
   const double k_of_hz = 2.0 * kPi / kSpeedOfLight_mps;
-  const std::size_t n_terms = facet_terms.size() + path_terms.size();
+  const std::size_t n_terms = facet_list.size() + path_terms.size();
   const std::size_t n_chunks = std::clamp<std::size_t>((n_terms + 1023) / 1024, 1, 64);
   const std::size_t chunk = (n_terms + n_chunks - 1) / n_chunks;
   std::vector<std::array<cplx, 4>> partial(n_chunks * nf, std::array<cplx, 4>{});
@@ -404,8 +458,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     std::array<cplx, 4>* acc = partial.data() + ci * nf;
     const std::size_t begin = ci * chunk, end = std::min(n_terms, begin + chunk);
     for (std::size_t ti = begin; ti < end; ++ti) {
-      if (ti < facet_terms.size()) {
-        const FacetTerm& t = facet_terms[ti];
+      if (ti < facet_list.size()) {
+        const FacetTerm& t = facet_list[ti];
         for (std::size_t fi = 0; fi < nf; ++fi) {
           const cplx integral =
               triangle_phase_integral(t.area_m2, t.b0_m, t.b1_m, t.b2_m, k_of_hz * freqs_hz[fi]);
@@ -414,7 +468,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         }
         continue;
       }
-      const PathTerm& t = path_terms[ti - facet_terms.size()];
+      const PathTerm& t = path_terms[ti - facet_list.size()];
       if (!uniform) {
         for (std::size_t fi = 0; fi < nf; ++fi) {
           const double k = k_of_hz * freqs_hz[fi];

@@ -4,17 +4,23 @@
 // cavity", IEEE TAP 37(2), 1989), fully polarimetric, monostatic or bistatic, over any set of
 // frequencies from one trace.
 //
-//   bounce 1   The exact PO integral over every lit facet (radar/em/facet_po.hpp): no ray-density
-//              error. A facet is lit when the wave meets it (both sides of a facet can be lit:
-//              sheets such as plates are two-sided) and the ray from its centroid toward the
-//              transmitter (and, bistatic, toward the receiver) is not occluded.
+//   bounce 1   Physical optics as classical PO has it: the currents the transmitter's wave
+//              induces on the lit surface radiate toward the receiver with no receiver-visibility
+//              cut (which gives forward scatter and the shadow-boundary terms). Lighting is the
+//              rule shared with the frame tracer (radar/em/sbr_core.hpp, FacetLight): a facet
+//              whose seven visibility samples all see the transmitter contributes the exact PO
+//              integral over the triangle (radar/em/facet_po.hpp: no ray-density error); a
+//              partly seen one is cut into congruent sub-triangles of about lambda / 4, each
+//              contributing its exact integral when its centroid sees the transmitter; one not
+//              seen at all contributes nothing. Both sides of a facet can be lit (sheets such
+//              as plates are two-sided).
 //   bounce 2+  A grid of parallel ray tubes (the incident plane wave, `rays_per_wavelength` along
 //              each axis at the highest frequency) is traced by geometrical optics; the field is
 //              carried through every reflection with its polarisation (PEC: R_perp = -1,
 //              R_par = +1; dielectric and coated surfaces: Fresnel coefficients); at every hit
 //              after the first the tube's footprint radiates by PO toward the receiver when the
-//              receiver sees the hit point. The first hit of each tube radiates nothing (bounce 1
-//              is the facets' job).
+//              receiver sees the lit side of the hit (n.s >= kGrazingCos, no obstruction). A
+//              tube stops at a grazing hit (cos theta_i < kGrazingCos) or at the bounce cap.
 //   sweeps     Facet geometry and ray paths do not depend on frequency: they are found once per
 //              direction and every frequency is summed from them.
 //
@@ -61,8 +67,13 @@ struct ScatteringMatrix {
   std::complex<double> hh{0.0, 0.0}, hv{0.0, 0.0}, vh{0.0, 0.0}, vv{0.0, 0.0};
 };
 
+/// The largest RcsConfig::max_bounces.
+inline constexpr int kMaxRcsBounces = 64;
+
 struct RcsConfig {
-  int max_bounces = 3;  ///< 1: facet PO only; n >= 2: ray tubes carry bounces 2..n (<= 16)
+  /// 1: bounce-1 PO only (no ray tube); n >= 2: ray tubes carry bounces 2..n
+  /// (n <= kMaxRcsBounces).
+  int max_bounces = 3;
   /// Ray tubes per wavelength along each axis of the incident wavefront, at the highest
   /// frequency of a call. May be below 1: a tube's footprint integral is exact on flat facets,
   /// so coarse tubes lose accuracy only at edges (check convergence by doubling it).
@@ -76,16 +87,21 @@ struct RcsConfig {
 };
 
 struct RcsStats {
-  std::uint64_t facets_lit = 0;
-  std::uint64_t facets_shadowed = 0;
-  std::uint64_t facets_edge_on = 0;  ///< |cos theta_i| < 1e-12: contribute nothing
+  std::uint64_t facets_lit = 0;       ///< FacetLight::kLit: exact facet PO
+  std::uint64_t facets_partial = 0;   ///< FacetLight::kPartial: cut into sub-triangles
+  std::uint64_t lit_subfacets = 0;    ///< lit sub-triangles of the partly lit facets
+  std::uint64_t facets_shadowed = 0;  ///< FacetLight::kDark
+  std::uint64_t facets_edge_on = 0;   ///< |cos theta_i| <= kEdgeOnCos: contribute nothing
   std::uint64_t rays = 0;
   std::uint64_t ray_hits = 0;
-  std::uint64_t paths = 0;          ///< tube exits radiated (bounces >= 2)
-  std::uint64_t grazing_stops = 0;  ///< tubes stopped at |cos theta_i| < 1e-6
+  std::uint64_t paths = 0;          ///< tube footprints radiated (bounces >= 2)
+  std::uint64_t grazing_stops = 0;  ///< tubes stopped at cos theta_i < kGrazingCos
+  /// Tubes still bouncing at the cap: after their max_bounces-th reflection the reflected ray
+  /// meets the target again (what a higher cap would add; 0 when no tube was traced).
+  std::uint64_t tubes_cut_off = 0;
   std::uint64_t occlusion_queries = 0;
   std::uint64_t segments = 0;  ///< intersection queries of the ray tubes (rays x bounces)
-  std::uint64_t paths_by_bounce[17] = {};  ///< [n]: exits after n bounces
+  std::uint64_t paths_by_bounce[kMaxRcsBounces + 1] = {};  ///< [n]: footprints at bounce n >= 2
 };
 
 /// One reflection of a ray tube (for tests of the GO tracer). Reported from worker threads.
@@ -139,6 +155,9 @@ class RcsEngine {
     glm::dvec3 v0, v1, v2, centroid, normal;
     double area_m2;
     std::uint16_t surface;
+    /// +1: `normal` points out of the closed part the facet belongs to, -1: into it, 0: open
+    /// part (sbr_core.hpp, closed_part_winding).
+    std::int8_t outward;
   };
   const scene::Scene* scene_;
   std::vector<SurfaceModel> surfaces_;

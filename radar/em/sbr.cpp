@@ -10,6 +10,7 @@
 #include <string>
 
 #include "radar/constants.hpp"
+#include "radar/em/facet_po.hpp"
 
 namespace radar_emu::radar {
 
@@ -125,10 +126,140 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   bundles_.reserve(n_targets_);
   unbundled_in_range_.reserve(n_targets_);
   counts_.assign(n_az_ * n_el_ + n_targets_ * c.max_rays_per_target, 0);
+  facet_first_.assign(desc.objects.size() + 1, 0);
+  for (std::size_t i = 0; i < desc.objects.size(); ++i) {
+    facet_first_[i + 1] =
+        facet_first_[i] + (is_target_[i] ? desc.objects[i].mesh.triangles.size() : 0);
+  }
+  facet_outward_.assign(facet_first_.back(), 0);
+  for (std::size_t i = 0; i < desc.objects.size(); ++i) {
+    if (!is_target_[i])
+      continue;
+    const scene::Mesh& mesh = desc.objects[i].mesh;
+    const std::vector<std::int8_t> closed = closed_part_winding(mesh.positions_m, mesh.triangles);
+    std::copy(closed.begin(), closed.end(),
+              facet_outward_.begin() + static_cast<std::ptrdiff_t>(facet_first_[i]));
+  }
+  facet_light_.assign(facet_first_.back(), kLightByRays);
+  facet_out_.assign(facet_first_.back(), Contribution{});
+  frame_world_from_body_.assign(desc.objects.size(), glm::dmat4(1.0));
 }
 
 std::size_t SbrTracer::max_contributions() const noexcept {
-  return counts_.size() * static_cast<std::size_t>(config_.max_bounces);
+  return counts_.size() * static_cast<std::size_t>(config_.max_bounces) + facet_out_.size();
+}
+
+namespace {
+// How far a ray leaving a surface at `p` starts off it, along the lit normal [m]: about ten float
+// ulps of the coordinates (traversal is float), so the ray cannot meet the surface it leaves
+// however grazing; small enough (1 um near the origin, 2 mm at 2 km) that the lifted ray
+// misses no edge that the unlifted one meets (onto_ray puts its hit back on the unlifted ray).
+double surface_offset_m(const glm::dvec3& p) noexcept {
+  return 1e-6 * (1.0 + glm::length(p));
+}
+}  // namespace
+
+std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
+                                   double resolution_m, Contribution& out,
+                                   std::uint64_t& queries) const noexcept {
+  const SbrConfig& c = config_;
+  const scene::Mesh& mesh = scene_->description().objects[id].mesh;
+  const glm::uvec3 tri = mesh.triangles[t];
+  const std::uint16_t material = mesh.triangle_material[t];
+  const auto dark = static_cast<std::uint8_t>(FacetLight::kDark);
+  if (!has_surface_[material])
+    return dark;  // no specular model: its rays end without radiating
+  const glm::dmat4& xf = frame_world_from_body_[id];
+  auto world = [&](unsigned i) { return glm::dvec3(xf * glm::dvec4(mesh.positions_m[i], 1.0)); };
+  const glm::dvec3 v0 = world(tri.x), v1 = world(tri.y), v2 = world(tri.z);
+  const glm::dvec3 nn = glm::cross(v1 - v0, v2 - v0);
+  const double twice_area = glm::length(nn);
+  const double longest =
+      std::max({glm::length(v1 - v0), glm::length(v2 - v1), glm::length(v0 - v2)});
+  if (!(twice_area > 1e-12 * longest * longest))
+    return dark;  // degenerate: rays do not meet it
+  const glm::dvec3 centroid = (v0 + v1 + v2) / 3.0;
+  const glm::dvec3 to_radar = pose.position_m - centroid;
+  const double range_m = glm::length(to_radar);
+  const glm::dvec3 s = to_radar / range_m, d = -s;
+  glm::dvec3 n = nn / twice_area;
+  double cos_i = glm::dot(n, s);
+  // The inside of a closed part is never lit (sbr_core.hpp, closed_part_winding); a mirroring
+  // placement turns the winding over.
+  const int outward =
+      facet_outward_[facet_first_[id] + t] * (glm::determinant(glm::dmat3(xf)) < 0.0 ? -1 : 1);
+  if (outward != 0 && outward * cos_i <= 0.0)
+    return dark;
+  if (cos_i < 0.0) {  // two-sided: the face the wave meets
+    n = -n;
+    cos_i = -cos_i;
+  }
+  if (cos_i <= kEdgeOnCos)
+    return dark;
+  const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
+  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+  const AzEl ae = azel_from_direction(antenna_from_world * d);
+  // Outside the view or the range, or too near for a plane wave over it: the rays sample it.
+  const double rho_m = std::max(
+      {glm::length(v0 - centroid), glm::length(v1 - centroid), glm::length(v2 - centroid)});
+  const bool in_view = glm::dot(pose.world_from_antenna[0], d) > 0.0 &&
+                       ae.azimuth_rad >= c.azimuth_min_rad && ae.azimuth_rad <= c.azimuth_max_rad &&
+                       ae.elevation_rad >= c.elevation_min_rad &&
+                       ae.elevation_rad <= c.elevation_max_rad;
+  if (!in_view || range_m > c.max_range_m || !facet_in_far_field(rho_m, range_m, k))
+    return kLightByRays;
+  const double offset_m = surface_offset_m(centroid);
+  auto blocked = [&](const glm::dvec3& p) {
+    ++queries;
+    scene::Ray ray;
+    const glm::dvec3 to = pose.position_m - p;
+    ray.t_far_m = glm::length(to);
+    ray.origin_m = p;
+    ray.direction = to / ray.t_far_m;
+    ray.t_near_m = 0.0;
+    return scene_->occluded(ray);
+  };
+  const FacetLight light = facet_light(facet_samples(v0, v1, v2, n, offset_m), blocked);
+  if (light == FacetLight::kDark)
+    return dark;
+  // The exact PO integral (facet_po.hpp) over the facet, or over its lit sub-triangles, in the
+  // local plane wave of the centroid direction, phase referred to the centroid:
+  // integral exp(j k (s - d).(r' - c)) dS' times exp(-j k 2 R) of the centroid's two-way path
+  // (sbr_core.hpp's footprint integral, over whole triangles).
+  const glm::dvec3 g = k * (s - d);
+  std::complex<double> integral{0.0, 0.0};
+  if (light == FacetLight::kLit) {
+    integral = triangle_phase_integral(v0 - centroid, v1 - centroid, v2 - centroid, g);
+  } else {
+    const int m = facet_subdivisions(longest, resolution_m);
+    (void)for_each_lit_subtriangle(
+        v0, v1, v2, n, offset_m, m, blocked,
+        [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& e) {
+          integral += triangle_phase_integral(a - centroid, b - centroid, e - centroid, g);
+        });
+    if (integral == std::complex<double>(0.0, 0.0))
+      return dark;  // no lit sub-triangle
+  }
+  const SurfaceModel& sm = surfaces_[material];
+  const bool pec = sm.kind == SurfaceModel::Kind::kPec;
+  const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
+  const glm::dvec3 boresight = pose.world_from_antenna[0], up = -pose.world_from_antenna[2];
+  const bool tx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kVH;
+  const bool rx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kHV;
+  const CVec e{pol_vector(tx_h, up, boresight, d), glm::dvec3(0.0)};
+  const glm::dvec3 p = pol_vector(rx_h, up, boresight, d);
+  const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
+  out.amplitude = po_amplitude_m(k, p, po_source(e, d, n, s, rc, pec), 1.0) * integral *
+                  std::polar(1.0, -2.0 * k * range_m);
+  out.range_m = range_m;
+  out.range_spread_m = 0.0;
+  out.radial_velocity_mps = glm::dot(v_obj - pose.velocity_mps, d);
+  out.azimuth_rad = ae.azimuth_rad;
+  out.elevation_rad = ae.elevation_rad;
+  out.object_id = id;
+  out.bounces = 1;
+  out.coherent = true;
+  return static_cast<std::uint8_t>(light);
 }
 
 SbrTracer::Frame SbrTracer::frame_for(const TraceKnobs& knobs, TraceStats* stats) const noexcept {
@@ -289,11 +420,12 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
   bool met_target = false;
   std::uint32_t path_owner = owner;  // the first target met (header: ownership)
   count = 0;
+  glm::dvec3 last_hit = origin;
   for (int bounce = 0; bounce < frame.max_bounces; ++bounce) {
     scene::Ray ray;
     ray.origin_m = origin;
     ray.direction = d;
-    ray.t_near_m = bounce == 0 ? 0.0 : 1e-3 * (1.0 + glm::length(origin) * 1e-3);
+    ray.t_near_m = 0.0;  // reflected rays start lifted off the surface (below)
     // Range budget: a return counts only if half its total path is within max_range, so the
     // first segment may run max_range and later ones what is left of 2 max_range.
     ray.t_far_m = bounce == 0 ? c.max_range_m : 2.0 * c.max_range_m - path_m;
@@ -317,14 +449,20 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
     }
     const RadarMaterial& mat = materials_[hit.material_id];
     const glm::dvec3 v_obj = scene_->objects()[hit.object_id].velocity_mps;
-    path_m += hit.t_m;
+    if (bounce == 0) {
+      path_m += hit.t_m;
+    } else {  // shot lifted off the surface: back onto the ray from the previous hit
+      hit.position_m = onto_ray(last_hit, d, hit.position_m, hit.normal);
+      path_m += glm::length(hit.position_m - last_hit);
+    }
+    last_hit = hit.position_m;
     path_rate += glm::dot(v_obj - v_prev, d);
     glm::dvec3 n = hit.normal;
     if (glm::dot(n, d) > 0.0)
       n = -n;  // the face the ray meets
     const double n_dot_d = glm::dot(n, d);
     const double cos_i = -n_dot_d;
-    if (cos_i < 1e-3) {
+    if (cos_i < kGrazingCos) {
       ++stats.grazing_skipped;
       return;
     }
@@ -361,20 +499,30 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
     const SurfaceModel& sm = surfaces_[hit.material_id];
     const bool pec = sm.kind == SurfaceModel::Kind::kPec;
     const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
+    const double off = surface_offset_m(hit.position_m);
     if (met_target) {
       // PO radiation of the footprint back to the radar (sbr_core.hpp).
       const glm::dvec3 to_radar = pose.position_m - hit.position_m;
       const double back_m = glm::length(to_radar);
       const glm::dvec3 s = to_radar / back_m;
-      bool visible = glm::dot(n, s) > 0.0;
-      if (visible && bounce > 0) {
-        scene::Ray shadow;
-        const double off = 1e-3 * (1.0 + glm::length(hit.position_m) * 1e-3);
-        shadow.origin_m = hit.position_m;
-        shadow.direction = s;
-        shadow.t_near_m = off;
-        shadow.t_far_m = back_m - off;
-        visible = !scene_->occluded(shadow);
+      bool visible = true;
+      if (bounce == 0) {
+        // A bundle's first hit on its own target: the facet pass has bounce 1 (header) unless
+        // it left this facet to the rays.
+        visible =
+            terrain || facet_light_[facet_first_[hit.object_id] + hit.primitive_id] == kLightByRays;
+      } else {
+        // Later bounces: the radar must see the lit side of the hit (sbr_core.hpp, kGrazingCos).
+        visible = glm::dot(n, s) >= kGrazingCos;
+        if (visible) {
+          scene::Ray shadow;
+          shadow.origin_m = hit.position_m + off * n;
+          const glm::dvec3 to = pose.position_m - shadow.origin_m;
+          shadow.t_far_m = glm::length(to);
+          shadow.direction = to / shadow.t_far_m;
+          shadow.t_near_m = 0.0;
+          visible = !scene_->occluded(shadow);
+        }
       }
       if (visible) {
         const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, s);
@@ -404,7 +552,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
     d = d_r;
     u = mirror(u, n);
     v = mirror(v, n);
-    origin = hit.position_m;
+    origin = hit.position_m + off * n;  // lifted to the lit side: no self-hit, however grazing
     v_prev = v_obj;
   }
 }
@@ -448,7 +596,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       continue;
     Bundle b;
     bool coarsened = false;
-    if (!bundle_for(pose, id, target_spacing(knobs, id, &stats), b, coarsened)) {
+    const double spacing_m = target_spacing(knobs, id, &stats);
+    if (!bundle_for(pose, id, spacing_m, b, coarsened)) {
       const scene::ObjectState& o = objects[id];
       const glm::dvec3 nearest = glm::clamp(pose.position_m, o.bounds_min_m, o.bounds_max_m);
       if (glm::length(nearest - pose.position_m) <= c.max_range_m)
@@ -457,12 +606,43 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     }
     stats.coarsened_bundles += coarsened ? 1 : 0;
     b.first_ray = next_ray;
+    b.spacing_m = spacing_m;
     next_ray += b.n_az * b.n_el;
     bundles_.push_back(b);
     bundled_[id] = 1;
     ++stats.target_bundles;
   }
   frame.unbundled_in_range = unbundled_in_range_;
+  // Bounce 1 of every facet of the bundled targets (header), before the rays that read it: one
+  // parallel loop over all their facets (bundle b's run from its first_facet).
+  std::size_t n_facets = 0;
+  for (Bundle& bd : bundles_) {
+    frame_world_from_body_[bd.object_id] = scene_->world_from_body(bd.object_id);
+    bd.first_facet = n_facets;
+    n_facets += facet_first_[bd.object_id + 1] - facet_first_[bd.object_id];
+  }
+  std::atomic<std::uint64_t> lit_facets{0}, partial_facets{0}, facet_queries{0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_facets, 64),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      std::uint64_t queries = 0, n_lit = 0, n_partial = 0;
+                      std::size_t b = 0;
+                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                        while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_facet)
+                          ++b;
+                        const Bundle& bd = bundles_[b];
+                        const std::size_t t = i - bd.first_facet;
+                        const std::size_t slot = facet_first_[bd.object_id] + t;
+                        const std::uint8_t l = facet_pass(pose, bd.object_id, t, bd.spacing_m,
+                                                          facet_out_[slot], queries);
+                        facet_light_[slot] = l;
+                        n_lit += l == static_cast<std::uint8_t>(FacetLight::kLit) ? 1u : 0u;
+                        n_partial += l == static_cast<std::uint8_t>(FacetLight::kPartial) ? 1u : 0u;
+                      }
+                      facet_queries += queries;
+                      lit_facets += n_lit;
+                      partial_facets += n_partial;
+                    });
+
   const std::size_t rays = next_ray;
   const auto per_ray = static_cast<std::size_t>(c.max_bounces);
   const std::size_t usable_rays = std::min({rays, out.size() / per_ray, counts_.size()});
@@ -503,6 +683,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   stats.grazing_skipped += grazing.load();
   stats.dielectric_reflections += dielectric.load();
   stats.pruned_paths += pruned.load();
+  stats.facet_queries += facet_queries.load();
   stats.dropped_contributions += (rays - usable_rays) * per_ray;  // upper bound, counted
   // Compact the fixed per-ray slots in ray order: deterministic whatever the threading.
   std::size_t n = 0;
@@ -510,6 +691,20 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     for (std::uint8_t k = 0; k < counts_[i]; ++k)
       out[n++] = out[i * per_ray + k];
   }
+  // Then the lit and partly lit facets, in object and triangle order.
+  for (const Bundle& bd : bundles_) {
+    for (std::size_t f = facet_first_[bd.object_id]; f < facet_first_[bd.object_id + 1]; ++f) {
+      if (facet_light_[f] != static_cast<std::uint8_t>(FacetLight::kLit) &&
+          facet_light_[f] != static_cast<std::uint8_t>(FacetLight::kPartial))
+        continue;
+      if (n < out.size())
+        out[n++] = facet_out_[f];
+      else
+        ++stats.dropped_contributions;
+    }
+  }
+  stats.lit_facets += lit_facets.load();
+  stats.partial_facets += partial_facets.load();
   stats.contributions += n;
   return n;
 }

@@ -16,6 +16,16 @@
 //     target's bundle count only paths owned by that target; terrain-grid rays count only paths
 //     owned by a target that has no bundle this frame (outside the field of view), so a target in
 //     view is sampled by its own, finer bundle alone.
+//   - Bounce 1 follows the lighting rule shared with the RCS engine (sbr_core.hpp, FacetLight):
+//     every frame, each facet of a target that has a bundle is judged against the radar's phase
+//     centre. Inside the field of view, within range and in its own far field
+//     (facet_in_far_field), a facet whose seven visibility samples all see the radar returns
+//     the exact PO integral over the triangle, a partly seen one that of its lit
+//     sub-triangles, each as one contribution at the facet's centroid; one not seen at all
+//     returns nothing; the bundle's first hits on such facets radiate nothing. Facets near
+//     field, out of view or out of range are left to the rays: their first hits radiate their
+//     tube footprints. Facet contributions follow all ray contributions in the output, in
+//     facet order.
 //   - A path radiates coherently (PO toward the radar) at every hit from its first target hit on:
 //     radar -> target -> ... and radar -> ground -> target -> ... (the target-ground double
 //     bounce, both orders) are all counted, each by the bundle of its first target (a bundle
@@ -34,9 +44,9 @@
 //     target are lost (counted in TraceStats::pruned_paths with every culled segment); the
 //     cull spares the long, grazing upward queries of rays reflected off the ground.
 //   - Every return is labelled with its path's owner (Contribution::object_id), whichever
-//     surface the path last met: radar -> target -> ground -> radar is the target's echo. A surface
-//     with no specular model (radar::surface_model() nullopt, e.g. the placeholder "soil") ends the
-//     ray.
+//     surface the path last met: radar -> target -> ground -> radar is the target's echo.
+//   - A surface with no specular model (radar::surface_model() nullopt, e.g. the placeholder
+//     "soil") ends the ray.
 
 #include <complex>
 #include <cstddef>
@@ -156,6 +166,9 @@ struct TraceStats {
   /// Rays ended before a target because their next segment could reach no countable target
   /// (header: ownership).
   std::uint64_t pruned_paths = 0;
+  std::uint64_t lit_facets = 0;      ///< facets returned whole by exact PO (bounce 1, header)
+  std::uint64_t partial_facets = 0;  ///< partly lit facets returned by their lit sub-triangles
+  std::uint64_t facet_queries = 0;   ///< occlusion queries of the bounce-1 lighting rule
 };
 
 class SbrTracer {
@@ -201,8 +214,10 @@ class SbrTracer {
   std::vector<int> sigma0_row_;
   struct Bundle {
     std::uint32_t object_id = 0;
+    double spacing_m = 0;  ///< the configured (or knob) spacing at the target, before coarsening
     double az0_rad = 0, el0_rad = 0, daz_rad = 0, del_rad = 0;
     std::size_t n_az = 0, n_el = 0, first_ray = 0;
+    std::size_t first_facet = 0;  ///< in this frame's run over the bundled targets' facets
   };
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
@@ -220,6 +235,25 @@ class SbrTracer {
   void trace_ray(const RadarPose& pose, const Frame& frame, double az, double el, double daz,
                  double del, std::uint32_t owner, bool terrain, Contribution* slot,
                  std::uint8_t& count, TraceStats& stats) const noexcept;
+
+  /// The bounce-1 light (FacetLight, or kLightByRays) of triangle t of target `id` this frame,
+  /// and its contribution when lit or partly lit, at facet_first_[id] + t;
+  /// facet_first_[id + 1] - facet_first_[id] is the object's triangle count for targets, 0
+  /// otherwise.
+  static constexpr std::uint8_t kLightByRays = 255;  ///< near field or out of view: the rays'
+  std::vector<std::size_t> facet_first_;
+  /// Per facet: +1 / -1 when its wound normal points out of / into its closed part, 0: open part
+  /// (sbr_core.hpp, closed_part_winding; body frame).
+  std::vector<std::int8_t> facet_outward_;
+  std::vector<std::uint8_t> facet_light_;
+  std::vector<Contribution> facet_out_;
+  std::vector<glm::dmat4> frame_world_from_body_;  ///< per object, this frame (bundled targets)
+  /// Bounce 1 of triangle `t` of target `id` for a radar at `pose` (header): its light, and
+  /// its contribution in `out` when lit or partly lit. Adds its occlusion queries to `queries`.
+  /// Partly lit facets are cut to `resolution_m` (sbr_core.hpp, facet_subdivisions).
+  [[nodiscard]] std::uint8_t facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
+                                        double resolution_m, Contribution& out,
+                                        std::uint64_t& queries) const noexcept;
 
   std::vector<std::uint8_t> is_target_;  ///< per object: has a conducting triangle
   std::size_t n_targets_ = 0;

@@ -17,9 +17,13 @@
 // (physical optics). A PEC plate of area A at normal incidence gives S = -j k A / sqrt(pi).
 // Pure computation, real-time safe (no allocation, no exceptions), thread-safe.
 
+#include <array>
+#include <cmath>
 #include <complex>
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <span>
+#include <vector>
 
 namespace radar_emu::radar {
 
@@ -130,5 +134,126 @@ struct TubeFootprint {
                                                   const glm::dvec3& receive_polarisation,
                                                   const CVec& source,
                                                   double footprint_integral_m2) noexcept;
+
+// --- Visibility rules shared by both engines (docs/validation.md, "Visibility rules"). ---------
+
+/// A ray tube meeting a surface at cos(theta_i) under this stops there (no footprint, no
+/// reflection); at bounces after the first, a footprint radiates toward a receiver only when the
+/// receiver sees its lit side at n.s >= kGrazingCos. The same bound on entry and exit keeps the
+/// rule reciprocal (a path cut at a grazing exit is the reverse of one cut at a grazing entry).
+inline constexpr double kGrazingCos = 1e-3;
+/// Reflected rays are shot from the hit lifted a small offset along the lit normal (no
+/// self-hit, however grazing); the hit they find is then moved back onto the unlifted ray:
+/// the point where the ray from `origin` along unit `d` meets the plane through `hit` of unit
+/// normal `normal` (unchanged when the ray runs parallel to that plane). So the lift changes no
+/// path length.
+[[nodiscard]] inline glm::dvec3 onto_ray(const glm::dvec3& origin, const glm::dvec3& d,
+                                         const glm::dvec3& hit, const glm::dvec3& normal) noexcept {
+  const double n_d = glm::dot(normal, d);
+  if (std::abs(n_d) < 1e-9)
+    return hit;
+  return origin + d * (glm::dot(normal, hit - origin) / n_d);
+}
+
+/// A facet met at |cos theta_i| <= kEdgeOnCos is edge-on: no bounce-1 PO at all.
+inline constexpr double kEdgeOnCos = 1e-12;
+
+/// How the incident wave lights a facet at bounce 1 (its first hits), judged by visibility
+/// samples (facet_samples) toward the source (the transmitter's plane wave or the radar's phase
+/// centre). Both engines return, at bounce 1, exactly what this rule gives; their ray tubes
+/// carry bounces 2 and up only.
+enum class FacetLight : std::uint8_t {
+  kLit,      ///< every sample sees the source: the exact PO integral over the whole facet
+  kPartial,  ///< some samples see it, some do not: the facet is cut into m x m congruent
+             ///< sub-triangles (facet_subdivisions) and each whose lifted centroid sees the
+             ///< source contributes its exact PO integral
+  kDark,     ///< no sample sees it: no bounce-1 return
+};
+
+/// The visibility samples of a facet: its centroid, then its three vertices and three edge
+/// midpoints each moved kFacetSampleInset of the way toward the centroid, all lifted offset_m
+/// along the unit normal of the lit side (toward the source): a ray from a sample toward the
+/// source leaves the facet's plane and cannot meet the facet itself, however grazing.
+inline constexpr std::size_t kFacetSamples = 7;
+inline constexpr double kFacetSampleInset = 1e-2;
+[[nodiscard]] std::array<glm::dvec3, kFacetSamples> facet_samples(const glm::dvec3& v0,
+                                                                  const glm::dvec3& v1,
+                                                                  const glm::dvec3& v2,
+                                                                  const glm::dvec3& lit_normal,
+                                                                  double offset_m) noexcept;
+
+/// Closed parts of a mesh (setup; allocates). For each triangle: +1 when it belongs to a closed,
+/// consistently wound part wound outward (positive signed volume), -1 when wound inward, 0 when
+/// its part is open (a boundary edge, an edge shared by more than two triangles, inconsistent
+/// winding, a degenerate triangle) or encloses no volume. Parts are the sets of triangles joined
+/// by shared edges, vertices welded by exact position. The inside of a closed part is never lit
+/// from outside, so a facet of a closed part whose outward side faces away from the source is
+/// dark at bounce 1 without a visibility sample: the seven samples would all be blocked by the
+/// part itself; both engines take this shortcut.
+[[nodiscard]] std::vector<std::int8_t> closed_part_winding(std::span<const glm::vec3> positions,
+                                                           std::span<const glm::uvec3> triangles);
+
+/// The bounce-1 lighting rule: `blocked(origin)` tells whether the path from `origin` toward the
+/// source is obstructed. All samples clear: kLit; all blocked: kDark; otherwise kPartial (stops
+/// as soon as both have been seen). Real-time safe when `blocked` is.
+template <class Blocked>
+[[nodiscard]] FacetLight facet_light(const std::array<glm::dvec3, kFacetSamples>& samples,
+                                     Blocked&& blocked) noexcept {
+  std::size_t clear = 0;
+  for (std::size_t i = 0; i < kFacetSamples; ++i) {
+    clear += blocked(samples[i]) ? 0u : 1u;
+    if (clear != 0 && clear != i + 1)
+      return FacetLight::kPartial;
+  }
+  return clear == kFacetSamples ? FacetLight::kLit : FacetLight::kDark;
+}
+
+/// Sub-triangles per edge of a partly lit facet: its longest edge over the engine's ray spacing
+/// (`resolution_m`: the RCS engine's tube spacing, the tracer's bundle spacing at the target),
+/// rounded up, in 1..kMaxFacetSubdivisions. The shadow boundary across a partly lit facet is
+/// so resolved as finely as the ray tubes resolve everything else (the same fidelity knob), to
+/// a sixteenth of the facet at most.
+inline constexpr int kMaxFacetSubdivisions = 16;
+[[nodiscard]] int facet_subdivisions(double longest_edge_m, double resolution_m) noexcept;
+
+/// Calls lit(a, b, c) for every one of the m x m congruent sub-triangles of (v0, v1, v2) (the
+/// barycentric grid of step 1/m) whose centroid, lifted offset_m along lit_normal, is not
+/// `blocked` (the same test as facet_light). Returns the number of occlusion tests (m^2).
+template <class Blocked, class Lit>
+std::size_t for_each_lit_subtriangle(const glm::dvec3& v0, const glm::dvec3& v1,
+                                     const glm::dvec3& v2, const glm::dvec3& lit_normal,
+                                     double offset_m, int m, Blocked&& blocked,
+                                     Lit&& lit) noexcept {
+  const glm::dvec3 e1 = (v1 - v0) / static_cast<double>(m), e2 = (v2 - v0) / static_cast<double>(m);
+  const glm::dvec3 lift = offset_m * lit_normal;
+  std::size_t tests = 0;
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; i + j < m; ++j) {
+      const glm::dvec3 p = v0 + static_cast<double>(i) * e1 + static_cast<double>(j) * e2;
+      // "Up" triangle (i, j), (i + 1, j), (i, j + 1); "down" (i + 1, j), (i + 1, j + 1), (i, j +
+      // 1).
+      const glm::dvec3 a = p, b = p + e1, c = p + e2;
+      ++tests;
+      if (!blocked((a + b + c) / 3.0 + lift))
+        lit(a, b, c);
+      if (i + j + 2 <= m) {
+        const glm::dvec3 d = p + e1 + e2;
+        ++tests;
+        if (!blocked((b + d + c) / 3.0 + lift))
+          lit(b, d, c);
+      }
+    }
+  }
+  return tests;
+}
+
+/// Whether a facet at distance range_m [m] from a point source is in its own far field, so that
+/// a plane wave over it (the exact facet integral with the phase linearised at its centroid)
+/// holds: the two-way phase the linearisation drops, k rho^2 / R at the vertex farthest from
+/// the centroid (rho), stays under pi/8 -- the far-field criterion R >= 2 D^2 / lambda (one-way
+/// phase error pi/8 over an aperture D; Balanis, Antenna Theory, 4th ed., 2016, sec. 2.2.4)
+/// applied to the two-way path. Plane-wave illumination (the RCS engine) is always far field.
+[[nodiscard]] bool facet_in_far_field(double max_vertex_distance_m, double range_m,
+                                      double wavenumber_rad_per_m) noexcept;
 
 }  // namespace radar_emu::radar

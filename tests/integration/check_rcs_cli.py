@@ -6,11 +6,14 @@ closed forms of physics.md (computed here, independently of the C++ code):
     polarisations, the CSV's complex amplitude consistent with its dBsm column, the plot a PNG;
   - fluctuation statistics written for a window;
   - a range profile of a triangular trihedral peaks at its apex (range 0) with resolution c/2B;
+  - forward scatter of a box (receiver straight behind it): 4 pi A_shadow^2 / lambda^2, and the
+    CSV's per-direction lighting and bounce-cap columns; --bounces above 16 (up to 64);
   - the small-ka warning, and a degenerate triangle reported with file, triangle and line.
 Usage: check_rcs_cli.py RADAR_EMU WORK_DIR"""
 import csv
 import math
 import os
+import subprocess
 import sys
 
 from cli_check import check, finish, runner
@@ -78,6 +81,33 @@ bin_m = float(prow[1]["range_m"]) - float(prow[0]["range_m"])
 print(f"trihedral profile peak at {float(peak['range_m']):.4f} m, bin {bin_m:.4f} m")
 check(abs(float(peak["range_m"])) <= bin_m + 1e-9, "trihedral peak at its apex (+-1 bin)")
 check(f"{resolution:.4g}" in r.stdout, f"resolution c/2B = {resolution:.4g} m printed")
+
+# Forward scatter: a 0.2 x 0.15 x 0.1 m PEC box lit from +z (theta 0), the receiver straight
+# behind it (theta 180): physical optics gives sigma = 4 pi A^2 / lambda^2 with A the shadow
+# (0.2 x 0.15 = 0.03 m^2): 11.0 dBsm at 10 GHz (Knott, Shaeffer & Tuley, Radar Cross Section,
+# 2004, sec. 5).
+box = os.path.join(work, "box.stl")
+run("scene", "target", "box", "--a-m", "0.2", "--b-m", "0.15", "--c-m", "0.1", "--out", box)
+fwd = os.path.join(work, "forward.csv")
+r = run("rcs", "--mesh", box, "--freq-hz", "10e9", "--theta-deg", "0", "--phi-deg", "0",
+        "--bistatic-theta-deg", "180", "--bistatic-phi-deg", "0", "--pol", "HH,VV", "--bounces",
+        "40", "--out", fwd)
+with open(fwd, newline="") as f:
+    frow = list(csv.DictReader(f))
+check(len(frow) == 1, "one forward-scatter row")
+shadow = 0.2 * 0.15
+expected = 10 * math.log10(4 * math.pi * shadow ** 2 / lam ** 2)
+for p in ("HH", "VV"):
+    got = float(frow[0][f"rcs_{p}_dbsm"])
+    print(f"box forward scatter {p}: {got:.4f} dBsm, 4 pi A^2 / lambda^2 = {expected:.4f} dBsm")
+    check(abs(got - expected) < 0.1, f"forward scatter {p} within 0.1 dB ({got} vs {expected})")
+check(int(frow[0]["facets_lit"]) == 2 and int(frow[0]["facets_partial"]) == 0,
+      "the lit face's two triangles, wholly lit: " + str(frow[0]))
+check(int(frow[0]["tubes_cut_off"]) == 0, "a convex box keeps no tube bouncing")
+check("tubes cut off at the bounce cap (40)" in r.stdout, "summary names the cap: " + r.stdout)
+r = subprocess.run([exe, "rcs", "--mesh", box, "--freq-hz", "10e9", "--bounces", "65", "--out",
+                    fwd], capture_output=True, text=True)
+check(r.returncode != 0 and "65" in r.stderr, "--bounces 65 is refused: " + r.stderr)
 
 # Electrically small target (sphere ka = 2.1 at 10 GHz): the CLI warns that PO fails there.
 sphere = os.path.join(work, "sphere.obj")
