@@ -1,6 +1,7 @@
 // radar-emu: command-line entry point. Parses options and orchestrates; all work lives in the
 // libraries (style.md item 1).
 
+#include <sched.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -19,6 +20,7 @@
 
 #include "emulator/ambiguity_tool.hpp"
 #include "emulator/atten_tool.hpp"
+#include "emulator/cli_checks.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
@@ -114,8 +116,6 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r, const s
                 static_cast<unsigned long long>(r.replay_frames_fed),
                 static_cast<unsigned long long>(r.replay_frames_left));
   }
-  for (const auto& w : r.realtime.warnings)
-    std::printf("  warning     %s\n", w.c_str());
   if (r.interrupted) {
     std::printf("  interrupted by %s after %llu of %llu frames\n",
                 r.stop_signal == SIGINT    ? "SIGINT"
@@ -183,6 +183,9 @@ int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const s
     std::fflush(stderr);
   }
   const emu::RunResult result = loop.run();
+  // Warnings go to stderr whatever -q says (-q silences progress and the summary only).
+  for (const auto& w : result.realtime.warnings)
+    std::fprintf(stderr, "radar-emu: warning: %s\n", w.c_str());
   if (show_progress && result.interrupted)
     std::fputc('\n', stderr);
   if (!out.empty())
@@ -272,13 +275,12 @@ int replay_command(const std::string& log_file, const std::string& scenario_file
   constexpr std::int64_t kDay_ns = 86'400'000'000'000LL;
   if (first_ns < scenario.epoch_unix_ns || first_ns - scenario.epoch_unix_ns > kDay_ns) {
     scenario.epoch_unix_ns = first_ns - first_ns % 1'000'000'000LL;
-    if (!quiet) {
-      std::fprintf(stderr,
-                   "radar-emu replay: log starts at %.6f s, not within a day of the "
-                   "scenario's epoch: epoch set to %lld s\n",
-                   static_cast<double>(first_ns) * 1e-9,
-                   static_cast<long long>(scenario.epoch_unix_ns / 1'000'000'000LL));
-    }
+    // A warning: printed whatever -q says.
+    std::fprintf(stderr,
+                 "radar-emu replay: warning: log starts at %.6f s, not within a day of the "
+                 "scenario's epoch: epoch set to %lld s\n",
+                 static_cast<double>(first_ns) * 1e-9,
+                 static_cast<long long>(scenario.epoch_unix_ns / 1'000'000'000LL));
   }
   if (frames > 0) {
     scenario.frames = frames;
@@ -290,8 +292,40 @@ int replay_command(const std::string& log_file, const std::string& scenario_file
   return execute_loop(scenario, std::move(options), out, quiet);
 }
 
+// The dimensions a target kind reads (scene/targets.hpp): 1 (a), 2 (a, b) or 3 (a, b, c).
+int target_dimensions(radar_emu::scene::TargetKind kind) {
+  using radar_emu::scene::TargetKind;
+  switch (kind) {
+    case TargetKind::kTrihedralSquare:
+    case TargetKind::kTrihedralTriangular:
+    case TargetKind::kSphere:
+      return 1;
+    case TargetKind::kPlate:
+    case TargetKind::kDihedral:
+    case TargetKind::kCylinder:
+      return 2;
+    default:
+      return 3;
+  }
+}
+
+// Default of `scene target --max-triangles` (README): about 4 GB at the measured 210 bytes a
+// triangle (scene/targets.hpp kTargetBytesPerTriangle).
+constexpr double kDefaultMaxTargetTriangles = 20e6;
+
+std::string si_bytes(double bytes) {
+  char text[64];
+  if (bytes >= 1e12)
+    std::snprintf(text, sizeof text, "%.3g TB", bytes * 1e-12);
+  else if (bytes >= 1e9)
+    std::snprintf(text, sizeof text, "%.3g GB", bytes * 1e-9);
+  else
+    std::snprintf(text, sizeof text, "%.3g MB", bytes * 1e-6);
+  return text;
+}
+
 int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec spec,
-                   const std::string& out) {
+                   const std::string& out, const CLI::App& cmd, double max_triangles) {
   namespace sc = radar_emu::scene;
   const auto kind = sc::target_kind_from_name(kind_name);
   if (!kind) {
@@ -299,6 +333,26 @@ int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec sp
                              ")");
   }
   spec.kind = *kind;
+  // A dimension the kind does not read is refused, not silently ignored.
+  const int dims = target_dimensions(*kind);
+  const char* takes = dims == 1 ? "--a-m only" : dims == 2 ? "--a-m and --b-m only" : "";
+  for (int d = dims; d < 3; ++d) {
+    const std::string name = d == 1 ? "--b-m" : "--c-m";
+    if (cmd.count(name) > 0)
+      throw std::invalid_argument(name + ": a " + kind_name + " takes " + takes);
+  }
+  // Refuse a mesh past the memory limit before making it, with the estimate.
+  const double triangles = sc::target_triangle_estimate(spec);
+  if (triangles > max_triangles) {
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "--facet-m %g: a %s would have about %.3g triangles (about %s of memory), over "
+                  "the limit of %.3g triangles (raise it with --max-triangles, or use a coarser "
+                  "--facet-m)",
+                  spec.facet_m, kind_name.c_str(), triangles,
+                  si_bytes(triangles * sc::kTargetBytesPerTriangle).c_str(), max_triangles);
+    throw std::invalid_argument(text);
+  }
   const sc::SceneDescription desc = sc::make_target(spec);
   const std::filesystem::path path(out);
   const std::string ext = path.extension().string();
@@ -318,6 +372,10 @@ int main(int argc, char** argv) {
   CLI::App app{"radar-emu: hardware-in-the-loop radar emulator (SBR physics on Embree)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "radar-emu 0.1.0");
+  // Every error is one line on stderr (style.md): the option and what is wrong with it.
+  app.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return "radar-emu: error: " + std::string(e.what()) + " (--help lists the options)\n";
+  });
 
   CLI::App* run = app.add_subcommand(
       "run", "Run the closed loop: aircraft state in over the bus, detections out");
@@ -333,18 +391,24 @@ int main(int argc, char** argv) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   // The last --out / --frames wins, so wrappers (scripts/run.sh) can set defaults.
   run->add_option("--out", out,
-                  "Directory for report.json, detections.json, truth.json, the pictures and the "
-                  "bus logs")
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  run->add_flag("--realtime", realtime,
-                "Pace frames on the monotonic wall clock (default: as fast as possible on "
-                "simulated time)");
+                  "Directory for report.json, detections.json, truth.json, "
+                  "the pictures and the bus logs")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast)
+      ->check(emu::output_dir());
+  CLI::Option* realtime_flag =
+      run->add_flag("--realtime", realtime,
+                    "Pace frames on the monotonic wall clock (default: as fast as possible on "
+                    "simulated time)");
   run->add_option("--rt-priority", rt_priority, "SCHED_FIFO priority with --realtime (1-99)")
-      ->check(CLI::Range(0, 99));
-  run->add_flag("--lock-memory", lock_memory, "mlockall() with --realtime");
-  run->add_option("--cpu", cpu, "Pin the frame loop to this CPU with --realtime");
-  run->add_flag("--print-scenario", print_scenario, "Print the embedded default scenario and exit");
-  run->add_flag("-q,--quiet", quiet, "No progress or summary");
+      ->check(CLI::Range(1, 99))
+      ->needs(realtime_flag);
+  run->add_flag("--lock-memory", lock_memory, "mlockall() with --realtime")->needs(realtime_flag);
+  run->add_option("--cpu", cpu, "Pin the frame loop to this CPU with --realtime")
+      ->check(CLI::Range(0, CPU_SETSIZE - 1))
+      ->needs(realtime_flag);
+  CLI::Option* print_flag = run->add_flag("--print-scenario", print_scenario,
+                                          "Print the embedded default scenario and exit");
+  run->add_flag("-q,--quiet", quiet, "No progress or summary (warnings are still printed)");
   BusArgs bus_args;
   run->add_option("--can", bus_args.can,
                   "CAN backend: sim (software loopback, default), socketcan:IFACE[,fd]"
@@ -354,15 +418,23 @@ int main(int argc, char** argv) {
                   "Ownship state from a Modbus navigation register map (docs/icd/modbus.md) "
                   "instead of CANaerospace: tcp:HOST:PORT, rtu:DEV:BAUD (with --realtime), or "
                   "sim (played from the scenario on the loopback register bank)");
-  run->add_option("--modbus-server", bus_args.modbus_server,
-                  "Serve the detection table as Modbus holding registers on HOST:PORT (:PORT "
-                  "binds 127.0.0.1; port 0 picks a free one, printed on stderr)");
+  CLI::Option* modbus_server =
+      run->add_option("--modbus-server", bus_args.modbus_server,
+                      "Serve the detection table as Modbus holding registers on HOST:PORT (:PORT "
+                      "binds 127.0.0.1; port 0 picks a free one, printed on stderr)");
   run->add_option("--modbus-linger-s", bus_args.modbus_linger_s,
                   "Keep serving the final detection table this long after the run [s]")
-      ->check(CLI::Range(0.0, 86400.0));
+      ->check(emu::in_range(0.0, 86400.0, "s"))
+      ->needs(modbus_server);
   run->add_option("--trace-events", bus_args.trace_events,
                   "Write every stage of every frame as Chrome trace-event JSON to FILE (open in "
-                  "https://ui.perfetto.dev or chrome://tracing)");
+                  "https://ui.perfetto.dev or chrome://tracing)")
+      ->check(emu::output_file());
+  // --print-scenario prints and exits: every other option would be silently ignored.
+  for (CLI::Option* o : run->get_options()) {
+    if (o != print_flag && o->get_name() != "--help" && !o->get_name().empty())
+      print_flag->excludes(o);
+  }
 
   CLI::App* replay = app.add_subcommand(
       "replay",
@@ -380,8 +452,10 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   replay->add_option("--frames", replay_frames, "Number of frames (default: the log's span)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}));
-  replay->add_option("--out", replay_out, "Output directory (default out/replay)");
-  replay->add_flag("-q,--quiet", replay_quiet, "No progress or summary");
+  replay->add_option("--out", replay_out, "Output directory (default out/replay)")
+      ->check(emu::output_dir());
+  replay->add_flag("-q,--quiet", replay_quiet,
+                   "No progress or summary (warnings are still printed)");
 
   CLI::App* scene_cmd = app.add_subcommand("scene", "Scene databases and canonical targets");
   scene_cmd->require_subcommand(1);
@@ -390,13 +464,32 @@ int main(int argc, char** argv) {
   std::string target_kind, target_out;
   radar_emu::scene::TargetSpec spec;
   target->add_option("kind", target_kind, radar_emu::scene::target_names())->required();
-  target->add_option("--a-m", spec.a_m,
-                     "First dimension [m]: plate/box x, fold length, trihedral edge, radius");
-  target->add_option("--b-m", spec.b_m, "Second dimension [m]: plate/box y, face width, length");
-  target->add_option("--c-m", spec.c_m, "Third dimension [m]: box z");
-  target->add_option("--facet-m", spec.facet_m,
-                     "Largest facet edge [m] (0: coarsest exact mesh, 32 segments for curves)");
-  target->add_option("--out", target_out, "Output file: .glb, .gltf, .obj or .stl")->required();
+  double max_triangles = kDefaultMaxTargetTriangles;
+  target
+      ->add_option("--a-m", spec.a_m,
+                   "First dimension [m]: plate/box x, fold length, trihedral edge, radius")
+      ->check(emu::in_range(0.0, 1e5, "m", true));
+  target
+      ->add_option("--b-m", spec.b_m,
+                   "Second dimension [m]: plate/box y, face width, length (not for trihedrals "
+                   "and spheres)")
+      ->check(emu::in_range(0.0, 1e5, "m", true));
+  target
+      ->add_option("--c-m", spec.c_m,
+                   "Third dimension [m]: box, vehicle and aircraft z (only those)")
+      ->check(emu::in_range(0.0, 1e5, "m", true));
+  target
+      ->add_option("--facet-m", spec.facet_m,
+                   "Largest facet edge [m] (0: coarsest exact mesh, 32 segments for curves)")
+      ->check(emu::in_range(0.0, 1e5, "m"));
+  target
+      ->add_option("--max-triangles", max_triangles,
+                   "Refuse a mesh estimated past this many triangles (about 210 bytes each "
+                   "while written; default 2e7)")
+      ->check(emu::in_range(1.0, 1.4e9, "triangles"));
+  target->add_option("--out", target_out, "Output file: .glb, .gltf, .obj or .stl")
+      ->required()
+      ->check(emu::output_file({".glb", ".gltf", ".obj", ".stl"}));
   emu::SceneCommands scene_tools;  // scene gen | info | preview (emulator/scene_tool.hpp)
   emu::add_scene_commands(*scene_cmd, scene_tools);
 
@@ -411,12 +504,19 @@ int main(int argc, char** argv) {
         ->required()
         ->check(CLI::ExistingFile);
     cmd->add_option("--scale", scale,
-                    "File units to metres (0.001 for mm, 0.0254 for inches; default 1)");
-    cmd->add_option("--freq-hz", t.freq, "One frequency [Hz]");
-    cmd->add_option("--freq-sweep-hz", t.freq_sweep, "Frequencies START:STOP:N [Hz]");
+                    "File units to metres (0.001 for mm, 0.0254 for inches; default 1)")
+        ->check(emu::in_range(0.0, 1e6, "", true));
+    CLI::Option* freq = cmd->add_option("--freq-hz", t.freq, "One frequency [Hz]")
+                            ->check(emu::sweep_in_range(0.0, 1e15, "Hz", true));
+    cmd->add_option("--freq-sweep-hz", t.freq_sweep, "Frequencies START:STOP:N [Hz]")
+        ->check(emu::sweep_in_range(0.0, 1e15, "Hz", true))
+        ->excludes(freq);
     cmd->add_option("--theta-deg", t.theta,
-                    "Radar direction from +z: A or A:B:N [deg] (default 0)");
-    cmd->add_option("--phi-deg", t.phi, "Radar direction from +x toward +y: A or A:B:N [deg]");
+                    "Radar direction from +z: A or A:B:N in [0, 180] deg (default 0)")
+        ->check(emu::sweep_in_range(0.0, 180.0, "deg"));
+    cmd->add_option("--phi-deg", t.phi,
+                    "Radar direction from +x toward +y: A or A:B:N in [-360, 360] deg")
+        ->check(emu::sweep_in_range(-360.0, 360.0, "deg"));
     cmd->add_option("--bounces", bounces,
                     "Bounces: 1 = facet PO only, up to " +
                         std::to_string(radar_emu::radar::kMaxRcsBounces) +
@@ -424,12 +524,20 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, radar_emu::radar::kMaxRcsBounces));
     cmd->add_option("--rays-per-wavelength", rpw,
                     "Ray-tube density for bounces >= 2 at the highest frequency (default 4)")
-        ->check(CLI::PositiveNumber);
+        ->check(emu::in_range(0.0, 1000.0, "rays a wavelength", true));
     cmd->add_option("--material", materials,
                     "Non-metal material: NAME=EPS_REAL,EPS_LOSS (dielectric, eps = EPS_REAL - j "
                     "EPS_LOSS) or NAME=EPS_REAL,EPS_LOSS,THICKNESS_M (coating on metal); "
                     "repeatable");
-    cmd->add_flag("-q,--quiet", quiet_flag, "No progress or summary");
+    cmd->add_flag("-q,--quiet", quiet_flag, "No progress or summary (warnings are still printed)");
+  };
+  // --rays-per-wavelength sets the density of the ray tubes of bounces >= 2: with --bounces 1
+  // it would be silently ignored.
+  auto check_rays = [](const CLI::App* cmd, int bounces) {
+    if (bounces == 1 && cmd->count("--rays-per-wavelength") > 0) {
+      throw std::invalid_argument(
+          "--rays-per-wavelength: not used with --bounces 1 (facet PO only, no ray tubes)");
+    }
   };
   auto frequencies = [](const SweepText& t) {
     if (t.freq.empty() == t.freq_sweep.empty())
@@ -449,18 +557,25 @@ int main(int argc, char** argv) {
   rcs->add_option("--pol", rcs_text.pol,
                   "Polarisations, receive letter first: HH,HV,VH,VV (default HH,VV)");
   CLI::Option* bt = rcs->add_option("--bistatic-theta-deg", bistatic_theta,
-                                    "Receiver direction theta [deg] (bistatic)");
-  CLI::Option* bp =
-      rcs->add_option("--bistatic-phi-deg", bistatic_phi, "Receiver direction phi [deg]");
+                                    "Receiver direction theta in [0, 180] deg (bistatic)")
+                        ->check(emu::in_range(0.0, 180.0, "deg"));
+  CLI::Option* bp = rcs->add_option("--bistatic-phi-deg", bistatic_phi,
+                                    "Receiver direction phi in [-360, 360] deg")
+                        ->check(emu::in_range(-360.0, 360.0, "deg"));
   bt->needs(bp);
   bp->needs(bt);
-  rcs->add_option("--out", rcs_opt.out_csv, "CSV output (default rcs.csv)");
-  rcs->add_option("--plot", rcs_opt.plot_png, "PNG plot of the sweep");
-  rcs->add_option("--window-deg", rcs_opt.window_deg,
-                  "Fluctuation statistics (mean, median, p10/p90, spread) over a sliding aspect "
-                  "window of this width [deg]")
-      ->check(CLI::PositiveNumber);
-  rcs->add_option("--stats-out", rcs_opt.stats_csv, "CSV for --window-deg (default *_stats.csv)");
+  CLI::Option* rcs_out = rcs->add_option("--out", rcs_opt.out_csv, "CSV output (default rcs.csv)")
+                             ->check(emu::output_file());
+  rcs->add_option("--plot", rcs_opt.plot_png, "PNG plot of the sweep")
+      ->check(emu::output_file({".png"}));
+  CLI::Option* window_deg =
+      rcs->add_option("--window-deg", rcs_opt.window_deg,
+                      "Fluctuation statistics (mean, median, p10/p90, spread) over a sliding "
+                      "aspect window of this width [deg] (needs a theta or phi sweep)")
+          ->check(emu::in_range(0.0, 360.0, "deg", true));
+  rcs->add_option("--stats-out", rcs_opt.stats_csv, "CSV for --window-deg (default *_stats.csv)")
+      ->check(emu::output_file())
+      ->needs(window_deg);
 
   CLI::App* profile = app.add_subcommand(
       "profile", "Range profile (and ISAR image over an angle sweep) of a mesh (PO + SBR)");
@@ -472,33 +587,63 @@ int main(int argc, char** argv) {
   profile->add_option("--pol", prof_text.pol, "One polarisation: HH, HV, VH or VV (default VV)");
   profile->add_option("--window", prof_opt.window,
                       "none, hann, hamming, blackman or taylor (default hann)");
-  profile->add_option("--oversample", prof_opt.oversample, "Zero-padding factor (default 4)");
+  profile->add_option("--oversample", prof_opt.oversample, "Zero-padding factor (default 4)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{64}));
   profile->add_option("--dynamic-range-db", prof_opt.dynamic_range_db, "Plot range (default 50)")
-      ->check(CLI::PositiveNumber);
-  profile->add_option("--out", prof_opt.out_csv, "Range-profile CSV (default profile.csv)");
-  profile->add_option("--plot", prof_opt.plot_png, "Range-profile PNG");
-  profile->add_option("--isar-out", prof_opt.isar_csv, "ISAR CSV (default *_isar.csv)");
-  profile->add_option("--isar-plot", prof_opt.isar_png, "ISAR PNG (default *_isar.png)");
+      ->check(emu::in_range(0.0, 400.0, "dB", true));
+  CLI::Option* prof_out =
+      profile->add_option("--out", prof_opt.out_csv, "Range-profile CSV (default profile.csv)")
+          ->check(emu::output_file());
+  profile->add_option("--plot", prof_opt.plot_png, "Range-profile PNG")
+      ->check(emu::output_file({".png"}));
+  profile
+      ->add_option("--isar-out", prof_opt.isar_csv,
+                   "ISAR CSV (default *_isar.csv; needs a theta or phi sweep)")
+      ->check(emu::output_file());
+  profile
+      ->add_option("--isar-plot", prof_opt.isar_png,
+                   "ISAR PNG (default *_isar.png; needs a theta or phi sweep)")
+      ->check(emu::output_file({".png"}));
 
   CLI::App* ambiguity = app.add_subcommand(
       "ambiguity",
       "Ambiguity function of the configured waveform (heat map, cuts, measured figures)");
   emu::AmbiguityToolOptions amb_opt;
-  ambiguity->add_option("scenario", amb_opt.scenario,
-                        "Scenario TOML whose [radar] waveform to use (default: the embedded one)");
-  ambiguity->add_option("--bandwidth-hz", amb_opt.bandwidth_hz, "Override the swept bandwidth");
-  ambiguity->add_option("--pulse-width-s", amb_opt.pulse_width_s, "Override the pulse length");
-  ambiguity->add_option("--prf-hz", amb_opt.prf_hz, "Override the PRF (with --train)");
-  ambiguity->add_option("--pulses", amb_opt.pulses, "Override the pulses a CPI (with --train)");
-  ambiguity->add_flag("--train", amb_opt.train,
-                      "The coherent pulse train (closed form) over +-2 PRI instead of one pulse");
-  ambiguity->add_option("--delay-span", amb_opt.delay_span, "+- delay in pulse widths (default 1)");
-  ambiguity->add_option("--doppler-span", amb_opt.doppler_span,
-                        "+- Doppler in 1/T (single pulse) or PRFs (train) (default 8)");
-  ambiguity->add_option("--points", amb_opt.points, "Grid points an axis (default 201)");
-  ambiguity->add_option("--oversample", amb_opt.oversample, "Samples per 1/B (default 8)");
-  ambiguity->add_option("--dynamic-range-db", amb_opt.dynamic_range_db, "Plot range (default 40)");
-  ambiguity->add_option("--out", amb_opt.out_dir, "Output directory (default ./ambiguity)");
+  ambiguity
+      ->add_option("scenario", amb_opt.scenario,
+                   "Scenario TOML whose [radar] waveform to use (default: the embedded one)")
+      ->check(CLI::ExistingFile);
+  // Ranges as the scenario's [radar] keys (emulator/scenario.cpp).
+  ambiguity->add_option("--bandwidth-hz", amb_opt.bandwidth_hz, "Override the swept bandwidth")
+      ->check(emu::in_range(1e3, 1e10, "Hz"));
+  ambiguity->add_option("--pulse-width-s", amb_opt.pulse_width_s, "Override the pulse length")
+      ->check(emu::in_range(1e-10, 1.0, "s"));
+  CLI::Option* train = ambiguity->add_flag(
+      "--train", amb_opt.train,
+      "The coherent pulse train (closed form) over +-2 PRI instead of one pulse");
+  ambiguity->add_option("--prf-hz", amb_opt.prf_hz, "Override the PRF (with --train)")
+      ->check(emu::in_range(1.0, 1e8, "Hz"))
+      ->needs(train);
+  ambiguity->add_option("--pulses", amb_opt.pulses, "Override the pulses a CPI (with --train)")
+      ->check(CLI::Range(1, 65536))
+      ->needs(train);
+  ambiguity
+      ->add_option("--delay-span", amb_opt.delay_span,
+                   "+- delay in pulse widths (single pulse; default 1)")
+      ->check(emu::in_range(0.0, 100.0, "pulse widths", true))
+      ->excludes(train);
+  ambiguity
+      ->add_option("--doppler-span", amb_opt.doppler_span,
+                   "+- Doppler in 1/T (single pulse) or PRFs (train) (default 8)")
+      ->check(emu::in_range(0.0, 1000.0, "", true));
+  ambiguity->add_option("--points", amb_opt.points, "Grid points an axis (default 201)")
+      ->check(CLI::Range(11, 2001));
+  ambiguity->add_option("--oversample", amb_opt.oversample, "Samples per 1/B (default 8)")
+      ->check(CLI::Range(2, 64));
+  ambiguity->add_option("--dynamic-range-db", amb_opt.dynamic_range_db, "Plot range (default 40)")
+      ->check(emu::in_range(0.0, 400.0, "dB", true));
+  ambiguity->add_option("--out", amb_opt.out_dir, "Output directory (default ./ambiguity)")
+      ->check(emu::output_dir());
   ambiguity->add_flag("-q,--quiet", amb_opt.quiet, "No summary");
 
   CLI::App* atten = app.add_subcommand(
@@ -508,43 +653,78 @@ int main(int argc, char** argv) {
   emu::AttenToolOptions atten_opt;
   std::string atten_freq;
   atten->add_option("--freq-hz", atten_freq, "Frequency [Hz]: F or START:STOP:N")->required();
-  atten->add_option("--pressure-hpa", atten_opt.dry_pressure_hpa,
-                    "Dry-air pressure [hPa] (default 1013.25)");
-  atten->add_option("--temp-c", atten_opt.temperature_c, "Temperature [C] (default 15)");
-  atten->add_option("--rho-gm3", atten_opt.water_vapour_gm3,
-                    "Water-vapour density [g/m^3] (default 7.5)");
+  // Ranges: a standard atmosphere from the ground to 100 km (ITU-R P.835: 1013 hPa to below
+  // 1e-3 hPa, -90 C to +60 C at the extremes), vapour to saturation at 60 C (130 g/m^3), the
+  // scenario's fog ceiling (5 g/m^3).
+  atten
+      ->add_option("--pressure-hpa", atten_opt.dry_pressure_hpa,
+                   "Dry-air pressure [hPa] (default 1013.25)")
+      ->check(emu::in_range(0.0, 1100.0, "hPa"));
+  atten->add_option("--temp-c", atten_opt.temperature_c, "Temperature [C] (default 15)")
+      ->check(emu::in_range(-100.0, 60.0, "C"));
+  atten
+      ->add_option("--rho-gm3", atten_opt.water_vapour_gm3,
+                   "Water-vapour density [g/m^3] (default 7.5)")
+      ->check(emu::in_range(0.0, 130.0, "g/m^3"));
   atten->add_option("--rain-mmh", atten_opt.rain_mm_per_h, "Rain rate [mm/h] (default 0)");
-  atten->add_option("--fog-gm3", atten_opt.fog_gm3,
-                    "Fog or cloud liquid water [g/m^3] (default 0)");
-  atten->add_option("--veg-depth-m", atten_opt.veg_depth_m,
-                    "Woodland crossed [m] (ITU-R P.833 sec. 2, 1-30 GHz; default 0)");
-  atten->add_flag("--out-of-leaf", atten_opt.out_of_leaf, "Woodland without leaves (P.833)");
-  atten->add_option("--out", atten_opt.out_csv, "CSV output (default atten.csv)");
-  atten->add_option("--plot", atten_opt.plot_png, "PNG chart");
+  atten->add_option("--fog-gm3", atten_opt.fog_gm3, "Fog or cloud liquid water [g/m^3] (default 0)")
+      ->check(emu::in_range(0.0, 5.0, "g/m^3"));
+  CLI::Option* veg =
+      atten->add_option("--veg-depth-m", atten_opt.veg_depth_m,
+                        "Woodland crossed [m] (ITU-R P.833 sec. 2, 1-30 GHz; default 0)");
+  atten->add_flag("--out-of-leaf", atten_opt.out_of_leaf, "Woodland without leaves (P.833)")
+      ->needs(veg);
+  CLI::Option* atten_out =
+      atten->add_option("--out", atten_opt.out_csv, "CSV output (default atten.csv)")
+          ->check(emu::output_file());
+  atten->add_option("--plot", atten_opt.plot_png, "PNG chart (needs a sweep START:STOP:N)")
+      ->check(emu::output_file({".png"}));
   atten->add_flag("-q,--quiet", atten_opt.quiet, "No summary");
 
   CLI::App* sigma0 = app.add_subcommand(
       "sigma0", "Terrain scattering coefficient vs angle (empirical, IEM, SPM, KA, RT, total)");
   emu::Sigma0ToolOptions s0_opt;
   std::string s0_theta = "0:85:86", s0_theta_s, s0_eps;
-  sigma0->add_option("--material", s0_opt.material,
-                     "Catalogue material: " + radar_emu::radar::clutter::terrain_material_names());
-  sigma0->add_option("--eps-r", s0_eps, "Custom surface permittivity RE,IM (eps = RE - j IM)");
-  sigma0->add_option("--rms-height-m", s0_opt.rms_height_m, "Custom surface rms height s [m]");
-  sigma0->add_option("--corr-length-m", s0_opt.corr_length_m, "Custom correlation length l [m]");
-  sigma0->add_option("--corr", s0_opt.correlation,
-                     "Correlation function: gaussian, exponential (default), xpower");
-  sigma0->add_option("--x-power", s0_opt.x_power, "Exponent of the x-power function (default 1.5)");
-  sigma0->add_option("--freq-hz", s0_opt.freq_hz, "Frequency [Hz]")->required();
+  CLI::Option* s0_material = sigma0->add_option(
+      "--material", s0_opt.material,
+      "Catalogue material: " + radar_emu::radar::clutter::terrain_material_names());
+  sigma0->add_option("--eps-r", s0_eps, "Custom surface permittivity RE,IM (eps = RE - j IM)")
+      ->excludes(s0_material);
+  sigma0->add_option("--rms-height-m", s0_opt.rms_height_m, "Custom surface rms height s [m]")
+      ->excludes(s0_material);
+  sigma0->add_option("--corr-length-m", s0_opt.corr_length_m, "Custom correlation length l [m]")
+      ->excludes(s0_material);
+  CLI::Option* s0_corr =
+      sigma0
+          ->add_option("--corr", s0_opt.correlation,
+                       "Custom surface correlation function: gaussian, exponential (default), "
+                       "xpower")
+          ->check(CLI::IsMember({"gaussian", "exponential", "xpower"}))
+          ->excludes(s0_material);
+  sigma0
+      ->add_option("--x-power", s0_opt.x_power,
+                   "Exponent of the x-power function (with --corr xpower; default 1.5)")
+      ->check(emu::in_range(1.0, 20.0, "", true))
+      ->needs(s0_corr);
+  sigma0->add_option("--freq-hz", s0_opt.freq_hz, "Frequency [Hz]")
+      ->required()
+      ->check(emu::in_range(0.0, 1e15, "Hz", true));
   sigma0->add_option("--model", s0_opt.model,
                      "empirical, iem, spm, ka, rt or total (surface + volume; default)");
   sigma0->add_option("--theta-deg", s0_theta, "Incidence angles A:B:N [deg] (default 0:85:86)");
-  sigma0->add_option("--theta-s-deg", s0_theta_s, "Bistatic scattering angles A:B:N [deg]");
-  sigma0->add_option("--phi-s-deg", s0_opt.phi_s_deg,
-                     "Bistatic azimuth from the plane of incidence [deg] (0: forward, 180: back)");
+  CLI::Option* theta_s =
+      sigma0->add_option("--theta-s-deg", s0_theta_s, "Bistatic scattering angles A:B:N [deg]");
+  sigma0
+      ->add_option("--phi-s-deg", s0_opt.phi_s_deg,
+                   "Bistatic azimuth from the plane of incidence [deg] (0: forward, 180: back; "
+                   "with --theta-s-deg)")
+      ->check(emu::in_range(-360.0, 360.0, "deg"))
+      ->needs(theta_s);
   sigma0->add_option("--pol", s0_opt.pols, "Polarisations, of HH,VV,HV,VH (default all four)");
-  sigma0->add_option("--out", s0_opt.out_csv, "CSV output (default sigma0.csv)");
-  sigma0->add_option("--plot", s0_opt.plot_png, "PNG chart");
+  CLI::Option* s0_out =
+      sigma0->add_option("--out", s0_opt.out_csv, "CSV output (default sigma0.csv)")
+          ->check(emu::output_file());
+  sigma0->add_option("--plot", s0_opt.plot_png, "PNG chart")->check(emu::output_file({".png"}));
   sigma0->add_flag("-q,--quiet", s0_opt.quiet, "No summary");
 
   CLI::App* tradeoff = app.add_subcommand(
@@ -552,9 +732,12 @@ int main(int argc, char** argv) {
       "Cost (wall ms, rays) against error for each fidelity knob, and where methods fail");
   emu::TradeoffOptions to_opt;
   std::string to_cases;
-  tradeoff->add_option("--out", to_opt.out_dir,
+  CLI::Option* to_out =
+      tradeoff
+          ->add_option("--out", to_opt.out_dir,
                        "Output directory: tradeoff.csv, tradeoff.png and one PNG per case "
-                       "(default tradeoff)");
+                       "(default tradeoff)")
+          ->check(emu::output_dir());
   tradeoff->add_option("--cases", to_cases,
                        "Comma-separated cases of vehicle,profile,frame,sphere,grazing,iem "
                        "(default all)");
@@ -567,15 +750,27 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  // Output paths left at their defaults: checked before any work too (a given one was checked
+  // by its validator while parsing).
+  auto check_default_file = [](const CLI::Option* opt, const std::string& path) {
+    if (opt->count() == 0)
+      emu::check_output_file(path, opt->get_name());
+  };
+  auto check_default_dir = [](const CLI::Option* opt, const std::string& path) {
+    if (opt->count() == 0)
+      emu::check_output_dir(path, opt->get_name());
+  };
   try {
     if (run->parsed()) {
       return run_command(scenario_file, frames, out, realtime, print_scenario, quiet, rt_priority,
                          lock_memory, cpu, bus_args);
     }
-    if (replay->parsed())
+    if (replay->parsed()) {
+      check_default_dir(replay->get_option("--out"), replay_out);
       return replay_command(replay_log, replay_scenario, replay_frames, replay_out, replay_quiet);
+    }
     if (target->parsed())
-      return target_command(target_kind, spec, target_out);
+      return target_command(target_kind, spec, target_out, *target, max_triangles);
     if (const auto scene_status = emu::run_scene_command(scene_tools))
       return *scene_status;
     if (rcs->parsed()) {
@@ -583,6 +778,10 @@ int main(int argc, char** argv) {
       rcs_opt.theta_deg = emu::parse_sweep(rcs_text.theta, "--theta-deg");
       rcs_opt.phi_deg = emu::parse_sweep(rcs_text.phi, "--phi-deg");
       rcs_opt.pols = emu::parse_pols(rcs_text.pol);
+      check_rays(rcs, rcs_opt.bounces);
+      if (rcs_opt.window_deg > 0.0 && rcs_opt.theta_deg.size() == 1 && rcs_opt.phi_deg.size() == 1)
+        throw std::invalid_argument("--window-deg: needs a sweep in theta or phi (A:B:N)");
+      check_default_file(rcs_out, rcs_opt.out_csv);
       if (bt->count() > 0) {
         rcs_opt.bistatic_theta_deg = bistatic_theta;
         rcs_opt.bistatic_phi_deg = bistatic_phi;
@@ -590,6 +789,10 @@ int main(int argc, char** argv) {
       return emu::run_rcs_tool(rcs_opt);
     }
     if (sigma0->parsed()) {
+      if (sigma0->count("--x-power") > 0 && s0_opt.correlation != "xpower")
+        throw std::invalid_argument("--x-power: used with --corr xpower only (got --corr " +
+                                    s0_opt.correlation + ")");
+      check_default_file(s0_out, s0_opt.out_csv);
       s0_opt.theta_deg = emu::parse_sweep(s0_theta, "--theta-deg");
       if (!s0_theta_s.empty())
         s0_opt.theta_s_deg = emu::parse_sweep(s0_theta_s, "--theta-s-deg");
@@ -601,14 +804,20 @@ int main(int argc, char** argv) {
       return emu::run_sigma0_tool(s0_opt);
     }
     if (tradeoff->parsed()) {
+      check_default_dir(to_out, to_opt.out_dir);
       if (!to_cases.empty())
         to_opt.cases = emu::parse_tradeoff_cases(to_cases);
       return emu::run_tradeoff_tool(to_opt);
     }
-    if (ambiguity->parsed())
+    if (ambiguity->parsed()) {
+      check_default_dir(ambiguity->get_option("--out"), amb_opt.out_dir.string());
       return emu::run_ambiguity_tool(amb_opt);
+    }
     if (atten->parsed()) {
       atten_opt.freqs_hz = emu::parse_sweep(atten_freq, "--freq-hz");
+      if (!atten_opt.plot_png.empty() && atten_opt.freqs_hz.size() < 2)
+        throw std::invalid_argument("--plot: needs a frequency sweep (--freq-hz START:STOP:N)");
+      check_default_file(atten_out, atten_opt.out_csv);
       return emu::run_atten_tool(atten_opt);
     }
     if (profile->parsed()) {
@@ -619,6 +828,15 @@ int main(int argc, char** argv) {
       if (pols.size() != 1)
         throw std::invalid_argument("--pol: a profile takes one polarisation");
       prof_opt.pol = pols[0];
+      check_rays(profile, prof_opt.bounces);
+      if (prof_opt.theta_deg.size() == 1 && prof_opt.phi_deg.size() == 1) {
+        for (const char* isar : {"--isar-out", "--isar-plot"}) {
+          if (profile->count(isar) > 0)
+            throw std::invalid_argument(std::string(isar) +
+                                        ": an ISAR image needs a sweep in theta or phi (A:B:N)");
+        }
+      }
+      check_default_file(prof_out, prof_opt.out_csv);
       return emu::run_profile_tool(prof_opt);
     }
   } catch (const std::exception& e) {

@@ -130,10 +130,11 @@ void warn_cut_off(const radar::RcsStats& stats, int bounces) {
                bounces, radar::kMaxRcsBounces);
 }
 
-void warn_electrical_size(const radar::RcsEngine& engine, double f_min_hz, bool quiet) {
+// A warning: printed whatever -q says (-q silences progress and the summary only).
+void warn_electrical_size(const radar::RcsEngine& engine, double f_min_hz) {
   const double ka =
       2.0 * radar::kPi * f_min_hz / radar::kSpeedOfLight_mps * engine.bounding_radius_m();
-  if (ka < 10.0 && !quiet) {
+  if (ka < 10.0) {
     std::fprintf(stderr,
                  "radar-emu: warning: the target is only ka = %.2f (wavenumber times its bounding "
                  "radius) at %.4g Hz: physical optics is a high-frequency method and its error "
@@ -164,7 +165,7 @@ struct ToolTarget {
         scene(loaded.description),
         engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength)) {
     print_target(loaded, engine, quiet);
-    warn_electrical_size(engine, min_freq_hz, quiet);
+    warn_electrical_size(engine, min_freq_hz);
   }
   static radar::RcsConfig config(int bounces, double rays_per_wavelength) {
     radar::RcsConfig c;
@@ -523,7 +524,6 @@ int run_rcs_tool(const RcsToolOptions& o) {
         static_cast<unsigned long long>(stats.facets_shadowed),
         static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths),
         static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
-    warn_cut_off(stats, o.bounces);
     std::printf("wrote %s", o.out_csv.c_str());
     if (!stats_path.empty())
       std::printf(", %s", stats_path.c_str());
@@ -531,6 +531,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
       std::printf(", %s", o.plot_png.c_str());
     std::printf("\n");
   }
+  warn_cut_off(stats, o.bounces);  // whatever -q says
   return 0;
 }
 
@@ -574,14 +575,14 @@ int run_profile_tool(const ProfileToolOptions& o) {
   // lambda_c / (2 dtheta) in cross-range), or its far parts fold over.
   const double extent_m = 2.0 * engine.bounding_radius_m();
   const double range_window_m = radar::kSpeedOfLight_mps / (2.0 * df);
-  if (range_window_m < extent_m && !o.quiet) {
+  if (range_window_m < extent_m) {
     std::fprintf(stderr,
                  "radar-emu: warning: the unambiguous range window c/(2 df) = %.3g m is smaller "
                  "than the target (%.3g m across): its profile folds over; use a finer frequency "
                  "step\n",
                  range_window_m, extent_m);
   }
-  if (na > 1 && !o.quiet) {
+  if (na > 1) {
     const double a0 = nt > 1 ? o.theta_deg.front() : o.phi_deg.front();
     const double a1 = nt > 1 ? o.theta_deg.back() : o.phi_deg.back();
     const double step_rad = std::abs(a1 - a0) / static_cast<double>(na - 1) * kDegToRad;
@@ -701,7 +702,6 @@ int run_profile_tool(const ProfileToolOptions& o) {
         "at the bounce cap (%d))\n",
         na, nf, elapsed_s, static_cast<unsigned long long>(stats.paths),
         static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
-    warn_cut_off(stats, o.bounces);
     std::printf(
         "range resolution c/2B = %.4g m, sample spacing %.4g m, unambiguous window %.4g m\n",
         centre.resolution_m, centre.bin_m, centre.unambiguous_m);
@@ -714,6 +714,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
     }
     std::printf("\n");
   }
+  warn_cut_off(stats, o.bounces);  // whatever -q says
   return 0;
 }
 

@@ -728,6 +728,11 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   s.stale_output_silent = stale_output == "silent";
 
   const TableReader scene(root, "scene", origin, {"builtin", "file", "seed"});
+  // One source of the scene: a table that names both would silently use the file.
+  if (scene.node("builtin") != nullptr && scene.node("file") != nullptr)
+    scene.fail("file", "builtin and file exclude each other (give one)");
+  if (scene.node("seed") != nullptr && scene.node("file") != nullptr)
+    scene.fail("seed", "seeds a built-in scene, not a file");
   scene.string("builtin", s.scene_builtin);
   std::int64_t scene_seed = static_cast<std::int64_t>(s.scene_seed & 0x7fffffffffffffffull);
   scene.integer("seed", scene_seed, 0, std::numeric_limits<std::int64_t>::max());
@@ -810,6 +815,11 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     ant.fail("pattern", "unknown pattern '" + s.pattern + "' (uniform, cosine, gaussian, table)");
   if (kind == radar::PatternKind::kTable && s.pattern_file.empty())
     ant.fail("pattern_file", "is required with pattern = \"table\"");
+  if (kind != radar::PatternKind::kTable && ant.node("pattern_file") != nullptr)
+    ant.fail("pattern_file",
+             "is read with pattern = \"table\" only (pattern is \"" + s.pattern + "\")");
+  if (ant.node("gain_db") != nullptr && ant.node("efficiency") != nullptr)
+    ant.fail("efficiency", "unused when gain_db is given (give one)");
   if (!(s.sbr.azimuth_min_rad < s.sbr.azimuth_max_rad)) {
     ant.fail("azimuth_max_deg", "must be greater than azimuth_min_deg");
   }
@@ -869,6 +879,13 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     rad.number("taylor_sidelobe_db", spec->taylor_sidelobe_db, 13.3, 120.0);
     rad.integer("taylor_nbar", spec->taylor_nbar, 1, 63);
   }
+  if (s.sensor.processing.range_window.kind != radar::WindowKind::kTaylor &&
+      s.sensor.processing.doppler_window.kind != radar::WindowKind::kTaylor) {
+    for (const char* key : {"taylor_sidelobe_db", "taylor_nbar"}) {
+      if (rad.node(key) != nullptr)
+        rad.fail(key, "is read with a \"taylor\" range_window or doppler_window only");
+    }
+  }
   rad.integer("max_bounces", s.sbr.max_bounces, 1, 16);
   rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, 1e-4, 10.0);
   rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, 1e-4, 100.0);
@@ -884,6 +901,8 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   if (cfar != "ca" && cfar != "os")
     det.fail("cfar", "unknown CFAR '" + cfar + "' (ca, os)");
   cf.kind = cfar == "ca" ? radar::CfarKind::kCellAveraging : radar::CfarKind::kOrderStatistic;
+  if (cf.kind == radar::CfarKind::kCellAveraging && det.node("os_rank") != nullptr)
+    det.fail("os_rank", "is read with cfar = \"os\" only (cfar is \"ca\")");
   det.integer("cfar_training_cells", cf.range_training, 0, 1024);
   det.integer("cfar_guard_cells", cf.range_guard, 0, 1024);
   det.integer("cfar_velocity_training_cells", cf.velocity_training, 0, 1024);

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "emulator/cli_checks.hpp"
 #include "scene/airport_gen.hpp"
 #include "scene/gltf.hpp"
 #include "scene/preview.hpp"
@@ -231,8 +232,8 @@ int run_scene_info(const SceneInfoOptions& o) {
 int run_scene_preview(const ScenePreviewOptions& o) {
   if (o.width_px < 1 || o.width_px > 16384 || o.height_px < 1 || o.height_px > 16384)
     throw std::invalid_argument("--width / --height must be in 1..16384 pixels");
-  if (!(o.fov_deg >= 0.0 && o.fov_deg < 180.0))
-    throw std::invalid_argument("--fov-deg must be in (0, 180) degrees");
+  if (o.fov_deg && !(*o.fov_deg > 0.0 && *o.fov_deg < 180.0))
+    throw std::invalid_argument("--fov-deg must be in (0, 180) deg");
   {
     const std::filesystem::path dir = std::filesystem::path(o.out).parent_path();
     std::error_code ec;
@@ -251,8 +252,8 @@ int run_scene_preview(const ScenePreviewOptions& o) {
     cam.position_m = *camera;
   if (look_at)
     cam.look_at_m = *look_at;
-  if (o.fov_deg > 0.0)
-    cam.vertical_fov_rad = o.fov_deg * kDeg;
+  if (o.fov_deg)
+    cam.vertical_fov_rad = *o.fov_deg * kDeg;
   const scene::PreviewImage img = scene::render_preview(scene, cam);
   if (stbi_write_png(o.out.c_str(), img.width_px, img.height_px, 3, img.rgb.data(),
                      img.width_px * 3) == 0) {
@@ -275,8 +276,10 @@ void add_scene_commands(CLI::App& scene, SceneCommands& c) {
   c.gen->add_option("kind", c.gen_options.kind, "terrain|airport")->required();
   c.gen->add_option("--seed", c.gen_options.seed,
                     "Seed of every random choice, 0..2^64-1 (default 1): same seed, same file");
-  c.gen->add_option("--out", c.gen_options.out, "Output file: .glb or .gltf")->required();
-  c.gen->add_flag("-q,--quiet", c.gen_options.quiet, "No summary");
+  c.gen->add_option("--out", c.gen_options.out, "Output file: .glb or .gltf")
+      ->required()
+      ->check(output_file({".glb", ".gltf"}));
+  c.gen->add_flag("-q,--quiet", c.gen_options.quiet, "No summary (warnings are still printed)");
 
   c.info = scene.add_subcommand(
       "info", "Polygon counts (per material, area, LOD level), extent and objects of a glTF scene");
@@ -287,15 +290,20 @@ void add_scene_commands(CLI::App& scene, SceneCommands& c) {
       "preview", "Render an optical preview PNG of a glTF scene (sun-lit material colours)");
   ScenePreviewOptions& p = c.preview_options;
   c.preview->add_option("file", p.file, "Scene: .glb or .gltf")->required();
-  c.preview->add_option("--out", p.out, "Output PNG")->required();
+  c.preview->add_option("--out", p.out, "Output PNG")->required()->check(output_file({".png"}));
   c.preview->add_option(
       "--camera", p.camera,
       "Camera position E,N,U [m] (default: oblique overview from the south-west)");
   c.preview->add_option("--look-at", p.look_at, "Point looked at E,N,U [m]");
-  c.preview->add_option("--fov-deg", p.fov_deg, "Vertical field of view [deg] (default 40)");
-  c.preview->add_option("--width", p.width_px, "Image width [pixels] (default 1024)");
-  c.preview->add_option("--height", p.height_px, "Image height [pixels] (default 768)");
-  c.preview->add_flag("-q,--quiet", p.quiet, "No summary");
+  c.preview
+      ->add_option("--fov-deg", p.fov_deg,
+                   "Vertical field of view in (0, 180) deg (default: the overview camera's 40)")
+      ->check(in_range(0.0, 180.0, "deg", true, true));
+  c.preview->add_option("--width", p.width_px, "Image width [pixels] (default 1024)")
+      ->check(CLI::Range(1, 16384));
+  c.preview->add_option("--height", p.height_px, "Image height [pixels] (default 768)")
+      ->check(CLI::Range(1, 16384));
+  c.preview->add_flag("-q,--quiet", p.quiet, "No summary (warnings are still printed)");
 }
 
 std::optional<int> run_scene_command(const SceneCommands& c) {

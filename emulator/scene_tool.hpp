@@ -29,11 +29,11 @@ struct SceneInfoOptions {
 };
 
 struct ScenePreviewOptions {
-  std::string file;      ///< .glb / .gltf
-  std::string out;       ///< PNG
-  std::string camera;    ///< "E,N,U" [m]; empty: scene::default_preview_camera's
-  std::string look_at;   ///< "E,N,U" [m]; empty: the default camera's
-  double fov_deg = 0.0;  ///< vertical field of view [deg]; 0: the default camera's
+  std::string file;               ///< .glb / .gltf
+  std::string out;                ///< PNG
+  std::string camera;             ///< "E,N,U" [m]; empty: scene::default_preview_camera's
+  std::string look_at;            ///< "E,N,U" [m]; empty: the default camera's
+  std::optional<double> fov_deg;  ///< vertical field of view [deg]; none: the default camera's
   int width_px = 1024;
   int height_px = 768;
   bool quiet = false;

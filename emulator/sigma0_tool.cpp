@@ -215,13 +215,15 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     if (!o.plot_png.empty())
       std::printf(", %s", o.plot_png.c_str());
     std::printf("\n");
-    if (seen != 0) {
-      std::string reasons = cl::describe_validity(seen & ~cl::kEmpiricalOutside);
-      if ((seen & cl::kEmpiricalOutside) != 0u)
-        reasons += (reasons == "valid" ? std::string() : "; ") +
-                   "empirical: no published row for some polarisations";
-      std::printf("note: rows with valid=0 leave a model's domain: %s\n", reasons.c_str());
-    }
+  }
+  // A warning: on stderr whatever -q says (-q silences the summary only).
+  if (seen != 0) {
+    std::string reasons = cl::describe_validity(seen & ~cl::kEmpiricalOutside);
+    if ((seen & cl::kEmpiricalOutside) != 0u)
+      reasons += (reasons == "valid" ? std::string() : "; ") +
+                 "empirical: no published row for some polarisations";
+    std::fprintf(stderr, "radar-emu: warning: rows with valid=0 leave a model's domain: %s\n",
+                 reasons.c_str());
   }
   return 0;
 }

@@ -754,4 +754,55 @@ SceneDescription make_target(const TargetSpec& t) {
   return d;
 }
 
+double target_triangle_estimate(const TargetSpec& t) {
+  require(t.a_m, "a_m");
+  require(t.b_m, "b_m");
+  require(t.c_m, "c_m");
+  require(t.facet_m, "facet_m", true);
+  const double a = t.a_m, b = t.b_m, c = t.c_m, f = t.facet_m;
+  const double pi = std::numbers::pi;
+  // divisions() in doubles: no overflow whatever the facet size.
+  auto div = [f](double length_m) {
+    return f <= 0.0 ? 1.0 : std::max(1.0, std::ceil(length_m / f - 1e-9));
+  };
+  // The lofted kinds: coarse count + k S / f^2 (S = 2 (ab + bc + ca)), k fitted per kind on the
+  // counts at facet_m = 0.05 m for the example sizes in targets.hpp.
+  auto lofted = [&](double coarse, double k, double facet_m) {
+    const double s = 2.0 * (a * b + b * c + c * a);
+    return facet_m > 0.0 ? coarse + k * s / (facet_m * facet_m) : coarse;
+  };
+  switch (t.kind) {
+    case TargetKind::kPlate:
+      return 2.0 * div(a) * div(b);
+    case TargetKind::kDihedral:
+      return 4.0 * div(a) * div(b);
+    case TargetKind::kTrihedralSquare:
+      return 6.0 * div(a) * div(a);
+    case TargetKind::kTrihedralTriangular:
+      return 3.0 * div(a) * div(a);
+    case TargetKind::kSphere: {
+      const double around = f > 0.0 ? std::max(8.0, div(2 * pi * a)) : 32.0;
+      const double rings = std::max(4.0, std::floor(around / 2.0));
+      return around * (2.0 * rings - 2.0);
+    }
+    case TargetKind::kCylinder: {
+      const double around = f > 0.0 ? std::max(8.0, div(2 * pi * a)) : 32.0;
+      return around * (2.0 * div(b) + 2.0);
+    }
+    case TargetKind::kBox:
+      return 4.0 * (div(a) * div(b) + div(a) * div(c) + div(b) * div(c));
+    case TargetKind::kVehicle:
+      return lofted(1000.0, 3.44, f > 0.0 ? f : a / 58.0);
+    case TargetKind::kTruck:
+      return lofted(436.0, 3.56, f);
+    case TargetKind::kJeep:
+      return lofted(292.0, 5.2, f);
+    case TargetKind::kHelicopter:
+      return lofted(512.0, 0.58, f);
+    case TargetKind::kTransportAircraft:
+      return lofted(896.0, 0.71, f);
+  }
+  return 0.0;
+}
+
 }  // namespace radar_emu::scene

@@ -464,3 +464,38 @@ TEST(MeshFiles, BrokenFilesNameFileLineAndProblem) {
   EXPECT_NE(error_of(tmp("x.ply")).find("unknown mesh format"), std::string::npos);
   EXPECT_NE(error_of(tmp("missing.obj")).find("missing.obj: no such file"), std::string::npos);
 }
+
+// The estimate that `scene target` refuses a mesh by (--max-triangles): exact where the count is
+// a closed form of the divisions, within a factor of 2 for the lofted kinds at the example sizes
+// of targets.hpp; an absurd facet size is a finite, huge estimate, not an overflow.
+TEST(Targets, TriangleEstimateMatchesTheMeshes) {
+  for (sc::TargetKind k :
+       {sc::TargetKind::kPlate, sc::TargetKind::kDihedral, sc::TargetKind::kTrihedralSquare,
+        sc::TargetKind::kTrihedralTriangular, sc::TargetKind::kSphere, sc::TargetKind::kCylinder,
+        sc::TargetKind::kBox}) {
+    for (double f : {0.0, 0.3, 0.07}) {
+      const sc::TargetSpec spec{k, 1.3, 0.9, 0.6, f};
+      const double n = static_cast<double>(sc::make_target(spec).objects[0].mesh.triangles.size());
+      EXPECT_EQ(sc::target_triangle_estimate(spec), n) << sc::target_name(k) << " facet " << f;
+    }
+  }
+  const std::vector<std::tuple<sc::TargetKind, double, double, double>> lofted{
+      {sc::TargetKind::kVehicle, 7.0, 3.5, 2.5},
+      {sc::TargetKind::kTruck, 8.0, 2.5, 3.4},
+      {sc::TargetKind::kJeep, 4.0, 1.8, 1.9},
+      {sc::TargetKind::kHelicopter, 12.7, 14.6, 4.4},
+      {sc::TargetKind::kTransportAircraft, 37.6, 35.8, 11.8}};
+  for (const auto& [k, a, b, c] : lofted) {
+    for (double f : {0.0, 0.5, 0.2, 0.1}) {
+      const sc::TargetSpec spec{k, a, b, c, f};
+      const double n = static_cast<double>(sc::make_target(spec).objects[0].mesh.triangles.size());
+      const double e = sc::target_triangle_estimate(spec);
+      EXPECT_GT(e, 0.5 * n) << sc::target_name(k) << " facet " << f;
+      EXPECT_LT(e, 2.0 * n) << sc::target_name(k) << " facet " << f;
+    }
+  }
+  // Sphere of radius 1 m at 0.1 mm: 62832 around x 31416 rings (2 per cell but the poles).
+  const double huge = sc::target_triangle_estimate({sc::TargetKind::kSphere, 1.0, 1.0, 1.0, 1e-4});
+  EXPECT_DOUBLE_EQ(huge, 62832.0 * (2.0 * 31416.0 - 2.0));
+  EXPECT_TRUE(std::isfinite(sc::target_triangle_estimate({sc::TargetKind::kBox, 1, 1, 1, 1e-300})));
+}
