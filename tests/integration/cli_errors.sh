@@ -40,7 +40,7 @@ expect_error "frames" run --frames 0
 expect_error "zero.toml/out: cannot create the output directory" run --frames 1000000 --out "$dir/zero.toml/out"
 expect_error "zero.toml/t.json: cannot open for writing" run --frames 1000000 --trace-events "$dir/zero.toml/t.json"
 expect_error "unknown target 'cone'" scene target cone --out "$dir/x.obj"
-expect_error "a_m must be a positive number" scene target plate --a-m -1 --out "$dir/x.obj"
+expect_error "--a-m: -1 is outside (0, 100000\] m" scene target plate --a-m -1 --out "$dir/x.obj"
 expect_error "cannot open for writing" scene target box --out "$dir/no/such/dir/x.stl"
 if ! "$exe" scene target trihedral-tri --a-m 0.3 --out "$dir/t.stl" >/dev/null; then
   echo "FAIL: scene target trihedral-tri"; fails=$((fails+1))
@@ -66,7 +66,7 @@ if ! "$exe" rcs --mesh "$dir/glass.obj" --freq-hz 1e10 --material glass=6,0.2 -q
   echo "FAIL: rcs with a dielectric material"; fails=$((fails+1))
 fi
 # ambiguity / the sensor's scenario keys: one-line errors naming the option or key.
-expect_error "--points must be in" ambiguity --points 3 --out "$dir/amb"
+expect_error "--points: Value 3 not in range 11 to 2001" ambiguity --points 3 --out "$dir/amb"
 expect_error "--train needs PRI >= 2 T" ambiguity --train --prf-hz 400e3 --out "$dir/amb"
 printf '[radar]\nwaveform = "cw"\n' > "$dir/wave.toml"
 expect_error "wave.toml: \[radar\] waveform: unknown waveform 'cw'" run "$dir/wave.toml"
@@ -91,13 +91,13 @@ expect_error "--veg-depth-m must be" atten --freq-hz 10e9 --veg-depth-m -2 --out
 expect_error "unknown scene kind 'city'" scene gen city --out "$dir/c.glb"
 expect_error "--seed: 'abc' is not a whole number" scene gen terrain --seed abc --out "$dir/t.glb"
 expect_error "--seed: '-3' is not a whole number" scene gen terrain --seed -3 --out "$dir/t.glb"
-expect_error "--out: '$dir/t.obj' is not a .glb or .gltf file" scene gen terrain --out "$dir/t.obj"
+expect_error "--out: $dir/t.obj: cannot write a '.obj' file (expected .glb, .gltf)" scene gen terrain --out "$dir/t.obj"
 expect_error "does not exist" scene gen terrain --out "$dir/no/such/dir/t.glb"
 expect_error "nope.glb" scene info "$dir/nope.glb"
 expect_error "zero.toml" scene info "$dir/zero.toml"
 expect_error "nope.glb" scene preview "$dir/nope.glb" --out "$dir/v.png"
 expect_error "--camera: '1,2' is not three numbers" scene preview "$dir/nope.glb" --camera 1,2 --out "$dir/v.png"
-expect_error "--width / --height" scene preview "$dir/nope.glb" --width 0 --out "$dir/v.png"
+expect_error "--width: Value 0 not in range 1 to 16384" scene preview "$dir/nope.glb" --width 0 --out "$dir/v.png"
 for sub in "scene gen" "scene info" "scene preview"; do
   if ! "$exe" $sub --help >/dev/null 2>&1; then echo "FAIL: '$sub --help'"; fails=$((fails+1)); fi
 done

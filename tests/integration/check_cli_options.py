@@ -1,0 +1,249 @@
+#!/usr/bin/python3
+"""No silent surprises (issue 18): every subcommand's options walked with bad values, as a table.
+Each row of BAD is a command line that must exit non-zero with ONE line on stderr containing the
+fragment: an ignored option (given in a mode that does not read it), a value out of its physical
+range (the message in the unit the option is given in), conflicting options, unknown or ignored
+scenario keys and glTF extras, an output path that cannot be written (refused before any work:
+each row would otherwise run for minutes), a mesh past the memory limit (refused with its
+estimate). Each row of QUIET runs with -q and must exit 0 with the warning still on stderr and
+nothing on stdout (-q silences progress and the summary only).
+Usage: check_cli_options.py RADAR_EMU SOURCE_DIR WORK_DIR"""
+import json
+import os
+import subprocess
+import sys
+import time
+
+from cli_check import check, finish
+
+exe, src, d = sys.argv[1], sys.argv[2], sys.argv[3]
+os.makedirs(d, exist_ok=True)
+
+
+def write(name, text):
+    path = os.path.join(d, name)
+    with open(path, "w") as f:
+        f.write(text)
+    return path
+
+
+def radar_emu(*args):
+    return subprocess.run([exe, *args], capture_output=True, text=True, timeout=300)
+
+
+# Inputs: a trihedral and a small sphere (made by the tool itself; checked in check_rcs_cli.py),
+# a plain file where a directory is expected, scenarios, a glTF with an unknown extras key.
+mesh = os.path.join(d, "t.stl")
+sphere = os.path.join(d, "s.stl")
+for args in (["scene", "target", "trihedral-tri", "--a-m", "0.3", "--out", mesh],
+             ["scene", "target", "sphere", "--a-m", "0.05", "--out", sphere],
+             ["scene", "target", "plate", "--out", os.path.join(d, "plate.gltf")]):
+    r = radar_emu(*args)
+    if r.returncode != 0:
+        sys.exit(f"setup failed: {' '.join(args)}: {r.stderr}")
+a_file = write("a_file.txt", "not a directory\n")
+no_dir = "/nonexistent_radar_emu_dir"
+with open(os.path.join(d, "plate.gltf")) as f:
+    gltf = json.load(f)
+gltf["nodes"][0]["extras"] = {"radar_emu": {"speed_mps": 3}}
+extras = write("extras.gltf", json.dumps(gltf))
+toml = {
+    "both": '[scene]\nbuiltin = "default"\nfile = "x.glb"\n',
+    "seed_file": '[scene]\nfile = "x.glb"\nseed = 3\n',
+    "extras_scene": f'[scene]\nfile = "{extras}"\n',
+    "unknown_key": '[radar]\ncarrier = 9.4e9\n',
+    "unknown_table": '[radr]\ncarrier_hz = 9.4e9\n',
+    "pattern_file": '[antenna]\npattern = "gaussian"\npattern_file = "p.csv"\n',
+    "gain": '[antenna]\ngain_db = 30.0\nefficiency = 0.5\n',
+    "os_rank": '[detector]\ncfar = "ca"\nos_rank = 0.75\n',
+    "taylor": '[radar]\ntaylor_nbar = 5\n',
+    "range": '[radar]\ncarrier_hz = 94.0\n',
+}
+sc = {k: write(k + ".toml", v) for k, v in toml.items()}
+log = os.path.join(src, "tests", "data", "replay", "approach_gap.log")
+old_log = write("old.log", "(1000000000.000000) can0 137#0102\n")
+f10 = ["--freq-hz", "1e10"]
+
+BAD = [
+    # run
+    (["run", "--rt-priority", "5"], "--rt-priority requires --realtime"),
+    (["run", "--lock-memory"], "--lock-memory requires --realtime"),
+    (["run", "--cpu", "1"], "--cpu requires --realtime"),
+    (["run", "--realtime", "--cpu", "5000"], "--cpu: Value 5000 not in range 0 to 1023"),
+    (["run", "--realtime", "--rt-priority", "0"], "--rt-priority: Value 0 not in range 1 to 99"),
+    (["run", "--modbus-linger-s", "5"], "--modbus-linger-s requires --modbus-server"),
+    (["run", "--modbus-server", ":0", "--modbus-linger-s", "-1"],
+     "--modbus-linger-s: -1 is outside [0, 86400] s"),
+    (["run", "--print-scenario", "--frames", "3"], "excludes --print-scenario"),
+    (["run", "--print-scenario", "--out", d], "excludes --print-scenario"),
+    (["run", "--frames", "0"], "--frames: Value 0 not in range"),
+    (["run", "--frames", "1000000", "--out", a_file + "/out"], "cannot create the output directory"),
+    (["run", "--frames", "1000000", "--trace-events", no_dir + "/t.json"],
+     "t.json: cannot open for writing: directory " + no_dir + " does not exist"),
+    # the scenario: unknown keys and tables, keys a mode does not read, values out of range
+    (["run", sc["both"]], "both.toml: [scene] file: builtin and file exclude each other"),
+    (["run", sc["seed_file"]], "seed_file.toml: [scene] seed: seeds a built-in scene, not a file"),
+    (["run", sc["unknown_key"]], "unknown_key.toml: [radar] carrier: unknown key"),
+    (["run", sc["unknown_table"]], "unknown_table.toml: radr: unknown table"),
+    (["run", sc["pattern_file"]], "[antenna] pattern_file: is read with pattern = \"table\" only"),
+    (["run", sc["gain"]], "[antenna] efficiency: unused when gain_db is given"),
+    (["run", sc["os_rank"]], "[detector] os_rank: is read with cfar = \"os\" only"),
+    (["run", sc["taylor"]], "[radar] taylor_nbar: is read with a \"taylor\" range_window"),
+    (["run", sc["range"]], "[radar] carrier_hz: value 94 outside [1e+08, 1e+12]"),
+    # glTF extras: the key and the node
+    (["run", sc["extras_scene"]], "node 0 extras radar_emu: unknown key 'speed_mps'"),
+    (["scene", "info", extras], "node 0 extras radar_emu: unknown key 'speed_mps'"),
+    # replay
+    (["replay", log, "--frames", "0"], "--frames: Value 0 not in range"),
+    (["replay", log, "--out", a_file + "/replay"], "cannot create the output directory"),
+    (["replay", os.path.join(d, "nope.log")], "nope.log"),
+    # scene target: dimensions a kind does not read, ranges, the memory limit, the output
+    (["scene", "target", "sphere", "--facet-m", "1e-4", "--out", os.path.join(d, "big.glb")],
+     "a sphere would have about 3.95e+09 triangles (about 829 GB of memory), over the limit of "
+     "2e+07 triangles (raise it with --max-triangles"),
+    (["scene", "target", "sphere", "--facet-m", "0.01", "--max-triangles", "1000", "--out",
+      os.path.join(d, "s.glb")], "over the limit of 1e+03 triangles"),
+    (["scene", "target", "sphere", "--max-triangles", "0", "--out", os.path.join(d, "s.glb")],
+     "--max-triangles: 0 is outside [1, 1.4e+09] triangles"),
+    (["scene", "target", "sphere", "--b-m", "2", "--out", os.path.join(d, "s.glb")],
+     "--b-m: a sphere takes --a-m only"),
+    (["scene", "target", "plate", "--c-m", "2", "--out", os.path.join(d, "p.glb")],
+     "--c-m: a plate takes --a-m and --b-m only"),
+    (["scene", "target", "box", "--a-m", "0", "--out", os.path.join(d, "b.glb")],
+     "--a-m: 0 is outside (0, 100000] m"),
+    (["scene", "target", "box", "--facet-m", "-1", "--out", os.path.join(d, "b.glb")],
+     "--facet-m: -1 is outside [0, 100000] m"),
+    (["scene", "target", "box", "--out", os.path.join(d, "b.ply")],
+     "b.ply: cannot write a '.ply' file (expected .glb, .gltf, .obj, .stl)"),
+    (["scene", "target", "box", "--out", no_dir + "/b.stl"], "cannot open for writing"),
+    (["scene", "target", "cone", "--out", os.path.join(d, "c.stl")], "unknown target 'cone'"),
+    # scene gen / preview
+    (["scene", "gen", "terrain", "--out", os.path.join(d, "t.obj")], "cannot write a '.obj' file"),
+    (["scene", "gen", "terrain", "--out", no_dir + "/t.glb"], "does not exist"),
+    (["scene", "preview", extras, "--fov-deg", "0", "--out", os.path.join(d, "v.png")],
+     "--fov-deg: 0 is outside (0, 180) deg"),
+    (["scene", "preview", extras, "--fov-deg", "180", "--out", os.path.join(d, "v.png")],
+     "--fov-deg: 180 is outside (0, 180) deg"),
+    (["scene", "preview", extras, "--width", "0", "--out", os.path.join(d, "v.png")],
+     "--width: Value 0 not in range 1 to 16384"),
+    (["scene", "preview", extras, "--out", os.path.join(d, "v.jpg")],
+     "v.jpg: cannot write a '.jpg' file (expected .png)"),
+    (["scene", "preview", extras, "--out", no_dir + "/v.png"], "cannot open for writing"),
+    # rcs
+    (["rcs", "--mesh", mesh, *f10, "--theta-deg", "200"], "--theta-deg: 200 is outside [0, 180] deg"),
+    (["rcs", "--mesh", mesh, *f10, "--theta-deg", "0:200:3"],
+     "--theta-deg: 200 (in 0:200:3) is outside [0, 180] deg"),
+    (["rcs", "--mesh", mesh, *f10, "--phi-deg", "400"], "--phi-deg: 400 is outside [-360, 360] deg"),
+    (["rcs", "--mesh", mesh, *f10, "--bistatic-theta-deg", "200", "--bistatic-phi-deg", "0"],
+     "--bistatic-theta-deg: 200 is outside [0, 180] deg"),
+    (["rcs", "--mesh", mesh, *f10, "--bistatic-theta-deg", "20"],
+     "--bistatic-theta-deg requires --bistatic-phi-deg"),
+    (["rcs", "--mesh", mesh, "--freq-hz", "-1"], "--freq-hz: -1 is outside (0, 1e+15] Hz"),
+    (["rcs", "--mesh", mesh, *f10, "--freq-sweep-hz", "9e9:1e10:3"], "excludes"),
+    (["rcs", "--mesh", mesh, *f10, "--scale", "0"], "--scale: 0 is outside (0, 1e+06]"),
+    (["rcs", "--mesh", mesh, *f10, "--plot", os.path.join(d, "x.jpg")],
+     "x.jpg: cannot write a '.jpg' file (expected .png)"),
+    (["rcs", "--mesh", mesh, *f10, "--theta-deg", "0:90:901", "--out", no_dir + "/a.csv"],
+     "a.csv: cannot open for writing: directory " + no_dir + " does not exist"),
+    (["rcs", "--mesh", mesh, *f10, "--out", d], "cannot open for writing: it is a directory"),
+    (["rcs", "--mesh", mesh, *f10, "--stats-out", os.path.join(d, "st.csv")],
+     "--stats-out requires --window-deg"),
+    (["rcs", "--mesh", mesh, *f10, "--window-deg", "10"],
+     "--window-deg: needs a sweep in theta or phi"),
+    (["rcs", "--mesh", mesh, *f10, "--window-deg", "0"], "--window-deg: 0 is outside (0, 360] deg"),
+    (["rcs", "--mesh", mesh, *f10, "--bounces", "1", "--rays-per-wavelength", "8"],
+     "--rays-per-wavelength: not used with --bounces 1"),
+    (["rcs", "--mesh", mesh, *f10, "--rays-per-wavelength", "0"],
+     "--rays-per-wavelength: 0 is outside (0, 1000] rays a wavelength"),
+    # profile
+    (["profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:1e10:8", "--isar-out",
+      os.path.join(d, "i.csv")], "--isar-out: an ISAR image needs a sweep in theta or phi"),
+    (["profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:1e10:8", "--isar-plot",
+      os.path.join(d, "i.png")], "--isar-plot: an ISAR image needs a sweep in theta or phi"),
+    (["profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:1e10:8", "--oversample", "0"],
+     "--oversample: Value 0 not in range 1 to 64"),
+    (["profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:1e10:8", "--dynamic-range-db", "0"],
+     "--dynamic-range-db: 0 is outside (0, 400] dB"),
+    (["profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:1e10:8", "--plot",
+      os.path.join(d, "p.svg")], "cannot write a '.svg' file"),
+    (["profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:1e10:8", "--out", no_dir + "/p.csv"],
+     "cannot open for writing"),
+    # ambiguity
+    (["ambiguity", "--prf-hz", "1e3", "--out", os.path.join(d, "amb")], "--prf-hz requires --train"),
+    (["ambiguity", "--pulses", "8", "--out", os.path.join(d, "amb")], "--pulses requires --train"),
+    (["ambiguity", "--train", "--delay-span", "2", "--out", os.path.join(d, "amb")], "excludes"),
+    (["ambiguity", "--points", "3"], "--points: Value 3 not in range 11 to 2001"),
+    (["ambiguity", "--bandwidth-hz", "0"], "--bandwidth-hz: 0 is outside [1000, 1e+10] Hz"),
+    (["ambiguity", "--pulse-width-s", "2"], "--pulse-width-s: 2 is outside [1e-10, 1] s"),
+    (["ambiguity", "--out", a_file + "/amb"], "cannot create the output directory"),
+    (["ambiguity", os.path.join(d, "nope.toml")], "nope.toml"),
+    # atten
+    (["atten", "--freq-hz", "1e10", "--out-of-leaf"], "--out-of-leaf requires --veg-depth-m"),
+    (["atten", "--freq-hz", "1e10", "--pressure-hpa", "-5"],
+     "--pressure-hpa: -5 is outside [0, 1100] hPa"),
+    (["atten", "--freq-hz", "1e10", "--temp-c", "200"], "--temp-c: 200 is outside [-100, 60] C"),
+    (["atten", "--freq-hz", "1e10", "--rho-gm3", "-1"], "--rho-gm3: -1 is outside [0, 130] g/m^3"),
+    (["atten", "--freq-hz", "1e10", "--fog-gm3", "9"], "--fog-gm3: 9 is outside [0, 5] g/m^3"),
+    (["atten", "--freq-hz", "1e10", "--plot", os.path.join(d, "a.png")],
+     "--plot: needs a frequency sweep"),
+    (["atten", "--freq-hz", "1e10:2e10:3", "--plot", os.path.join(d, "a.jpg")],
+     "cannot write a '.jpg' file"),
+    (["atten", "--freq-hz", "1e10", "--out", no_dir + "/a.csv"], "cannot open for writing"),
+    # sigma0
+    (["sigma0", "--material", "grass", "--corr", "xpower", "--freq-hz", "1e10"],
+     "--material excludes --corr"),
+    (["sigma0", "--material", "grass", "--eps-r", "4,0.1", "--freq-hz", "1e10"],
+     "--material excludes --eps-r"),
+    (["sigma0", "--eps-r", "4,0.1", "--rms-height-m", "0.001", "--corr-length-m", "0.01",
+      "--x-power", "2", "--freq-hz", "1e10"], "--x-power requires --corr"),
+    (["sigma0", "--eps-r", "4,0.1", "--rms-height-m", "0.001", "--corr-length-m", "0.01",
+      "--corr", "gaussian", "--x-power", "2", "--freq-hz", "1e10"],
+     "--x-power: used with --corr xpower only"),
+    (["sigma0", "--eps-r", "4,0.1", "--rms-height-m", "0.001", "--corr-length-m", "0.01",
+      "--corr", "xpower", "--x-power", "1", "--freq-hz", "1e10"], "--x-power: 1 is outside (1, 20]"),
+    (["sigma0", "--eps-r", "4,0.1", "--rms-height-m", "0.001", "--corr-length-m", "0.01",
+      "--corr", "cosine", "--freq-hz", "1e10"], "--corr: cosine not in"),
+    (["sigma0", "--material", "grass", "--phi-s-deg", "30", "--freq-hz", "1e10"],
+     "--phi-s-deg requires --theta-s-deg"),
+    (["sigma0", "--material", "grass", "--freq-hz", "0"], "--freq-hz: 0 is outside (0, 1e+15] Hz"),
+    (["sigma0", "--material", "grass", "--freq-hz", "1e10", "--plot", os.path.join(d, "s.gif")],
+     "cannot write a '.gif' file"),
+    (["sigma0", "--material", "grass", "--freq-hz", "1e10", "--out", no_dir + "/s.csv"],
+     "cannot open for writing"),
+    # tradeoff
+    (["tradeoff", "--out", a_file + "/to"], "cannot create the output directory"),
+    (["tradeoff", "--cases", "sphere,cone", "--out", os.path.join(d, "to")], "cone"),
+]
+
+# (command line, fragment of the warning that -q must keep on stderr).
+QUIET = [
+    (["rcs", "--mesh", sphere, "--freq-hz", "1e9", "-q", "--out", os.path.join(d, "q.csv")],
+     "radar-emu: warning: the target is only ka = 1.05"),
+    (["profile", "--mesh", sphere, "--freq-sweep-hz", "1e10:2e10:3", "-q", "--out",
+      os.path.join(d, "qp.csv")], "radar-emu: warning: the unambiguous range window"),
+    (["sigma0", "--material", "grass", "--freq-hz", "35e9", "-q", "--out",
+      os.path.join(d, "qs.csv")], "radar-emu: warning: rows with valid=0 leave a model's domain"),
+    (["replay", old_log, "--frames", "1", "-q", "--out", os.path.join(d, "qr")],
+     "radar-emu replay: warning: log starts at 1000000000.000000 s"),
+]
+
+for args, fragment in BAD:
+    t0 = time.monotonic()
+    r = radar_emu(*args)
+    what = "radar-emu " + " ".join(args)
+    lines = [line for line in r.stderr.splitlines() if line.strip()]
+    check(r.returncode != 0, f"{what}: exited 0")
+    check(len(lines) == 1, f"{what}: {len(lines)} lines on stderr, not one: {r.stderr!r}")
+    check(fragment in r.stderr, f"{what}: stderr {r.stderr!r} lacks {fragment!r}")
+    # Refused before any work: a bad option costs no computation.
+    check(time.monotonic() - t0 < 10.0, f"{what}: took {time.monotonic() - t0:.1f} s to refuse")
+
+for args, fragment in QUIET:
+    r = radar_emu(*args)
+    what = "radar-emu " + " ".join(args)
+    check(r.returncode == 0, f"{what}: exited {r.returncode}: {r.stderr}")
+    check(fragment in r.stderr, f"{what}: -q hid the warning {fragment!r}: stderr {r.stderr!r}")
+    check(r.stdout == "", f"{what}: -q printed on stdout: {r.stdout!r}")
+
+print(f"{len(BAD)} bad command lines refused, {len(QUIET)} warnings kept under -q")
+finish()
