@@ -174,6 +174,9 @@ max_level = 12              # coarsest: target rays / 64, terrain grid spacing x
 # speed_mps = 5.0             # 0: fixed; > 0: straight line along course_deg (default heading_deg)
 )";
 
+// The largest built-in [[target]] mesh (triangles): about 4 GB while made (scene/targets.hpp).
+constexpr double kMaxTargetTriangles = 20e6;
+
 class TableReader {
  public:
   TableReader(const toml::table& root, std::string_view table, const std::string& origin,
@@ -567,6 +570,21 @@ scene::TargetPlacement parse_target(const TargetReader& r, const toml::table& ta
     spec.c_m = size.size() > 2 ? size[2] : 1.0;
     t.builtin = spec;
     r.number("facet_m", t.facet_m, 0.0, 1e4);
+    {
+      // The mesh past the memory limit is refused with its estimate, before it is made (the
+      // same limit as `scene target`'s default --max-triangles).
+      scene::TargetSpec sized = spec;
+      sized.facet_m = t.facet_m;
+      const double triangles = scene::target_triangle_estimate(sized);
+      if (triangles > kMaxTargetTriangles) {
+        std::ostringstream os;
+        os.precision(3);
+        os << "facet_m = " << t.facet_m << ": a " << builtin << " would have about " << triangles
+           << " triangles (about " << triangles * scene::kTargetBytesPerTriangle * 1e-9
+           << " GB of memory), over the limit of " << kMaxTargetTriangles << " triangles";
+        r.fail(os.str());
+      }
+    }
     for (const char* key : {"mesh_scale", "mesh_front_axis", "mesh_up_axis"}) {
       if (r.has(key))
         r.fail(std::string(key) + " applies to mesh_file only");

@@ -58,6 +58,8 @@ toml = {
     "os_rank": '[detector]\ncfar = "ca"\nos_rank = 0.75\n',
     "taylor": '[radar]\ntaylor_nbar = 5\n',
     "range": '[radar]\ncarrier_hz = 94.0\n',
+    "facet": '[[target]]\nbuiltin = "sphere"\nsize_m = 1.0\nfacet_m = 1e-4\n'
+             'position_enu_m = [0, 0, 0]\n',
 }
 sc = {k: write(k + ".toml", v) for k, v in toml.items()}
 log = os.path.join(src, "tests", "data", "replay", "approach_gap.log")
@@ -90,6 +92,8 @@ BAD = [
     (["run", sc["os_rank"]], "[detector] os_rank: is read with cfar = \"os\" only"),
     (["run", sc["taylor"]], "[radar] taylor_nbar: is read with a \"taylor\" range_window"),
     (["run", sc["range"]], "[radar] carrier_hz: value 94 outside [1e+08, 1e+12]"),
+    (["run", sc["facet"]], "facet.toml: [[target]] #1: facet_m = 0.0001: a sphere would have "
+     "about 3.95e+09 triangles (about 829 GB of memory), over the limit of 2e+07 triangles"),
     # glTF extras: the key and the node
     (["run", sc["extras_scene"]], "node 0 extras radar_emu: unknown key 'speed_mps'"),
     (["scene", "info", extras], "node 0 extras radar_emu: unknown key 'speed_mps'"),
