@@ -652,7 +652,10 @@ int main(int argc, char** argv) {
       "P.676/838/840/833)");
   emu::AttenToolOptions atten_opt;
   std::string atten_freq;
-  atten->add_option("--freq-hz", atten_freq, "Frequency [Hz]: F or START:STOP:N")->required();
+  // ITU-R P.676-13's domain, 1-1000 GHz, in the option's unit.
+  atten->add_option("--freq-hz", atten_freq, "Frequency [Hz]: F or START:STOP:N in [1e9, 1e12]")
+      ->required()
+      ->check(emu::sweep_in_range(1e9, 1e12, "Hz"));
   // Ranges: a standard atmosphere from the ground to 100 km (ITU-R P.835: 1013 hPa to below
   // 1e-3 hPa, -90 C to +60 C at the extremes), vapour to saturation at 60 C (130 g/m^3), the
   // scenario's fog ceiling (5 g/m^3).
@@ -666,7 +669,8 @@ int main(int argc, char** argv) {
       ->add_option("--rho-gm3", atten_opt.water_vapour_gm3,
                    "Water-vapour density [g/m^3] (default 7.5)")
       ->check(emu::in_range(0.0, 130.0, "g/m^3"));
-  atten->add_option("--rain-mmh", atten_opt.rain_mm_per_h, "Rain rate [mm/h] (default 0)");
+  atten->add_option("--rain-mmh", atten_opt.rain_mm_per_h, "Rain rate [mm/h] (default 0)")
+      ->check(emu::in_range(0.0, 500.0, "mm/h"));  // ITU-R P.838's range here
   atten->add_option("--fog-gm3", atten_opt.fog_gm3, "Fog or cloud liquid water [g/m^3] (default 0)")
       ->check(emu::in_range(0.0, 5.0, "g/m^3"));
   CLI::Option* veg =

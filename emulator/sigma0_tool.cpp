@@ -105,8 +105,12 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     if (!cl::empirical_row(spec.empirical, o.freq_hz, 1))
       throw std::invalid_argument(
           "empirical: Ulaby-Dobson coefficients are available for L, S and C band (1-8 GHz) "
-          "only; use --model total at " +
-          std::to_string(o.freq_hz * 1e-9) + " GHz");
+          "only; use --model total at --freq-hz " +
+          [&] {
+            char f[32];
+            std::snprintf(f, sizeof f, "%g", o.freq_hz);
+            return std::string(f);
+          }());
   }
   if ((model == cl::Sigma0Model::kRt) && !spec.has_volume)
     throw std::invalid_argument("--model rt needs a material with a volume layer (" + what +

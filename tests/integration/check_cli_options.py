@@ -182,6 +182,11 @@ BAD = [
     (["ambiguity", "--out", a_file + "/amb"], "cannot create the output directory"),
     (["ambiguity", os.path.join(d, "nope.toml")], "nope.toml"),
     # atten
+    (["atten", "--freq-hz", "0.5e9"], "--freq-hz: 5e+08 is outside [1e+09, 1e+12] Hz"),
+    (["atten", "--freq-hz", "1e9:2e12:3"], "(in 1e9:2e12:3) is outside [1e+09, 1e+12] Hz"),
+    (["atten", "--freq-hz", "1e10", "--rain-mmh", "-3"], "--rain-mmh: -3 is outside [0, 500] mm/h"),
+    (["sigma0", "--material", "grass", "--model", "empirical", "--freq-hz", "94e9"],
+     "use --model total at --freq-hz 9.4e+10"),
     (["atten", "--freq-hz", "1e10", "--out-of-leaf"], "--out-of-leaf requires --veg-depth-m"),
     (["atten", "--freq-hz", "1e10", "--pressure-hpa", "-5"],
      "--pressure-hpa: -5 is outside [0, 1100] hPa"),
