@@ -67,6 +67,11 @@ old_log = write("old.log", "(1000000000.000000) can0 137#0102\n")
 f10 = ["--freq-hz", "1e10"]
 
 BAD = [
+    # unknown options, everywhere
+    (["run", "--frobnicate"], "The following argument was not expected: --frobnicate"),
+    (["rcs", "--mesh", mesh, *f10, "--no-such-option", "1"], "not expected: 1 --no-such-option"),
+    (["scene", "target", "box", "--radius-m", "1", "--out", os.path.join(d, "b.stl")],
+     "not expected: 1 --radius-m"),
     # run
     (["run", "--rt-priority", "5"], "--rt-priority requires --realtime"),
     (["run", "--lock-memory"], "--lock-memory requires --realtime"),
