@@ -13,6 +13,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include "emulator/bus_backends.hpp"
@@ -479,6 +480,19 @@ struct ClosedLoop::Impl {
   io::modbus::DetectionTableConfig table_config{};
   std::vector<std::uint16_t> table_regs;
   std::unique_ptr<io::modbus::ModbusServer> modbus_server;
+  // The run under way (begin() to finish()): its result so far, its clocks and its schedule.
+  struct RunState {
+    explicit RunState(std::int64_t epoch_ns) : simulated(epoch_ns) {}
+    RunResult r;
+    timing::MonotonicClock wall;
+    timing::SimulatedClock simulated;
+    std::optional<timing::FixedRateScheduler> scheduler;
+    std::int64_t period_ns = 0, start_ns = 0, timeout_ns = 0, run_start_wall = 0;
+    std::uint16_t frame_counter = 0;
+    std::uint64_t done = 0;  ///< frames run
+    bool finished = false;
+  };
+  std::unique_ptr<RunState> run;
 };
 
 ClosedLoop::ClosedLoop(const Scenario& scenario, const RunOptions& options)
@@ -508,10 +522,14 @@ const std::vector<std::string>& ClosedLoop::setup_warnings() const noexcept {
   return impl_->warnings;
 }
 
-RunResult ClosedLoop::run() {
+void ClosedLoop::begin() {
   Impl& m = *impl_;
+  if (m.run)
+    throw std::logic_error("ClosedLoop: the run has already begun (a loop runs once)");
   const Scenario& s = m.scenario;
-  RunResult r;
+  m.run = std::make_unique<Impl::RunState>(s.epoch_unix_ns);
+  Impl::RunState& rs = *m.run;
+  RunResult& r = rs.r;
   r.frames_planned = s.frames;
   r.records.reserve(static_cast<std::size_t>(m.recorded_frames));
   r.detections.reserve(static_cast<std::size_t>(m.recorded_frames) * s.sensor.max_detections);
@@ -524,15 +542,14 @@ RunResult ClosedLoop::run() {
   r.field_age_max_s.fill(0.0);
   r.field_stale_frames.fill(0);
 
-  timing::MonotonicClock wall;
-  timing::SimulatedClock simulated(s.epoch_unix_ns);
+  timing::MonotonicClock& wall = rs.wall;
   timing::Clock& sched_clock = m.options.realtime ? static_cast<timing::Clock&>(wall)
-                                                  : static_cast<timing::Clock&>(simulated);
+                                                  : static_cast<timing::Clock&>(rs.simulated);
   if (m.options.realtime)
     r.realtime = timing::bring_up_realtime(m.options.rt);
-  const std::int64_t period_ns = std::llround(1e9 / s.rate_hz);
+  rs.period_ns = std::llround(1e9 / s.rate_hz);
   const std::int64_t start_ns =
-      m.options.realtime ? wall.now_ns() + 20'000'000 : simulated.now_ns();  // 20 ms to settle
+      m.options.realtime ? wall.now_ns() + 20'000'000 : rs.simulated.now_ns();  // 20 ms to settle
   if (m.hardware_can || m.nav_external) {
     // A real bus: bus time is Unix time (CLOCK_REALTIME, as SocketCAN's and gs_usb's stamps),
     // taken once here and carried on by the monotonic clock.
@@ -543,11 +560,26 @@ RunResult ClosedLoop::run() {
     m.scenario.epoch_unix_ns = realtime_now_ns + (start_ns - wall.now_ns());
     m.bus_from_monotonic_ns.store(m.scenario.epoch_unix_ns - start_ns);
   }
-  timing::FixedRateScheduler scheduler(sched_clock, period_ns, start_ns);
-  const std::int64_t timeout_ns = std::llround(s.state_timeout_s * 1e9);
-  const std::int64_t run_start_wall = wall.now_ns();
-  std::uint16_t frame_counter = 0;
+  rs.start_ns = start_ns;
+  rs.scheduler.emplace(sched_clock, rs.period_ns, start_ns);
+  rs.timeout_ns = std::llround(s.state_timeout_s * 1e9);
+  rs.run_start_wall = wall.now_ns();
+}
 
+bool ClosedLoop::step(FrameOutput& out, const OwnshipInput* ownship) {
+  Impl& m = *impl_;
+  if (!m.run)
+    begin();
+  Impl::RunState& rs = *m.run;
+  if (rs.finished)
+    return false;
+  const Scenario& s = m.scenario;
+  RunResult& r = rs.r;
+  timing::MonotonicClock& wall = rs.wall;
+  timing::FixedRateScheduler& scheduler = *rs.scheduler;
+  const std::int64_t start_ns = rs.start_ns, period_ns = rs.period_ns, timeout_ns = rs.timeout_ns;
+  std::uint16_t& frame_counter = rs.frame_counter;
+  const std::uint64_t done = rs.done;
   // A stop request ends the run at a frame boundary: before the wait, or after it (a real-time
   // run may sleep a period in between).
   auto stop_requested = [&] {
@@ -558,268 +590,291 @@ RunResult ClosedLoop::run() {
     }
     return sig != 0;
   };
-  for (std::uint64_t done = 0; done < s.frames; ++done) {
-    if (stop_requested())
-      break;
-    if (m.outputs)
-      m.outputs->wait_for_room();  // simulated clock only: the writer keeps up
-    const timing::Tick tick = scheduler.wait_next();
-    if (stop_requested())
-      break;
-    const std::int64_t frame_start_wall = wall.now_ns();
-    m.profiler.set_frame(done);
-    const std::int64_t since_start_ns = tick.deadline_ns - start_ns;
-    const double t_s = static_cast<double>(since_start_ns) * 1e-9;
-    const std::int64_t bus_now_ns = s.epoch_unix_ns + since_start_ns;
-    if (m.options.realtime) {
-      m.profiler.record(timing::Stage::kWakeLatency, tick.wake_ns - tick.deadline_ns);
-    }
-
-    // Peers on the software bus act first: the INS publishes what is due by now, or, in a
-    // replay, the recorded frames the radar had received by now.
-    if (m.options.replay) {
-      const std::vector<io::CanFrame>& log = m.options.replay_input;
-      while (m.replay_next < log.size() && log[m.replay_next].timestamp_ns <= bus_now_ns) {
-        if (m.replay_ep.send(log[m.replay_next]))
-          ++r.replay_frames_fed;
-        ++m.replay_next;
-      }
-    } else if (!m.hardware_can && !m.nav_external) {
-      if (m.nav_player)
-        (void)m.nav_player->publish_until(t_s, *m.nav_bank);
-      (void)m.player.publish_until(
-          t_s, m.stale_ins ? static_cast<io::CanEndpoint&>(*m.stale_ins) : m.ins);
-      if (m.babbler)
-        (void)m.babbler->publish_until(t_s, *m.babble_ep);
-      if (s.malformed_every_n_frames > 0 && done % s.malformed_every_n_frames == 0) {
-        m.faulty.send_next(m.faulty_ep, bus_now_ns);
-      }
-    }
-
-    // ---- input: decode the bus into the ownship state ----
-    radar::RadarPose pose;
-    bool valid = false;
-    {
-      timing::ScopedStage stage(m.profiler, wall, timing::Stage::kInput);
-      io::CanFrame f;
-      m.link->advance_to(bus_now_ns);
-      io::CanEndpoint& rx = m.hw_can ? *m.hw_can : static_cast<io::CanEndpoint&>(*m.link);
-      while (rx.receive(f)) {
-        ++r.bus_frames_in;
-        // Reception times are kept to the microsecond, the resolution of the candump log, so
-        // that a replay of bus_in.log decodes exactly what this run decoded.
-        f.timestamp_ns -= f.timestamp_ns % 1000;
-        if (m.outputs)
-          m.outputs->bus_in(f);
-        (void)m.decoder.decode(f, f.timestamp_ns);
-      }
-      // The ownship state: CANaerospace from the bus, or the Modbus navigation map.
-      const io::canas::OwnshipState* state = &m.decoder.state();
-      if (m.nav_faulty) {
-        m.nav_faulty->advance_to(bus_now_ns);
-        if (m.nav_faulty->read_holding(m.nav_map.base_address, m.nav_regs) ==
-            io::RegisterStatus::kOk) {
-          (void)m.nav_decoder.decode(m.nav_regs, bus_now_ns);
-        } else {
-          ++m.nav_read_failures;
-        }
-        state = &m.nav_decoder.state();
-      } else if (m.nav_poller) {
-        (void)m.nav_poller->latest(m.nav_state);
-        state = &m.nav_state;
-        if (m.nav_poller->link_state() != io::modbus::NavLinkState::kUp)
-          ++m.nav_frames_source_down;  // reported with the link (report.json nav_modbus.link)
-      }
-      valid = radar_pose_from_state(*state, bus_now_ns, timeout_ns, m.enu, s.antenna_depression_rad,
-                                    pose);
-      const io::canas::OwnshipState& st = *state;
-      for (std::size_t k = 0; k < io::canas::kFieldCount; ++k) {
-        const auto field = static_cast<io::canas::Field>(k);
-        if (st[field].received)
-          r.field_age_max_s[k] = std::max(r.field_age_max_s[k], st.age_s(field, bus_now_ns));
-        if (!st.fresh(field, bus_now_ns, timeout_ns))
-          ++r.field_stale_frames[k];
-      }
-    }
-    // ---- scene update: moving objects to frame time ----
-    {
-      timing::ScopedStage stage(m.profiler, wall, timing::Stage::kSceneUpdate);
-      m.scene.set_time(t_s);
-      if (valid) {
-        // Model no more than the radar sees: terrain tiles outside the beam are dropped, the
-        // others take the coarsest level of detail whose facets stay within a resolution cell.
-        scene::ViewVolume view;
-        view.position_m = pose.position_m;
-        view.world_from_antenna = pose.world_from_antenna;
-        view.azimuth_min_rad = s.sbr.azimuth_min_rad;
-        view.azimuth_max_rad = s.sbr.azimuth_max_rad;
-        view.elevation_min_rad = s.sbr.elevation_min_rad;
-        view.elevation_max_rad = s.sbr.elevation_max_rad;
-        view.max_range_m = s.sbr.max_range_m;
-        view.range_cell_m = radar::range_resolution_m(s.sensor.processing.waveform);
-        view.angular_cell_rad = s.sbr.terrain_ray_spacing_rad;
-        m.scene.set_view(view);
-        const scene::ViewStats& vs = m.scene.view_stats();
-        r.view.lod_groups_culled += vs.lod_groups_culled;
-        r.view.lod_groups_in_view += vs.lod_groups_in_view;
-        r.view.triangles_active += vs.triangles_active;
-        for (std::size_t k = 0; k < r.view.lod_groups_at_level.size(); ++k)
-          r.view.lod_groups_at_level[k] += vs.lod_groups_at_level[k];
-        ++r.view.frames;
-      }
-    }
-    // ---- trace: the governor sets the fidelity, then shoot and bounce ----
-    std::size_t n_contrib = 0;
-    const std::uint64_t rays_before = r.trace.rays;
-    const std::uint64_t cells_before = r.sensor.cells_synthesised;
-    const GovernorDecision* decision = nullptr;
-    {
-      timing::ScopedStage stage(m.profiler, wall, timing::Stage::kTrace);
-      if (valid) {
-        decision = &m.governor.decide(pose);
-        n_contrib = m.tracer.trace(pose, m.contributions, r.trace, decision->knobs);  // adds
-      }
-      // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
-      radar::apply_two_way_loss(std::span(m.contributions.data(), n_contrib), m.weather_db_per_m);
-    }
-    // ---- sensor: cells, CFAR, detections ----
-    std::size_t n_det = 0;
-    const std::uint64_t truncated_before = r.sensor.truncated;
-    {
-      timing::ScopedStage stage(m.profiler, wall, timing::Stage::kSensor);
-      if (valid) {
-        n_det = m.sensor.process(std::span(m.contributions.data(), n_contrib), m.detections,
-                                 r.sensor);  // accumulates
-      }
-    }
-    if (valid) {
-      m.governor.observe(static_cast<double>(m.profiler.last_ns(timing::Stage::kTrace)) * 1e-6,
-                         static_cast<double>(m.profiler.last_ns(timing::Stage::kSensor)) * 1e-6,
-                         r.trace.rays - rays_before, n_contrib,
-                         r.sensor.cells_synthesised - cells_before);
-      ++r.governor.level_frames[static_cast<std::size_t>(decision->level)];
-      r.governor.frames_degraded += decision->degraded ? 1 : 0;
-      r.governor.frames_predicted_late += decision->over_deadline ? 1 : 0;
-      r.governor.max_level = std::max(r.governor.max_level, decision->level);
-    }
-    if (r.governor.per_frame_level.size() < r.governor.per_frame_level.capacity()) {
-      // Every frame, valid or not (-1: no state, nothing traced), up to kGovernorFramesKept.
-      r.governor.per_frame_level.push_back(
-          static_cast<std::int8_t>(decision != nullptr ? decision->level : -1));
-      r.governor.per_frame_predicted_ms.push_back(
-          decision != nullptr ? static_cast<float>(decision->predicted_ms) : 0.0f);
-    }
-    // ---- output: ICD frames on the bus ----
-    FrameRecord rec;
-    std::size_t n_truth = 0;
-    {
-      timing::ScopedStage stage(m.profiler, wall, timing::Stage::kOutput);
-      for (std::size_t i = 0; i < n_det; ++i)
-        m.icd_detections[i] = to_icd(m.detections[i]);
-      io::icd::Header h;
-      h.frame_counter = frame_counter++;
-      h.time_ms = static_cast<std::uint32_t>(since_start_ns / 1'000'000);
-      if (!valid)
-        h.status |= io::icd::status::kOwnshipInvalid;
-      if (tick.late)
-        h.status |= io::icd::status::kOverrun;
-      if (r.sensor.truncated > truncated_before)
-        h.status |= io::icd::status::kTruncated;
-      if (decision != nullptr && decision->degraded)
-        h.status |= io::icd::status::kDegraded;
-      // A stale state sends an empty list flagged OWNSHIP_INVALID, or nothing ("silent").
-      const bool send_list = valid || !s.stale_output_silent;
-      io::icd::EncodeResult enc{};
-      if (send_list) {
-        const std::span<const io::icd::Detection> list(m.icd_detections.data(), n_det);
-        enc = s.can_fd ? io::icd::encode_fd(h, list, m.out_frames)
-                       : io::icd::encode(h, list, m.out_frames);
-      } else {
-        ++r.lists_suppressed;
-      }
-      r.icd_dropped += enc.dropped;
-      r.icd_truncated += enc.truncated;
-      io::CanEndpoint& tx = m.hw_can ? *m.hw_can : static_cast<io::CanEndpoint&>(m.radar_ep);
-      for (std::size_t i = 0; i < enc.frames; ++i) {
-        io::CanFrame& f = m.out_frames[i];
-        f.timestamp_ns = bus_now_ns;
-        if (tx.send(f))
-          ++r.bus_frames_out;
-        if (m.outputs)
-          m.outputs->bus_out(f);
-      }
-      if (m.modbus_server) {
-        // The Modbus table is state, not a message: it is published every frame, stale or not.
-        const io::modbus::TableEncodeResult te = io::modbus::encode_detection_table(
-            h, std::span<const io::icd::Detection>(m.icd_detections.data(), n_det), m.table_regs,
-            m.table_config);
-        (void)te;
-        (void)m.modbus_server->publish(m.table_regs);
-      }
-      // Ground truth: each target whose box centre is inside the field of view and range.
-      n_truth =
-          valid ? objects_in_view(pose, m.scene.objects(), m.truth_objects, s.sbr, m.frame_truth)
-                : 0;
-      rec.frame_index = tick.period_index;
-      rec.time_s = t_s;
-      rec.header = h;
-      rec.header.detection_count = static_cast<std::uint8_t>(enc.encoded);
-      rec.detection_count = static_cast<std::uint32_t>(n_det);
-      rec.truth_count = static_cast<std::uint32_t>(n_truth);
-      rec.late = tick.late;
-      rec.sent = send_list;
-      rec.ownship_valid = valid;
-      rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
-      rec.governor_level = decision != nullptr ? decision->level : 0;
-      rec.governor_predicted_ms = decision != nullptr ? decision->predicted_ms : 0.0;
-      rec.governor_error_db = decision != nullptr ? decision->estimated_snr_error_db : 0.0;
-      rec.rays = decision != nullptr ? decision->rays : 0;
-    }
-    const std::int64_t frame_end_wall = wall.now_ns();
-    const std::int64_t frame_ns = frame_end_wall - frame_start_wall;
-    m.profiler.record_span(timing::Stage::kFrame, frame_start_wall, frame_end_wall);
-    if (frame_ns > period_ns)
-      ++r.frames_over_budget;
-
-    // The frame's record: to the writer thread, and to memory for the first recorded_frames.
-    const std::span<const ObjectTruth> truth(m.frame_truth.data(), n_truth);
-    if (m.outputs) {
-      std::array<std::int64_t, timing::kStageCount> stage_ns{};
-      for (std::size_t k = 0; k < timing::kStageCount; ++k)
-        stage_ns[k] = m.profiler.last_ns(static_cast<timing::Stage>(k));
-      m.outputs->frame(rec, stage_ns, std::span(m.icd_detections.data(), n_det),
-                       std::span(m.detections.data(), n_det), truth);
-    }
-    if (r.records.size() < m.recorded_frames) {
-      rec.first_detection = static_cast<std::uint32_t>(r.detections.size());
-      rec.first_truth = static_cast<std::uint32_t>(r.truth.size());
-      const std::size_t room = r.truth.capacity() - r.truth.size();
-      rec.truth_count = static_cast<std::uint32_t>(std::min(n_truth, room));
-      r.truth_overflows += n_truth - rec.truth_count;
-      r.truth.insert(r.truth.end(), truth.begin(), truth.begin() + rec.truth_count);
-      r.records.push_back(rec);
-      r.detections.insert(r.detections.end(), m.icd_detections.begin(),
-                          m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
-      r.sensor_detections.insert(r.sensor_detections.end(), m.detections.begin(),
-                                 m.detections.begin() + static_cast<std::ptrdiff_t>(n_det));
-    }
-
-    // The avionics under test read what the radar sent.
-    (void)m.sink.poll(m.avionics);
-
-    ++r.frames;
-    if (valid)
-      ++r.frames_valid;
-    r.detections_total += n_det;
-    r.detections_min = std::min<std::uint64_t>(r.detections_min, n_det);
-    r.detections_max = std::max<std::uint64_t>(r.detections_max, n_det);
-    if (m.options.progress)
-      m.options.progress(done + 1, s.frames);
+  if (done >= s.frames || stop_requested())
+    return false;
+  if (m.outputs)
+    m.outputs->wait_for_room();  // simulated clock only: the writer keeps up
+  const timing::Tick tick = scheduler.wait_next();
+  if (stop_requested())
+    return false;
+  const std::int64_t frame_start_wall = wall.now_ns();
+  m.profiler.set_frame(done);
+  const std::int64_t since_start_ns = tick.deadline_ns - start_ns;
+  const double t_s = static_cast<double>(since_start_ns) * 1e-9;
+  const std::int64_t bus_now_ns = s.epoch_unix_ns + since_start_ns;
+  if (m.options.realtime) {
+    m.profiler.record(timing::Stage::kWakeLatency, tick.wake_ns - tick.deadline_ns);
   }
 
-  r.wall_time_s = static_cast<double>(wall.now_ns() - run_start_wall) * 1e-9;
-  r.overruns = scheduler.overruns();
-  r.missed_periods = scheduler.missed_periods();
+  // Peers on the software bus act first: the INS publishes what is due by now, or, in a
+  // replay, the recorded frames the radar had received by now.
+  if (m.options.replay) {
+    const std::vector<io::CanFrame>& log = m.options.replay_input;
+    while (m.replay_next < log.size() && log[m.replay_next].timestamp_ns <= bus_now_ns) {
+      if (m.replay_ep.send(log[m.replay_next]))
+        ++r.replay_frames_fed;
+      ++m.replay_next;
+    }
+  } else if (!m.hardware_can && !m.nav_external) {
+    if (m.nav_player)
+      (void)m.nav_player->publish_until(t_s, *m.nav_bank);
+    (void)m.player.publish_until(t_s,
+                                 m.stale_ins ? static_cast<io::CanEndpoint&>(*m.stale_ins) : m.ins);
+    if (m.babbler)
+      (void)m.babbler->publish_until(t_s, *m.babble_ep);
+    if (s.malformed_every_n_frames > 0 && done % s.malformed_every_n_frames == 0) {
+      m.faulty.send_next(m.faulty_ep, bus_now_ns);
+    }
+  }
+
+  // ---- input: decode the bus into the ownship state ----
+  radar::RadarPose pose;
+  bool valid = false;
+  {
+    timing::ScopedStage stage(m.profiler, wall, timing::Stage::kInput);
+    io::CanFrame f;
+    m.link->advance_to(bus_now_ns);
+    io::CanEndpoint& rx = m.hw_can ? *m.hw_can : static_cast<io::CanEndpoint&>(*m.link);
+    while (rx.receive(f)) {
+      ++r.bus_frames_in;
+      // Reception times are kept to the microsecond, the resolution of the candump log, so
+      // that a replay of bus_in.log decodes exactly what this run decoded.
+      f.timestamp_ns -= f.timestamp_ns % 1000;
+      if (m.outputs)
+        m.outputs->bus_in(f);
+      (void)m.decoder.decode(f, f.timestamp_ns);
+    }
+    // The ownship state: CANaerospace from the bus, or the Modbus navigation map.
+    const io::canas::OwnshipState* state = &m.decoder.state();
+    if (m.nav_faulty) {
+      m.nav_faulty->advance_to(bus_now_ns);
+      if (m.nav_faulty->read_holding(m.nav_map.base_address, m.nav_regs) ==
+          io::RegisterStatus::kOk) {
+        (void)m.nav_decoder.decode(m.nav_regs, bus_now_ns);
+      } else {
+        ++m.nav_read_failures;
+      }
+      state = &m.nav_decoder.state();
+    } else if (m.nav_poller) {
+      (void)m.nav_poller->latest(m.nav_state);
+      state = &m.nav_state;
+      if (m.nav_poller->link_state() != io::modbus::NavLinkState::kUp)
+        ++m.nav_frames_source_down;  // reported with the link (report.json nav_modbus.link)
+    }
+    valid = radar_pose_from_state(*state, bus_now_ns, timeout_ns, m.enu, s.antenna_depression_rad,
+                                  pose);
+    if (ownship != nullptr) {
+      // A stepped frame with the caller's state (step()): it replaces the bus's, in the
+      // scenario's [ownship] conventions (anchor ENU, body attitude, the mount depression).
+      pose.position_m = ownship->position_enu_m;
+      pose.velocity_mps = ownship->velocity_enu_mps;
+      pose.world_from_antenna =
+          enu_from_body(ownship->heading_rad, ownship->pitch_rad, ownship->roll_rad) *
+          body_from_antenna(s.antenna_depression_rad);
+      valid = true;
+    }
+    const io::canas::OwnshipState& st = *state;
+    for (std::size_t k = 0; k < io::canas::kFieldCount; ++k) {
+      const auto field = static_cast<io::canas::Field>(k);
+      if (st[field].received)
+        r.field_age_max_s[k] = std::max(r.field_age_max_s[k], st.age_s(field, bus_now_ns));
+      if (!st.fresh(field, bus_now_ns, timeout_ns))
+        ++r.field_stale_frames[k];
+    }
+  }
+  // ---- scene update: moving objects to frame time ----
+  {
+    timing::ScopedStage stage(m.profiler, wall, timing::Stage::kSceneUpdate);
+    m.scene.set_time(t_s);
+    if (valid) {
+      // Model no more than the radar sees: terrain tiles outside the beam are dropped, the
+      // others take the coarsest level of detail whose facets stay within a resolution cell.
+      scene::ViewVolume view;
+      view.position_m = pose.position_m;
+      view.world_from_antenna = pose.world_from_antenna;
+      view.azimuth_min_rad = s.sbr.azimuth_min_rad;
+      view.azimuth_max_rad = s.sbr.azimuth_max_rad;
+      view.elevation_min_rad = s.sbr.elevation_min_rad;
+      view.elevation_max_rad = s.sbr.elevation_max_rad;
+      view.max_range_m = s.sbr.max_range_m;
+      view.range_cell_m = radar::range_resolution_m(s.sensor.processing.waveform);
+      view.angular_cell_rad = s.sbr.terrain_ray_spacing_rad;
+      m.scene.set_view(view);
+      const scene::ViewStats& vs = m.scene.view_stats();
+      r.view.lod_groups_culled += vs.lod_groups_culled;
+      r.view.lod_groups_in_view += vs.lod_groups_in_view;
+      r.view.triangles_active += vs.triangles_active;
+      for (std::size_t k = 0; k < r.view.lod_groups_at_level.size(); ++k)
+        r.view.lod_groups_at_level[k] += vs.lod_groups_at_level[k];
+      ++r.view.frames;
+    }
+  }
+  // ---- trace: the governor sets the fidelity, then shoot and bounce ----
+  std::size_t n_contrib = 0;
+  const std::uint64_t rays_before = r.trace.rays;
+  const std::uint64_t cells_before = r.sensor.cells_synthesised;
+  const GovernorDecision* decision = nullptr;
+  {
+    timing::ScopedStage stage(m.profiler, wall, timing::Stage::kTrace);
+    if (valid) {
+      decision = &m.governor.decide(pose);
+      n_contrib = m.tracer.trace(pose, m.contributions, r.trace, decision->knobs);  // adds
+    }
+    // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
+    radar::apply_two_way_loss(std::span(m.contributions.data(), n_contrib), m.weather_db_per_m);
+  }
+  // ---- sensor: cells, CFAR, detections ----
+  std::size_t n_det = 0;
+  const std::uint64_t truncated_before = r.sensor.truncated;
+  {
+    timing::ScopedStage stage(m.profiler, wall, timing::Stage::kSensor);
+    if (valid) {
+      n_det = m.sensor.process(std::span(m.contributions.data(), n_contrib), m.detections,
+                               r.sensor);  // accumulates
+    }
+  }
+  if (valid) {
+    m.governor.observe(static_cast<double>(m.profiler.last_ns(timing::Stage::kTrace)) * 1e-6,
+                       static_cast<double>(m.profiler.last_ns(timing::Stage::kSensor)) * 1e-6,
+                       r.trace.rays - rays_before, n_contrib,
+                       r.sensor.cells_synthesised - cells_before);
+    ++r.governor.level_frames[static_cast<std::size_t>(decision->level)];
+    r.governor.frames_degraded += decision->degraded ? 1 : 0;
+    r.governor.frames_predicted_late += decision->over_deadline ? 1 : 0;
+    r.governor.max_level = std::max(r.governor.max_level, decision->level);
+  }
+  if (r.governor.per_frame_level.size() < r.governor.per_frame_level.capacity()) {
+    // Every frame, valid or not (-1: no state, nothing traced), up to kGovernorFramesKept.
+    r.governor.per_frame_level.push_back(
+        static_cast<std::int8_t>(decision != nullptr ? decision->level : -1));
+    r.governor.per_frame_predicted_ms.push_back(
+        decision != nullptr ? static_cast<float>(decision->predicted_ms) : 0.0f);
+  }
+  // ---- output: ICD frames on the bus ----
+  FrameRecord rec;
+  std::size_t n_truth = 0;
+  {
+    timing::ScopedStage stage(m.profiler, wall, timing::Stage::kOutput);
+    for (std::size_t i = 0; i < n_det; ++i)
+      m.icd_detections[i] = to_icd(m.detections[i]);
+    io::icd::Header h;
+    h.frame_counter = frame_counter++;
+    h.time_ms = static_cast<std::uint32_t>(since_start_ns / 1'000'000);
+    if (!valid)
+      h.status |= io::icd::status::kOwnshipInvalid;
+    if (tick.late)
+      h.status |= io::icd::status::kOverrun;
+    if (r.sensor.truncated > truncated_before)
+      h.status |= io::icd::status::kTruncated;
+    if (decision != nullptr && decision->degraded)
+      h.status |= io::icd::status::kDegraded;
+    // A stale state sends an empty list flagged OWNSHIP_INVALID, or nothing ("silent").
+    const bool send_list = valid || !s.stale_output_silent;
+    io::icd::EncodeResult enc{};
+    if (send_list) {
+      const std::span<const io::icd::Detection> list(m.icd_detections.data(), n_det);
+      enc = s.can_fd ? io::icd::encode_fd(h, list, m.out_frames)
+                     : io::icd::encode(h, list, m.out_frames);
+    } else {
+      ++r.lists_suppressed;
+    }
+    r.icd_dropped += enc.dropped;
+    r.icd_truncated += enc.truncated;
+    io::CanEndpoint& tx = m.hw_can ? *m.hw_can : static_cast<io::CanEndpoint&>(m.radar_ep);
+    for (std::size_t i = 0; i < enc.frames; ++i) {
+      io::CanFrame& f = m.out_frames[i];
+      f.timestamp_ns = bus_now_ns;
+      if (tx.send(f))
+        ++r.bus_frames_out;
+      if (m.outputs)
+        m.outputs->bus_out(f);
+    }
+    if (m.modbus_server) {
+      // The Modbus table is state, not a message: it is published every frame, stale or not.
+      const io::modbus::TableEncodeResult te = io::modbus::encode_detection_table(
+          h, std::span<const io::icd::Detection>(m.icd_detections.data(), n_det), m.table_regs,
+          m.table_config);
+      (void)te;
+      (void)m.modbus_server->publish(m.table_regs);
+    }
+    // Ground truth: each target whose box centre is inside the field of view and range.
+    n_truth =
+        valid ? objects_in_view(pose, m.scene.objects(), m.truth_objects, s.sbr, m.frame_truth) : 0;
+    rec.frame_index = tick.period_index;
+    rec.time_s = t_s;
+    rec.header = h;
+    rec.header.detection_count = static_cast<std::uint8_t>(enc.encoded);
+    rec.detection_count = static_cast<std::uint32_t>(n_det);
+    rec.truth_count = static_cast<std::uint32_t>(n_truth);
+    rec.late = tick.late;
+    rec.sent = send_list;
+    rec.ownship_valid = valid;
+    rec.ownship_enu_m = valid ? pose.position_m : glm::dvec3(0.0);
+    rec.governor_level = decision != nullptr ? decision->level : 0;
+    rec.governor_predicted_ms = decision != nullptr ? decision->predicted_ms : 0.0;
+    rec.governor_error_db = decision != nullptr ? decision->estimated_snr_error_db : 0.0;
+    rec.rays = decision != nullptr ? decision->rays : 0;
+  }
+  const std::int64_t frame_end_wall = wall.now_ns();
+  const std::int64_t frame_ns = frame_end_wall - frame_start_wall;
+  m.profiler.record_span(timing::Stage::kFrame, frame_start_wall, frame_end_wall);
+  if (frame_ns > period_ns)
+    ++r.frames_over_budget;
+
+  // The frame's record: to the writer thread, and to memory for the first recorded_frames.
+  const std::span<const ObjectTruth> truth(m.frame_truth.data(), n_truth);
+  if (m.outputs) {
+    std::array<std::int64_t, timing::kStageCount> stage_ns{};
+    for (std::size_t k = 0; k < timing::kStageCount; ++k)
+      stage_ns[k] = m.profiler.last_ns(static_cast<timing::Stage>(k));
+    m.outputs->frame(rec, stage_ns, std::span(m.icd_detections.data(), n_det),
+                     std::span(m.detections.data(), n_det), truth);
+  }
+  out.record = rec;
+  out.detections = std::span<const io::icd::Detection>(m.icd_detections.data(), n_det);
+  out.sensor_detections = std::span<const radar::Detection>(m.detections.data(), n_det);
+  out.truth = truth;
+  if (r.records.size() < m.recorded_frames) {
+    rec.first_detection = static_cast<std::uint32_t>(r.detections.size());
+    rec.first_truth = static_cast<std::uint32_t>(r.truth.size());
+    const std::size_t room = r.truth.capacity() - r.truth.size();
+    rec.truth_count = static_cast<std::uint32_t>(std::min(n_truth, room));
+    r.truth_overflows += n_truth - rec.truth_count;
+    r.truth.insert(r.truth.end(), truth.begin(), truth.begin() + rec.truth_count);
+    r.records.push_back(rec);
+    r.detections.insert(r.detections.end(), m.icd_detections.begin(),
+                        m.icd_detections.begin() + static_cast<std::ptrdiff_t>(n_det));
+    r.sensor_detections.insert(r.sensor_detections.end(), m.detections.begin(),
+                               m.detections.begin() + static_cast<std::ptrdiff_t>(n_det));
+  }
+
+  // The avionics under test read what the radar sent.
+  (void)m.sink.poll(m.avionics);
+
+  ++r.frames;
+  if (valid)
+    ++r.frames_valid;
+  r.detections_total += n_det;
+  r.detections_min = std::min<std::uint64_t>(r.detections_min, n_det);
+  r.detections_max = std::max<std::uint64_t>(r.detections_max, n_det);
+  ++rs.done;
+  if (m.options.progress)
+    m.options.progress(done + 1, s.frames);
+  return true;
+}
+
+RunResult ClosedLoop::finish() {
+  Impl& m = *impl_;
+  if (!m.run)
+    begin();
+  Impl::RunState& rs = *m.run;
+  if (rs.finished)
+    throw std::logic_error("ClosedLoop: finish() called twice");
+  rs.finished = true;
+  RunResult& r = rs.r;
+  r.wall_time_s = static_cast<double>(rs.wall.now_ns() - rs.run_start_wall) * 1e-9;
+  r.overruns = rs.scheduler->overruns();
+  r.missed_periods = rs.scheduler->missed_periods();
   r.decoder = m.decoder.counters();
   r.link_faults = m.link->counters();
   if (m.stale_ins)
@@ -841,7 +896,15 @@ RunResult ClosedLoop::run() {
   }
   if (r.frames == 0)
     r.detections_min = 0;
-  return r;
+  return std::move(r);
+}
+
+RunResult ClosedLoop::run() {
+  begin();
+  FrameOutput frame;
+  while (step(frame))
+    continue;
+  return finish();
 }
 
 OutputCounters ClosedLoop::output_counters() const {

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -178,6 +179,28 @@ struct RunResult {
   std::vector<ObjectTruth> truth;
 };
 
+/// The ownship state of a stepped frame (ClosedLoop::step), given by the caller instead of the
+/// bus, in the conventions of the scenario's [ownship]: position and velocity in the scene's
+/// anchor ENU frame, attitude of the body (x forward, y right, z down) as heading, pitch and
+/// roll [rad] (emulator/ownship.hpp); the antenna is the body pitched down by the scenario's
+/// depression.
+struct OwnshipInput {
+  glm::dvec3 position_enu_m{0.0};
+  glm::dvec3 velocity_enu_mps{0.0};
+  double heading_rad = 0.0;
+  double pitch_rad = 0.0;
+  double roll_rad = 0.0;
+};
+
+/// What one stepped frame produced. The spans point into the loop's own buffers: valid until
+/// the next step(). record.truth_count and record.detection_count are the spans' sizes.
+struct FrameOutput {
+  FrameRecord record{};
+  std::span<const io::icd::Detection> detections;       ///< as sent (before ICD quantisation)
+  std::span<const radar::Detection> sensor_detections;  ///< the sensor's view, same index
+  std::span<const ObjectTruth> truth;                   ///< objects in the beam
+};
+
 /// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop
 /// builds it. Throws with context when a file cannot be loaded.
 [[nodiscard]] scene::SceneDescription scene_description(const Scenario& scenario);
@@ -191,8 +214,22 @@ class ClosedLoop {
   ClosedLoop(const ClosedLoop&) = delete;
   ClosedLoop& operator=(const ClosedLoop&) = delete;
 
-  /// Runs scenario.frames frames, or fewer when options.stop is raised.
+  /// Runs scenario.frames frames, or fewer when options.stop is raised. Exactly begin(), then
+  /// step() until it returns false, then finish().
   RunResult run();
+
+  /// Stepping, frame by frame (scripts, the Python module). begin() starts the run (clocks,
+  /// schedule, the result's memory); a loop runs once (a second begin() throws std::logic_error).
+  void begin();
+  /// Runs the next frame (begin() first if it has not run) and describes it in `out`. With
+  /// `ownship` null the ownship state comes from the bus as in run(); otherwise it replaces the
+  /// bus's state for this frame (the bus is still read, decoded and logged). Returns false, and
+  /// runs nothing, once the scenario's frames are done, a stop was requested or finish() ran.
+  /// Allocates nothing beyond what begin() reserved.
+  bool step(FrameOutput& out, const OwnshipInput* ownship = nullptr);
+  /// Ends the run and returns its result, as run() does (then write_outputs() may follow).
+  /// Throws std::logic_error when called twice.
+  RunResult finish();
 
   /// Completes the outputs in options.out_dir: waits for the writer to write what the run handed
   /// it (bus_in.log, bus_out.log, detections.json, truth.json, frames.csv, detections.png), then

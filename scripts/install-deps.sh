@@ -14,6 +14,8 @@ PACKAGES=(
   clang libclang-rt-14-dev
   # independent peers used by the tests (buses.md)
   python3 python3-can python3-canmatrix python3-pymodbus python3-serial-asyncio mbpoll socat
+  # the Python module radar_emu (python/, optional at build time) and its tests
+  python3-dev pybind11-dev python3-numpy python3-pytest
 )
 
 missing=()
