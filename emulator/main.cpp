@@ -512,8 +512,10 @@ int main(int argc, char** argv) {
         ->check(emu::sweep_in_range(0.0, 1e15, "Hz", true))
         ->excludes(freq);
     cmd->add_option("--theta-deg", t.theta,
-                    "Radar direction from +z: A or A:B:N in [0, 180] deg (default 0)")
-        ->check(emu::sweep_in_range(0.0, 180.0, "deg"));
+                    "Radar direction from +z: A or A:B:N in [-180, 180] deg (default 0; "
+                    "theta < 0 is the half of the cut at phi + 180, so a cut can pass through "
+                    "normal incidence)")
+        ->check(emu::sweep_in_range(-180.0, 180.0, "deg"));
     cmd->add_option("--phi-deg", t.phi,
                     "Radar direction from +x toward +y: A or A:B:N in [-360, 360] deg")
         ->check(emu::sweep_in_range(-360.0, 360.0, "deg"));

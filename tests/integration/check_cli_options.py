@@ -139,9 +139,9 @@ BAD = [
      "v.jpg: cannot write a '.jpg' file (expected .png)"),
     (["scene", "preview", extras, "--out", no_dir + "/v.png"], "cannot open for writing"),
     # rcs
-    (["rcs", "--mesh", mesh, *f10, "--theta-deg", "200"], "--theta-deg: 200 is outside [0, 180] deg"),
+    (["rcs", "--mesh", mesh, *f10, "--theta-deg", "200"], "--theta-deg: 200 is outside [-180, 180] deg"),
     (["rcs", "--mesh", mesh, *f10, "--theta-deg", "0:200:3"],
-     "--theta-deg: 200 (in 0:200:3) is outside [0, 180] deg"),
+     "--theta-deg: 200 (in 0:200:3) is outside [-180, 180] deg"),
     (["rcs", "--mesh", mesh, *f10, "--phi-deg", "400"], "--phi-deg: 400 is outside [-360, 360] deg"),
     (["rcs", "--mesh", mesh, *f10, "--bistatic-theta-deg", "200", "--bistatic-phi-deg", "0"],
      "--bistatic-theta-deg: 200 is outside [0, 180] deg"),
