@@ -446,6 +446,9 @@ int main(int argc, char** argv) {
   double bistatic_theta = 0.0, bistatic_phi = 0.0;
   add_common(rcs, rcs_text, rcs_opt.mesh, rcs_opt.scale, rcs_opt.materials, rcs_opt.bounces,
              rcs_opt.rays_per_wavelength, rcs_opt.quiet);
+  rcs->add_flag("--no-edges{false}", rcs_opt.edges,
+                "No edge diffraction (default: fringe equivalent edge currents of the mesh's "
+                "wedge edges and sheet boundaries added to PO)");
   rcs->add_option("--pol", rcs_text.pol,
                   "Polarisations, receive letter first: HH,HV,VH,VV (default HH,VV)");
   CLI::Option* bt = rcs->add_option("--bistatic-theta-deg", bistatic_theta,
@@ -469,6 +472,8 @@ int main(int argc, char** argv) {
   emu::ProfileToolOptions prof_opt;
   add_common(profile, prof_text, prof_opt.mesh, prof_opt.scale, prof_opt.materials,
              prof_opt.bounces, prof_opt.rays_per_wavelength, prof_opt.quiet);
+  profile->add_flag("--no-edges{false}", prof_opt.edges,
+                    "No edge diffraction (default: fringe equivalent edge currents added to PO)");
   profile->add_option("--pol", prof_text.pol, "One polarisation: HH, HV, VH or VV (default VV)");
   profile->add_option("--window", prof_opt.window,
                       "none, hann, hamming, blackman or taylor (default hann)");

@@ -51,6 +51,7 @@ struct RcsToolOptions {
   std::vector<Pol> pols{Pol::kHH, Pol::kVV};
   int bounces = 3;
   double rays_per_wavelength = 4.0;
+  bool edges = true;  ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
   std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
   std::string out_csv = "rcs.csv";
   std::string plot_png;     ///< empty: no plot
@@ -71,6 +72,7 @@ struct ProfileToolOptions {
   Pol pol = Pol::kVV;
   int bounces = 3;
   double rays_per_wavelength = 4.0;
+  bool edges = true;  ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
   std::string window = "hann";
   std::size_t oversample = 4;
   double dynamic_range_db = 50.0;  ///< plots
