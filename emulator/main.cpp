@@ -446,6 +446,9 @@ int main(int argc, char** argv) {
   double bistatic_theta = 0.0, bistatic_phi = 0.0;
   add_common(rcs, rcs_text, rcs_opt.mesh, rcs_opt.scale, rcs_opt.materials, rcs_opt.bounces,
              rcs_opt.rays_per_wavelength, rcs_opt.quiet);
+  rcs->add_option("--edge-turn-deg", rcs_opt.edge_turn_deg,
+                  "A shared mesh edge diffracts when its faces turn by more than this (default "
+                  "30 deg; open-sheet boundaries always do)");
   rcs->add_flag("--no-edges{false}", rcs_opt.edges,
                 "No edge diffraction (default: fringe equivalent edge currents of the mesh's "
                 "wedge edges and sheet boundaries added to PO)");
@@ -472,6 +475,9 @@ int main(int argc, char** argv) {
   emu::ProfileToolOptions prof_opt;
   add_common(profile, prof_text, prof_opt.mesh, prof_opt.scale, prof_opt.materials,
              prof_opt.bounces, prof_opt.rays_per_wavelength, prof_opt.quiet);
+  profile->add_option("--edge-turn-deg", prof_opt.edge_turn_deg,
+                      "A shared mesh edge diffracts when its faces turn by more than this (default "
+                      "30 deg; open-sheet boundaries always do)");
   profile->add_flag("--no-edges{false}", prof_opt.edges,
                     "No edge diffraction (default: fringe equivalent edge currents added to PO)");
   profile->add_option("--pol", prof_text.pol, "One polarisation: HH, HV, VH or VV (default VV)");

@@ -188,18 +188,23 @@ struct ToolTarget {
   scene::Scene scene;
   radar::RcsEngine engine;
   ToolTarget(const std::string& mesh, double scale, const std::vector<std::string>& materials,
-             int bounces, double rays_per_wavelength, bool edges, double min_freq_hz, bool quiet)
+             int bounces, double rays_per_wavelength, bool edges, double edge_turn_deg,
+             double min_freq_hz, bool quiet)
       : loaded(load_target(mesh, scale, materials)),
         scene(loaded.description),
-        engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength, edges)) {
+        engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength, edges, edge_turn_deg)) {
     print_target(loaded, engine, quiet);
     warn_electrical_size(engine, min_freq_hz, quiet);
   }
-  static radar::RcsConfig config(int bounces, double rays_per_wavelength, bool edges) {
+  static radar::RcsConfig config(int bounces, double rays_per_wavelength, bool edges,
+                                 double edge_turn_deg) {
+    if (!(edge_turn_deg >= 0.0 && edge_turn_deg < 180.0))
+      throw std::invalid_argument("--edge-turn-deg must be in [0, 180)");
     radar::RcsConfig c;
     c.max_bounces = bounces;
     c.rays_per_wavelength = rays_per_wavelength;
     c.edges = edges;
+    c.edge_min_turn_rad = edge_turn_deg * kDegToRad;
     return c;
   }
 };
@@ -391,7 +396,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
   if (o.bistatic_theta_deg.has_value() != o.bistatic_phi_deg.has_value())
     throw std::invalid_argument("give both --bistatic-theta-deg and --bistatic-phi-deg");
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
-                          *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
+                          o.edge_turn_deg, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()),
+                          o.quiet);
   const radar::RcsEngine& engine = target.engine;
 
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
@@ -586,7 +592,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
   if (o.oversample < 1 || o.oversample > 64)
     throw std::invalid_argument("--oversample must be in 1..64");
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
-                          o.freqs_hz.front(), o.quiet);
+                          o.edge_turn_deg, o.freqs_hz.front(), o.quiet);
   const radar::RcsEngine& engine = target.engine;
 
   const std::size_t na = nt * np;

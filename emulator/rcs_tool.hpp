@@ -51,7 +51,8 @@ struct RcsToolOptions {
   std::vector<Pol> pols{Pol::kHH, Pol::kVV};
   int bounces = 3;
   double rays_per_wavelength = 4.0;
-  bool edges = true;  ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
+  bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
+  double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
   std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
   std::string out_csv = "rcs.csv";
   std::string plot_png;     ///< empty: no plot
@@ -72,7 +73,8 @@ struct ProfileToolOptions {
   Pol pol = Pol::kVV;
   int bounces = 3;
   double rays_per_wavelength = 4.0;
-  bool edges = true;  ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
+  bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
+  double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
   std::string window = "hann";
   std::size_t oversample = 4;
   double dynamic_range_db = 50.0;  ///< plots
