@@ -462,6 +462,9 @@ int main(int argc, char** argv) {
   bp->needs(bt);
   rcs->add_option("--out", rcs_opt.out_csv, "CSV output (default rcs.csv)");
   rcs->add_option("--plot", rcs_opt.plot_png, "PNG plot of the sweep");
+  rcs->add_option("--overlay", rcs_opt.overlays,
+                  "Another curve on the plot, FILE=LABEL: lines of numbers whose last two are the "
+                  "swept value and dBsm (a reference table, another run); repeatable");
   rcs->add_option("--window-deg", rcs_opt.window_deg,
                   "Fluctuation statistics (mean, median, p10/p90, spread) over a sliding aspect "
                   "window of this width [deg]")

@@ -209,6 +209,54 @@ struct ToolTarget {
   }
 };
 
+// A plot overlay "FILE=LABEL" (RcsToolOptions::overlays): x and y from the last two numbers of
+// each line.
+Series read_overlay(const std::string& spec) {
+  const std::size_t eq = spec.rfind('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
+    throw std::invalid_argument("--overlay '" + spec + "': expected FILE=LABEL");
+  const std::string path = spec.substr(0, eq);
+  Series ser;
+  ser.label = spec.substr(eq + 1);
+  FILE* f = std::fopen(path.c_str(), "r");
+  if (f == nullptr)
+    throw std::invalid_argument("--overlay: cannot read " + path);
+  const File closer(f);
+  char buf[4096];
+  for (std::size_t line = 1; std::fgets(buf, sizeof buf, f) != nullptr; ++line) {
+    std::string text(buf);
+    std::replace(text.begin(), text.end(), ',', ' ');
+    std::vector<double> v;
+    bool numeric = true;
+    for (std::string_view tok : split(text, ' ')) {
+      while (!tok.empty() && std::isspace(static_cast<unsigned char>(tok.back())))
+        tok.remove_suffix(1);
+      if (tok.empty())
+        continue;
+      double x = 0.0;
+      const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), x);
+      if (ec != std::errc() || ptr != tok.data() + tok.size()) {
+        numeric = false;
+        break;
+      }
+      v.push_back(x);
+    }
+    if (v.empty() && numeric)
+      continue;  // blank line
+    if (!numeric || v.size() < 2) {
+      if (line == 1)
+        continue;  // header
+      throw std::invalid_argument("--overlay: " + path + ":" + std::to_string(line) +
+                                  ": expected at least two numbers");
+    }
+    ser.x.push_back(v[v.size() - 2]);
+    ser.y.push_back(v.back());
+  }
+  if (ser.x.empty())
+    throw std::invalid_argument("--overlay: " + path + " has no data line");
+  return ser;
+}
+
 }  // namespace
 
 std::pair<double, double> parse_pair(std::string_view text, std::string_view option) {
@@ -539,6 +587,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
       }
       chart.series.push_back(std::move(ser));
     }
+    for (const std::string& spec : o.overlays)
+      chart.series.push_back(read_overlay(spec));
     // Keep 60 dB under the peak: deep nulls would squash the pattern.
     double peak = -400.0;
     for (const Series& ser : chart.series) {

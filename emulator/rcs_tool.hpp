@@ -55,7 +55,11 @@ struct RcsToolOptions {
   double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
   std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
   std::string out_csv = "rcs.csv";
-  std::string plot_png;     ///< empty: no plot
+  std::string plot_png;  ///< empty: no plot
+  /// Curves drawn on the plot beside the computed ones, "FILE=LABEL": text lines of numbers
+  /// (whitespace or commas) whose last two are x (the swept angle or frequency) and dBsm, e.g.
+  /// a reference table or another run; a first line that is not numbers is a header.
+  std::vector<std::string> overlays;
   double window_deg = 0.0;  ///< > 0: fluctuation statistics over +-window/2 of the swept angle
   std::string stats_csv;    ///< where they go (default: next to out_csv, *_stats.csv)
   bool quiet = false;
