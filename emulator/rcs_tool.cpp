@@ -443,6 +443,11 @@ int run_rcs_tool(const RcsToolOptions& o) {
     throw std::invalid_argument("--pol: no polarisation");
   if (o.bistatic_theta_deg.has_value() != o.bistatic_phi_deg.has_value())
     throw std::invalid_argument("give both --bistatic-theta-deg and --bistatic-phi-deg");
+  if (!o.overlays.empty() && o.plot_png.empty())
+    throw std::invalid_argument("--overlay needs --plot");
+  std::vector<Series> overlays;  // read before the sweep: a bad file fails fast
+  for (const std::string& spec : o.overlays)
+    overlays.push_back(read_overlay(spec));
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
                           o.edge_turn_deg, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()),
                           o.quiet);
@@ -587,8 +592,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
       }
       chart.series.push_back(std::move(ser));
     }
-    for (const std::string& spec : o.overlays)
-      chart.series.push_back(read_overlay(spec));
+    for (Series& ser : overlays)
+      chart.series.push_back(std::move(ser));
     // Keep 60 dB under the peak: deep nulls would squash the pattern.
     double peak = -400.0;
     for (const Series& ser : chart.series) {
