@@ -163,12 +163,6 @@ std::vector<WedgeEdge> find_wedge_edges(std::span<const std::array<glm::dvec3, 3
   return out;
 }
 
-bool edge_lit(const WedgeEdge& edge, const glm::dvec3& d) noexcept {
-  const glm::dvec3 u = normal_part(-d, edge.t);
-  const double phi0 = wrap_2pi(std::atan2(glm::dot(u, edge.y0), glm::dot(u, edge.x0)));
-  return phi0 <= edge.alpha_rad && (phi0 < kPi || phi0 > edge.alpha_rad - kPi);
-}
-
 glm::dvec3 edge_probe(const WedgeEdge& edge, double offset_m) noexcept {
   const double h = 0.5 * edge.alpha_rad;
   return 0.5 * (edge.a_m + edge.b_m) + offset_m * (std::cos(h) * edge.x0 + std::sin(h) * edge.y0);

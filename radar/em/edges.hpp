@@ -120,10 +120,6 @@ struct EdgeTerm {
                                  const glm::dvec3& rx_h, const glm::dvec3& rx_v,
                                  EdgeCoefficient kind, EdgeTerm& term, bool& guarded) noexcept;
 
-/// Whether face 0 / face 1 of `edge` is lit by a wave propagating along d (the source on the
-/// free-space side of the face's plane).
-[[nodiscard]] bool edge_lit(const WedgeEdge& edge, const glm::dvec3& d) noexcept;
-
 /// A point beside the edge's midpoint in the free space (along the exterior bisector), offset_m
 /// away: where the engine's occlusion test toward the transmitter starts.
 [[nodiscard]] glm::dvec3 edge_probe(const WedgeEdge& edge, double offset_m) noexcept;
