@@ -21,6 +21,10 @@
 //              after the first the tube's footprint radiates by PO toward the receiver when the
 //              receiver sees the lit side of the hit (n.s >= kGrazingCos, no obstruction). A
 //              tube stops at a grazing hit (cos theta_i < kGrazingCos) or at the bounce cap.
+//   edges      With RcsConfig::edges: edge diffraction, the fringe equivalent edge currents of the
+//              mesh's wedge edges and open-sheet boundaries (PTD; radar/em/edges.hpp), each
+//              integrated exactly along its straight edge and added to bounce 1; an edge
+//              radiates when a face of it is lit and its midpoint sees the transmitter.
 //   sweeps     Facet geometry and ray paths do not depend on frequency: they are found once per
 //              direction and every frequency is summed from them.
 //
