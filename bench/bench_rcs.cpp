@@ -4,6 +4,8 @@
 //                              R/2 ray tubes per wavelength (argument R = 2 x rays per wavelength)
 //   BM_Vehicle361Angles/R      361 monostatic angles (phi 0..360 deg, theta 80 deg), one frequency
 //                              (35 GHz), R/2 rays per wavelength
+//   BM_VehicleProfileEdges/E   the range profile at 2 rays per wavelength without (E = 0) and with
+//                              (E = 1) edge diffraction (radar/em/edges.hpp): the cost of edges
 //   BM_SbrThroughput           compute() at one frequency: ray-tube segments per second, and
 //   BM_EmbreeRawThroughput     raw Embree rtcIntersect1 bouncing the very same rays, side by side
 // Convergence of the profile (doubling the rays) is reported as a counter of the profile
@@ -110,6 +112,27 @@ BENCHMARK(BM_VehicleRangeProfile)
     ->Arg(8)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+void BM_VehicleProfileEdges(benchmark::State& state) {
+  Vehicle& v = vehicle();
+  radar::RcsConfig config;
+  config.max_bounces = 3;
+  config.rays_per_wavelength = 2.0;
+  config.edges = state.range(0) != 0;
+  const radar::RcsEngine engine(v.scene, {radar::SurfaceModel{}}, config);
+  const std::vector<double> f = profile_freqs();
+  std::vector<radar::ScatteringMatrix> s(f.size());
+  radar::RcsStats stats;
+  for (auto _ : state) {
+    stats = {};
+    engine.compute(kAspect, kAspect, f, s, stats);
+    benchmark::DoNotOptimize(s.data());
+  }
+  state.counters["edges"] = static_cast<double>(engine.edges().size());
+  state.counters["edges_used"] = static_cast<double>(stats.edges_used);
+  state.counters["rays"] = static_cast<double>(stats.rays);
+}
+BENCHMARK(BM_VehicleProfileEdges)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 std::vector<double> pattern_db(const radar::RcsEngine& engine) {
   const double f[1] = {35e9};

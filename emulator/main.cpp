@@ -556,6 +556,12 @@ int main(int argc, char** argv) {
   double bistatic_theta = 0.0, bistatic_phi = 0.0;
   add_common(rcs, rcs_text, rcs_opt.mesh, rcs_opt.scale, rcs_opt.materials, rcs_opt.bounces,
              rcs_opt.rays_per_wavelength, rcs_opt.quiet);
+  rcs->add_option("--edge-turn-deg", rcs_opt.edge_turn_deg,
+                  "A shared mesh edge diffracts when its faces turn by more than this (default "
+                  "30 deg; open-sheet boundaries always do)");
+  rcs->add_flag("--no-edges{false}", rcs_opt.edges,
+                "No edge diffraction (default: fringe equivalent edge currents of the mesh's "
+                "wedge edges and sheet boundaries added to PO)");
   rcs->add_option("--pol", rcs_text.pol,
                   "Polarisations, receive letter first: HH,HV,VH,VV (default HH,VV)");
   CLI::Option* bt = rcs->add_option("--bistatic-theta-deg", bistatic_theta,
@@ -570,6 +576,9 @@ int main(int argc, char** argv) {
                              ->check(emu::output_file());
   rcs->add_option("--plot", rcs_opt.plot_png, "PNG plot of the sweep")
       ->check(emu::output_file({".png"}));
+  rcs->add_option("--overlay", rcs_opt.overlays,
+                  "Another curve on the plot, FILE=LABEL: lines of numbers whose last two are the "
+                  "swept value and dBsm (a reference table, another run); repeatable");
   CLI::Option* window_deg =
       rcs->add_option("--window-deg", rcs_opt.window_deg,
                       "Fluctuation statistics (mean, median, p10/p90, spread) over a sliding "
@@ -586,6 +595,11 @@ int main(int argc, char** argv) {
   emu::ProfileToolOptions prof_opt;
   add_common(profile, prof_text, prof_opt.mesh, prof_opt.scale, prof_opt.materials,
              prof_opt.bounces, prof_opt.rays_per_wavelength, prof_opt.quiet);
+  profile->add_option("--edge-turn-deg", prof_opt.edge_turn_deg,
+                      "A shared mesh edge diffracts when its faces turn by more than this (default "
+                      "30 deg; open-sheet boundaries always do)");
+  profile->add_flag("--no-edges{false}", prof_opt.edges,
+                    "No edge diffraction (default: fringe equivalent edge currents added to PO)");
   profile->add_option("--pol", prof_text.pol, "One polarisation: HH, HV, VH or VV (default VV)");
   profile->add_option("--window", prof_opt.window,
                       "none, hann, hamming, blackman or taylor (default hann)");

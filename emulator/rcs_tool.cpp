@@ -113,6 +113,10 @@ void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
   total.tubes_cut_off += one.tubes_cut_off;
   total.occlusion_queries += one.occlusion_queries;
   total.segments += one.segments;
+  total.edges_used += one.edges_used;
+  total.edges_shadowed += one.edges_shadowed;
+  total.edges_skipped += one.edges_skipped;
+  total.edges_guarded += one.edges_guarded;
   for (std::size_t b = 0; b <= static_cast<std::size_t>(radar::kMaxRcsBounces); ++b)
     total.paths_by_bounce[b] += one.paths_by_bounce[b];
 }
@@ -151,6 +155,31 @@ void print_target(const LoadedTarget& t, const radar::RcsEngine& e, bool quiet) 
     return;
   std::printf("target: %zu facets (%zu degenerate skipped), bounding radius %.4g m\n",
               e.facet_count(), e.degenerate_facets(), e.bounding_radius_m());
+  if (!e.config().edges) {
+    std::printf("edge diffraction: off (--no-edges)\n");
+    return;
+  }
+  const radar::EdgeCensus& c = e.edge_census();
+  std::printf(
+      "edge diffraction: on, %zu edges (%llu open-sheet boundaries, %llu wedges turning > %.0f "
+      "deg; %llu smoother edges left to PO, %llu not modelled: concave, non-PEC, shared by > 2 "
+      "facets or inconsistently wound)\n",
+      e.edges().size(), static_cast<unsigned long long>(c.half_planes),
+      static_cast<unsigned long long>(c.wedges), e.config().edge_min_turn_rad / kDegToRad,
+      static_cast<unsigned long long>(c.smooth), static_cast<unsigned long long>(c.unsupported));
+}
+
+// The summary line of the edge terms over a run.
+void print_edge_stats(const radar::RcsEngine& e, const radar::RcsStats& st) {
+  if (!e.config().edges)
+    return;
+  std::printf(
+      "edge terms: %llu used, %llu shadowed, %llu without a term (no lit face, along the edge, "
+      "receiver inside the wedge), %llu boundary singularities stepped around\n",
+      static_cast<unsigned long long>(st.edges_used),
+      static_cast<unsigned long long>(st.edges_shadowed),
+      static_cast<unsigned long long>(st.edges_skipped),
+      static_cast<unsigned long long>(st.edges_guarded));
 }
 
 // The target as both tools set it up: loaded, built, with the engine over it (in place: the
@@ -160,20 +189,74 @@ struct ToolTarget {
   scene::Scene scene;
   radar::RcsEngine engine;
   ToolTarget(const std::string& mesh, double scale, const std::vector<std::string>& materials,
-             int bounces, double rays_per_wavelength, double min_freq_hz, bool quiet)
+             int bounces, double rays_per_wavelength, bool edges, double edge_turn_deg,
+             double min_freq_hz, bool quiet)
       : loaded(load_target(mesh, scale, materials)),
         scene(loaded.description),
-        engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength)) {
+        engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength, edges, edge_turn_deg)) {
     print_target(loaded, engine, quiet);
     warn_electrical_size(engine, min_freq_hz);
   }
-  static radar::RcsConfig config(int bounces, double rays_per_wavelength) {
+  static radar::RcsConfig config(int bounces, double rays_per_wavelength, bool edges,
+                                 double edge_turn_deg) {
+    if (!(edge_turn_deg >= 0.0 && edge_turn_deg < 180.0))
+      throw std::invalid_argument("--edge-turn-deg must be in [0, 180)");
     radar::RcsConfig c;
     c.max_bounces = bounces;
     c.rays_per_wavelength = rays_per_wavelength;
+    c.edges = edges;
+    c.edge_min_turn_rad = edge_turn_deg * kDegToRad;
     return c;
   }
 };
+
+// A plot overlay "FILE=LABEL" (RcsToolOptions::overlays): x and y from the last two numbers of
+// each line.
+Series read_overlay(const std::string& spec) {
+  const std::size_t eq = spec.rfind('=');
+  if (eq == std::string::npos || eq == 0 || eq + 1 == spec.size())
+    throw std::invalid_argument("--overlay '" + spec + "': expected FILE=LABEL");
+  const std::string path = spec.substr(0, eq);
+  Series ser;
+  ser.label = spec.substr(eq + 1);
+  FILE* f = std::fopen(path.c_str(), "r");
+  if (f == nullptr)
+    throw std::invalid_argument("--overlay: cannot read " + path);
+  const File closer(f);
+  char buf[4096];
+  for (std::size_t line = 1; std::fgets(buf, sizeof buf, f) != nullptr; ++line) {
+    std::string text(buf);
+    std::replace(text.begin(), text.end(), ',', ' ');
+    std::vector<double> v;
+    bool numeric = true;
+    for (std::string_view tok : split(text, ' ')) {
+      while (!tok.empty() && std::isspace(static_cast<unsigned char>(tok.back())))
+        tok.remove_suffix(1);
+      if (tok.empty())
+        continue;
+      double x = 0.0;
+      const auto [ptr, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), x);
+      if (ec != std::errc() || ptr != tok.data() + tok.size()) {
+        numeric = false;
+        break;
+      }
+      v.push_back(x);
+    }
+    if (v.empty() && numeric)
+      continue;  // blank line
+    if (!numeric || v.size() < 2) {
+      if (line == 1)
+        continue;  // header
+      throw std::invalid_argument("--overlay: " + path + ":" + std::to_string(line) +
+                                  ": expected at least two numbers");
+    }
+    ser.x.push_back(v[v.size() - 2]);
+    ser.y.push_back(v.back());
+  }
+  if (ser.x.empty())
+    throw std::invalid_argument("--overlay: " + path + " has no data line");
+  return ser;
+}
 
 }  // namespace
 
@@ -361,8 +444,14 @@ int run_rcs_tool(const RcsToolOptions& o) {
     throw std::invalid_argument("--pol: no polarisation");
   if (o.bistatic_theta_deg.has_value() != o.bistatic_phi_deg.has_value())
     throw std::invalid_argument("give both --bistatic-theta-deg and --bistatic-phi-deg");
-  const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength,
-                          *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
+  if (!o.overlays.empty() && o.plot_png.empty())
+    throw std::invalid_argument("--overlay needs --plot");
+  std::vector<Series> overlays;  // read before the sweep: a bad file fails fast
+  for (const std::string& spec : o.overlays)
+    overlays.push_back(read_overlay(spec));
+  const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
+                          o.edge_turn_deg, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()),
+                          o.quiet);
   const radar::RcsEngine& engine = target.engine;
 
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
@@ -370,7 +459,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
   radar::RcsStats stats;
   // Per direction, for the CSV: how bounce 1 was lit and how many tubes the bounce cap cut off.
   struct DirectionStats {
-    std::uint64_t facets_lit = 0, facets_partial = 0, tubes_cut_off = 0;
+    std::uint64_t facets_lit = 0, facets_partial = 0, tubes_cut_off = 0, edges_used = 0;
   };
   std::vector<DirectionStats> per_direction(nt * np);
   Progress progress(!o.quiet && nt * np > 4, "direction", nt * np);
@@ -385,7 +474,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
       radar::RcsStats one;
       engine.compute(tx, rx, o.freqs_hz,
                      std::span<radar::ScatteringMatrix>(s.data() + (it * np + ip) * nf, nf), one);
-      per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off};
+      per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off,
+                                     one.edges_used};
       add_stats(stats, one);
       progress.update(it * np + ip + 1);
     }
@@ -400,7 +490,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
       const std::string n(pol_name(p));
       std::fprintf(f.get(), ",rcs_%s_dbsm,re_%s,im_%s", n.c_str(), n.c_str(), n.c_str());
     }
-    std::fprintf(f.get(), ",facets_lit,facets_partial,tubes_cut_off\n");
+    // edges: 1 when edge diffraction was on; edges_used: the edge terms of that direction.
+    std::fprintf(f.get(), ",facets_lit,facets_partial,tubes_cut_off,edges,edges_used\n");
     for (std::size_t it = 0; it < nt; ++it) {
       for (std::size_t ip = 0; ip < np; ++ip) {
         const DirectionStats& ds = per_direction[it * np + ip];
@@ -411,9 +502,11 @@ int run_rcs_tool(const RcsToolOptions& o) {
             const std::complex<double> a = component(m, p);
             std::fprintf(f.get(), ",%.6f,%.9e,%.9e", radar::dbsm(a), a.real(), a.imag());
           }
-          std::fprintf(f.get(), ",%llu,%llu,%llu\n", static_cast<unsigned long long>(ds.facets_lit),
+          std::fprintf(f.get(), ",%llu,%llu,%llu,%d,%llu\n",
+                       static_cast<unsigned long long>(ds.facets_lit),
                        static_cast<unsigned long long>(ds.facets_partial),
-                       static_cast<unsigned long long>(ds.tubes_cut_off));
+                       static_cast<unsigned long long>(ds.tubes_cut_off), o.edges ? 1 : 0,
+                       static_cast<unsigned long long>(ds.edges_used));
         }
       }
     }
@@ -500,6 +593,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
       }
       chart.series.push_back(std::move(ser));
     }
+    for (Series& ser : overlays)
+      chart.series.push_back(std::move(ser));
     // Keep 60 dB under the peak: deep nulls would squash the pattern.
     double peak = -400.0;
     for (const Series& ser : chart.series) {
@@ -524,6 +619,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
         static_cast<unsigned long long>(stats.facets_shadowed),
         static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths),
         static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
+    print_edge_stats(engine, stats);
     std::printf("wrote %s", o.out_csv.c_str());
     if (!stats_path.empty())
       std::printf(", %s", stats_path.c_str());
@@ -551,20 +647,23 @@ int run_profile_tool(const ProfileToolOptions& o) {
                                 "' is not none, hann, hamming, blackman or taylor");
   if (o.oversample < 1 || o.oversample > 64)
     throw std::invalid_argument("--oversample must be in 1..64");
-  const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength,
-                          o.freqs_hz.front(), o.quiet);
+  const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
+                          o.edge_turn_deg, o.freqs_hz.front(), o.quiet);
   const radar::RcsEngine& engine = target.engine;
 
   const std::size_t na = nt * np;
   std::vector<radar::ScatteringMatrix> s(na * nf);
+  std::vector<std::uint64_t> edges_used(na);
   radar::RcsStats stats;
   Progress progress(!o.quiet && na > 4, "angle", na);
   const auto t0 = std::chrono::steady_clock::now();
   for (std::size_t a = 0; a < na; ++a) {
     const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
     const radar::Direction dir{o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
+    const std::uint64_t before = stats.edges_used;
     engine.compute(dir, dir, o.freqs_hz, std::span<radar::ScatteringMatrix>(s.data() + a * nf, nf),
                    stats);
+    edges_used[a] = stats.edges_used - before;
     progress.update(a + 1);
   }
   const double elapsed_s =
@@ -607,14 +706,16 @@ int run_profile_tool(const ProfileToolOptions& o) {
   }
   {
     File f(open_or_throw(o.out_csv));
-    std::fprintf(f.get(), "theta_deg,phi_deg,range_m,amplitude_dbsm,re_m,im_m\n");
+    // edges: 1 when edge diffraction was on; edges_used: the edge terms of that angle.
+    std::fprintf(f.get(), "theta_deg,phi_deg,range_m,amplitude_dbsm,re_m,im_m,edges,edges_used\n");
     for (std::size_t a = 0; a < na; ++a) {
       const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
       const radar::RangeProfile& p = profiles[a];
       for (std::size_t i = 0; i < p.range_m.size(); ++i) {
-        std::fprintf(f.get(), "%.10g,%.10g,%.6f,%.4f,%.9e,%.9e\n", o.theta_deg[it], o.phi_deg[ip],
-                     p.range_m[i], radar::dbsm(p.amplitude_m[i]), p.amplitude_m[i].real(),
-                     p.amplitude_m[i].imag());
+        std::fprintf(f.get(), "%.10g,%.10g,%.6f,%.4f,%.9e,%.9e,%d,%llu\n", o.theta_deg[it],
+                     o.phi_deg[ip], p.range_m[i], radar::dbsm(p.amplitude_m[i]),
+                     p.amplitude_m[i].real(), p.amplitude_m[i].imag(), o.edges ? 1 : 0,
+                     static_cast<unsigned long long>(edges_used[a]));
       }
     }
   }
@@ -702,6 +803,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
         "at the bounce cap (%d))\n",
         na, nf, elapsed_s, static_cast<unsigned long long>(stats.paths),
         static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
+    print_edge_stats(engine, stats);
     std::printf(
         "range resolution c/2B = %.4g m, sample spacing %.4g m, unambiguous window %.4g m\n",
         centre.resolution_m, centre.bin_m, centre.unambiguous_m);

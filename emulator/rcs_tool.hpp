@@ -51,9 +51,15 @@ struct RcsToolOptions {
   std::vector<Pol> pols{Pol::kHH, Pol::kVV};
   int bounces = 3;
   double rays_per_wavelength = 4.0;
+  bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
+  double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
   std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
   std::string out_csv = "rcs.csv";
-  std::string plot_png;     ///< empty: no plot
+  std::string plot_png;  ///< empty: no plot
+  /// Curves drawn on the plot beside the computed ones, "FILE=LABEL": text lines of numbers
+  /// (whitespace or commas) whose last two are x (the swept angle or frequency) and dBsm, e.g.
+  /// a reference table or another run; a first line that is not numbers is a header.
+  std::vector<std::string> overlays;
   double window_deg = 0.0;  ///< > 0: fluctuation statistics over +-window/2 of the swept angle
   std::string stats_csv;    ///< where they go (default: next to out_csv, *_stats.csv)
   bool quiet = false;
@@ -71,6 +77,8 @@ struct ProfileToolOptions {
   Pol pol = Pol::kVV;
   int bounces = 3;
   double rays_per_wavelength = 4.0;
+  bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
+  double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
   std::string window = "hann";
   std::size_t oversample = 4;
   double dynamic_range_db = 50.0;  ///< plots

@@ -21,6 +21,10 @@
 //              after the first the tube's footprint radiates by PO toward the receiver when the
 //              receiver sees the lit side of the hit (n.s >= kGrazingCos, no obstruction). A
 //              tube stops at a grazing hit (cos theta_i < kGrazingCos) or at the bounce cap.
+//   edges      With RcsConfig::edges: edge diffraction, the fringe equivalent edge currents of the
+//              mesh's wedge edges and open-sheet boundaries (PTD; radar/em/edges.hpp), each
+//              integrated exactly along its straight edge and added to bounce 1; an edge
+//              radiates when a face of it is lit and its midpoint sees the transmitter.
 //   sweeps     Facet geometry and ray paths do not depend on frequency: they are found once per
 //              direction and every frequency is summed from them.
 //
@@ -46,6 +50,7 @@
 #include <string>
 #include <vector>
 
+#include "radar/em/edges.hpp"
 #include "radar/em/sbr_core.hpp"
 #include "scene/scene.hpp"
 
@@ -84,6 +89,13 @@ struct RcsConfig {
   double coating_reference_hz = 0.0;
   bool shadowing = true;                ///< occlusion tests for facets and ray-path exits
   std::uint64_t max_rays = 50'000'000;  ///< per call; more is an error (say so, don't stall)
+  /// Edge diffraction (radar/em/edges.hpp): fringe equivalent edge currents of the mesh's wedge
+  /// edges and open-sheet boundaries, added to bounce-1 PO. Off here (the closed-form PO tests
+  /// compare PO alone); the CLI turns it on by default.
+  bool edges = false;
+  /// A shared edge diffracts when its exterior wedge angle departs from pi (flat) by more than
+  /// this [rad]; smoother edges of a faceted curved surface are left to PO.
+  double edge_min_turn_rad = 30.0 * 3.14159265358979323846 / 180.0;
 };
 
 struct RcsStats {
@@ -102,6 +114,11 @@ struct RcsStats {
   std::uint64_t occlusion_queries = 0;
   std::uint64_t segments = 0;  ///< intersection queries of the ray tubes (rays x bounces)
   std::uint64_t paths_by_bounce[kMaxRcsBounces + 1] = {};  ///< [n]: footprints at bounce n >= 2
+  std::uint64_t edges_used = 0;                            ///< edge terms added (config.edges)
+  std::uint64_t edges_shadowed = 0;  ///< lit faces, but the path to the transmitter is blocked
+  std::uint64_t edges_skipped = 0;   ///< no lit face, along the edge (Keller-cone guard) or the
+                                     ///< receiver inside the wedge (edges.hpp, EdgeSkip)
+  std::uint64_t edges_guarded = 0;   ///< boundary singularities stepped around (edges.hpp)
 };
 
 /// One reflection of a ray tube (for tests of the GO tracer). Reported from worker threads.
@@ -149,6 +166,9 @@ class RcsEngine {
   [[nodiscard]] std::size_t facet_count() const noexcept { return facets_.size(); }
   [[nodiscard]] std::size_t degenerate_facets() const noexcept { return degenerate_; }
   [[nodiscard]] const RcsConfig& config() const noexcept { return config_; }
+  /// The diffracting edges found (empty unless config.edges) and how the mesh's edges sorted.
+  [[nodiscard]] std::span<const WedgeEdge> edges() const noexcept { return edges_; }
+  [[nodiscard]] const EdgeCensus& edge_census() const noexcept { return census_; }
 
  private:
   struct Facet {
@@ -167,6 +187,8 @@ class RcsEngine {
   glm::dvec3 centre_m_{0.0};
   double radius_m_ = 0.0;
   double epsilon_m_ = 0.0;  ///< ray offset, scaled with the target
+  std::vector<WedgeEdge> edges_;
+  EdgeCensus census_;
 };
 
 /// sigma = |S|^2 in dBsm, floored at -400 dBsm for an exact zero.

