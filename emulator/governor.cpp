@@ -8,14 +8,15 @@ namespace radar_emu::emulator {
 
 // Measured with `build/emulator/radar-emu tradeoff --cases frame` (series governor_level: mean
 // |SNR error| of the detections matched to the reference frame's, pooled over four frames of the
-// default approach at t = 0, 3, 6, 9 s; docs/performance.md, "The fidelity governor"):
+// default approach at t = 0, 3, 6, 9 s; docs/performance.md, "The fidelity governor"), at
+// 9fc99ff (bounce 1 by the shared lighting rule, returns labelled by their owner):
 //   level     0     1     2     3     4     5     6     8    10
-//   dB     1.33  2.18  4.02  5.61  5.88  9.60  8.06 19.77 19.67
-// Made non-decreasing (a level is never estimated better than a finer one); level 7 takes level
-// 8's value, levels past 8 the largest measured.
+//   dB     1.09  1.94  3.02  5.00  5.90  7.29 11.55 19.93 23.00
+// Made non-decreasing (a level is never estimated better than a finer one); levels 7 and 9 take
+// the next measured level's value, levels past 10 the largest measured.
 const std::array<double, FidelityGovernor::kMaxLevel + 1> FidelityGovernor::kLevelSnrError_db = {
-    1.33,  2.18,  4.02,  5.61,  5.88,  9.60,  9.60,  19.77, 19.77,
-    19.77, 19.77, 19.77, 19.77, 19.77, 19.77, 19.77, 19.77};
+    1.09,  1.94,  3.02,  5.00,  5.90,  7.29,  11.55, 19.93, 19.93,
+    23.00, 23.00, 23.00, 23.00, 23.00, 23.00, 23.00, 23.00};
 
 namespace {
 
