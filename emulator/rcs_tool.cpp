@@ -193,20 +193,10 @@ struct ToolTarget {
              double min_freq_hz, bool quiet)
       : loaded(load_target(mesh, scale, materials)),
         scene(loaded.description),
-        engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength, edges, edge_turn_deg)) {
+        engine(scene, loaded.surfaces,
+               rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg)) {
     print_target(loaded, engine, quiet);
     warn_electrical_size(engine, min_freq_hz);
-  }
-  static radar::RcsConfig config(int bounces, double rays_per_wavelength, bool edges,
-                                 double edge_turn_deg) {
-    if (!(edge_turn_deg >= 0.0 && edge_turn_deg < 180.0))
-      throw std::invalid_argument("--edge-turn-deg must be in [0, 180)");
-    radar::RcsConfig c;
-    c.max_bounces = bounces;
-    c.rays_per_wavelength = rays_per_wavelength;
-    c.edges = edges;
-    c.edge_min_turn_rad = edge_turn_deg * kDegToRad;
-    return c;
   }
 };
 
@@ -433,6 +423,79 @@ std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept
   return {};
 }
 
+radar::RcsConfig rcs_config(int bounces, double rays_per_wavelength, bool edges,
+                            double edge_turn_deg, OptionSpelling spelling) {
+  const auto name = [spelling](std::string cli) {
+    if (spelling == OptionSpelling::kCli)
+      return cli;
+    cli.erase(0, 2);
+    std::replace(cli.begin(), cli.end(), '-', '_');
+    return cli;
+  };
+  // CLI11 checks --bounces and --rays-per-wavelength on the command line already; these are
+  // for the library's other callers (the Python module).
+  if (bounces < 1 || bounces > radar::kMaxRcsBounces) {
+    throw std::invalid_argument(name("--bounces") + " must be in 1.." +
+                                std::to_string(radar::kMaxRcsBounces));
+  }
+  if (!(rays_per_wavelength > 0.0))
+    throw std::invalid_argument(name("--rays-per-wavelength") + " must be > 0");
+  if (!(edge_turn_deg >= 0.0 && edge_turn_deg < 180.0))
+    throw std::invalid_argument(name("--edge-turn-deg") + " must be in [0, 180)");
+  radar::RcsConfig c;
+  c.max_bounces = bounces;
+  c.rays_per_wavelength = rays_per_wavelength;
+  c.edges = edges;
+  c.edge_min_turn_rad = edge_turn_deg * kDegToRad;
+  return c;
+}
+
+void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+               std::span<const double> phi_deg, std::span<const double> freqs_hz,
+               std::optional<std::pair<double, double>> bistatic_deg,
+               std::span<radar::ScatteringMatrix> s, std::span<RcsDirectionStats> per_direction,
+               radar::RcsStats& total, const std::function<void(std::size_t)>& progress) {
+  const std::size_t nt = theta_deg.size(), np = phi_deg.size(), nf = freqs_hz.size();
+  if (s.size() != nt * np * nf || per_direction.size() != nt * np)
+    throw std::invalid_argument("sweep_rcs: output sizes do not match the sweep");
+  for (std::size_t it = 0; it < nt; ++it) {
+    for (std::size_t ip = 0; ip < np; ++ip) {
+      const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
+      const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
+                                                                  bistatic_deg->second * kDegToRad}
+                                               : tx;
+      radar::RcsStats one;
+      engine.compute(tx, rx, freqs_hz, s.subspan((it * np + ip) * nf, nf), one);
+      per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off,
+                                     one.edges_used};
+      add_stats(total, one);
+      if (progress)
+        progress(it * np + ip + 1);
+    }
+  }
+}
+
+void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+                   std::span<const double> phi_deg, std::span<const double> freqs_hz,
+                   std::span<radar::ScatteringMatrix> s, std::span<std::uint64_t> edges_used,
+                   radar::RcsStats& total, const std::function<void(std::size_t)>& progress) {
+  const std::size_t nt = theta_deg.size(), np = phi_deg.size(), nf = freqs_hz.size();
+  const std::size_t na = nt * np;
+  if (nt > 1 && np > 1)
+    throw std::invalid_argument("sweep theta or phi, not both (ISAR uses one angle)");
+  if (s.size() != na * nf || edges_used.size() != na)
+    throw std::invalid_argument("sweep_profile: output sizes do not match the sweep");
+  for (std::size_t a = 0; a < na; ++a) {
+    const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
+    const radar::Direction dir{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
+    const std::uint64_t before = total.edges_used;
+    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), total);
+    edges_used[a] = total.edges_used - before;
+    if (progress)
+      progress(a + 1);
+  }
+}
+
 int run_rcs_tool(const RcsToolOptions& o) {
   if (o.freqs_hz.empty())
     throw std::invalid_argument("give --freq-hz F or --freq-sweep-hz START:STOP:N");
@@ -458,28 +521,14 @@ int run_rcs_tool(const RcsToolOptions& o) {
   std::vector<radar::ScatteringMatrix> s(nt * np * nf);  // [theta][phi][freq]
   radar::RcsStats stats;
   // Per direction, for the CSV: how bounce 1 was lit and how many tubes the bounce cap cut off.
-  struct DirectionStats {
-    std::uint64_t facets_lit = 0, facets_partial = 0, tubes_cut_off = 0, edges_used = 0;
-  };
-  std::vector<DirectionStats> per_direction(nt * np);
+  std::vector<RcsDirectionStats> per_direction(nt * np);
   Progress progress(!o.quiet && nt * np > 4, "direction", nt * np);
   const auto t0 = std::chrono::steady_clock::now();
-  for (std::size_t it = 0; it < nt; ++it) {
-    for (std::size_t ip = 0; ip < np; ++ip) {
-      const radar::Direction tx{o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
-      const radar::Direction rx =
-          o.bistatic_theta_deg
-              ? radar::Direction{*o.bistatic_theta_deg * kDegToRad, *o.bistatic_phi_deg * kDegToRad}
-              : tx;
-      radar::RcsStats one;
-      engine.compute(tx, rx, o.freqs_hz,
-                     std::span<radar::ScatteringMatrix>(s.data() + (it * np + ip) * nf, nf), one);
-      per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off,
-                                     one.edges_used};
-      add_stats(stats, one);
-      progress.update(it * np + ip + 1);
-    }
-  }
+  std::optional<std::pair<double, double>> bistatic;
+  if (o.bistatic_theta_deg)
+    bistatic.emplace(*o.bistatic_theta_deg, *o.bistatic_phi_deg);
+  sweep_rcs(engine, o.theta_deg, o.phi_deg, o.freqs_hz, bistatic, s, per_direction, stats,
+            [&progress](std::size_t done) { progress.update(done); });
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -494,7 +543,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
     std::fprintf(f.get(), ",facets_lit,facets_partial,tubes_cut_off,edges,edges_used\n");
     for (std::size_t it = 0; it < nt; ++it) {
       for (std::size_t ip = 0; ip < np; ++ip) {
-        const DirectionStats& ds = per_direction[it * np + ip];
+        const RcsDirectionStats& ds = per_direction[it * np + ip];
         for (std::size_t k = 0; k < nf; ++k) {
           const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
           std::fprintf(f.get(), "%.10g,%.10g,%.10g", o.freqs_hz[k], o.theta_deg[it], o.phi_deg[ip]);
@@ -657,15 +706,8 @@ int run_profile_tool(const ProfileToolOptions& o) {
   radar::RcsStats stats;
   Progress progress(!o.quiet && na > 4, "angle", na);
   const auto t0 = std::chrono::steady_clock::now();
-  for (std::size_t a = 0; a < na; ++a) {
-    const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
-    const radar::Direction dir{o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
-    const std::uint64_t before = stats.edges_used;
-    engine.compute(dir, dir, o.freqs_hz, std::span<radar::ScatteringMatrix>(s.data() + a * nf, nf),
-                   stats);
-    edges_used[a] = stats.edges_used - before;
-    progress.update(a + 1);
-  }
+  sweep_profile(engine, o.theta_deg, o.phi_deg, o.freqs_hz, s, edges_used, stats,
+                [&progress](std::size_t done) { progress.update(done); });
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 

@@ -3,7 +3,10 @@
 // (radar/em/rcs.hpp). Loading, option checking, sweeps with progress, CSV and PNG outputs.
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -41,6 +44,42 @@ enum class Pol { kHH, kHV, kVH, kVV };
 [[nodiscard]] std::vector<Pol> parse_pols(std::string_view text);
 [[nodiscard]] std::string_view pol_name(Pol p) noexcept;
 [[nodiscard]] std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept;
+
+/// How an error message names an option: the CLI's "--edge-turn-deg" or Python's
+/// "edge_turn_deg" (the radar_emu module, docs/python.md).
+enum class OptionSpelling { kCli, kPython };
+
+/// The engine settings of `rcs` and `profile` (--bounces, --rays-per-wavelength, --no-edges,
+/// --edge-turn-deg), checked: bounces in 1..radar::kMaxRcsBounces, rays_per_wavelength > 0,
+/// edge_turn_deg in [0, 180). Throws std::invalid_argument naming the option as `spelling` says.
+[[nodiscard]] radar::RcsConfig rcs_config(int bounces, double rays_per_wavelength, bool edges,
+                                          double edge_turn_deg,
+                                          OptionSpelling spelling = OptionSpelling::kCli);
+
+/// The counters of one direction of an `rcs` sweep, as its CSV prints them.
+struct RcsDirectionStats {
+  std::uint64_t facets_lit = 0, facets_partial = 0, tubes_cut_off = 0, edges_used = 0;
+};
+
+/// The sweep of `radar-emu rcs`: every (theta, phi) direction [deg], theta outer, at all
+/// `freqs_hz`; the receiver at `bistatic_deg` (theta, phi) when given, else monostatic.
+/// Writes s[(it * np + ip) * nf + k] and per_direction[it * np + ip] (sizes nt * np * nf and
+/// nt * np), adds every counter to `total`, and calls `progress` (may be empty) with the number
+/// of directions done after each one.
+void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+               std::span<const double> phi_deg, std::span<const double> freqs_hz,
+               std::optional<std::pair<double, double>> bistatic_deg,
+               std::span<radar::ScatteringMatrix> s, std::span<RcsDirectionStats> per_direction,
+               radar::RcsStats& total, const std::function<void(std::size_t)>& progress = {});
+
+/// The angle sweep of `radar-emu profile`: theta or phi swept (the other one value, degrees),
+/// monostatic, at all `freqs_hz`. Writes s[a * nf + k] and edges_used[a] (the edge terms of
+/// angle a; sizes na * nf and na, na = nt * np), adds every counter to `total`, and calls
+/// `progress` (may be empty) with the number of angles done after each one.
+void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+                   std::span<const double> phi_deg, std::span<const double> freqs_hz,
+                   std::span<radar::ScatteringMatrix> s, std::span<std::uint64_t> edges_used,
+                   radar::RcsStats& total, const std::function<void(std::size_t)>& progress = {});
 
 struct RcsToolOptions {
   std::string mesh;

@@ -14,6 +14,7 @@
 #include <atomic>
 #include <cmath>
 #include <complex>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -25,6 +26,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -147,25 +149,19 @@ void warn(const std::string& text) {
 // ---- targets ---------------------------------------------------------------------------------
 
 // A loaded target with its engine, as `radar-emu rcs` and `profile` set it up (rcs_tool.cpp):
-// emulator::load_target, a scene over it, radar::RcsEngine with the bounce cap and ray density.
+// emulator::load_target, a scene over it, radar::RcsEngine with emulator::rcs_config (bounce
+// cap, ray density, edge diffraction), checked as the CLI checks them.
 struct Target {
   Target(const std::filesystem::path& mesh, double scale, const std::vector<std::string>& materials,
-         int bounces, double rays_per_wavelength)
+         int bounces, double rays_per_wavelength, bool edges, double edge_turn_deg)
       : path(path_text(mesh)),
+        config(emu::rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg,
+                               emu::OptionSpelling::kPython)),
         loaded(emu::load_target(path, scale, materials)),
         scene(loaded.description),
-        engine(scene, loaded.surfaces, config(bounces, rays_per_wavelength)) {}
-  static radar::RcsConfig config(int bounces, double rays_per_wavelength) {
-    if (bounces < 1 || bounces > radar::kMaxRcsBounces)
-      throw std::invalid_argument("bounces must be in 1.." + std::to_string(radar::kMaxRcsBounces));
-    if (!(rays_per_wavelength > 0.0))
-      throw std::invalid_argument("rays_per_wavelength must be > 0");
-    radar::RcsConfig c;
-    c.max_bounces = bounces;
-    c.rays_per_wavelength = rays_per_wavelength;
-    return c;
-  }
+        engine(scene, loaded.surfaces, config) {}
   std::string path;
+  radar::RcsConfig config;  // checked before the mesh is loaded: bad settings fail fast
   emu::LoadedTarget loaded;
   sc::Scene scene;
   radar::RcsEngine engine;  // keeps a pointer to `scene`: Target is never moved
@@ -173,8 +169,10 @@ struct Target {
 
 std::shared_ptr<Target> make_loaded_target(const std::filesystem::path& mesh, double scale,
                                            const std::vector<std::string>& materials, int bounces,
-                                           double rays_per_wavelength) {
-  auto t = std::make_shared<Target>(mesh, scale, materials, bounces, rays_per_wavelength);
+                                           double rays_per_wavelength, bool edges,
+                                           double edge_turn_deg) {
+  auto t = std::make_shared<Target>(mesh, scale, materials, bounces, rays_per_wavelength, edges,
+                                    edge_turn_deg);
   for (const std::string& w : t->loaded.warnings)
     warn(w);
   return t;
@@ -183,7 +181,8 @@ std::shared_ptr<Target> make_loaded_target(const std::filesystem::path& mesh, do
 // `radar-emu rcs`: one row per CSV row (theta outer, then phi, then frequency), the CSV's
 // columns: freq_hz, theta_deg, phi_deg, then per polarisation rcs_P_dbsm (radar::dbsm of the
 // amplitude), re_P, im_P (scattering amplitude [m]), then facets_lit, facets_partial,
-// tubes_cut_off of the direction. Full double precision (the CSV prints %.6f / %.9e).
+// tubes_cut_off of the direction, edges (edge diffraction on) and edges_used (the direction's
+// edge terms). Full double precision (the CSV prints %.6f / %.9e).
 py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& theta_deg,
                     const SweepArg& phi_deg, const std::string& pol,
                     std::optional<double> bistatic_theta_deg,
@@ -202,26 +201,14 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
     throw std::invalid_argument("give both bistatic_theta_deg and bistatic_phi_deg");
   const std::size_t nt = theta.size(), np = phi.size(), nf = freqs.size();
   std::vector<radar::ScatteringMatrix> s(nt * np * nf);
-  struct DirectionStats {
-    std::uint64_t facets_lit = 0, facets_partial = 0, tubes_cut_off = 0;
-  };
-  std::vector<DirectionStats> per_direction(nt * np);
+  std::vector<emu::RcsDirectionStats> per_direction(nt * np);
+  std::optional<std::pair<double, double>> bistatic;
+  if (bistatic_theta_deg)
+    bistatic.emplace(*bistatic_theta_deg, *bistatic_phi_deg);
   {
     py::gil_scoped_release release;
-    for (std::size_t it = 0; it < nt; ++it) {
-      for (std::size_t ip = 0; ip < np; ++ip) {
-        const radar::Direction tx{theta[it] * kDegToRad, phi[ip] * kDegToRad};
-        const radar::Direction rx =
-            bistatic_theta_deg
-                ? radar::Direction{*bistatic_theta_deg * kDegToRad, *bistatic_phi_deg * kDegToRad}
-                : tx;
-        radar::RcsStats one;
-        t.engine.compute(tx, rx, freqs,
-                         std::span<radar::ScatteringMatrix>(s.data() + (it * np + ip) * nf, nf),
-                         one);
-        per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off};
-      }
-    }
+    radar::RcsStats total;
+    emu::sweep_rcs(t.engine, theta, phi, freqs, bistatic, s, per_direction, total);
   }
   Table table;
   table.col("freq_hz", 'd').col("theta_deg", 'd').col("phi_deg", 'd');
@@ -230,11 +217,12 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
     table.col("rcs_" + n + "_dbsm", 'd').col("re_" + n, 'd').col("im_" + n, 'd');
   }
   table.col("facets_lit", 'Q').col("facets_partial", 'Q').col("tubes_cut_off", 'Q');
+  table.col("edges", '?').col("edges_used", 'Q');
   py::array out = table.make(nt * np * nf);
   std::size_t row = 0;
   for (std::size_t it = 0; it < nt; ++it) {
     for (std::size_t ip = 0; ip < np; ++ip) {
-      const DirectionStats& ds = per_direction[it * np + ip];
+      const emu::RcsDirectionStats& ds = per_direction[it * np + ip];
       for (std::size_t k = 0; k < nf; ++k, ++row) {
         const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
         std::size_t c = 0;
@@ -250,6 +238,8 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
         table.set(out, row, c++, ds.facets_lit);
         table.set(out, row, c++, ds.facets_partial);
         table.set(out, row, c++, ds.tubes_cut_off);
+        table.set(out, row, c++, t.config.edges);
+        table.set(out, row, c++, ds.edges_used);
       }
     }
   }
@@ -257,9 +247,9 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
 }
 
 // `radar-emu profile`: the range profile(s) as the CSV (theta_deg, phi_deg, range_m,
-// amplitude_dbsm, re_m, im_m) and, over an angle sweep, the ISAR image (cross_range_m,
-// range_m, amplitude_dbsm), from radar::range_profile and radar::isar_image on the engine's
-// samples, with the tool's checks.
+// amplitude_dbsm, re_m, im_m, edges, edges_used) and, over an angle sweep, the ISAR image
+// (cross_range_m, range_m, amplitude_dbsm), from radar::range_profile and radar::isar_image on the
+// engine's samples, with the tool's checks.
 py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& theta_deg,
                        const SweepArg& phi_deg, const std::string& pol, const std::string& window,
                        std::size_t oversample) {
@@ -286,18 +276,14 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
     throw std::invalid_argument("oversample must be in 1..64");
   const std::size_t na = nt * np;
   std::vector<radar::ScatteringMatrix> s(na * nf);
+  std::vector<std::uint64_t> edges_used(na);
   std::vector<radar::RangeProfile> profiles;
   std::optional<radar::IsarImage> image;
   const radar::FrequencyGrid grid{freqs.front(), df, nf};
   {
     py::gil_scoped_release release;
     radar::RcsStats stats;
-    for (std::size_t a = 0; a < na; ++a) {
-      const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
-      const radar::Direction dir{theta[it] * kDegToRad, phi[ip] * kDegToRad};
-      t.engine.compute(dir, dir, freqs, std::span<radar::ScatteringMatrix>(s.data() + a * nf, nf),
-                       stats);
-    }
+    emu::sweep_profile(t.engine, theta, phi, freqs, s, edges_used, stats);
     std::vector<std::complex<double>> samples(na * nf);
     for (std::size_t i = 0; i < na * nf; ++i)
       samples[i] = emu::component(s[i], pols[0]);
@@ -328,7 +314,9 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
       .col("range_m", 'd')
       .col("amplitude_dbsm", 'd')
       .col("re_m", 'd')
-      .col("im_m", 'd');
+      .col("im_m", 'd')
+      .col("edges", '?')
+      .col("edges_used", 'Q');
   std::size_t rows = 0;
   for (const auto& p : profiles)
     rows += p.range_m.size();
@@ -344,6 +332,8 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
       pt.set(prof, row, 3, radar::dbsm(p.amplitude_m[i]));
       pt.set(prof, row, 4, p.amplitude_m[i].real());
       pt.set(prof, row, 5, p.amplitude_m[i].imag());
+      pt.set(prof, row, 6, t.config.edges);
+      pt.set(prof, row, 7, edges_used[a]);
     }
   }
   const radar::RangeProfile& centre = profiles[na / 2];
@@ -810,10 +800,14 @@ PYBIND11_MODULE(radar_emu, m) {
   py::class_<Target, std::shared_ptr<Target>>(
       m, "Target",
       "A target mesh (.glb, .gltf, .obj, .stl) with its RCS engine, as radar-emu rcs / profile "
-      "load it (--mesh, --scale, --material, --bounces, --rays-per-wavelength).")
+      "load it (--mesh, --scale, --material, --bounces, --rays-per-wavelength, --no-edges, "
+      "--edge-turn-deg).")
       .def(py::init(&make_loaded_target), py::arg("mesh"), py::arg("scale") = 1.0,
            py::arg("materials") = std::vector<std::string>{}, py::arg("bounces") = 3,
-           py::arg("rays_per_wavelength") = 4.0)
+           py::arg("rays_per_wavelength") = 4.0, py::arg("edges") = true,
+           py::arg("edge_turn_deg") = 30.0)
+      .def_property_readonly("edges", [](const Target& t) { return t.config.edges; })
+      .def_property_readonly("edge_count", [](const Target& t) { return t.engine.edges().size(); })
       .def_property_readonly("path", [](const Target& t) { return t.path; })
       .def_property_readonly("facet_count", [](const Target& t) { return t.engine.facet_count(); })
       .def_property_readonly("degenerate_facets",
@@ -835,30 +829,34 @@ PYBIND11_MODULE(radar_emu, m) {
       [](const std::filesystem::path& mesh, const SweepArg& freq_hz, const SweepArg& theta_deg,
          const SweepArg& phi_deg, const std::string& pol, std::optional<double> bt,
          std::optional<double> bp, double scale, const std::vector<std::string>& materials,
-         int bounces, double rpw) {
-        const auto t = make_loaded_target(mesh, scale, materials, bounces, rpw);
+         int bounces, double rpw, bool edges, double edge_turn_deg) {
+        const auto t =
+            make_loaded_target(mesh, scale, materials, bounces, rpw, edges, edge_turn_deg);
         return rcs_sweep(*t, freq_hz, theta_deg, phi_deg, pol, bt, bp);
       },
       py::arg("mesh"), py::arg("freq_hz"), py::arg("theta_deg") = SweepArg(0.0),
       py::arg("phi_deg") = SweepArg(0.0), py::arg("pol") = "HH,VV",
       py::arg("bistatic_theta_deg") = py::none(), py::arg("bistatic_phi_deg") = py::none(),
       py::arg("scale") = 1.0, py::arg("materials") = std::vector<std::string>{},
-      py::arg("bounces") = 3, py::arg("rays_per_wavelength") = 4.0,
+      py::arg("bounces") = 3, py::arg("rays_per_wavelength") = 4.0, py::arg("edges") = true,
+      py::arg("edge_turn_deg") = 30.0,
       "radar-emu rcs: loads the mesh and sweeps; a structured array with the CSV's columns.");
   m.def(
       "profile",
       [](const std::filesystem::path& mesh, const SweepArg& freq_hz, const SweepArg& theta_deg,
          const SweepArg& phi_deg, const std::string& pol, const std::string& window,
          std::size_t oversample, double scale, const std::vector<std::string>& materials,
-         int bounces, double rpw) {
-        const auto t = make_loaded_target(mesh, scale, materials, bounces, rpw);
+         int bounces, double rpw, bool edges, double edge_turn_deg) {
+        const auto t =
+            make_loaded_target(mesh, scale, materials, bounces, rpw, edges, edge_turn_deg);
         return profile_sweep(*t, freq_hz, theta_deg, phi_deg, pol, window, oversample);
       },
       py::arg("mesh"), py::arg("freq_hz"), py::arg("theta_deg") = SweepArg(0.0),
       py::arg("phi_deg") = SweepArg(0.0), py::arg("pol") = "VV", py::arg("window") = "hann",
       py::arg("oversample") = 4, py::arg("scale") = 1.0,
       py::arg("materials") = std::vector<std::string>{}, py::arg("bounces") = 3,
-      py::arg("rays_per_wavelength") = 4.0, "radar-emu profile: range profile and ISAR image.");
+      py::arg("rays_per_wavelength") = 4.0, py::arg("edges") = true,
+      py::arg("edge_turn_deg") = 30.0, "radar-emu profile: range profile and ISAR image.");
   m.def("sigma0", &sigma0, py::arg("freq_hz"), py::kw_only(), py::arg("material") = "",
         py::arg("eps_real") = py::none(), py::arg("eps_loss") = py::none(),
         py::arg("rms_height_m") = py::none(), py::arg("corr_length_m") = py::none(),

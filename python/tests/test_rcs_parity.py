@@ -87,6 +87,29 @@ def test_vehicle_multibounce(cli, tmp_path):
     assert array["tubes_cut_off"].max() > 0 or array["facets_lit"].min() > 0
 
 
+def test_no_edges(cli, tmp_path):
+    # edges=False against --no-edges, and the default (edges on) against the CLI's default, on a
+    # plate: its four rims are open-sheet boundaries, so the edge terms change the sidelobes.
+    mesh = tmp_path / "plate.obj"
+    cli("scene", "target", "plate", "--a-m", "0.4", "--b-m", "0.25", "--out", mesh)
+    args = ["--freq-sweep-hz", "9e9:11e9:3", "--theta-deg", "-40:40:17", "--phi-deg", "0:90:2",
+            "--pol", "HH,VV,HV", "--bounces", "1"]
+    kwargs = dict(freq_hz="9e9:11e9:3", theta_deg="-40:40:17", phi_deg="0:90:2",
+                  pol="HH,VV,HV", bounces=1)
+    off = run_both(cli, tmp_path, str(mesh), args + ["--no-edges"], edges=False, **kwargs)
+    on = run_both(cli, tmp_path, str(mesh), args, **kwargs)
+    assert not off["edges"].any() and off["edges_used"].max() == 0
+    assert on["edges"].all() and on["edges_used"].min() > 0
+    assert np.abs(on["rcs_VV_dbsm"] - off["rcs_VV_dbsm"]).max() > 0.1
+    # A turn angle other than the default, and its check (named as the Python argument).
+    target = radar_emu.Target(str(mesh), bounces=1, edge_turn_deg=10.0)
+    assert target.edges and target.edge_count == 4
+    with pytest.raises(ValueError, match="edge_turn_deg must be in"):
+        radar_emu.Target(str(mesh), edge_turn_deg=180.0)
+    with pytest.raises(ValueError, match="bounces must be in"):
+        radar_emu.rcs(str(mesh), 1e9, bounces=0)
+
+
 def test_scaled_mesh_and_bad_input(cli, tmp_path):
     mesh = tmp_path / "dihedral_mm.stl"
     cli("scene", "target", "dihedral", "--a-m", "400", "--b-m", "300", "--out", mesh)

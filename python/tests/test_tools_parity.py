@@ -31,7 +31,8 @@ def test_profile_and_isar(cli, tmp_path):
     cli("profile", "--mesh", mesh, "--freq-sweep-hz", "8e9:12e9:41", "--theta-deg", "54.7356",
         "--phi-deg", "35:55:11", "--out", out, "--isar-out", isar, "-q")
     p = radar_emu.profile(str(mesh), "8e9:12e9:41", theta_deg=54.7356, phi_deg="35:55:11")
-    assert_printed_equal(p["profile"], out, ["%.10g", "%.10g", "%.6f", "%.4f", "%.9e", "%.9e"])
+    assert_printed_equal(p["profile"], out,
+                         ["%.10g", "%.10g", "%.6f", "%.4f", "%.9e", "%.9e", "%d", "%d"])
     assert_printed_equal(p["isar"], isar, ["%.6f", "%.6f", "%.4f"])
     # Resolution c / (2 B), B = N df (radar/products/range_profile.hpp).
     assert abs(p["resolution_m"] - 299792458.0 / (2 * 41 * 0.1e9)) < 1e-9
