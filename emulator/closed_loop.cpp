@@ -1184,6 +1184,9 @@ void ClosedLoop::write_outputs(const RunResult& r) {
                   {"lit_facets", r.trace.lit_facets},
                   {"partial_facets", r.trace.partial_facets},
                   {"facet_queries", r.trace.facet_queries},
+                  {"edges_used", r.trace.edges_used},
+                  {"edges_shadowed", r.trace.edges_shadowed},
+                  {"edges_skipped", r.trace.edges_skipped},
                   {"knob_fallbacks", r.trace.knob_fallbacks}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   rep["sensor"] = {

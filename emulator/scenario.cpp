@@ -105,6 +105,8 @@ max_bounces = 3
 terrain_ray_spacing_deg = 0.0573   # 1 mrad
 target_ray_spacing_m = 0.1
 max_rays_per_target = 20000 # bundles of larger targets (the parked transports) coarsen (counted)
+edges = true                # edge diffraction (PTD fringe edge currents) of the targets' wedges
+edge_turn_deg = 30.0        # shared edges turning by more than this diffract
 
 [detector]
 cfar = "ca"                 # ca | os
@@ -867,7 +869,9 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
                          "max_bounces",
                          "terrain_ray_spacing_deg",
                          "target_ray_spacing_m",
-                         "max_rays_per_target"});
+                         "max_rays_per_target",
+                         "edges",
+                         "edge_turn_deg"});
   std::string waveform = radar::waveform_name(w.kind);
   rad.string("waveform", waveform);
   if (!radar::parse_waveform_kind(waveform, w.kind))
@@ -908,6 +912,11 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, 1e-4, 10.0);
   rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, 1e-4, 100.0);
   rad.integer("max_rays_per_target", s.sbr.max_rays_per_target, 1, 100'000'000);
+  s.sbr.edges = true;  // the loop's default (SbrConfig keeps it off for the unit tests)
+  rad.boolean("edges", s.sbr.edges);
+  rad.degrees("edge_turn_deg", s.sbr.edge_min_turn_rad, 0.0, 179.0);
+  if (!s.sbr.edges && rad.node("edge_turn_deg") != nullptr)
+    rad.fail("edge_turn_deg", "is read with edges = true only");
 
   radar::CfarConfig& cf = s.sensor.cfar;
   const TableReader det(root, "detector", origin,

@@ -140,13 +140,44 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     std::copy(closed.begin(), closed.end(),
               facet_outward_.begin() + static_cast<std::ptrdiff_t>(facet_first_[i]));
   }
+  edge_first_.assign(desc.objects.size() + 1, 0);
+  if (c.edges) {
+    require(std::isfinite(c.edge_min_turn_rad) && c.edge_min_turn_rad >= 0.0 &&
+                c.edge_min_turn_rad < kPi,
+            "edge_min_turn_rad", "must be in [0, pi)");
+    for (std::size_t i = 0; i < desc.objects.size(); ++i) {
+      edge_first_[i + 1] = edge_first_[i];
+      if (!is_target_[i])
+        continue;
+      const scene::Mesh& mesh = desc.objects[i].mesh;
+      const std::size_t nt = mesh.triangles.size();
+      std::vector<std::array<glm::dvec3, 3>> tris(nt);
+      std::vector<std::uint8_t> pec(nt);
+      for (std::size_t t = 0; t < nt; ++t) {
+        const glm::uvec3 tri = mesh.triangles[t];
+        tris[t] = {glm::dvec3(mesh.positions_m[tri.x]), glm::dvec3(mesh.positions_m[tri.y]),
+                   glm::dvec3(mesh.positions_m[tri.z])};
+        const std::uint16_t m = mesh.triangle_material[t];
+        pec[t] = has_surface_[m] && surfaces_[m].kind == SurfaceModel::Kind::kPec ? 1 : 0;
+      }
+      EdgeCensus census;
+      const std::vector<WedgeEdge> found = find_wedge_edges(
+          tris, std::span<const std::int8_t>(facet_outward_).subspan(facet_first_[i], nt), pec,
+          c.edge_min_turn_rad, census);
+      edges_body_.insert(edges_body_.end(), found.begin(), found.end());
+      edge_first_[i + 1] = edges_body_.size();
+    }
+  }
+  edge_state_.assign(edges_body_.size(), 2);
+  edge_out_.assign(edges_body_.size(), Contribution{});
   facet_light_.assign(facet_first_.back(), kLightByRays);
   facet_out_.assign(facet_first_.back(), Contribution{});
   frame_world_from_body_.assign(desc.objects.size(), glm::dmat4(1.0));
 }
 
 std::size_t SbrTracer::max_contributions() const noexcept {
-  return counts_.size() * static_cast<std::size_t>(config_.max_bounces) + facet_out_.size();
+  return counts_.size() * static_cast<std::size_t>(config_.max_bounces) + facet_out_.size() +
+         edge_out_.size();
 }
 
 namespace {
@@ -260,6 +291,71 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   out.bounces = 1;
   out.coherent = true;
   return static_cast<std::uint8_t>(light);
+}
+
+std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::size_t e,
+                                  Contribution& out, std::uint64_t& queries) const noexcept {
+  const SbrConfig& c = config_;
+  constexpr std::uint8_t kUsed = 0, kShadowed = 1, kNoTerm = 2;
+  // The edge in the world now (a rigid placement: points by the transform, directions by its
+  // rotation).
+  const glm::dmat4& xf = frame_world_from_body_[id];
+  const glm::dmat3 r(xf);
+  const WedgeEdge& body = edges_body_[e];
+  WedgeEdge w = body;
+  w.a_m = glm::dvec3(xf * glm::dvec4(body.a_m, 1.0));
+  w.b_m = glm::dvec3(xf * glm::dvec4(body.b_m, 1.0));
+  w.t = r * body.t;
+  w.x0 = r * body.x0;
+  w.y0 = r * body.y0;
+  const glm::dvec3 centre = 0.5 * (w.a_m + w.b_m);
+  const glm::dvec3 to_radar = pose.position_m - centre;
+  const double range_m = glm::length(to_radar);
+  if (!(range_m > 0.0) || range_m > c.max_range_m)
+    return kNoTerm;
+  const glm::dvec3 s = to_radar / range_m, d = -s;
+  const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
+  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+  const AzEl ae = azel_from_direction(antenna_from_world * d);
+  const bool in_view = glm::dot(pose.world_from_antenna[0], d) > 0.0 &&
+                       ae.azimuth_rad >= c.azimuth_min_rad && ae.azimuth_rad <= c.azimuth_max_rad &&
+                       ae.elevation_rad >= c.elevation_min_rad &&
+                       ae.elevation_rad <= c.elevation_max_rad;
+  // A plane wave along the edge: its own far field, as for a facet (facet_in_far_field).
+  if (!in_view || !facet_in_far_field(0.5 * w.length_m, range_m, k))
+    return kNoTerm;
+  const glm::dvec3 boresight = pose.world_from_antenna[0], up = -pose.world_from_antenna[2];
+  // The antenna's H and V along d (SbrConfig::polarisation: S_pq as the RCS engine's).
+  const glm::dvec3 h = pol_vector(true, up, boresight, d), v = pol_vector(false, up, boresight, d);
+  EdgeTerm term;
+  bool guarded = false;
+  if (edge_term(w, d, s, h, v, h, v, EdgeCoefficient::kFringe, term, guarded) != EdgeSkip::kNone)
+    return kNoTerm;
+  ++queries;
+  scene::Ray ray;
+  ray.origin_m = edge_probe(w, 10.0 * surface_offset_m(centre));
+  const glm::dvec3 to = pose.position_m - ray.origin_m;
+  ray.t_far_m = glm::length(to);
+  ray.direction = to / ray.t_far_m;
+  ray.t_near_m = 0.0;
+  if (scene_->occluded(ray))
+    return kShadowed;
+  // edges.hpp: S = c L sinc(k taper) exp(j k (s - d).centre); here the phase is the spherical
+  // wave's two-way path to the midpoint, as a facet's is to its centroid.
+  const std::size_t channel = static_cast<std::size_t>(c.polarisation);  // hh, hv, vh, vv
+  const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
+  out.amplitude = term.c[channel] * (term.length_m * sinc(k * term.taper_m)) *
+                  std::polar(1.0, -2.0 * k * range_m);
+  out.range_m = range_m;
+  out.range_spread_m = 0.0;
+  out.radial_velocity_mps = glm::dot(v_obj - pose.velocity_mps, d);
+  out.azimuth_rad = ae.azimuth_rad;
+  out.elevation_rad = ae.elevation_rad;
+  out.object_id = id;
+  out.radiated_by_owner = true;
+  out.bounces = 1;
+  out.coherent = true;
+  return kUsed;
 }
 
 SbrTracer::Frame SbrTracer::frame_for(const TraceKnobs& knobs, TraceStats* stats) const noexcept {
@@ -643,6 +739,28 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                       partial_facets += n_partial;
                     });
 
+  // Edge diffraction of the bundled targets (SbrConfig::edges), the same way.
+  std::atomic<std::uint64_t> edge_queries{0};
+  if (c.edges) {
+    std::size_t n_edges = 0;
+    for (Bundle& bd : bundles_) {
+      bd.first_edge = n_edges;
+      n_edges += edge_first_[bd.object_id + 1] - edge_first_[bd.object_id];
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_edges, 64),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        std::uint64_t queries = 0;
+                        std::size_t b = 0;
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                          while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_edge)
+                            ++b;
+                          const Bundle& bd = bundles_[b];
+                          const std::size_t e = edge_first_[bd.object_id] + i - bd.first_edge;
+                          edge_state_[e] = edge_pass(pose, bd.object_id, e, edge_out_[e], queries);
+                        }
+                        edge_queries += queries;
+                      });
+  }
   const std::size_t rays = next_ray;
   const auto per_ray = static_cast<std::size_t>(c.max_bounces);
   const std::size_t usable_rays = std::min({rays, out.size() / per_ray, counts_.size()});
@@ -702,6 +820,23 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       else
         ++stats.dropped_contributions;
     }
+  }
+  // Then the edges that radiate, in object and edge order.
+  if (c.edges) {
+    for (const Bundle& bd : bundles_) {
+      for (std::size_t e = edge_first_[bd.object_id]; e < edge_first_[bd.object_id + 1]; ++e) {
+        stats.edges_shadowed += edge_state_[e] == 1 ? 1u : 0u;
+        stats.edges_skipped += edge_state_[e] == 2 ? 1u : 0u;
+        if (edge_state_[e] != 0)
+          continue;
+        ++stats.edges_used;
+        if (n < out.size())
+          out[n++] = edge_out_[e];
+        else
+          ++stats.dropped_contributions;
+      }
+    }
+    stats.facet_queries += edge_queries.load();
   }
   stats.lit_facets += lit_facets.load();
   stats.partial_facets += partial_facets.load();

@@ -56,6 +56,7 @@
 #include <vector>
 
 #include "radar/clutter/terrain.hpp"
+#include "radar/em/edges.hpp"
 #include "radar/em/sbr_core.hpp"
 #include "radar/materials.hpp"
 #include "scene/scene.hpp"
@@ -103,6 +104,14 @@ struct SbrConfig {
   /// d, H = V x d (right of boresight for a level antenna); so V = -theta_hat, H = -phi_hat of
   /// the RCS engine's frame and S_pq equals its S_pq for every channel.
   Polarisation polarisation = Polarisation::kVV;
+  /// Edge diffraction of the targets' wedge edges (radar/em/edges.hpp, the RCS engine's PTD
+  /// fringe equivalent edge currents): every frame, each diffracting edge of a target in view,
+  /// in range and in its own far field radiates one contribution at its midpoint when a face of
+  /// it is lit and the path from beside its midpoint to the radar is clear. Off here; the
+  /// scenario's [radar] edges turns it on by default.
+  bool edges = false;
+  /// Shared edges turning by more than this diffract (open-sheet boundaries always do) [rad].
+  double edge_min_turn_rad = 0.5235987755982988;
 };
 
 /// Per-frame overrides for the fidelity governor. Defaults leave the configuration as it is.
@@ -168,7 +177,10 @@ struct TraceStats {
   std::uint64_t pruned_paths = 0;
   std::uint64_t lit_facets = 0;      ///< facets returned whole by exact PO (bounce 1, header)
   std::uint64_t partial_facets = 0;  ///< partly lit facets returned by their lit sub-triangles
-  std::uint64_t facet_queries = 0;   ///< occlusion queries of the bounce-1 lighting rule
+  std::uint64_t facet_queries = 0;   ///< occlusion queries of the bounce-1 rule and the edges
+  std::uint64_t edges_used = 0;      ///< edge-diffraction contributions (SbrConfig::edges)
+  std::uint64_t edges_shadowed = 0;  ///< edges whose midpoint does not see the radar
+  std::uint64_t edges_skipped = 0;   ///< back-facing, along the Keller cone, out of view/range
 };
 
 class SbrTracer {
@@ -218,6 +230,7 @@ class SbrTracer {
     double az0_rad = 0, el0_rad = 0, daz_rad = 0, del_rad = 0;
     std::size_t n_az = 0, n_el = 0, first_ray = 0;
     std::size_t first_facet = 0;  ///< in this frame's run over the bundled targets' facets
+    std::size_t first_edge = 0;   ///< in this frame's run over the bundled targets' edges
   };
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
@@ -255,6 +268,17 @@ class SbrTracer {
                                         double resolution_m, Contribution& out,
                                         std::uint64_t& queries) const noexcept;
 
+  /// Diffracting edges of the targets, body frame (SbrConfig::edges): object id's are
+  /// edges_body_[edge_first_[id] .. edge_first_[id + 1]); per frame, each edge's state (0 used,
+  /// 1 shadowed, 2 no term) and contribution.
+  std::vector<std::size_t> edge_first_;
+  std::vector<WedgeEdge> edges_body_;
+  std::vector<std::uint8_t> edge_state_;
+  std::vector<Contribution> edge_out_;
+  /// Edge `e` of target `id` for a radar at `pose` (SbrConfig::edges): its state, and its
+  /// contribution in `out` when used. Adds its occlusion query to `queries`.
+  [[nodiscard]] std::uint8_t edge_pass(const RadarPose& pose, std::uint32_t id, std::size_t e,
+                                       Contribution& out, std::uint64_t& queries) const noexcept;
   std::vector<std::uint8_t> is_target_;  ///< per object: has a conducting triangle
   std::size_t n_targets_ = 0;
   std::size_t n_az_ = 0, n_el_ = 0;                ///< terrain grid
