@@ -106,6 +106,7 @@ void FidelityGovernor::knobs_for(int level) noexcept {
   k.terrain_spacing_scale = std::pow(2.0, 0.25 * level);
   k.max_bounces =
       level >= kBounceLevel ? std::max(std::min(2, c.max_bounces), c.max_bounces - 1) : 0;
+  k.facet_centroid_only = level >= kFacetLevel;
 }
 
 const GovernorDecision& FidelityGovernor::decide(const radar::RadarPose& pose) noexcept {

@@ -5,7 +5,10 @@
 // Levels. Level 0 is the scenario's own fidelity ([radar] ray spacings, bounces). Each level up
 // halves the rays of a target bundle (bundle spacing x sqrt 2) and coarsens the terrain grid by
 // 2^(1/4) (its rays x 0.71); from level kBounceLevel on, rays bounce one time less (at least
-// twice: the target-ground double bounce and dihedrals stay). Up to kMaxLevel.
+// twice: the target-ground double bounce and dihedrals stay); from level kFacetLevel on, bounce
+// 1 judges each facet by its centroid's visibility alone (TraceKnobs::facet_centroid_only: a
+// seventh of the facet pass's occlusion queries, which dominate targets of tens of thousands of
+// facets over the 207k-triangle terrain). Up to kMaxLevel.
 //
 // Where the rays go. Above level 0 a target's level is the frame's level plus its "rank", at
 // most the frame's level again: rank 0 for targets whose expected SNR is within kRankStep_db of
@@ -82,6 +85,7 @@ class FidelityGovernor {
  public:
   static constexpr int kMaxLevel = 16;
   static constexpr int kBounceLevel = 8;
+  static constexpr int kFacetLevel = 6;
   static constexpr double kRankStep_db = 10.0;
   static constexpr int kMaxRank = 4;
   /// Mean |SNR error| [dB] of matched detections per level on the default frame (index: level,

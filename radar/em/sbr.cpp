@@ -191,7 +191,7 @@ double surface_offset_m(const glm::dvec3& p) noexcept {
 }  // namespace
 
 std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
-                                   double resolution_m, Contribution& out,
+                                   bool centroid_only, double resolution_m, Contribution& out,
                                    std::uint64_t& queries) const noexcept {
   const SbrConfig& c = config_;
   const scene::Mesh& mesh = scene_->description().objects[id].mesh;
@@ -250,7 +250,10 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
     ray.t_near_m = 0.0;
     return scene_->occluded(ray);
   };
-  const FacetLight light = facet_light(facet_samples(v0, v1, v2, n, offset_m), blocked);
+  // TraceKnobs::facet_centroid_only: the centroid's sample alone decides, lit or dark whole.
+  const FacetLight light =
+      centroid_only ? (blocked(centroid + offset_m * n) ? FacetLight::kDark : FacetLight::kLit)
+                    : facet_light(facet_samples(v0, v1, v2, n, offset_m), blocked);
   if (light == FacetLight::kDark)
     return dark;
   // The exact PO integral (facet_po.hpp) over the facet, or over its lit sub-triangles, in the
@@ -728,8 +731,9 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                         const Bundle& bd = bundles_[b];
                         const std::size_t t = i - bd.first_facet;
                         const std::size_t slot = facet_first_[bd.object_id] + t;
-                        const std::uint8_t l = facet_pass(pose, bd.object_id, t, bd.spacing_m,
-                                                          facet_out_[slot], queries);
+                        const std::uint8_t l =
+                            facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only,
+                                       bd.spacing_m, facet_out_[slot], queries);
                         facet_light_[slot] = l;
                         n_lit += l == static_cast<std::uint8_t>(FacetLight::kLit) ? 1u : 0u;
                         n_partial += l == static_cast<std::uint8_t>(FacetLight::kPartial) ? 1u : 0u;

@@ -126,6 +126,9 @@ struct TraceKnobs {
   /// empty span, a missing entry or 0 take config.target_ray_spacing_m. Bundles still coarsen
   /// at config.max_rays_per_target.
   std::span<const double> target_ray_spacing_m{};
+  /// Bounce 1 judges each facet by one visibility sample (its centroid) instead of seven: a
+  /// seventh of the occlusion queries, no partly lit facets (a facet is lit or dark whole).
+  bool facet_centroid_only = false;
 };
 
 /// What trace() would shoot for a pose and knobs (plan()).
@@ -265,7 +268,7 @@ class SbrTracer {
   /// its contribution in `out` when lit or partly lit. Adds its occlusion queries to `queries`.
   /// Partly lit facets are cut to `resolution_m` (sbr_core.hpp, facet_subdivisions).
   [[nodiscard]] std::uint8_t facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
-                                        double resolution_m, Contribution& out,
+                                        bool centroid_only, double resolution_m, Contribution& out,
                                         std::uint64_t& queries) const noexcept;
 
   /// Diffracting edges of the targets, body frame (SbrConfig::edges): object id's are
