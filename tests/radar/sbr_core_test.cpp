@@ -255,6 +255,25 @@ TEST(SbrLoopVsRcs, EdgeDiffractionOfAPlateMatchesTheRcsEngine) {
   EXPECT_GT(largest_edge_effect_db, 3.0) << "the cases must be ones where edges matter";
 }
 
+TEST(SbrKnobs, CentroidOnlyLightingIsOneQueryAFacetAndExactOnAnOpenFacet) {
+  // TraceKnobs::facet_centroid_only: a plate seen in the clear is lit whole either way, so the
+  // return is the same (the exact facet integral), with one occlusion query per facet instead
+  // of seven.
+  sc::Scene scene(sc::make_target({sc::TargetKind::kPlate, 0.25, 0.2, 1.0, 0.0}));
+  rd::SbrTracer tracer(scene, narrow(0.01, 0.0015, rd::Polarisation::kVV));
+  const rd::RadarPose pose = looking_at_origin_from({0.1, 0.05, 1.0}, 200.0);
+  rd::TraceStats seven, one;
+  rd::TraceKnobs k;
+  const std::complex<double> a = referred_sum(trace(tracer, pose, k, &seven), 200.0, 1);
+  k.facet_centroid_only = true;
+  const std::complex<double> b = referred_sum(trace(tracer, pose, k, &one), 200.0, 1);
+  EXPECT_EQ(seven.lit_facets, 2u);
+  EXPECT_EQ(one.lit_facets, 2u);
+  EXPECT_EQ(seven.facet_queries, 14u);
+  EXPECT_EQ(one.facet_queries, 2u);
+  EXPECT_NEAR(std::abs(a - b), 0.0, 1e-12 * std::abs(a));
+}
+
 TEST(SbrLoopVsRcs, VehicleMatchesTheRcsEngineInTheFarField) {
   // The 25k-facet vehicle (7 x 3.5 x 2.5 m) alone in the loop at 10 GHz, broadside (radar on +y,
   // level): bounce 1 is the same lighting rule in both engines (sbr_core.hpp, FacetLight: exact
