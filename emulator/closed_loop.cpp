@@ -162,6 +162,7 @@ scene::SceneDescription scene_description(const Scenario& s) {
   } else if (s.scene_builtin == "airport") {
     scene::AirportSpec spec;
     spec.seed = s.scene_seed;
+    spec.corner_reflectors = s.scene_corner_reflectors;
     d = scene::generate_airport(spec);
   } else if (s.scene_builtin == "terrain") {
     scene::TerrainSpec spec;

@@ -8,15 +8,15 @@ namespace radar_emu::emulator {
 
 // Measured with `build/emulator/radar-emu tradeoff --cases frame` (series governor_level: mean
 // |SNR error| of the detections matched to the reference frame's, pooled over four frames of the
-// default approach at t = 0, 3, 6, 9 s; docs/performance.md, "The fidelity governor"), at
-// 9fc99ff (bounce 1 by the shared lighting rule, returns labelled by their owner):
+// default approach at t = 0, 3, 6, 9 s, 42 reference detections; docs/performance.md, "The
+// fidelity governor"), on the default scene without corner reflectors, edges on:
 //   level     0     1     2     3     4     5     6     8    10
-//   dB     1.09  1.94  3.02  5.00  5.90  7.29 11.55 19.93 23.00
+//   dB     1.95  2.77  4.42  5.42  5.61  8.73  8.49  8.74 10.12
 // Made non-decreasing (a level is never estimated better than a finer one); levels 7 and 9 take
 // the next measured level's value, levels past 10 the largest measured.
 const std::array<double, FidelityGovernor::kMaxLevel + 1> FidelityGovernor::kLevelSnrError_db = {
-    1.09,  1.94,  3.02,  5.00,  5.90,  7.29,  11.55, 19.93, 19.93,
-    23.00, 23.00, 23.00, 23.00, 23.00, 23.00, 23.00, 23.00};
+    1.95,  2.77,  4.42,  5.42,  5.61,  8.73,  8.73,  8.74, 8.74,
+    10.12, 10.12, 10.12, 10.12, 10.12, 10.12, 10.12, 10.12};
 
 namespace {
 

@@ -42,6 +42,8 @@ stale_output = "flag"       # while stale: "flag" (empty list, OWNSHIP_INVALID) 
 builtin = "airport"         # "airport" (generated, seed below), "default" (runway only),
                             # "terrain" (the seed paper's 5 x 7 km database), or file = "x.glb"
 seed = 1                    # generator seed of the built-in database
+corner_reflectors = false   # airport: 0.5 m trihedrals on the closed-loop objects, as on a
+                            # test range (off: seen by their own edges and ground coupling)
 
 [ownship]
 # Straight flight in the scene's East-North-Up frame: 4 km short of the threshold, on a
@@ -747,7 +749,7 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     run.fail("stale_output", "expected \"flag\" or \"silent\", got \"" + stale_output + "\"");
   s.stale_output_silent = stale_output == "silent";
 
-  const TableReader scene(root, "scene", origin, {"builtin", "file", "seed"});
+  const TableReader scene(root, "scene", origin, {"builtin", "file", "seed", "corner_reflectors"});
   // One source of the scene: a table that names both would silently use the file.
   if (scene.node("builtin") != nullptr && scene.node("file") != nullptr)
     scene.fail("file", "builtin and file exclude each other (give one)");
@@ -757,10 +759,16 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   std::int64_t scene_seed = static_cast<std::int64_t>(s.scene_seed & 0x7fffffffffffffffull);
   scene.integer("seed", scene_seed, 0, std::numeric_limits<std::int64_t>::max());
   s.scene_seed = static_cast<std::uint64_t>(scene_seed);
+  scene.boolean("corner_reflectors", s.scene_corner_reflectors);
   std::string file;
   scene.string("file", file);
   if (!file.empty())
     s.scene_file = file;
+  if (scene.node("corner_reflectors") != nullptr &&
+      (s.scene_builtin != "airport" || !s.scene_file.empty()))
+    scene.fail("corner_reflectors",
+               "applies to builtin = \"airport\" only (the runway scene "
+               "\"default\" is a test range: it always has them)");
   if (s.scene_file.empty() && s.scene_builtin != "default" && s.scene_builtin != "airport" &&
       s.scene_builtin != "terrain") {
     scene.fail("builtin", "unknown built-in scene '" + s.scene_builtin +

@@ -48,6 +48,8 @@ struct Scenario {
   /// (the seed paper's 5 x 7 km database, scene/terrain_gen.hpp; its own anchor).
   std::string scene_builtin = "airport";
   std::uint64_t scene_seed = 1;  ///< generator seed of the built-in database
+  /// Built-in "airport": its closed-loop objects carry 0.5 m trihedrals (a test range's).
+  bool scene_corner_reflectors = false;
   std::filesystem::path scene_file;
   /// [[target]] tables: objects added to whichever scene the [scene] table names
   /// (docs/scene_format.md), in table order, named "target_N" (N from 1) unless named.

@@ -57,12 +57,14 @@
 namespace radar_emu::scene {
 
 struct AirportSpec {
-  std::uint64_t seed = 1;         ///< picks the occupied gates, building sizes, jitters
-  bool corner_reflectors = true;  ///< the closed-loop objects carry their 0.5 m trihedrals
-  int parked_transports = 3;      ///< transport aircraft at the terminal's 6 gates, 0..6
-  bool service_vehicles = true;   ///< a truck and a jeep on the main apron
-  bool helicopter = true;         ///< a helicopter on the helipad
-  bool approach_lights = true;    ///< the approach-light masts south of the threshold
+  std::uint64_t seed = 1;  ///< picks the occupied gates, building sizes, jitters
+  /// The closed-loop objects carry 0.5 m trihedrals, as on a test range. Off by default: they
+  /// are seen by their own edges, multi-bounce and ground coupling.
+  bool corner_reflectors = false;
+  int parked_transports = 3;     ///< transport aircraft at the terminal's 6 gates, 0..6
+  bool service_vehicles = true;  ///< a truck and a jeep on the main apron
+  bool helicopter = true;        ///< a helicopter on the helipad
+  bool approach_lights = true;   ///< the approach-light masts south of the threshold
 };
 
 /// Builds the airport (layout above). Deterministic: the same spec gives the same description,

@@ -134,6 +134,12 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
       std::string::npos);
   EXPECT_NE(error_of("[scene]\nbuiltin = \"moon\"\n").find("unknown built-in scene"),
             std::string::npos);
+  EXPECT_NE(error_of("[scene]\nbuiltin = \"default\"\ncorner_reflectors = true\n")
+                .find("[scene] corner_reflectors: applies to builtin = \"airport\" only"),
+            std::string::npos);
+  EXPECT_NE(error_of("[radar]\nedges = false\nedge_turn_deg = 20.0\n")
+                .find("[radar] edge_turn_deg: is read with edges = true only"),
+            std::string::npos);
   EXPECT_NE(error_of("[radar]\nwaveform = \"cw\"\n").find("[radar] waveform: unknown"),
             std::string::npos);
   EXPECT_NE(error_of("[radar]\nrange_window = \"kaiser\"\n").find("unknown window"),
