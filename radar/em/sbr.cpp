@@ -188,6 +188,23 @@ namespace {
 double surface_offset_m(const glm::dvec3& p) noexcept {
   return 1e-6 * (1.0 + glm::length(p));
 }
+
+// A bounce-1 return of target `id` (a facet's or an edge's): coherent, radiated by its owner.
+Contribution bounce1_return(std::complex<double> amplitude, double range_m,
+                            double radial_velocity_mps, const AzEl& ae, std::uint32_t id) noexcept {
+  Contribution out;
+  out.amplitude = amplitude;
+  out.range_m = range_m;
+  out.range_spread_m = 0.0;
+  out.radial_velocity_mps = radial_velocity_mps;
+  out.azimuth_rad = ae.azimuth_rad;
+  out.elevation_rad = ae.elevation_rad;
+  out.object_id = id;
+  out.radiated_by_owner = true;
+  out.bounces = 1;
+  out.coherent = true;
+  return out;
+}
 }  // namespace
 
 std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
@@ -283,16 +300,9 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   const CVec e{pol_vector(tx_h, up, boresight, d), glm::dvec3(0.0)};
   const glm::dvec3 p = pol_vector(rx_h, up, boresight, d);
   const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
-  out.amplitude = po_amplitude_m(k, p, po_source(e, d, n, s, rc, pec), 1.0) * integral *
-                  std::polar(1.0, -2.0 * k * range_m);
-  out.range_m = range_m;
-  out.range_spread_m = 0.0;
-  out.radial_velocity_mps = glm::dot(v_obj - pose.velocity_mps, d);
-  out.azimuth_rad = ae.azimuth_rad;
-  out.elevation_rad = ae.elevation_rad;
-  out.object_id = id;
-  out.bounces = 1;
-  out.coherent = true;
+  out = bounce1_return(po_amplitude_m(k, p, po_source(e, d, n, s, rc, pec), 1.0) * integral *
+                           std::polar(1.0, -2.0 * k * range_m),
+                       range_m, glm::dot(v_obj - pose.velocity_mps, d), ae, id);
   return static_cast<std::uint8_t>(light);
 }
 
@@ -347,17 +357,9 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   // wave's two-way path to the midpoint, as a facet's is to its centroid.
   const std::size_t channel = static_cast<std::size_t>(c.polarisation);  // hh, hv, vh, vv
   const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
-  out.amplitude = term.c[channel] * (term.length_m * sinc(k * term.taper_m)) *
-                  std::polar(1.0, -2.0 * k * range_m);
-  out.range_m = range_m;
-  out.range_spread_m = 0.0;
-  out.radial_velocity_mps = glm::dot(v_obj - pose.velocity_mps, d);
-  out.azimuth_rad = ae.azimuth_rad;
-  out.elevation_rad = ae.elevation_rad;
-  out.object_id = id;
-  out.radiated_by_owner = true;
-  out.bounces = 1;
-  out.coherent = true;
+  out = bounce1_return(term.c[channel] * (term.length_m * sinc(k * term.taper_m)) *
+                           std::polar(1.0, -2.0 * k * range_m),
+                       range_m, glm::dot(v_obj - pose.velocity_mps, d), ae, id);
   return kUsed;
 }
 
