@@ -920,7 +920,6 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, 1e-4, 10.0);
   rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, 1e-4, 100.0);
   rad.integer("max_rays_per_target", s.sbr.max_rays_per_target, 1, 100'000'000);
-  s.sbr.edges = true;  // the loop's default (SbrConfig keeps it off for the unit tests)
   rad.boolean("edges", s.sbr.edges);
   rad.degrees("edge_turn_deg", s.sbr.edge_min_turn_rad, 0.0, 179.0);
   if (!s.sbr.edges && rad.node("edge_turn_deg") != nullptr)

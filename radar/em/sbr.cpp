@@ -189,6 +189,15 @@ double surface_offset_m(const glm::dvec3& p) noexcept {
   return 1e-6 * (1.0 + glm::length(p));
 }
 
+// Whether a direction d from the radar (world), at antenna angles `ae`, is inside the field of
+// view (ahead of the antenna and within its azimuth and elevation limits).
+bool in_field_of_view(const SbrConfig& c, const RadarPose& pose, const glm::dvec3& d,
+                      const AzEl& ae) noexcept {
+  return glm::dot(pose.world_from_antenna[0], d) > 0.0 && ae.azimuth_rad >= c.azimuth_min_rad &&
+         ae.azimuth_rad <= c.azimuth_max_rad && ae.elevation_rad >= c.elevation_min_rad &&
+         ae.elevation_rad <= c.elevation_max_rad;
+}
+
 // A bounce-1 return of target `id` (a facet's or an edge's): coherent, radiated by its owner.
 Contribution bounce1_return(std::complex<double> amplitude, double range_m,
                             double radial_velocity_mps, const AzEl& ae, std::uint32_t id) noexcept {
@@ -250,10 +259,7 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   // Outside the view or the range, or too near for a plane wave over it: the rays sample it.
   const double rho_m = std::max(
       {glm::length(v0 - centroid), glm::length(v1 - centroid), glm::length(v2 - centroid)});
-  const bool in_view = glm::dot(pose.world_from_antenna[0], d) > 0.0 &&
-                       ae.azimuth_rad >= c.azimuth_min_rad && ae.azimuth_rad <= c.azimuth_max_rad &&
-                       ae.elevation_rad >= c.elevation_min_rad &&
-                       ae.elevation_rad <= c.elevation_max_rad;
+  const bool in_view = in_field_of_view(c, pose, d, ae);
   if (!in_view || range_m > c.max_range_m || !facet_in_far_field(rho_m, range_m, k))
     return kLightByRays;
   const double offset_m = surface_offset_m(centroid);
@@ -330,10 +336,7 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
   const AzEl ae = azel_from_direction(antenna_from_world * d);
-  const bool in_view = glm::dot(pose.world_from_antenna[0], d) > 0.0 &&
-                       ae.azimuth_rad >= c.azimuth_min_rad && ae.azimuth_rad <= c.azimuth_max_rad &&
-                       ae.elevation_rad >= c.elevation_min_rad &&
-                       ae.elevation_rad <= c.elevation_max_rad;
+  const bool in_view = in_field_of_view(c, pose, d, ae);
   // A plane wave along the edge: its own far field, as for a facet (facet_in_far_field).
   if (!in_view || !facet_in_far_field(0.5 * w.length_m, range_m, k))
     return kNoTerm;

@@ -39,6 +39,10 @@ TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
   EXPECT_DOUBLE_EQ(s.rate_hz, 20.0);
   EXPECT_DOUBLE_EQ(s.sensor.processing.waveform.carrier_hz, 94e9);
   EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, s.sensor.processing.waveform.carrier_hz);
+  // Edge diffraction on in the loop, wedges turning by more than 30 deg; no corner reflectors.
+  EXPECT_TRUE(s.sbr.edges);
+  EXPECT_NEAR(s.sbr.edge_min_turn_rad, 30.0 * kDeg, 1e-12);
+  EXPECT_FALSE(s.scene_corner_reflectors);
   EXPECT_NEAR(s.sensor.noise_figure, std::pow(10.0, 0.5), 1e-12);  // 5 dB
   EXPECT_NEAR(s.antenna_depression_rad, 5.0 * kDeg, 1e-15);
   // 16 beams of 1 deg across -8..8 deg; PRI from the PRF; the range gate from 1500 m.
