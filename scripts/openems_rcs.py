@@ -54,6 +54,7 @@ from openEMS.physical_constants import C0
 from openEMS.ports import UI_data
 
 MM = 1e-3  # the CSX drawing unit
+START_DIR = os.getcwd()
 
 
 def r_hat(theta, phi):
@@ -129,6 +130,7 @@ def run_case(add_object, half_mm, dx_mm, tfsf_mm, nf2ff_mm, radar_theta, radar_p
         e_p = np.array([res.E_phi[i][0, 0] for i in range(len(freqs))])
         return e_t, e_p, e0, elapsed
     finally:
+        os.chdir(START_DIR)  # openEMS Run() changes into the simulation folder
         shutil.rmtree(sim, ignore_errors=True)
 
 
@@ -182,8 +184,9 @@ PLATE_DX_MM = 100.0 / 66  # 1.515 mm: lambda/19.8 at 10 GHz, lambda/16.5 at 12 G
 PLATE_FREQS = (9e9, 10e9, 12e9)
 
 
-def plate_geometry(with_plate):
-    dx = PLATE_DX_MM
+def plate_geometry(with_plate, dx):
+    if abs(PLATE_SIDE_MM / 2 / dx - round(PLATE_SIDE_MM / 2 / dx)) > 1e-9:
+        sys.exit(f"--dx-mm {dx}: the plate's half side {PLATE_SIDE_MM / 2} mm must be a multiple")
     h = PLATE_SIDE_MM / 2
     tfsf = [h + 4 * dx, h + 4 * dx, 4 * dx]
     nfb = [t + 3 * dx for t in tfsf]
@@ -205,7 +208,8 @@ def parse_sweep(text):
 
 
 def cmd_plate(args):
-    add, half, tfsf, nfb = plate_geometry(not args.no_object)
+    dx = args.dx_mm or PLATE_DX_MM
+    add, half, tfsf, nfb = plate_geometry(not args.no_object, dx)
     freqs = np.array(PLATE_FREQS)
     f0, fc = 10.5e9, 4.5e9  # 6..15 GHz at -20 dB
     rows, total = [], 0.0
@@ -217,7 +221,7 @@ def cmd_plate(args):
         else:
             runs = [("both", h_hat + v_hat, None)]
         for name, e_inc, which in runs:
-            e_t, e_p, e0, el = run_case(add, half, PLATE_DX_MM, tfsf, nfb, th, ph, e_inc,
+            e_t, e_p, e0, el = run_case(add, half, dx, tfsf, nfb, th, ph, e_inc,
                                         f0, fc, freqs, args.threads, args.end)
             total += el
             s_hh, s_vv = sigma(e_p, e0, 1.0), sigma(e_t, e0, 1.0)

