@@ -17,6 +17,9 @@ PACKAGES=(
   # the Python module radar_emu (python/, optional at build time) and its tests
   python3-dev pybind11-dev python3-numpy python3-pytest
 )
+# Not installed here, needed only to regenerate the full-wave table tests/data/openems_plate
+# (scripts/openems_rcs.py; the tests read the checked-in table):
+#   openems python3-openems python3-h5py python3-scipy
 
 missing=()
 for p in "${PACKAGES[@]}"; do
