@@ -129,7 +129,7 @@ if charts:
             "--phi-deg", "0", "--pol", pol, "--bounces", "1", "-q",
             "--out", os.path.join(work, f"chart_{pol}.csv"),
             "--plot", os.path.join(charts, f"openems_plate_10ghz_{pol.lower()}.png"),
-            "--overlay", f"{po_txt}=PO alone", "--overlay", f"{ref_txt}=openEMS (FDTD)")
+            "--overlay", f"{po_txt}=PO alone", "--overlay", f"{ref_txt}=openEMS")
 
 print("\nsummary:\n  " + "\n  ".join(report))
 finish()
