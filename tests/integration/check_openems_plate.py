@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """radar-emu rcs with and without edge diffraction against a full-wave (FDTD) reference computed
 here with openEMS: a PEC zero-thickness square plate, 100 mm a side, monostatic, theta = 0..85 deg
-from the normal in 2.5-deg steps in a principal plane, HH and VV, at 9, 10 and 12 GHz (3.0, 3.33
-and 4.0 wavelengths). The table and how it was made (scripts/openems_rcs.py, its check against the Mie
-series): tests/data/openems_plate/README.md. This test reads only the checked-in table.
+from the normal in 2.5-deg steps in a principal plane, HH and VV, at 9, 10 and 12 GHz (3.0,
+3.33 and 4.0 wavelengths). The table and how it was made (scripts/openems_rcs.py, its check
+against the Mie series): tests/data/openems_plate/README.md. This test reads only the
+checked-in table.
 
 The issue's figure (median |difference| <= 2 dB over 0-85 deg, both polarisations, PO + edges) is
 asserted where it is reached; where it is not, the figure reached is asserted (a regression
@@ -77,8 +78,8 @@ check(freqs == [9e9, 10e9, 12e9], f"reference frequencies {freqs}")
 # half-plane's backscatter coefficients f and g swap between the leading and trailing edge), while
 # the reference's VV has a travelling-wave lobe near 65 deg and falls toward grazing (multiple
 # diffraction between the edges, which the method does not carry).
-bounds = {(9e9, "HH"): 2.0, (9e9, "VV"): 3.3, (10e9, "HH"): 2.0, (10e9, "VV"): 2.6,
-          (12e9, "HH"): 2.0, (12e9, "VV"): 2.9}
+bounds = {(9e9, "HH"): 2.0, (9e9, "VV"): 3.1, (10e9, "HH"): 2.0, (10e9, "VV"): 2.4,
+          (12e9, "HH"): 2.0, (12e9, "VV"): 2.4}
 for freq in freqs:
     on = os.path.join(work, f"plate_{freq / 1e9:g}ghz.csv")
     off = os.path.join(work, f"plate_{freq / 1e9:g}ghz_po.csv")
@@ -100,11 +101,12 @@ for freq in freqs:
         d_on = [abs(got[a] - r[a]) for a in r]
         d_po = [abs(po[a] - r[a]) for a in r]
         med, med_po = statistics.median(d_on), statistics.median(d_po)
+        worst = max(r, key=lambda a: abs(got[a] - r[a]))
         print(f"plate {freq / 1e9:g} GHz {pol}: normal: reference {r[0.0]:.2f} dBsm (closed form "
               f"{closed:.2f}), PO + edges {got[0.0] - r[0.0]:+.2f} dB; median |diff| 0-85 deg "
               f"PO {med_po:.2f} dB, PO + edges {med:.2f} dB; 0-60 deg PO + edges "
               f"{statistics.median(abs(got[a] - r[a]) for a in r if a <= 60):.2f} dB; max "
-              f"|diff| PO + edges {max(d_on):.1f} dB at {max(r, key=lambda a: abs(got[a] - r[a])):g} deg")
+              f"|diff| PO + edges {max(d_on):.1f} dB at {worst:g} deg")
         figure(f"plate {freq / 1e9:g} GHz {pol} median |diff| 0-85 deg (PO + edges)", med, 2.0,
                bounds[(freq, pol)])
         check(med < med_po, f"plate {freq / 1e9:g} GHz {pol}: edges improve on PO")
