@@ -32,8 +32,9 @@ E-perpendicular). VV: E = theta_hat, in the plane of incidence (TM, or E-paralle
 component normal to the plate, which grows toward grazing).
 
 Usage:
-  scripts/openems_rcs.py sphere OUT.csv [--threads N]
-  scripts/openems_rcs.py plate OUT.csv [--theta-deg 0:85:18] [--threads N] [--separate-pol]
+  scripts/openems_rcs.py sphere OUT.csv [--threads N] [--dx-mm 2.5] [--pml-gap 4] [--end 1e-5]
+  scripts/openems_rcs.py plate OUT.csv [--theta-deg 0:85:35] [--threads N] [--dx-mm 1.25]
+                         [--separate-pol]
   scripts/openems_rcs.py plate OUT.csv --theta-deg A --no-object   (the set-up without the
                                                      plate: the TF/SF leakage floor, as an RCS)
 Each run works in a temporary folder (removed after) and prints its time; nice it yourself
@@ -250,7 +251,7 @@ def main():
     ap.add_argument("what", choices=["sphere", "plate"])
     ap.add_argument("out")
     ap.add_argument("--threads", type=int, default=1)
-    ap.add_argument("--theta-deg", default="0:85:18", help="plate: START:STOP:N or A")
+    ap.add_argument("--theta-deg", default="0:85:35", help="plate: START:STOP:N or A")
     ap.add_argument("--separate-pol", action="store_true")
     ap.add_argument("--dx-mm", type=float, default=0.0, help="mesh step (default: the table's)")
     ap.add_argument("--pml-gap", type=int, default=4, help="cells from the NF2FF box to the PML")

@@ -8,7 +8,8 @@ checked-in table.
 
 The issue's figure (median |difference| <= 2 dB over 0-85 deg, both polarisations, PO + edges) is
 asserted where it is reached; where it is not, the figure reached is asserted (a regression
-guard) and the gap printed as NOT REACHED (docs/validation.md, "Full-wave reference").
+guard) and the gap printed as NOT REACHED (docs/validation.md, "Against a full-wave reference
+computed here (openEMS): square plate").
 Usage: check_openems_plate.py RADAR_EMU WORK_DIR [--charts DIR]  (--charts: also write the
 docs charts openems_plate_10ghz_{hh,vv}.png into DIR)"""
 import csv
