@@ -22,6 +22,7 @@
 #include "emulator/atten_tool.hpp"
 #include "emulator/cli_checks.hpp"
 #include "emulator/closed_loop.hpp"
+#include "emulator/mpi_work.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
 #include "emulator/scene_tool.hpp"
@@ -369,6 +370,8 @@ int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec sp
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Under mpirun, rcs and profile split their sweeps over the ranks (docs/cluster.md).
+  const emu::mpi_work::Scope mpi_scope;
   CLI::App app{"radar-emu: hardware-in-the-loop radar emulator (SBR physics on Embree)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "radar-emu 0.1.0");
@@ -781,6 +784,13 @@ int main(int argc, char** argv) {
       emu::check_output_dir(path, opt->get_name());
   };
   try {
+    // Only the sweeps are split: N copies of another command would write the same files.
+    if (emu::mpi_work::launched_size() > 1 && !rcs->parsed() && !profile->parsed()) {
+      throw std::invalid_argument(
+          "launched by mpirun as " + std::to_string(emu::mpi_work::launched_size()) +
+          " ranks: only rcs and profile split their work over MPI ranks; run this command "
+          "without mpirun");
+    }
     if (run->parsed()) {
       return run_command(scenario_file, frames, out, realtime, print_scenario, quiet, rt_priority,
                          lock_memory, cpu, bus_args);
@@ -860,7 +870,12 @@ int main(int argc, char** argv) {
       return emu::run_profile_tool(prof_opt);
     }
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "radar-emu: error: %s\n", e.what());
+    // Under mpirun every rank reports (a file missing on one node only must be heard); ranks
+    // other than 0 say which they are.
+    if (emu::mpi_work::is_root())
+      std::fprintf(stderr, "radar-emu: error: %s\n", e.what());
+    else
+      std::fprintf(stderr, "radar-emu: error (rank %d): %s\n", emu::mpi_work::rank(), e.what());
     return 1;
   }
   return 0;

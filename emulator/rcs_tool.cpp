@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "emulator/charts.hpp"
+#include "emulator/mpi_work.hpp"
 #include "radar/constants.hpp"
 #include "radar/materials.hpp"
 #include "radar/products/fluctuation.hpp"
@@ -195,10 +196,22 @@ struct ToolTarget {
         scene(loaded.description),
         engine(scene, loaded.surfaces,
                rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg)) {
+    if (!mpi_work::is_root())
+      return;  // under mpirun, rank 0 alone prints (every rank loads the same target)
     print_target(loaded, engine, quiet);
     warn_electrical_size(engine, min_freq_hz);
   }
 };
+
+// Starts the MPI split of a sweep of `items` work items (nothing in one process) and says, on
+// rank 0 unless quiet, how the ranks share them.
+void start_split(std::size_t items, const char* what, bool quiet) {
+  mpi_work::start();
+  if (quiet || mpi_work::size() == 1 || !mpi_work::is_root())
+    return;
+  std::printf("MPI: %zu %s over %d ranks (%zu on rank 0), %d TBB thread(s) per rank\n", items, what,
+              mpi_work::size(), mpi_work::my_block(items).size(), mpi_work::threads_per_rank());
+}
 
 // A plot overlay "FILE=LABEL" (RcsToolOptions::overlays): x and y from the last two numbers of
 // each line.
@@ -458,20 +471,29 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
   const std::size_t nt = theta_deg.size(), np = phi_deg.size(), nf = freqs_hz.size();
   if (s.size() != nt * np * nf || per_direction.size() != nt * np)
     throw std::invalid_argument("sweep_rcs: output sizes do not match the sweep");
-  for (std::size_t it = 0; it < nt; ++it) {
-    for (std::size_t ip = 0; ip < np; ++ip) {
-      const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
-      const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
-                                                                  bistatic_deg->second * kDegToRad}
-                                               : tx;
-      radar::RcsStats one;
-      engine.compute(tx, rx, freqs_hz, s.subspan((it * np + ip) * nf, nf), one);
-      per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off,
-                                     one.edges_used};
-      add_stats(total, one);
-      if (progress)
-        progress(it * np + ip + 1);
-    }
+  // The work items are the directions d = it * np + ip, all frequencies each: one ray trace
+  // serves every frequency (the tube density follows the highest), so a direction is computed
+  // whole, exactly as in one process. MPI ranks take contiguous blocks (mpi_work.hpp).
+  const mpi_work::Block mine = mpi_work::my_block(nt * np);
+  std::vector<radar::RcsStats> counters(nt * np);
+  for (std::size_t d = mine.begin; d < mine.end; ++d) {
+    const std::size_t it = d / np, ip = d % np;
+    const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
+    const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
+                                                                bistatic_deg->second * kDegToRad}
+                                             : tx;
+    engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), counters[d]);
+    if (progress)
+      progress(d - mine.begin + 1);
+  }
+  mpi_work::gather_blocks(s, nf);
+  mpi_work::gather_blocks(std::span<radar::RcsStats>(counters));
+  // Integer counters, added in direction order: the same total whatever the split.
+  const mpi_work::Block have = mpi_work::is_root() ? mpi_work::Block{0, nt * np} : mine;
+  for (std::size_t d = have.begin; d < have.end; ++d) {
+    const radar::RcsStats& one = counters[d];
+    per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
+    add_stats(total, one);
   }
 }
 
@@ -485,14 +507,22 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
     throw std::invalid_argument("sweep theta or phi, not both (ISAR uses one angle)");
   if (s.size() != na * nf || edges_used.size() != na)
     throw std::invalid_argument("sweep_profile: output sizes do not match the sweep");
-  for (std::size_t a = 0; a < na; ++a) {
+  // The work items are the angles, all frequencies each (as sweep_rcs), split over MPI ranks.
+  const mpi_work::Block mine = mpi_work::my_block(na);
+  std::vector<radar::RcsStats> counters(na);
+  for (std::size_t a = mine.begin; a < mine.end; ++a) {
     const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
     const radar::Direction dir{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
-    const std::uint64_t before = total.edges_used;
-    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), total);
-    edges_used[a] = total.edges_used - before;
+    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), counters[a]);
     if (progress)
-      progress(a + 1);
+      progress(a - mine.begin + 1);
+  }
+  mpi_work::gather_blocks(s, nf);
+  mpi_work::gather_blocks(std::span<radar::RcsStats>(counters));
+  const mpi_work::Block have = mpi_work::is_root() ? mpi_work::Block{0, na} : mine;
+  for (std::size_t a = have.begin; a < have.end; ++a) {
+    edges_used[a] = counters[a].edges_used;
+    add_stats(total, counters[a]);
   }
 }
 
@@ -510,8 +540,10 @@ int run_rcs_tool(const RcsToolOptions& o) {
   if (!o.overlays.empty() && o.plot_png.empty())
     throw std::invalid_argument("--overlay needs --plot");
   std::vector<Series> overlays;  // read before the sweep: a bad file fails fast
-  for (const std::string& spec : o.overlays)
-    overlays.push_back(read_overlay(spec));
+  if (mpi_work::is_root()) {     // under mpirun, rank 0 alone plots
+    for (const std::string& spec : o.overlays)
+      overlays.push_back(read_overlay(spec));
+  }
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
                           o.edge_turn_deg, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()),
                           o.quiet);
@@ -522,7 +554,10 @@ int run_rcs_tool(const RcsToolOptions& o) {
   radar::RcsStats stats;
   // Per direction, for the CSV: how bounce 1 was lit and how many tubes the bounce cap cut off.
   std::vector<RcsDirectionStats> per_direction(nt * np);
-  Progress progress(!o.quiet && nt * np > 4, "direction", nt * np);
+  start_split(nt * np, "directions", o.quiet);
+  // Under mpirun: rank 0's block (the others keep pace), the others quiet.
+  const std::size_t my_items = mpi_work::my_block(nt * np).size();
+  Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "direction", my_items);
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<std::pair<double, double>> bistatic;
   if (o.bistatic_theta_deg)
@@ -531,6 +566,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
             [&progress](std::size_t done) { progress.update(done); });
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!mpi_work::is_root())
+    return 0;  // rank 0 has gathered every direction: it alone writes
 
   {
     File f(open_or_throw(o.out_csv));
@@ -704,12 +741,16 @@ int run_profile_tool(const ProfileToolOptions& o) {
   std::vector<radar::ScatteringMatrix> s(na * nf);
   std::vector<std::uint64_t> edges_used(na);
   radar::RcsStats stats;
-  Progress progress(!o.quiet && na > 4, "angle", na);
+  start_split(na, "angles", o.quiet);
+  const std::size_t my_items = mpi_work::my_block(na).size();
+  Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "angle", my_items);
   const auto t0 = std::chrono::steady_clock::now();
   sweep_profile(engine, o.theta_deg, o.phi_deg, o.freqs_hz, s, edges_used, stats,
                 [&progress](std::size_t done) { progress.update(done); });
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!mpi_work::is_root())
+    return 0;  // rank 0 has gathered every angle: it alone writes
 
   const radar::FrequencyGrid grid{o.freqs_hz.front(), df, nf};
   // Aliasing: the target must fit in the unambiguous windows (c / 2 df in range,
