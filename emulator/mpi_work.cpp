@@ -61,7 +61,7 @@ State& state() {
 
 // See threads_per_rank(): the cores this rank may run on when the launcher bound it, else its
 // share of the node.
-int pick_threads() noexcept {
+[[maybe_unused]] int pick_threads() noexcept {
   const int online = std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   cpu_set_t set;
   CPU_ZERO(&set);
