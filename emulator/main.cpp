@@ -875,7 +875,8 @@ int main(int argc, char** argv) {
     if (emu::mpi_work::is_root())
       std::fprintf(stderr, "radar-emu: error: %s\n", e.what());
     else
-      std::fprintf(stderr, "radar-emu: error (rank %d): %s\n", emu::mpi_work::rank(), e.what());
+      std::fprintf(stderr, "radar-emu: error (rank %d): %s\n", emu::mpi_work::launched_rank(),
+                   e.what());
     return 1;
   }
   return 0;

@@ -121,9 +121,16 @@ bool started() noexcept {
 
 int rank() noexcept {
   const State& st = state();
-  if (st.started)
-    return st.rank;
+  return st.started ? st.rank : 0;
+}
+
+int launched_rank() noexcept {
   return env_size() > 1 ? env_rank() : 0;
+}
+
+bool is_root() noexcept {
+  const State& st = state();
+  return st.started ? st.rank == 0 : launched_rank() == 0;
 }
 
 int size() noexcept {

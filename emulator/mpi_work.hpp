@@ -41,14 +41,18 @@ void start();
 /// True after start() initialised MPI (launched with more than one rank, in an MPI build).
 [[nodiscard]] bool started() noexcept;
 
-/// This process's rank in 0..size()-1 and the rank count. Before start(): from the launcher's
-/// environment (so that ranks other than 0 can stay quiet from the start); 0 and 1 when not
-/// launched by mpirun.
+/// This process's rank in 0..size()-1 and the rank count of the split: MPI's after start()
+/// initialised it, else 0 and 1 (one process computes everything, whoever launched it).
 [[nodiscard]] int rank() noexcept;
 [[nodiscard]] int size() noexcept;
-[[nodiscard]] inline bool is_root() noexcept {
-  return rank() == 0;
-}
+
+/// The rank the launcher gave this process, from its environment (OMPI_COMM_WORLD_RANK, else
+/// PMI_RANK); 0 when not launched by one. Valid before start().
+[[nodiscard]] int launched_rank() noexcept;
+
+/// Whether this process prints and writes: rank 0 of the split after start(); before it, rank
+/// 0 of the launch (so that the others stay quiet from the start).
+[[nodiscard]] bool is_root() noexcept;
 
 /// TBB threads this rank uses after start(): all it may run on when the launcher bound it to
 /// some cores (mpirun binds each rank to one core for -np <= 2, to a socket above), else the

@@ -122,6 +122,21 @@ void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
     total.paths_by_bounce[b] += one.paths_by_bounce[b];
 }
 
+// Adds a sweep's counters to `total`: this rank's `mine`; on rank 0 of an MPI split, every
+// rank's, gathered one record a rank and added in rank order (integers: the same sum as one
+// process).
+void add_gathered_stats(radar::RcsStats& total, const radar::RcsStats& mine) {
+  std::vector<radar::RcsStats> per_rank(static_cast<std::size_t>(mpi_work::size()));
+  per_rank[static_cast<std::size_t>(mpi_work::rank())] = mine;
+  mpi_work::gather_blocks(std::span<radar::RcsStats>(per_rank));  // one item a rank
+  if (!mpi_work::is_root()) {
+    add_stats(total, mine);
+    return;
+  }
+  for (const radar::RcsStats& one : per_rank)
+    add_stats(total, one);
+}
+
 // Tubes still bouncing at the cap: the return may still be growing (a cavity).
 void warn_cut_off(const radar::RcsStats& stats, int bounces) {
   if (stats.tubes_cut_off == 0 || stats.rays == 0)
@@ -475,26 +490,23 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
   // serves every frequency (the tube density follows the highest), so a direction is computed
   // whole, exactly as in one process. MPI ranks take contiguous blocks (mpi_work.hpp).
   const mpi_work::Block mine = mpi_work::my_block(nt * np);
-  std::vector<radar::RcsStats> counters(nt * np);
+  radar::RcsStats mine_total;
   for (std::size_t d = mine.begin; d < mine.end; ++d) {
     const std::size_t it = d / np, ip = d % np;
     const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
     const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
                                                                 bistatic_deg->second * kDegToRad}
                                              : tx;
-    engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), counters[d]);
+    radar::RcsStats one;
+    engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
+    per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
+    add_stats(mine_total, one);
     if (progress)
       progress(d - mine.begin + 1);
   }
   mpi_work::gather_blocks(s, nf);
-  mpi_work::gather_blocks(std::span<radar::RcsStats>(counters));
-  // Integer counters, added in direction order: the same total whatever the split.
-  const mpi_work::Block have = mpi_work::is_root() ? mpi_work::Block{0, nt * np} : mine;
-  for (std::size_t d = have.begin; d < have.end; ++d) {
-    const radar::RcsStats& one = counters[d];
-    per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
-    add_stats(total, one);
-  }
+  mpi_work::gather_blocks(per_direction);
+  add_gathered_stats(total, mine_total);
 }
 
 void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
@@ -509,21 +521,19 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
     throw std::invalid_argument("sweep_profile: output sizes do not match the sweep");
   // The work items are the angles, all frequencies each (as sweep_rcs), split over MPI ranks.
   const mpi_work::Block mine = mpi_work::my_block(na);
-  std::vector<radar::RcsStats> counters(na);
+  radar::RcsStats mine_total;
   for (std::size_t a = mine.begin; a < mine.end; ++a) {
     const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
     const radar::Direction dir{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
-    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), counters[a]);
+    const std::uint64_t before = mine_total.edges_used;
+    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), mine_total);
+    edges_used[a] = mine_total.edges_used - before;
     if (progress)
       progress(a - mine.begin + 1);
   }
   mpi_work::gather_blocks(s, nf);
-  mpi_work::gather_blocks(std::span<radar::RcsStats>(counters));
-  const mpi_work::Block have = mpi_work::is_root() ? mpi_work::Block{0, na} : mine;
-  for (std::size_t a = have.begin; a < have.end; ++a) {
-    edges_used[a] = counters[a].edges_used;
-    add_stats(total, counters[a]);
-  }
+  mpi_work::gather_blocks(edges_used);
+  add_gathered_stats(total, mine_total);
 }
 
 int run_rcs_tool(const RcsToolOptions& o) {

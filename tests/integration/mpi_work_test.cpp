@@ -3,6 +3,7 @@
 #include "emulator/mpi_work.hpp"
 
 #include <gtest/gtest.h>
+#include <stdlib.h>
 
 #include <array>
 #include <cstddef>
@@ -48,6 +49,7 @@ TEST(MpiWork, OutsideMpirunIsOneProcessWithEveryItem) {
   mw::start();  // nothing to start: one rank
   EXPECT_FALSE(mw::started());
   EXPECT_EQ(mw::rank(), 0);
+  EXPECT_EQ(mw::launched_rank(), 0);
   EXPECT_EQ(mw::size(), 1);
   EXPECT_TRUE(mw::is_root());
   EXPECT_EQ(mw::threads_per_rank(), 0);  // TBB's default left alone
@@ -59,6 +61,26 @@ TEST(MpiWork, OutsideMpirunIsOneProcessWithEveryItem) {
   EXPECT_THROW(mw::gather_blocks(std::span<double>(records), 0), std::invalid_argument);
   mw::finalize();  // nothing to finalize
   EXPECT_FALSE(mw::started());
+}
+
+// A caller that never starts MPI (the Python module's sweeps) computes every item even when a
+// launcher started it as rank 1 of 2; only printing follows the launch's rank.
+TEST(MpiWork, LaunchedButNotStartedComputesEverything) {
+  ASSERT_EQ(mw::launched_size(), 1) << "run this test without mpirun";
+  ::setenv("OMPI_COMM_WORLD_SIZE", "2", 1);
+  ::setenv("OMPI_COMM_WORLD_RANK", "1", 1);
+  EXPECT_EQ(mw::launched_size(), 2);
+  EXPECT_EQ(mw::launched_rank(), 1);
+  EXPECT_FALSE(mw::is_root());  // quiet
+  EXPECT_EQ(mw::rank(), 0);
+  EXPECT_EQ(mw::size(), 1);
+  EXPECT_EQ(mw::my_block(5), (mw::Block{0, 5}));
+  ::setenv("OMPI_COMM_WORLD_SIZE", "banana", 1);  // not a launcher's: one process
+  EXPECT_EQ(mw::launched_size(), 1);
+  EXPECT_EQ(mw::launched_rank(), 0);
+  ::unsetenv("OMPI_COMM_WORLD_SIZE");
+  ::unsetenv("OMPI_COMM_WORLD_RANK");
+  EXPECT_TRUE(mw::is_root());
 }
 
 }  // namespace
