@@ -36,6 +36,10 @@ namespace radar_emu::emulator::mpi_work {
 /// limits this rank's TBB worker threads so that the ranks of one node share its cores (see
 /// threads_per_rank). Throws std::runtime_error when launched with more than one rank by a
 /// build without MPI, or when MPI's world size disagrees with the launcher's.
+/// Call it late, after every check and set-up that can fail (options, files, the mesh): a rank
+/// that fails before start() exits and mpirun ends the job; one that failed after it would
+/// leave the others waiting in a gather. After start(), nothing but the sweep and the gather
+/// should stand between the ranks.
 void start();
 
 /// True after start() initialised MPI (launched with more than one rank, in an MPI build).
