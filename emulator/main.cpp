@@ -877,6 +877,7 @@ int main(int argc, char** argv) {
     else
       std::fprintf(stderr, "radar-emu: error (rank %d): %s\n", emu::mpi_work::launched_rank(),
                    e.what());
+    emu::mpi_work::abort_job(1);  // under mpirun, after the split started: the others may wait
     return 1;
   }
   return 0;

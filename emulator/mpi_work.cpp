@@ -159,6 +159,17 @@ void finalize() noexcept {
   st.threads = 0;
 }
 
+void abort_job(int status) noexcept {
+  const State& st = state();
+  if (!st.started || st.size == 1)
+    return;
+#ifdef RADAR_EMU_HAVE_MPI
+  MPI_Abort(MPI_COMM_WORLD, status);
+#else
+  (void)status;
+#endif
+}
+
 Block block_of(std::size_t n, int rank, int ranks) noexcept {
   if (ranks < 1 || rank < 0 || rank >= ranks)
     return {};

@@ -38,8 +38,7 @@ namespace radar_emu::emulator::mpi_work {
 /// build without MPI, or when MPI's world size disagrees with the launcher's.
 /// Call it late, after every check and set-up that can fail (options, files, the mesh): a rank
 /// that fails before start() exits and mpirun ends the job; one that failed after it would
-/// leave the others waiting in a gather. After start(), nothing but the sweep and the gather
-/// should stand between the ranks.
+/// leave the others waiting in a gather (main() then ends the job with abort_job()).
 void start();
 
 /// True after start() initialised MPI (launched with more than one rank, in an MPI build).
@@ -66,6 +65,11 @@ void start();
 
 /// MPI_Finalize if start() initialised MPI (idempotent). Called by Scope.
 void finalize() noexcept;
+
+/// After an error on this rank: when start() initialised MPI with more than one rank, ends every
+/// rank of the job with `status` (MPI_Abort), as the others may be waiting for this one in a
+/// gather; otherwise returns.
+void abort_job(int status) noexcept;
 
 /// Held by main(): finalize() when it returns.
 struct Scope {
