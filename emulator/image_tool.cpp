@@ -18,6 +18,7 @@
 #include "emulator/cli_checks.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/ownship.hpp"
+#include "emulator/scene_tool.hpp"
 #include "radar/propagation/path.hpp"
 #include "scene/scene.hpp"
 
@@ -175,10 +176,12 @@ EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std
   g.seed = seed;
   g.ground_height_m = ground_height_below(scene, tracer, p.pose.position_m);
   if (p.pose.position_m.z <= g.ground_height_m) {
-    throw std::runtime_error("ownship at t = " + std::to_string(time_s) + " s is at height " +
-                             std::to_string(p.pose.position_m.z) +
-                             " m, not above the ground plane at " +
-                             std::to_string(g.ground_height_m) + " m");
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "--time-s: the ownship at t = %g s is at height %.1f m, not above the ground "
+                  "below it (%.1f m)",
+                  time_s, p.pose.position_m.z, g.ground_height_m);
+    throw std::runtime_error(buf);
   }
   try {
     (void)radar::ev_image_rows(g);
@@ -316,7 +319,7 @@ void add_image_command(CLI::App& app, ImageCommand& c) {
       ->check(in_range(0.0, 1e6, "s"));
   c.app->add_option("--looks", o.looks, "Uncorrelated looks averaged (default 10)")
       ->check(CLI::Range(1, 1000));
-  c.app->add_option("--seed", o.seed, "Speckle seed (default 20261124)");
+  c.app->add_option("--seed", c.seed_text, "Speckle seed, 0..2^64-1 (default 20261124)");
   c.app
       ->add_option("--optical-scale", o.optical_scale,
                    "Optical preview pixels per radar pixel, each way (default 4)")
@@ -329,7 +332,10 @@ void add_image_command(CLI::App& app, ImageCommand& c) {
 std::optional<int> run_image_command(const ImageCommand& c) {
   if (c.app == nullptr || !c.app->parsed())
     return std::nullopt;
-  return run_image_tool(c.options);
+  ImageToolOptions o = c.options;
+  if (!c.seed_text.empty())
+    o.seed = parse_seed(c.seed_text, "--seed");
+  return run_image_tool(o);
 }
 
 }  // namespace radar_emu::emulator

@@ -66,6 +66,7 @@ int run_image_tool(const ImageToolOptions& options);
 struct ImageCommand {
   CLI::App* app = nullptr;
   ImageToolOptions options;
+  std::string seed_text;  ///< --seed as given (parsed by run_image_command: errors name it)
 };
 /// Registers `image` on the application.
 void add_image_command(CLI::App& app, ImageCommand& command);
