@@ -50,9 +50,8 @@ int run_atten_tool(const AttenToolOptions& o) {
       std::fprintf(f, "%.8g", r.veg);
     std::fprintf(f, "\n");
   }
-  const bool ok = std::ferror(f) == 0;
-  std::fclose(f);
-  if (!ok)
+  const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
+  if (std::fclose(f) != 0 || !ok)
     throw std::runtime_error(o.out_csv + ": write failed");
   if (!o.plot_png.empty() && rows.size() > 1) {
     LineChart chart;

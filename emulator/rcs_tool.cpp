@@ -66,6 +66,15 @@ struct FileCloser {
 };
 using File = std::unique_ptr<FILE, FileCloser>;
 
+// Flushes and closes a written file: an error buffered until then (a full disk, /dev/full) is a
+// failed write, not a silent empty file.
+void close_or_throw(File& f, const std::string& path) {
+  const bool flushed = std::fflush(f.get()) == 0 && std::ferror(f.get()) == 0;
+  const bool closed = std::fclose(f.release()) == 0;
+  if (!flushed || !closed)
+    throw std::runtime_error(path + ": write failed");
+}
+
 double db_of_power(double p) {
   return p > 0.0 ? 10.0 * std::log10(p) : -400.0;
 }
@@ -606,8 +615,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
         }
       }
     }
-    if (std::ferror(f.get()))
-      throw std::runtime_error(o.out_csv + ": write failed");
+    close_or_throw(f, o.out_csv);
   }
 
   // Fluctuation statistics over a sliding aspect window of the swept angle.
@@ -653,6 +661,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
         }
       }
     }
+    close_or_throw(f, stats_path);
   }
 
   if (!o.plot_png.empty()) {
@@ -811,6 +820,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
                      static_cast<unsigned long long>(edges_used[a]));
       }
     }
+    close_or_throw(f, o.out_csv);
   }
   const radar::RangeProfile& centre = profiles[na / 2];
   const std::string name = std::filesystem::path(o.mesh).filename().string();
@@ -869,6 +879,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
                      values[r * img.range_m.size() + c]);
       }
     }
+    close_or_throw(f, isar_csv);
     isar_png = o.isar_png;
     if (isar_png.empty() && !o.plot_png.empty())
       isar_png = sibling(o.plot_png, "_isar.png").string();

@@ -161,9 +161,8 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     seen |= flags;
     std::fprintf(f, ",%d\n", flags == 0 ? 1 : 0);
   }
-  const bool ok = std::ferror(f) == 0;
-  std::fclose(f);
-  if (!ok)
+  const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
+  if (std::fclose(f) != 0 || !ok)
     throw std::runtime_error(o.out_csv + ": write failed");
 
   if (!o.plot_png.empty() && rows.size() > 1) {

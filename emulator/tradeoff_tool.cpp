@@ -925,9 +925,8 @@ void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path) 
     std::fprintf(f, "%s,%s,%.6g,%.3f,%llu,%s,%.6g,\"%s\",\"%s\"\n", r.case_name.c_str(),
                  r.knob.c_str(), r.value, r.cost_ms, static_cast<unsigned long long>(r.rays),
                  r.metric.c_str(), r.error, r.reference.c_str(), r.validity.c_str());
-  const bool ok = std::ferror(f) == 0;
-  std::fclose(f);
-  if (!ok)
+  const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
+  if (std::fclose(f) != 0 || !ok)
     throw std::runtime_error(path.string() + ": write failed");
 }
 

@@ -155,6 +155,8 @@ BAD = [
     (["rcs", "--mesh", mesh, *f10, "--theta-deg", "0:90:901", "--out", no_dir + "/a.csv"],
      "a.csv: cannot open for writing: directory " + no_dir + " does not exist"),
     (["rcs", "--mesh", mesh, *f10, "--out", d], "cannot open for writing: it is a directory"),
+    # A full disk (/dev/full) shows only when the buffered CSV is flushed: a failed write.
+    (["rcs", "--mesh", sphere, *f10, "--out", "/dev/full"], "/dev/full: write failed"),
     (["rcs", "--mesh", mesh, *f10, "--stats-out", os.path.join(d, "st.csv")],
      "--stats-out requires --window-deg"),
     (["rcs", "--mesh", mesh, *f10, "--window-deg", "10"],
@@ -177,6 +179,8 @@ BAD = [
       os.path.join(d, "p.svg")], "cannot write a '.svg' file"),
     (["profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:1e10:8", "--out", no_dir + "/p.csv"],
      "cannot open for writing"),
+    (["profile", "--mesh", sphere, "--freq-sweep-hz", "1.1e10:1.2e10:8", "--out", "/dev/full"],
+     "/dev/full: write failed"),
     # ambiguity
     (["ambiguity", "--prf-hz", "1e3", "--out", os.path.join(d, "amb")], "--prf-hz requires --train"),
     (["ambiguity", "--pulses", "8", "--out", os.path.join(d, "amb")], "--pulses requires --train"),
@@ -203,6 +207,7 @@ BAD = [
     (["atten", "--freq-hz", "1e10:2e10:3", "--plot", os.path.join(d, "a.jpg")],
      "cannot write a '.jpg' file"),
     (["atten", "--freq-hz", "1e10", "--out", no_dir + "/a.csv"], "cannot open for writing"),
+    (["atten", "--freq-hz", "1e10", "--out", "/dev/full"], "/dev/full: write failed"),
     # image (the EV image of examples/ev_radar_94ghz.toml)
     (["image", "--looks", "0"], "--looks: Value 0 not in range 1 to 1000"),
     (["image", "--time-s", "-1"], "--time-s: -1 is outside [0, 1e+06] s"),
@@ -233,6 +238,8 @@ BAD = [
      "cannot write a '.gif' file"),
     (["sigma0", "--material", "grass", "--freq-hz", "1e10", "--out", no_dir + "/s.csv"],
      "cannot open for writing"),
+    (["sigma0", "--material", "grass", "--freq-hz", "1e10", "--out", "/dev/full"],
+     "/dev/full: write failed"),
     # tradeoff
     (["tradeoff", "--out", a_file + "/to"], "cannot create the output directory"),
     (["tradeoff", "--cases", "sphere,cone", "--out", os.path.join(d, "to")], "cone"),
