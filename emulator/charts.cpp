@@ -325,7 +325,7 @@ AxisTicks axis_ticks(double lo, double hi, bool log_axis, int target) {
         continue;
       if (m == 1 && k % stride == 0)
         major.push_back({m, k});
-      else if (span <= 6.0 && m > 1)
+      else if (span <= 8.0 && m > 1)
         minor.push_back({m, k});
     }
   }

@@ -68,7 +68,7 @@ struct AxisTicks {
   std::vector<double> minor;        ///< unlabelled (log axes: 2..9 x 10^k)
 };
 /// Linear: nice_ticks. Log (lo > 0): every decade in range (every other one past 12 decades),
-/// minor ticks at 2..9 (up to 6 decades); 2 and 5 labelled too when fewer than 3 decade ticks show;
+/// minor ticks at 2..9 (up to 8 decades); 2 and 5 labelled too when fewer than 3 decade ticks show;
 /// labels plain between 0.001 and 10^4, 10^k outside.
 [[nodiscard]] AxisTicks axis_ticks(double lo, double hi, bool log_axis, int target = 6);
 /// "%g"-like label at the precision the tick step needs ("0.25", "1500", "-3").

@@ -180,7 +180,8 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     for (Pol p : pols) {
       Heatmap m;
       char title[200];
-      std::snprintf(title, sizeof title, "sigma0 %s of %s, %s model, %.4g GHz, phi_s %g deg",
+      std::snprintf(title, sizeof title,
+                    "sigma0 %s of %s, %s model, %.4g GHz, phi_s %g deg (grey: outside validity)",
                     std::string(pol_name(p)).c_str(), what.c_str(), cl::to_string(model),
                     o.freq_hz * 1e-9, o.phi_s_deg);
       m.title = title;

@@ -930,6 +930,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
       for (std::size_t j : models) {
         PlotSeries in{std::string(names[j]) + " " + surf.tag + " (valid)", {}, {}};
         PlotSeries out{std::string(names[j]) + " " + surf.tag + " (outside validity)", {}, {}};
+        out.dashed = true;
         for (std::size_t i = 0; i < curves.ks.size(); ++i) {
           const bool v = curves.valid[j][i];
           in.x.push_back(curves.ks[i]);
