@@ -266,6 +266,10 @@ void draw_axis_labels(Canvas& c, const PixelRect& r, const std::string& xl, cons
 
 // ---------------------------------------------------------------------------------------------
 
+Rgb series_colour(std::size_t k) noexcept {
+  return kPalette[k % kPalette.size()];
+}
+
 std::vector<double> nice_ticks(double lo, double hi, int target) {
   std::vector<double> out;
   if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi))
@@ -513,7 +517,7 @@ Canvas render_line_chart(const LineChart& chart) {
   };
   for (std::size_t k = 0; k < chart.series.size(); ++k) {
     const Series& s = chart.series[k];
-    const Rgb col = kPalette[k % kPalette.size()];
+    const Rgb col = s.colour.value_or(series_colour(k));
     const int shape = static_cast<int>(k / kPalette.size()) % 3;
     bool have_prev = false;
     double xp = 0, yp = 0, dash = 0;
@@ -541,7 +545,7 @@ Canvas render_line_chart(const LineChart& chart) {
   for (std::size_t e = 0; e < L.legend.size(); ++e) {
     const std::size_t k = L.legend_series[e];
     const Series& s = chart.series[k];
-    const Rgb col = kPalette[k % kPalette.size()];
+    const Rgb col = s.colour.value_or(series_colour(k));
     const PixelRect& r = L.legend[e];
     const int ym = r.y0 + 7;
     double dash = 0;

@@ -18,7 +18,11 @@ struct Series {
   std::vector<double> x, y;  ///< same length; non-finite y values break the line
   bool markers = false;      ///< a marker at every point as well as the line
   bool dashed = false;
+  std::optional<Rgb> colour = std::nullopt;  ///< default: series_colour(index of the series)
 };
+
+/// The colour of the k-th series when it sets none (ten well separated colours, repeating).
+[[nodiscard]] Rgb series_colour(std::size_t k) noexcept;
 
 struct LineChart {
   /// Axis labels carry the unit in brackets, "range [m]" (docs/plotting.md).

@@ -227,6 +227,7 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     const bool reciprocal = !bistatic && std::all_of(rows.begin(), rows.end(), [](const Row& r) {
       return r.s.incoherent.hv == r.s.incoherent.vh;
     });
+    std::size_t colour_index = 0;
     for (Pol p : pols) {
       if (p == Pol::kVH && has_hv && reciprocal)
         continue;
@@ -246,6 +247,9 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
         outside.x.push_back(x);
         outside.y.push_back(!valid && y > kFloorDb ? y : std::nan(""));
       }
+      // Outside the model's validity: the same colour, dashed.
+      inside.colour = outside.colour = series_colour(colour_index++);
+      outside.dashed = true;
       for (Series* series : {&inside, &outside}) {
         if (std::any_of(series->y.begin(), series->y.end(),
                         [](double y) { return std::isfinite(y); }))

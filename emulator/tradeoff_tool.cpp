@@ -931,6 +931,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
         PlotSeries in{std::string(names[j]) + " " + surf.tag + " (valid)", {}, {}};
         PlotSeries out{std::string(names[j]) + " " + surf.tag + " (outside validity)", {}, {}};
         out.dashed = true;
+        in.colour = out.colour = series_colour(p.series.size() / 2);
         for (std::size_t i = 0; i < curves.ks.size(); ++i) {
           const bool v = curves.valid[j][i];
           in.x.push_back(curves.ks[i]);
