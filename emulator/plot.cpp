@@ -136,8 +136,11 @@ void write_timing_png(const timing::StageProfiler& profiler, double period_s,
   for (std::size_t i = 0; i < n; ++i)
     frame.y[i] = static_cast<double>(frame_ns[i]) * 1e-6;
   stages.series.push_back(std::move(frame));
-  stages.series.push_back(
-      Series{"budget", {0.0, n > 1 ? static_cast<double>(n - 1) : 1.0}, {budget_ms, budget_ms}});
+  stages.series.push_back(Series{"budget",
+                                 {0.0, n > 1 ? static_cast<double>(n - 1) : 1.0},
+                                 {budget_ms, budget_ms},
+                                 false,
+                                 true});
   stages.y_min = 0.0;
   out.blit(render_line_chart(stages), 0, 0);
 
@@ -172,7 +175,7 @@ void write_timing_png(const timing::StageProfiler& profiler, double period_s,
   steps.x.push_back(top_ms);
   steps.y.push_back(0.0);
   hist.series.push_back(std::move(steps));
-  hist.series.push_back(Series{"budget", {budget_ms, budget_ms}, {0.0, count_max}});
+  hist.series.push_back(Series{"budget", {budget_ms, budget_ms}, {0.0, count_max}, false, true});
   hist.y_min = 0.0;
   out.blit(render_line_chart(hist), 0, kTimingPngHeight / 2);
   out.write_png(path);
