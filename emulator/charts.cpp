@@ -282,7 +282,9 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
     if (step >= raw)
       break;
   }
-  for (double k = std::ceil(lo / step - 1e-9); k * step <= hi + 1e-9 * step; k += 1.0)
+  // (At most 1000 ticks: a span far below the values' precision would not advance k.)
+  double k = std::ceil(lo / step - 1e-9);
+  for (int n = 0; n < 1000 && k * step <= hi + 1e-9 * step; ++n, k += 1.0)
     out.push_back(k == 0.0 ? 0.0 : k * step);
   return out;
 }
@@ -598,18 +600,21 @@ void check_axis(const std::vector<double>& a, const std::string& title, const ch
 }  // namespace
 
 int HeatmapLayout::px(double x) const noexcept {
-  const double f = (x - x0) / (x1 - x0);
+  const double r = (x - x0) / (x1 - x0);
+  const double f = std::isfinite(r) ? std::clamp(r, -1.0, 2.0) : 0.0;
   return std::clamp(image.x0 + static_cast<int>(std::floor(f * image.width())), image.x0, image.x1);
 }
 
 int HeatmapLayout::py(double y) const noexcept {
-  const double f = (y - y0) / (y1 - y0);
+  const double r = (y - y0) / (y1 - y0);
+  const double f = std::isfinite(r) ? std::clamp(r, -1.0, 2.0) : 0.0;
   return std::clamp(image.y1 - static_cast<int>(std::floor(f * image.height())), image.y0,
                     image.y1);
 }
 
 int HeatmapLayout::bar_row(double value) const noexcept {
-  const double f = std::clamp((value - value_lo) / (value_hi - value_lo), 0.0, 1.0);
+  const double r = (value - value_lo) / (value_hi - value_lo);
+  const double f = std::isfinite(r) ? std::clamp(r, 0.0, 1.0) : 0.0;
   return colour_bar.y1 - static_cast<int>(std::lround(f * (colour_bar.height() - 1)));
 }
 
