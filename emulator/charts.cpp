@@ -584,6 +584,13 @@ std::vector<double> cell_edges(const std::vector<double>& c) {
   return e;
 }
 
+Rgb scale_colour(const Heatmap& m, double f) noexcept {
+  if (!m.grey)
+    return colour_map(f);
+  const auto g = static_cast<std::uint8_t>(std::lround(255.0 * std::clamp(f, 0.0, 1.0)));
+  return Rgb{g, g, g};
+}
+
 std::size_t cell_of(const std::vector<double>& edges, double v) {
   const auto it = std::upper_bound(edges.begin() + 1, edges.end() - 1, v);
   return static_cast<std::size_t>(it - (edges.begin() + 1));
@@ -620,7 +627,10 @@ int HeatmapLayout::bar_row(double value) const noexcept {
 
 HeatmapLayout heatmap_layout(const Heatmap& m) {
   check_size(m.width, m.height);
-  if (m.x.empty() || m.y.empty() || m.values.size() != m.x.size() * m.y.size())
+  const bool picture = !m.rgb.empty();
+  if (m.x.empty() || m.y.empty() ||
+      (picture ? m.rgb.size() != m.x.size() * m.y.size() * 3
+               : m.values.size() != m.x.size() * m.y.size()))
     throw std::invalid_argument("heat map '" + m.title + "': empty or inconsistent data");
   check_axis(m.x, m.title, "x");
   check_axis(m.y, m.title, "y");
@@ -652,9 +662,10 @@ HeatmapLayout heatmap_layout(const Heatmap& m) {
   const int last_x_label =
       L.x_ticks.labels.empty() ? 0 : label_width(L.x_ticks.labels.back(), kScale);
   constexpr int kBarGap = 18, kBarWidth = 20;
-  const int bar_space = kBarGap + kBarWidth + kTick + 6 +
-                        max_label_width(L.bar_ticks.labels, kScale) +
-                        (m.value_label.empty() ? 0 : 10 + Canvas::text_height(kScale)) + kMargin;
+  const int bar_space =
+      picture ? kMargin
+              : kBarGap + kBarWidth + kTick + 6 + max_label_width(L.bar_ticks.labels, kScale) +
+                    (m.value_label.empty() ? 0 : 10 + Canvas::text_height(kScale)) + kMargin;
   const int right_space = std::max(bar_space, last_x_label / 2 + kMargin);
   const PixelRect avail{left, top, m.width - right_space - 1, m.height - bottom - 1};
   if (avail.width() < 60 || avail.height() < 60)
@@ -672,7 +683,9 @@ HeatmapLayout heatmap_layout(const Heatmap& m) {
   }
   L.colour_bar =
       PixelRect{L.image.x1 + kBarGap, L.image.y0, L.image.x1 + kBarGap + kBarWidth - 1, L.image.y1};
-  if (L.colour_bar.height() < 60) {  // a flat image: the bar keeps a readable height
+  if (picture) {
+    L.colour_bar = PixelRect{L.image.x1 + 1, L.image.y0, L.image.x1, L.image.y1};
+  } else if (L.colour_bar.height() < 60) {  // a flat image: the bar keeps a readable height
     const int mid = (L.image.y0 + L.image.y1) / 2;
     L.colour_bar.y0 = std::max(avail.y0, mid - 30);
     L.colour_bar.y1 = std::min(avail.y1, L.colour_bar.y0 + 59);
@@ -691,8 +704,13 @@ Canvas render_heatmap(const Heatmap& m) {
     const std::size_t iy = cell_of(ey, y);
     for (int px = L.image.x0; px <= L.image.x1; ++px) {
       const double x = L.x0 + (px - L.image.x0 + 0.5) / L.image.width() * (L.x1 - L.x0);
-      const double v = m.values[iy * m.x.size() + cell_of(ex, x)];
-      c.put(px, py, std::isfinite(v) ? colour_map((v - L.value_lo) / range) : kMissing);
+      const std::size_t i = iy * m.x.size() + cell_of(ex, x);
+      if (!m.rgb.empty()) {
+        c.put(px, py, Rgb{m.rgb[3 * i], m.rgb[3 * i + 1], m.rgb[3 * i + 2]});
+        continue;
+      }
+      const double v = m.values[i];
+      c.put(px, py, std::isfinite(v) ? scale_colour(m, (v - L.value_lo) / range) : kMissing);
     }
   }
   // Axes: ticks at the cells' data coordinates (the centre of the pixel holding the value).
@@ -707,18 +725,21 @@ Canvas render_heatmap(const Heatmap& m) {
 
   // Colour bar: ticks and labels on its right, the label (unit) beyond them, read upward.
   const PixelRect& b = L.colour_bar;
-  for (int row = b.y0; row <= b.y1; ++row)
-    c.rect(b.x0, row, b.x1, row, colour_map(static_cast<double>(b.y1 - row) / (b.height() - 1)));
-  draw_frame(c, b);
+  for (int row = b.y0; row <= b.y1; ++row) {
+    c.rect(b.x0, row, b.x1, row,
+           scale_colour(m, static_cast<double>(b.y1 - row) / (b.height() - 1)));
+  }
+  if (b.width() > 0)
+    draw_frame(c, b);
   int label_right = b.x1 + 2 + kTick;
-  for (std::size_t i = 0; i < L.bar_ticks.major.size(); ++i) {
+  for (std::size_t i = 0; b.width() > 0 && i < L.bar_ticks.major.size(); ++i) {
     const int row = L.bar_row(L.bar_ticks.major[i]);
     c.line(b.x1 + 2, row, b.x1 + 1 + kTick, row, kInk);
     draw_label(c, b.x1 + kTick + 6, row - 7, L.bar_ticks.labels[i], kInk, kScale);
     label_right =
         std::max(label_right, b.x1 + kTick + 6 + label_width(L.bar_ticks.labels[i], kScale));
   }
-  if (!m.value_label.empty()) {
+  if (!m.value_label.empty() && b.width() > 0) {
     const int h = Canvas::text_width(m.value_label, kScale);
     c.text_up(label_right + 10, std::max(kMargin, (b.y0 + b.y1 - h) / 2), m.value_label, kInk,
               kScale);
@@ -742,6 +763,23 @@ Canvas render_heatmap(const Heatmap& m) {
 
 void write_heatmap_png(const Heatmap& map, const std::filesystem::path& path) {
   render_heatmap(map).write_png(path);
+}
+
+Canvas join_panels(const std::vector<Canvas>& panels) {
+  if (panels.empty())
+    throw std::invalid_argument("join_panels: no panels");
+  int w = 0, h = 0;
+  for (const Canvas& p : panels) {
+    w += p.width();
+    h = std::max(h, p.height());
+  }
+  Canvas out(w, h, kBackground);
+  int x = 0;
+  for (const Canvas& p : panels) {
+    out.blit(p, x, 0);
+    x += p.width();
+  }
+  return out;
 }
 
 Canvas stack_panels(const std::vector<Canvas>& panels) {

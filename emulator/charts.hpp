@@ -4,6 +4,7 @@
 // decade and 2..9 minor ticks on log axes, colour bars with ticks and a label, legends outside
 // the data, titles wrapped rather than clipped, images in metres at equal x and y scale.
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -50,7 +51,15 @@ struct Heatmap {
   /// fifth of the x span), labelled with the x unit. Default: none.
   std::optional<double> scale_bar;
   int width = 1000, height = 640;  ///< pixels of the whole picture
+  /// Grey scale (black at the bottom of the scale, white at the top) instead of viridis.
+  bool grey = false;
+  /// A picture instead of values (an optical view beside a radar image): x.size() * y.size()
+  /// RGB triplets, row-major [y][x] like `values` (which may then be empty); no colour bar.
+  std::vector<std::uint8_t> rgb;
 };
+
+/// Panels side by side (height: the tallest).
+[[nodiscard]] Canvas join_panels(const std::vector<Canvas>& panels);
 
 /// Throw std::runtime_error naming the path on write failure, std::invalid_argument for empty or
 /// inconsistent data.
@@ -113,7 +122,8 @@ struct ChartLayout {
 struct HeatmapLayout {
   int width = 0, height = 0;
   PixelRect image;       ///< the data area (letterboxed when equal_aspect)
-  PixelRect colour_bar;  ///< top row: value_max, bottom row: value_max - value_range
+  PixelRect colour_bar;  ///< top row: value_max, bottom row: value_max - value_range; empty
+                         ///< (width 0) for a picture
   std::vector<TextLine> title;
   double x0 = 0, x1 = 1, y0 = 0, y1 = 1;  ///< extents of the cells (data units)
   bool equal_aspect = false;
