@@ -263,3 +263,29 @@ TEST(Charts, BadInputIsAClearError) {
   m.x = {1, 0};
   EXPECT_THROW((void)re::render_heatmap(m), std::invalid_argument);
 }
+
+TEST(Charts, PictureCellsKeepTheirColoursAndHaveNoColourBar) {
+  // A 2 x 2 picture (rows ascending in y): each quarter of the image shows its RGB triplet.
+  re::Heatmap m;
+  m.x_label = "azimuth [deg]";
+  m.y_label = "elevation [deg]";
+  m.x = {0.0, 1.0};
+  m.y = {0.0, 1.0};
+  m.rgb = {255, 0, 0, 0, 255, 0, 0, 0, 255, 250, 250, 10};
+  const re::HeatmapLayout L = re::heatmap_layout(m);
+  EXPECT_EQ(L.colour_bar.width(), 0);
+  EXPECT_TRUE(L.equal_aspect);
+  EXPECT_NEAR(L.image.width(), L.image.height(), 1.0);
+  const re::Canvas c = re::render_heatmap(m);
+  for (std::size_t j = 0; j < 2; ++j) {
+    for (std::size_t i = 0; i < 2; ++i) {
+      const std::uint8_t* p = c.data() + pixel_index(L.px(m.x[i]), L.py(m.y[j]), c.width());
+      const std::size_t k = 3 * (j * 2 + i);
+      EXPECT_EQ(p[0], m.rgb[k]) << i << "," << j;
+      EXPECT_EQ(p[1], m.rgb[k + 1]);
+      EXPECT_EQ(p[2], m.rgb[k + 2]);
+    }
+  }
+  m.rgb.pop_back();
+  EXPECT_THROW((void)re::render_heatmap(m), std::invalid_argument);
+}
