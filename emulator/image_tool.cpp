@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "emulator/canvas.hpp"
+#include "emulator/charts.hpp"
 #include "emulator/cli_checks.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/ownship.hpp"
@@ -76,15 +76,11 @@ double db(double v) {
   return v > 0.0 ? 10.0 * std::log10(v) : -400.0;
 }
 
-// The radar image (grey, dB over `range_db` below the 99.5th percentile, like the seed's
-// figure 5) and the optical preview side by side, axes in degrees.
+// The radar image (grey, dB over 40 dB below the 99.5th percentile, like the seed's figure 5)
+// and the optical preview side by side, both at equal scales in degrees (docs/plotting.md).
 void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
   const radar::EvImage& im = p.image;
   const int s = std::max(1, p.optical_scale);
-  const int w = im.columns * s, h = im.rows * s;
-  constexpr int kLeft = 70, kTop = 50, kGap = 90, kBottom = 70, kRight = 30;
-  const Rgb ink{20, 20, 20};
-  Canvas c(kLeft + 2 * w + kGap + kRight, kTop + h + kBottom, Rgb{255, 255, 255});
   std::vector<float> sorted;
   for (float v : im.intensity_m2)
     if (v > 0.0f)
@@ -92,56 +88,49 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
   std::sort(sorted.begin(), sorted.end());
   const double top_db = sorted.empty() ? 0.0 : db(sorted[(sorted.size() - 1) * 995 / 1000]);
   constexpr double kRangeDb = 40.0;
-  for (int r = 0; r < im.rows; ++r) {
-    for (int col = 0; col < im.columns; ++col) {
-      const double f = std::clamp((db(im.at(r, col)) - (top_db - kRangeDb)) / kRangeDb, 0.0, 1.0);
-      const auto g = static_cast<std::uint8_t>(std::lround(255.0 * f));
-      c.rect(kLeft + col * s, kTop + r * s, kLeft + col * s + s - 1, kTop + r * s + s - 1,
-             Rgb{g, g, g});
-    }
-  }
-  const int ox = kLeft + w + kGap;
-  if (p.optical.width_px == w && p.optical.height_px == h) {
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        const std::uint8_t* px =
-            p.optical.rgb.data() + (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
-                                    static_cast<std::size_t>(x)) *
-                                       3;
-        c.put(ox + x, kTop + y, Rgb{px[0], px[1], px[2]});
-      }
-  }
-  // Axes: azimuth ticks every 5 deg, elevation every 2.5 deg, on both panels.
   const radar::EvImageConfig& g = p.config;
   const double az0 = g.azimuth_min_rad * kDeg, el1 = g.elevation_max_rad * kDeg;
   const double px_deg = g.pixel_rad * kDeg;
-  for (int x0 : {kLeft, ox}) {
-    c.line(x0 - 1, kTop - 1, x0 + w, kTop - 1, ink);
-    c.line(x0 - 1, kTop + h, x0 + w, kTop + h, ink);
-    c.line(x0 - 1, kTop - 1, x0 - 1, kTop + h, ink);
-    c.line(x0 + w, kTop - 1, x0 + w, kTop + h, ink);
-    char buf[32];
-    for (double a = std::ceil(az0 / 5.0) * 5.0; a <= az0 + im.columns * px_deg + 1e-9; a += 5.0) {
-      const int x = x0 + static_cast<int>(std::lround((a - az0) / px_deg * s));
-      c.line(x, kTop + h, x, kTop + h + 5, ink);
-      std::snprintf(buf, sizeof buf, "%g", a);
-      c.text(x - Canvas::text_width(buf) / 2, kTop + h + 8, buf, ink);
-    }
-    for (double e = std::floor(el1 / 2.5) * 2.5; e >= el1 - im.rows * px_deg - 1e-9; e -= 2.5) {
-      const int y = kTop + static_cast<int>(std::lround((el1 - e) / px_deg * s));
-      c.line(x0 - 6, y, x0 - 1, y, ink);
-      std::snprintf(buf, sizeof buf, "%g", e);
-      c.text(x0 - 8 - Canvas::text_width(buf), y - 5, buf, ink);
-    }
-    c.text(x0 + w / 2 - 60, kTop + h + 26, "azimuth [deg]", ink, 2);
-    c.text(x0 - 64, kTop - 20, "elev. [deg]", ink);
-  }
+  const auto rows = static_cast<std::size_t>(im.rows), cols = static_cast<std::size_t>(im.columns);
+  // Cell centres, elevation ascending (row 0 of the image is the top).
+  auto grid = [&](Heatmap& m, std::size_t nx, std::size_t ny, double step) {
+    for (std::size_t x = 0; x < nx; ++x)
+      m.x.push_back(az0 + (static_cast<double>(x) + 0.5) * step);
+    for (std::size_t y = 0; y < ny; ++y)
+      m.y.push_back(el1 - (static_cast<double>(ny - 1 - y) + 0.5) * step);
+    m.x_label = "azimuth [deg]";
+    m.y_label = "elevation [deg]";
+    m.width = 1000;
+    m.height = 400;
+  };
+  Heatmap radar_map;
+  grid(radar_map, cols, rows, px_deg);
   char title[160];
   std::snprintf(title, sizeof title, "%.0f GHz radar, %d looks, %.0f dB range (top %.1f dBsm)",
                 p.carrier_hz * 1e-9, p.config.looks, kRangeDb, top_db);
-  c.text(kLeft, 14, title, ink, 2);
-  c.text(ox, 14, "optical preview, same view", ink, 2);
-  c.write_png(path);
+  radar_map.title = title;
+  radar_map.value_label = "pixel [dBsm]";
+  radar_map.grey = true;
+  radar_map.value_max = top_db;
+  radar_map.value_range = kRangeDb;
+  for (std::size_t y = 0; y < rows; ++y) {
+    for (std::size_t x = 0; x < cols; ++x)
+      radar_map.values.push_back(db(im.at(static_cast<int>(rows - 1 - y), static_cast<int>(x))));
+  }
+  std::vector<Canvas> panels{render_heatmap(radar_map)};
+  const auto w = static_cast<std::size_t>(im.columns * s),
+             h = static_cast<std::size_t>(im.rows * s);
+  if (p.optical.width_px == static_cast<int>(w) && p.optical.height_px == static_cast<int>(h)) {
+    Heatmap optical;
+    grid(optical, w, h, px_deg / s);
+    optical.title = "optical preview, same view";
+    optical.rgb.resize(w * h * 3);
+    for (std::size_t y = 0; y < h; ++y)
+      std::copy_n(p.optical.rgb.data() + (h - 1 - y) * w * 3, w * 3,
+                  optical.rgb.data() + y * w * 3);
+    panels.push_back(render_heatmap(optical));
+  }
+  join_panels(panels).write_png(path);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "emulator/rcs_tool.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -545,6 +546,172 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
   add_gathered_stats(total, mine_total);
 }
 
+namespace {
+
+// One swept dimension (theta, phi or frequency): RCS against it, a curve per polarisation, the
+// overlays beside them; 60 dB under the peak kept (deep nulls would squash the pattern).
+void write_rcs_chart(const RcsToolOptions& o, const std::vector<radar::ScatteringMatrix>& s,
+                     const std::string& name, std::vector<Series> overlays) {
+  const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
+  const bool sweep_theta = nt > 1, sweep_phi = np > 1;
+  LineChart chart;
+  chart.y_label = "RCS [dBsm]";
+  char title[200];
+  if (sweep_theta || sweep_phi) {
+    chart.x_label = sweep_theta ? "theta [deg]" : "phi [deg]";
+    std::snprintf(title, sizeof title, "%s: RCS at %.4g GHz%s, %s = %g deg", name.c_str(),
+                  o.freqs_hz[0] / 1e9, o.bistatic_theta_deg ? " (bistatic)" : "",
+                  sweep_theta ? "phi" : "theta", sweep_theta ? o.phi_deg[0] : o.theta_deg[0]);
+  } else {
+    chart.x_label = "frequency [GHz]";
+    std::snprintf(title, sizeof title, "%s: RCS at theta %g deg, phi %g deg", name.c_str(),
+                  o.theta_deg[0], o.phi_deg[0]);
+  }
+  chart.title = title;
+  for (Pol p : o.pols) {
+    Series ser;
+    ser.label = std::string(pol_name(p));
+    if (sweep_theta || sweep_phi) {
+      const std::size_t n = sweep_theta ? nt : np;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t it = sweep_theta ? i : 0, ip = sweep_theta ? 0 : i;
+        ser.x.push_back(sweep_theta ? o.theta_deg[i] : o.phi_deg[i]);
+        ser.y.push_back(radar::dbsm(component(s[(it * np + ip) * nf], p)));
+      }
+    } else {
+      for (std::size_t k = 0; k < nf; ++k) {
+        ser.x.push_back(o.freqs_hz[k] / 1e9);
+        ser.y.push_back(radar::dbsm(component(s[k], p)));
+      }
+    }
+    chart.series.push_back(std::move(ser));
+  }
+  for (Series& ser : overlays)
+    chart.series.push_back(std::move(ser));
+  double peak = -400.0;
+  for (const Series& ser : chart.series) {
+    for (double y : ser.y)
+      peak = std::max(peak, y);
+  }
+  double low = peak;
+  for (const Series& ser : chart.series) {
+    for (double y : ser.y)
+      low = std::min(low, y);
+  }
+  chart.y_min = std::max(low, peak - 60.0);
+  write_line_chart_png(chart, o.plot_png);
+}
+
+// Indices of `v` in ascending order (a map's axis must ascend).
+std::vector<std::size_t> ascending(const std::vector<double>& v) {
+  std::vector<std::size_t> idx(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i)
+    idx[i] = i;
+  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  return idx;
+}
+
+// Two or three swept dimensions: a map (dBsm colour, 60 dB under the peak) of the first two
+// swept of (theta, phi, frequency) per polarisation, and per value of the third one swept, as
+// panels one under the other (at most kMaxPanels; the CSV has everything).
+void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::ScatteringMatrix>& s,
+                    const std::string& name) {
+  constexpr std::size_t kMaxPanels = 12;
+  const std::size_t np = o.phi_deg.size(), nf = o.freqs_hz.size();
+  // Axes 0 theta, 1 phi, 2 frequency [GHz].
+  std::vector<double> ghz(nf);
+  for (std::size_t k = 0; k < nf; ++k)
+    ghz[k] = o.freqs_hz[k] / 1e9;
+  const std::array<const std::vector<double>*, 3> values{&o.theta_deg, &o.phi_deg, &ghz};
+  const std::array<const char*, 3> labels{"theta [deg]", "phi [deg]", "frequency [GHz]"};
+  const std::array<const char*, 3> names{"theta", "phi", "f"};
+  const std::array<const char*, 3> units{"deg", "deg", "GHz"};
+  std::vector<int> swept;
+  for (int a = 0; a < 3; ++a) {
+    if (values[static_cast<std::size_t>(a)]->size() > 1)
+      swept.push_back(a);
+  }
+  // x: an angle (phi before theta when both are swept, the pattern's usual cut); y: the other.
+  int ax = swept[0], ay = swept[1];
+  if (ax == 0 && ay == 1)
+    std::swap(ax, ay);
+  const int slice_axis = swept.size() > 2 ? swept[2] : -1;
+  auto idx3 = [&](std::array<std::size_t, 3> i) { return (i[0] * np + i[1]) * nf + i[2]; };
+  const auto& xs = *values[static_cast<std::size_t>(ax)];
+  const auto& ys = *values[static_cast<std::size_t>(ay)];
+  const std::vector<std::size_t> ox = ascending(xs), oy = ascending(ys);
+  for (std::size_t i = 1; i < ox.size(); ++i) {
+    if (!(xs[ox[i]] > xs[ox[i - 1]]))
+      throw std::invalid_argument(std::string("--plot: the map needs distinct ") +
+                                  names[static_cast<std::size_t>(ax)] + " values");
+  }
+  for (std::size_t i = 1; i < oy.size(); ++i) {
+    if (!(ys[oy[i]] > ys[oy[i - 1]]))
+      throw std::invalid_argument(std::string("--plot: the map needs distinct ") +
+                                  names[static_cast<std::size_t>(ay)] + " values");
+  }
+  const std::size_t n_slices =
+      slice_axis < 0 ? 1 : values[static_cast<std::size_t>(slice_axis)]->size();
+  double peak = -400.0;
+  for (const radar::ScatteringMatrix& m : s) {
+    for (Pol p : o.pols)
+      peak = std::max(peak, radar::dbsm(component(m, p)));
+  }
+  std::vector<Canvas> panels;
+  std::size_t skipped = 0;
+  for (std::size_t sl = 0; sl < n_slices; ++sl) {
+    for (Pol p : o.pols) {
+      if (panels.size() == kMaxPanels) {
+        ++skipped;
+        continue;
+      }
+      Heatmap m;
+      std::string fixed;
+      char buf[64];
+      for (int a = 0; a < 3; ++a) {
+        if (a == ax || a == ay)
+          continue;
+        const auto ua = static_cast<std::size_t>(a);
+        std::snprintf(buf, sizeof buf, ", %s %g %s", names[ua],
+                      (*values[ua])[a == slice_axis ? sl : 0], units[ua]);
+        fixed += buf;
+      }
+      m.title = name + ": RCS " + std::string(pol_name(p)) + fixed +
+                (o.bistatic_theta_deg ? " (bistatic)" : "");
+      m.x_label = labels[static_cast<std::size_t>(ax)];
+      m.y_label = labels[static_cast<std::size_t>(ay)];
+      m.value_label = "RCS [dBsm]";
+      m.equal_aspect = false;
+      m.height = 560;
+      for (std::size_t i : ox)
+        m.x.push_back(xs[i]);
+      for (std::size_t j : oy)
+        m.y.push_back(ys[j]);
+      for (std::size_t j : oy) {
+        for (std::size_t i : ox) {
+          std::array<std::size_t, 3> at{0, 0, 0};
+          at[static_cast<std::size_t>(ax)] = i;
+          at[static_cast<std::size_t>(ay)] = j;
+          if (slice_axis >= 0)
+            at[static_cast<std::size_t>(slice_axis)] = sl;
+          m.values.push_back(radar::dbsm(component(s[idx3(at)], p)));
+        }
+      }
+      m.value_max = std::ceil(peak);
+      m.value_range = 60.0;
+      panels.push_back(render_heatmap(m));
+    }
+  }
+  if (skipped > 0) {
+    std::fprintf(stderr,
+                 "radar-emu: warning: --plot: drew the first %zu maps of %zu (the CSV has all)\n",
+                 kMaxPanels, kMaxPanels + skipped);
+  }
+  stack_panels(panels).write_png(o.plot_png);
+}
+
+}  // namespace
+
 int run_rcs_tool(const RcsToolOptions& o) {
   if (o.freqs_hz.empty())
     throw std::invalid_argument("give --freq-hz F or --freq-sweep-hz START:STOP:N");
@@ -558,6 +725,10 @@ int run_rcs_tool(const RcsToolOptions& o) {
     throw std::invalid_argument("give both --bistatic-theta-deg and --bistatic-phi-deg");
   if (!o.overlays.empty() && o.plot_png.empty())
     throw std::invalid_argument("--overlay needs --plot");
+  if (!o.overlays.empty() &&
+      int(o.theta_deg.size() > 1) + int(o.phi_deg.size() > 1) + int(o.freqs_hz.size() > 1) > 1)
+    throw std::invalid_argument(
+        "--overlay: curves go on a plot of one swept dimension (with two swept, --plot is a map)");
   std::vector<Series> overlays;  // read before the sweep: a bad file fails fast
   if (mpi_work::is_root()) {     // under mpirun, rank 0 alone plots
     for (const std::string& spec : o.overlays)
@@ -665,54 +836,11 @@ int run_rcs_tool(const RcsToolOptions& o) {
   }
 
   if (!o.plot_png.empty()) {
-    LineChart chart;
-    chart.y_label = "RCS [dBsm]";
     const std::string name = std::filesystem::path(o.mesh).filename().string();
-    char title[200];
-    if (sweep_theta || sweep_phi) {
-      chart.x_label = sweep_theta ? "theta [deg]" : "phi [deg]";
-      std::snprintf(title, sizeof title, "%s: RCS at %.4g GHz%s, %s = %g deg", name.c_str(),
-                    o.freqs_hz[0] / 1e9, o.bistatic_theta_deg ? " (bistatic)" : "",
-                    sweep_theta ? "phi" : "theta", sweep_theta ? o.phi_deg[0] : o.theta_deg[0]);
-    } else {
-      chart.x_label = "frequency [GHz]";
-      std::snprintf(title, sizeof title, "%s: RCS at theta %g deg, phi %g deg", name.c_str(),
-                    o.theta_deg[0], o.phi_deg[0]);
-    }
-    chart.title = title;
-    for (Pol p : o.pols) {
-      Series ser;
-      ser.label = std::string(pol_name(p));
-      if (sweep_theta || sweep_phi) {
-        const std::size_t n = sweep_theta ? nt : np;
-        for (std::size_t i = 0; i < n; ++i) {
-          const std::size_t it = sweep_theta ? i : 0, ip = sweep_theta ? 0 : i;
-          ser.x.push_back(sweep_theta ? o.theta_deg[i] : o.phi_deg[i]);
-          ser.y.push_back(radar::dbsm(component(s[(it * np + ip) * nf], p)));
-        }
-      } else {
-        for (std::size_t k = 0; k < nf; ++k) {
-          ser.x.push_back(o.freqs_hz[k] / 1e9);
-          ser.y.push_back(radar::dbsm(component(s[k], p)));
-        }
-      }
-      chart.series.push_back(std::move(ser));
-    }
-    for (Series& ser : overlays)
-      chart.series.push_back(std::move(ser));
-    // Keep 60 dB under the peak: deep nulls would squash the pattern.
-    double peak = -400.0;
-    for (const Series& ser : chart.series) {
-      for (double y : ser.y)
-        peak = std::max(peak, y);
-    }
-    double low = peak;
-    for (const Series& ser : chart.series) {
-      for (double y : ser.y)
-        low = std::min(low, y);
-    }
-    chart.y_min = std::max(low, peak - 60.0);
-    write_line_chart_png(chart, o.plot_png);
+    if (int(sweep_theta) + int(sweep_phi) + int(nf > 1) >= 2)
+      write_rcs_maps(o, s, name);
+    else
+      write_rcs_chart(o, s, name, std::move(overlays));
   }
 
   if (!o.quiet) {
@@ -892,12 +1020,13 @@ int run_profile_tool(const ProfileToolOptions& o) {
       m.title = title;
       m.x_label = "range [m]";
       m.y_label = "cross-range [m]";
-      m.value_label = "dBsm";
+      m.value_label = "image amplitude [dBsm]";
       m.x = img.range_m;
       m.y = img.cross_range_m;
       m.values = std::move(values);
       m.value_max = peak;
       m.value_range = o.dynamic_range_db;
+      m.scale_bar = 0.0;  // equal scales (both axes in m) and a scale bar
       write_heatmap_png(m, isar_png);
     }
   }

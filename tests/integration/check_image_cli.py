@@ -72,8 +72,8 @@ with open(os.path.join(out, "looks10", "image.png"), "rb") as f:
     head = f.read(24)
 check(head[:8] == b"\x89PNG\r\n\x1a\n", "image.png is a PNG")
 w, hgt = struct.unpack(">II", head[16:24])
-# 70 + 2 x 800 + 90 + 30 wide, 50 + 264 + 70 high (emulator/image_tool.cpp's layout).
-check((w, hgt) == (1790, 384), f"image.png is {w} x {hgt}, want 1790 x 384")
+# Two 1000 x 400 panels side by side (emulator/image_tool.cpp: radar image and optical preview).
+check((w, hgt) == (2000, 400), f"image.png is {w} x {hgt}, want 2000 x 400")
 
 meta1, rows1 = image(1, os.path.join(out, "looks1"))
 cv1, n1 = grass_cv(rows1)
