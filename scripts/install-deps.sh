@@ -16,6 +16,9 @@ PACKAGES=(
   python3 python3-can python3-canmatrix python3-pymodbus python3-serial-asyncio mbpoll socat
   # the Python module radar_emu (python/, optional at build time) and its tests
   python3-dev pybind11-dev python3-numpy python3-pytest
+  # MPI scale-out of rcs / profile (emulator/mpi_work.hpp, docs/cluster.md; optional at build
+  # time, CMake RADAR_EMU_MPI) and its mpirun test
+  openmpi-bin libopenmpi-dev
 )
 # Not installed here, needed only to regenerate the full-wave table tests/data/openems_plate
 # (scripts/openems_rcs.py; the tests read the checked-in table):
