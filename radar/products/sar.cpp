@@ -412,8 +412,19 @@ SarImage backproject(const SarParams& p, const SarCompressed& rc, const SarImage
   SarImage img;
   img.grid = grid;
   img.pixels.resize(acc.size());
-  for (std::size_t i = 0; i < acc.size(); ++i)
-    img.pixels[i] = wsum[i] > 0.0 ? std::complex<float>(acc[i] / wsum[i]) : std::complex<float>{};
+  // Basebanded to the zero-Doppler range R0 of each pixel (its distance from the track line).
+  for (std::size_t row = 0; row < grid.rows; ++row)
+    for (std::size_t col = 0; col < grid.cols; ++col) {
+      const std::size_t i = row * grid.cols + col;
+      if (!(wsum[i] > 0.0))
+        continue;
+      const glm::dvec3 x = grid.origin_m +
+                           static_cast<double>(row) * grid.azimuth_spacing_m * track +
+                           static_cast<double>(col) * grid.ground_range_spacing_m * look;
+      const glm::dvec3 d = x - p.start_position_m;
+      const double r0 = glm::length(d - glm::dot(d, track) * track);
+      img.pixels[i] = std::complex<float>(acc[i] / wsum[i] * std::polar(1.0, -k2 * r0));
+    }
   img.looks = std::move(looks);
   return img;
 }

@@ -35,14 +35,17 @@
 // Backprojection (Soumekh, Synthetic Aperture Radar Signal Processing, 1999, sec. 4.5; Cumming &
 // Wong 2005, sec. 1.4): pixel X gets
 //   I(X) = sum_i w_i c_i(R_i) exp(+j 4 pi R_i / lambda) (4 pi)^(3/2) R_i^2 / (sqrt(P_t) G_i
-//          lambda) / sum_i w_i,   R_i = |P_i - X|,
-// over the pulses whose line of sight to X is within +-Theta/2 of broadside (Theta: the
-// processed integration angle; azimuth resolution 0.886 lambda / (2 Theta) for w = 1), with
-// w_i = 1 or Hamming in the pulse's angle over Theta, c_i the range-compressed pulse read by
-// linear interpolation after an FFT upsampling by `upsample`. So a point scatterer at X images to
-// its amplitude A (peak |I|^2 = sigma) and a distributed one of backscatter coefficient sigma0 to
-// a mean intensity sigma0 rho_r_ground rho_a (rho = c/(2B) / sin(incidence), lambda / (2 Theta):
-// the integral of the unweighted impulse response's |h|^2 over the ground).
+//          lambda) / sum_i w_i * exp(-j 4 pi R0(X) / lambda),   R_i = |P_i - X|,
+// (the last factor basebands the image to each pixel's zero-Doppler range R0, its distance from
+// the track: a point target's pixels then carry the phase -4 pi R0_T / lambda, as in a
+// zero-Doppler SLC, instead of the carrier's ramp, curved in ground range, which no pixel grid
+// samples without aliasing) over the pulses whose line of sight to X is within +-Theta/2 of
+// broadside (Theta: the processed integration angle; azimuth resolution 0.886 lambda / (2 Theta)
+// for w = 1), with w_i = 1 or Hamming in the pulse's angle over Theta, c_i the range-compressed
+// pulse read by linear interpolation after an FFT upsampling by `upsample`. So a point scatterer at
+// X images to its amplitude A (peak |I|^2 = sigma) and a distributed one of backscatter coefficient
+// sigma0 to a mean intensity sigma0 rho_r_ground rho_a (rho = c/(2B) / sin(incidence), lambda / (2
+// Theta): the integral of the unweighted impulse response's |h|^2 over the ground).
 //
 // Offline: these functions allocate and plan FFTs; they throw std::invalid_argument for bad input.
 // synthesise_* write pulses [begin, end) of a preallocated raw matrix, so that ranks or threads
