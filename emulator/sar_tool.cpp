@@ -32,6 +32,7 @@
 #include "radar/em/sbr.hpp"
 #include "radar/products/irf.hpp"
 #include "radar/products/sar.hpp"
+#include "radar/products/sar_terrain.hpp"
 #include "scene/scene.hpp"
 #include "scene/targets.hpp"
 
@@ -630,55 +631,20 @@ int run_sar_tool(const SarToolOptions& o) {
   std::size_t shadowed = 0;
   if (c.clutter && c.ground_material != "none") {
     const auto t0 = Clock::now();
-    const cl::TerrainMaterial* tm = cl::find_terrain_material(c.ground_material);
-    const std::vector<cl::SurfaceSpec> specs{cl::resolve_surface(*tm, p.carrier_hz)};
-    const cl::Sigma0Table table(specs, cl::Sigma0Model::kTotal, p.carrier_hz);
-    const cl::Sigma0Table::Pol tpol = c.pol == rd::Polarisation::kHH   ? cl::Sigma0Table::kHH
-                                      : c.pol == rd::Polarisation::kVV ? cl::Sigma0Table::kVV
-                                      : c.pol == rd::Polarisation::kHV ? cl::Sigma0Table::kHV
-                                                                       : cl::Sigma0Table::kVH;
-    cl::SpeckleSpec speckle;
-    speckle.seed = c.speckle_seed;
-    const double cell = c.clutter_cell_m;
     // Cells over the image plus the beam's reach beyond it along track and a margin in range.
-    const double a0 = -0.5 * c.image_width_m - 40.0, a1 = 0.5 * c.image_width_m + 40.0;
+    rd::TerrainCellSpec ts;
+    ts.cell_m = c.clutter_cell_m;
+    const double reach = far * std::tan(1.58 * p.azimuth_beamwidth_rad) + 2.0;
+    const double a0 = -0.5 * c.image_width_m - reach, a1 = 0.5 * c.image_width_m + reach;
     const double r0 = g_near - c.ground_centre_m - 20.0, r1 = g_far - c.ground_centre_m + 20.0;
-    const auto na = static_cast<std::size_t>((a1 - a0) / cell) + 1;
-    const auto nr = static_cast<std::size_t>((r1 - r0) / cell) + 1;
-    cells.reserve(na * nr);
-    std::uint64_t index = 0;
-    for (std::size_t i = 0; i < na; ++i) {
-      for (std::size_t j = 0; j < nr; ++j, ++index) {
-        const glm::dvec3 xy = (a0 + static_cast<double>(i) * cell) * tdir +
-                              (r0 + static_cast<double>(j) * cell) * ldir;
-        sc::Ray down{xy + glm::dvec3(0, 0, 1000.0), {0, 0, -1}, 0.0, 3000.0};
-        sc::Hit hit;
-        if (!scene.intersect(down, hit) || tracer.is_target(hit.object_id))
-          continue;
-        glm::dvec3 n = hit.normal;
-        if (n.z < 0)
-          n = -n;
-        const glm::dvec3 radar = broadside_platform(p, hit.position_m);
-        const glm::dvec3 to = radar - hit.position_m;
-        const double dist = glm::length(to);
-        const double cos_inc = glm::dot(n, to / dist);
-        if (cos_inc <= 0.0) {
-          ++shadowed;
-          continue;
-        }
-        sc::Ray up{hit.position_m + 0.01 * n, to / dist, 0.0, dist};
-        if (scene.occluded(up)) {
-          ++shadowed;
-          continue;
-        }
-        const double s0 = static_cast<double>(table.lookup(0, tpol, cos_inc));
-        const cl::SpeckleSample s = cl::speckle_sample(speckle, index);
-        const double area = cell * cell / std::max(n.z, 1e-3);
-        cells.push_back(
-            {hit.position_m, std::polar(std::sqrt(s0 * area * static_cast<double>(s.intensity)),
-                                        static_cast<double>(s.phase_rad))});
-      }
-    }
+    ts.origin_m = a0 * tdir + r0 * ldir;
+    ts.along = static_cast<std::size_t>((a1 - a0) / ts.cell_m) + 1;
+    ts.across = static_cast<std::size_t>((r1 - r0) / ts.cell_m) + 1;
+    ts.polarisation = c.pol;
+    ts.speckle.seed = c.speckle_seed;
+    rd::TerrainCells tc = rd::terrain_cells(scene, tracer, p, ts);
+    cells = std::move(tc.cells);
+    shadowed = tc.shadowed;
     trace_s += seconds_since(t0);
   }
 

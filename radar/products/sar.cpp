@@ -171,42 +171,62 @@ SarRaw make_raw(const SarParams& p) {
 void add_echoes(const SarParams& p, std::span<const SarEcho> echoes,
                 std::span<const glm::dvec3> directions, std::span<std::complex<float>> row) {
   require(echoes.size() == directions.size(), "echoes and directions differ in size");
+  std::vector<std::complex<double>> acc(row.size());
+  add_echoes_accumulate(p, echoes, directions, acc);
+  finish_pulse(p, acc, row);
+}
+
+void add_echoes_accumulate(const SarParams& p, std::span<const SarEcho> echoes,
+                           std::span<const glm::dvec3> directions,
+                           std::span<std::complex<double>> acc) {
+  require(echoes.size() == directions.size(), "echoes and directions differ in size");
   const double lambda = sar_wavelength_m(p), fs = p.sample_rate_hz, dt = 1.0 / fs;
   const double k_rate = p.bandwidth_hz / p.pulse_duration_s;  // K [Hz/s]
-  const double half_t = p.pulse_duration_s / 2;
+  const double half_t = p.pulse_duration_s / 2, flat_t = half_t - kSarPulseEdge * p.pulse_duration_s;
   const double h = static_cast<double>((sar_chirp_samples(p) - 1) / 2);
   const double scale = std::sqrt(p.transmit_power_w) * lambda / std::pow(4.0 * kPi, 1.5);
-  const auto n_samples = static_cast<std::ptrdiff_t>(row.size());
-  // Phase recursion (second difference of pi K x^2 is the constant 2 pi K dt^2); restarted
-  // exactly every kExact samples so rounding cannot build up.
+  const auto n_samples = static_cast<std::ptrdiff_t>(acc.size());
+  // exp(j pi K (t_n - tau)^2) = exp(j pi K t_n^2) exp(-j 2 pi K tau t_n) exp(j pi K tau^2): the
+  // first factor is common to every echo (finish_pulse applies it), the second a linear phase
+  // (one complex multiplication per sample), restarted exactly every kExact samples.
   constexpr std::ptrdiff_t kExact = 64;
-  const std::complex<double> second = std::polar(1.0, 2.0 * kPi * k_rate * dt * dt);
   for (std::size_t e = 0; e < echoes.size(); ++e) {
     const SarEcho& echo = echoes[e];
     if (!(echo.range_m > 0.0) || !std::isfinite(echo.range_m))
       continue;
     const double gain = sar_two_way_gain(p, directions[e]);
-    const std::complex<double> amp =
-        echo.amplitude_m * (scale * gain / (echo.range_m * echo.range_m));
     const double tau = 2.0 * (echo.range_m - p.near_range_m) / kC;  // relative to gate 0
+    const std::complex<double> amp = echo.amplitude_m *
+                                     (scale * gain / (echo.range_m * echo.range_m)) *
+                                     std::polar(1.0, kPi * k_rate * tau * tau);
     auto n0 = static_cast<std::ptrdiff_t>(std::ceil((tau - half_t) * fs + h));
     auto n1 = static_cast<std::ptrdiff_t>(std::floor((tau + half_t) * fs + h));
     n0 = std::max<std::ptrdiff_t>(n0, 0);
     n1 = std::min<std::ptrdiff_t>(n1, n_samples - 1);
-    std::complex<double> z, w;
+    const double omega = -2.0 * kPi * k_rate * tau * dt;
+    const std::complex<double> w = std::polar(1.0, omega);
+    std::complex<double> z;
     for (std::ptrdiff_t n = n0; n <= n1; ++n) {
-      if ((n - n0) % kExact == 0) {
-        const double x = (static_cast<double>(n) - h) * dt - tau;
-        z = std::polar(1.0, kPi * k_rate * x * x);
-        w = std::polar(1.0, kPi * k_rate * (2.0 * x * dt + dt * dt));
-      }
-      const double x = (static_cast<double>(n) - h) * dt - tau;
-      const std::complex<double> v = amp * z * envelope(x, p.pulse_duration_s);
-      row[static_cast<std::size_t>(n)] +=
-          std::complex<float>(static_cast<float>(v.real()), static_cast<float>(v.imag()));
+      const double t = (static_cast<double>(n) - h) * dt;
+      if ((n - n0) % kExact == 0)
+        z = amp * std::polar(1.0, -2.0 * kPi * k_rate * tau * t);
+      const double x = std::abs(t - tau);
+      acc[static_cast<std::size_t>(n)] += x <= flat_t ? z : z * envelope(x, p.pulse_duration_s);
       z *= w;
-      w *= second;
     }
+  }
+}
+
+void finish_pulse(const SarParams& p, std::span<const std::complex<double>> acc,
+                  std::span<std::complex<float>> row) {
+  require(acc.size() == row.size(), "accumulator and row differ in size");
+  const double dt = 1.0 / p.sample_rate_hz, k_rate = p.bandwidth_hz / p.pulse_duration_s;
+  const double h = static_cast<double>((sar_chirp_samples(p) - 1) / 2);
+  for (std::size_t n = 0; n < acc.size(); ++n) {
+    if (acc[n] == std::complex<double>{})
+      continue;
+    const double t = (static_cast<double>(n) - h) * dt;
+    row[n] += std::complex<float>(acc[n] * std::polar(1.0, kPi * k_rate * t * t));
   }
 }
 
@@ -217,20 +237,34 @@ void synthesise_points(const SarParams& p, std::span<const PointScatterer> point
               raw.data.size() == raw.pulses * raw.samples,
           "raw matrix does not match the parameters");
   require(begin <= end && end <= p.pulses, "pulse range outside [0, pulses]");
+  require(points.size() < 0xffffffffull, "too many points");
   const double k = 2.0 * kPi / sar_wavelength_m(p);
-  const double far_m =
-      p.near_range_m + static_cast<double>(p.gates) * sar_gate_m(p) + p.pulse_duration_s * kC / 2;
+  const double far_m = p.near_range_m + static_cast<double>(p.gates) * sar_gate_m(p) +
+                       p.pulse_duration_s * kC / 2;
   const double near_m = p.near_range_m - p.pulse_duration_s * kC / 2;
+  // Points sorted along track: a pulse visits only those within its beam's reach (two-way gain
+  // >= 1e-3 of the peak: 1.58 azimuth beamwidths off boresight).
+  const glm::dvec3 track = sar_track_dir(p);
+  std::vector<std::pair<double, std::uint32_t>> order(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    order[i] = {glm::dot(points[i].position_m - p.start_position_m, track),
+                static_cast<std::uint32_t>(i)};
+  std::sort(order.begin(), order.end());
+  const double reach = far_m * std::tan(std::min(1.58 * p.azimuth_beamwidth_rad, 1.5)) + 1.0;
   tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(begin, end, 4),
-      [&](const tbb::blocked_range<std::size_t>& r) {
+      tbb::blocked_range<std::size_t>(begin, end, 4), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<SarEcho> echoes;
         std::vector<glm::dvec3> dirs;
+        std::vector<std::complex<double>> acc(raw.samples);
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
           const glm::dvec3 pos = sar_platform_m(p, sar_pulse_time_s(p, i));
+          const double along = glm::dot(pos - p.start_position_m, track);
+          auto it = std::lower_bound(order.begin(), order.end(),
+                                     std::pair<double, std::uint32_t>{along - reach, 0});
           echoes.clear();
           dirs.clear();
-          for (const PointScatterer& s : points) {
+          for (; it != order.end() && it->first <= along + reach; ++it) {
+            const PointScatterer& s = points[it->second];
             const glm::dvec3 d = s.position_m - pos;
             const double range = glm::length(d);
             if (range < near_m || range > far_m)
@@ -241,7 +275,9 @@ void synthesise_points(const SarParams& p, std::span<const PointScatterer> point
             echoes.push_back({s.amplitude_m * std::polar(1.0, -2.0 * k * range), range});
             dirs.push_back(u);
           }
-          add_echoes(p, echoes, dirs, std::span(raw.data).subspan(i * raw.samples, raw.samples));
+          std::fill(acc.begin(), acc.end(), std::complex<double>{});
+          add_echoes_accumulate(p, echoes, dirs, acc);
+          finish_pulse(p, acc, std::span(raw.data).subspan(i * raw.samples, raw.samples));
         }
       });
 }

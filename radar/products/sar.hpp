@@ -122,6 +122,15 @@ struct SarRaw {
 void add_echoes(const SarParams& p, std::span<const SarEcho> echoes,
                 std::span<const glm::dvec3> directions, std::span<std::complex<float>> row);
 
+/// The same in two steps, for many echoes of one pulse: accumulate their linear-phase parts into
+/// `acc` (sar_raw_samples long, double precision), then finish_pulse() applies the chirp's common
+/// quadratic phase and adds the pulse to `row`.
+void add_echoes_accumulate(const SarParams& p, std::span<const SarEcho> echoes,
+                           std::span<const glm::dvec3> directions,
+                           std::span<std::complex<double>> acc);
+void finish_pulse(const SarParams& p, std::span<const std::complex<double>> acc,
+                  std::span<std::complex<float>> row);
+
 /// A point scatterer fixed in the world (its path phase from its range): the test's and the
 /// clutter's building block. amplitude_m: sqrt(sigma) times any fixed phase (speckle).
 struct PointScatterer {
