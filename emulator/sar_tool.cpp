@@ -718,11 +718,15 @@ int run_sar_tool(const SarToolOptions& o) {
       const double v_r = glm::dot(t.velocity_mps, glm::normalize(t.position_m - radar));
       j["radial_velocity_mps"] = v_r;
       j["predicted_azimuth_shift_m"] = -range * v_r / c.speed_mps;
+      jt.push_back(j);
       continue;
     }
-    if (row < 0 || col < 0 || row >= static_cast<double>(grid.rows) ||
-        col >= static_cast<double>(grid.cols))
+    // Extended targets have no impulse response to measure.
+    if (!is_trihedral(t.spec.kind) || row < 0 || col < 0 || row >= static_cast<double>(grid.rows) ||
+        col >= static_cast<double>(grid.cols)) {
+      jt.push_back(j);
       continue;
+    }
     rd::IrfOptions io;
     io.chip = 96;
     io.quadratic_phase_row_rad = rd::sar_azimuth_quadratic_phase(p, range, grid.azimuth_spacing_m);

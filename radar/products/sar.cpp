@@ -182,7 +182,8 @@ void add_echoes_accumulate(const SarParams& p, std::span<const SarEcho> echoes,
   require(echoes.size() == directions.size(), "echoes and directions differ in size");
   const double lambda = sar_wavelength_m(p), fs = p.sample_rate_hz, dt = 1.0 / fs;
   const double k_rate = p.bandwidth_hz / p.pulse_duration_s;  // K [Hz/s]
-  const double half_t = p.pulse_duration_s / 2, flat_t = half_t - kSarPulseEdge * p.pulse_duration_s;
+  const double half_t = p.pulse_duration_s / 2,
+               flat_t = half_t - kSarPulseEdge * p.pulse_duration_s;
   const double h = static_cast<double>((sar_chirp_samples(p) - 1) / 2);
   const double scale = std::sqrt(p.transmit_power_w) * lambda / std::pow(4.0 * kPi, 1.5);
   const auto n_samples = static_cast<std::ptrdiff_t>(acc.size());
@@ -239,8 +240,8 @@ void synthesise_points(const SarParams& p, std::span<const PointScatterer> point
   require(begin <= end && end <= p.pulses, "pulse range outside [0, pulses]");
   require(points.size() < 0xffffffffull, "too many points");
   const double k = 2.0 * kPi / sar_wavelength_m(p);
-  const double far_m = p.near_range_m + static_cast<double>(p.gates) * sar_gate_m(p) +
-                       p.pulse_duration_s * kC / 2;
+  const double far_m =
+      p.near_range_m + static_cast<double>(p.gates) * sar_gate_m(p) + p.pulse_duration_s * kC / 2;
   const double near_m = p.near_range_m - p.pulse_duration_s * kC / 2;
   // Points sorted along track: a pulse visits only those within its beam's reach (two-way gain
   // >= 1e-3 of the peak: 1.58 azimuth beamwidths off boresight).
@@ -252,7 +253,8 @@ void synthesise_points(const SarParams& p, std::span<const PointScatterer> point
   std::sort(order.begin(), order.end());
   const double reach = far_m * std::tan(std::min(1.58 * p.azimuth_beamwidth_rad, 1.5)) + 1.0;
   tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(begin, end, 4), [&](const tbb::blocked_range<std::size_t>& r) {
+      tbb::blocked_range<std::size_t>(begin, end, 4),
+      [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<SarEcho> echoes;
         std::vector<glm::dvec3> dirs;
         std::vector<std::complex<double>> acc(raw.samples);

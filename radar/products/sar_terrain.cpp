@@ -45,8 +45,8 @@ TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, c
     if (!materials[i].terrain_catalogue)
       continue;
     row[i] = static_cast<int>(specs.size());
-    specs.push_back(clutter::resolve_surface(*clutter::find_terrain_material(materials[i].name),
-                                             p.carrier_hz));
+    specs.push_back(
+        clutter::resolve_surface(*clutter::find_terrain_material(materials[i].name), p.carrier_hz));
   }
   TerrainCells out;
   if (specs.empty())
