@@ -26,6 +26,7 @@
 #endif
 
 #include "emulator/canvas.hpp"
+#include "emulator/charts.hpp"
 #include "radar/clutter/speckle.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "radar/constants.hpp"
@@ -749,6 +750,7 @@ int run_sar_tool(const SarToolOptions& o) {
       j["range_cut_db"] = r.range.power_db;
       j["azimuth_cut_db"] = r.azimuth.power_db;
       j["cut_step_px"] = 1.0 / static_cast<double>(io.oversample);
+      j["sin_incidence"] = sin_inc;
       if (t.spec.kind == sc::TargetKind::kTrihedralSquare)
         j["rcs_theory_dbsm"] = db10(12.0 * rd::kPi * std::pow(t.spec.a_m, 4) / (lambda * lambda));
       else if (t.spec.kind == sc::TargetKind::kTrihedralTriangular)
@@ -818,6 +820,42 @@ int run_sar_tool(const SarToolOptions& o) {
   title << "radar-emu sar: " << p.carrier_hz / 1e9 << " GHz, B " << p.bandwidth_hz / 1e6
         << " MHz, incidence " << p.incidence_rad / kDeg << " deg, " << c.pol_name;
   write_png(img, title.str(), (dir / "image.png").string());
+
+  // The impulse response of the first analysed trihedral: range and azimuth cuts, dB.
+  for (const auto& t : jt) {
+    if (!t.contains("range_cut_db"))
+      continue;
+    LineChart chart;
+    chart.title = "SAR impulse response, " + t["name"].get<std::string>() + " (" +
+                  (c.taper == rd::SarTaper::kNone ? "unweighted" : "Hamming") + ")";
+    chart.x_label = "offset from the peak [resolution cells c/(2B), lambda/(2 Theta)]";
+    chart.y_label = "power [dB]";
+    chart.y_min = -70.0;
+    chart.y_max = 3.0;
+    const double step = t["cut_step_px"].get<double>();
+    for (const char* axis : {"range", "azimuth"}) {
+      const auto cut = t[std::string(axis) + "_cut_db"].get<std::vector<double>>();
+      const std::size_t k =
+          static_cast<std::size_t>(std::max_element(cut.begin(), cut.end()) - cut.begin());
+      // Pixels to resolution cells: ground-range pixels through the incidence, azimuth pixels.
+      const double cell_px =
+          std::string(axis) == "range"
+              ? rho_r / t["sin_incidence"].get<double>() / grid.ground_range_spacing_m
+              : rho_a / grid.azimuth_spacing_m;
+      Series se;
+      se.label = axis;
+      for (std::size_t i = 0; i < cut.size(); ++i) {
+        const double x = (static_cast<double>(i) - static_cast<double>(k)) * step / cell_px;
+        if (std::abs(x) <= 25.0) {
+          se.x.push_back(x);
+          se.y.push_back(std::max(cut[i], -70.0));
+        }
+      }
+      chart.series.push_back(std::move(se));
+    }
+    write_line_chart_png(chart, dir / "irf.png");
+    break;
+  }
 
   nlohmann::json j;
   j["config"] = o.config;

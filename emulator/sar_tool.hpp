@@ -9,8 +9,9 @@
 // terrain from fixed ground cells (sigma0 of the clutter models at the cell's incidence times its
 // speckle sample, shadowed cells left out); then range compression and backprojection
 // (radar/products/sar.hpp). Outputs in the output directory: raw.tif (complex raw data, GCPs),
-// image.tif (focused complex image, georeferenced), image.png (detected, dB, scale bar) and
-// sar.json (parameters, timings, point-target measurements).
+// image.tif (focused complex image, georeferenced), image.png (detected, dB, scale bar),
+// sar.json (parameters, timings, point-target measurements) and, when a static trihedral is in
+// the image, irf.png (its range and azimuth impulse-response cuts).
 
 #include <string>
 
