@@ -22,6 +22,7 @@
 #include "emulator/atten_tool.hpp"
 #include "emulator/cli_checks.hpp"
 #include "emulator/closed_loop.hpp"
+#include "emulator/image_tool.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/sar_tool.hpp"
 #include "emulator/scenario.hpp"
@@ -493,6 +494,8 @@ int main(int argc, char** argv) {
       ->check(emu::output_file({".glb", ".gltf", ".obj", ".stl"}));
   emu::SceneCommands scene_tools;  // scene gen | info | preview (emulator/scene_tool.hpp)
   emu::add_scene_commands(*scene_cmd, scene_tools);
+  emu::ImageCommand image_tool;  // image (emulator/image_tool.hpp)
+  emu::add_image_command(app, image_tool);
 
   // rcs / profile: options are kept as text and parsed by the tool, so errors name the option.
   struct SweepText {
@@ -808,6 +811,8 @@ int main(int argc, char** argv) {
       return target_command(target_kind, spec, target_out, *target, max_triangles);
     if (const auto scene_status = emu::run_scene_command(scene_tools))
       return *scene_status;
+    if (const auto image_status = emu::run_image_command(image_tool))
+      return *image_status;
     if (rcs->parsed()) {
       rcs_opt.freqs_hz = frequencies(rcs_text);
       rcs_opt.theta_deg = emu::parse_sweep(rcs_text.theta, "--theta-deg");

@@ -203,6 +203,15 @@ BAD = [
     (["atten", "--freq-hz", "1e10:2e10:3", "--plot", os.path.join(d, "a.jpg")],
      "cannot write a '.jpg' file"),
     (["atten", "--freq-hz", "1e10", "--out", no_dir + "/a.csv"], "cannot open for writing"),
+    # image (the EV image of examples/ev_radar_94ghz.toml)
+    (["image", "--looks", "0"], "--looks: Value 0 not in range 1 to 1000"),
+    (["image", "--time-s", "-1"], "--time-s: -1 is outside [0, 1e+06] s"),
+    (["image", "--optical-scale", "0"], "--optical-scale: Value 0 not in range 1 to 16"),
+    (["image", "--seed", "-3"], "--seed: '-3' is not a whole number"),
+    (["image", "--out", a_file + "/img"], "cannot create the output directory"),
+    (["image", os.path.join(d, "nope.toml")], "nope.toml"),
+    (["image", os.path.join(src, "examples", "ev_radar_94ghz.toml"), "--time-s", "100",
+      "--out", os.path.join(d, "img")], "--time-s: the ownship at t = 100 s is at height -137.0 m"),
     # sigma0
     (["sigma0", "--material", "grass", "--corr", "xpower", "--freq-hz", "1e10"],
      "--material excludes --corr"),
