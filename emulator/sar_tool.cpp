@@ -718,7 +718,41 @@ int run_sar_tool(const SarToolOptions& o) {
       // -R v_r / V (v_r > 0 receding).
       const double v_r = glm::dot(t.velocity_mps, glm::normalize(t.position_m - radar));
       j["radial_velocity_mps"] = v_r;
-      j["predicted_azimuth_shift_m"] = -range * v_r / c.speed_mps;
+      const double shift = -range * v_r / c.speed_mps;
+      j["predicted_azimuth_shift_m"] = shift;
+      // Where it imaged: the brightest pixel within +-15 m along track and +-10 m in ground range
+      // of the predicted place (its ground range where the platform passes its along-track place).
+      const double t_b = glm::dot(t.position_m - p.start_position_m, tdir) / c.speed_mps;
+      const glm::dvec3 at_b = t.position_m + t.velocity_mps * t_b;
+      const double col_b = glm::dot(at_b - grid.origin_m, ldir) / grid.ground_range_spacing_m;
+      const double row_p = glm::dot(at_b - grid.origin_m, tdir) / grid.azimuth_spacing_m +
+                           shift / grid.azimuth_spacing_m;
+      const auto span_r = static_cast<std::ptrdiff_t>(15.0 / grid.azimuth_spacing_m);
+      const auto span_c = static_cast<std::ptrdiff_t>(10.0 / grid.ground_range_spacing_m);
+      double best = -1.0;
+      std::ptrdiff_t br = -1, bc = -1;
+      for (std::ptrdiff_t r = std::llround(row_p) - span_r; r <= std::llround(row_p) + span_r; ++r)
+        for (std::ptrdiff_t cc = std::llround(col_b) - span_c; cc <= std::llround(col_b) + span_c;
+             ++cc) {
+          if (r < 0 || cc < 0 || r >= static_cast<std::ptrdiff_t>(grid.rows) ||
+              cc >= static_cast<std::ptrdiff_t>(grid.cols))
+            continue;
+          const double v = static_cast<double>(std::norm(
+              img.pixels[static_cast<std::size_t>(r) * grid.cols + static_cast<std::size_t>(cc)]));
+          if (v > best) {
+            best = v;
+            br = r;
+            bc = cc;
+          }
+        }
+      if (br >= 0) {
+        j["measured_azimuth_shift_m"] =
+            (static_cast<double>(br) - (row_p - shift / grid.azimuth_spacing_m)) *
+            grid.azimuth_spacing_m;
+        j["measured_ground_range_offset_m"] =
+            (static_cast<double>(bc) - col_b) * grid.ground_range_spacing_m;
+        j["peak_dbsm"] = db10(best);
+      }
       jt.push_back(j);
       continue;
     }

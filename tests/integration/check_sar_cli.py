@@ -15,6 +15,8 @@ reader, an independent tool):
   - gdalinfo reads image.tif as a CFloat32 GeoTIFF in a transverse Mercator at the scene anchor,
     its geotransform puts each trihedral's world position at the pixel the processing expected,
     and raw.tif as CFloat32 pulses x samples with ground control points;
+  - a trihedral receding at 1 m/s images -R v_r / V along track off its place (Raney 1971),
+    within 1 m (about a resolution cell);
   - image.png is a PNG.
 Usage: check_sar_cli.py RADAR_EMU SOURCE_DIR WORK_DIR"""
 import json
@@ -86,8 +88,24 @@ for taper in ("none", "hamming"):
     res_r, res_a = k * C / (2 * B), k * lam / (2 * theta)
     pslr = -42.7 if hamming else -13.26
     islr = islr_theory(hamming)
-    targets = j["point_targets"]
-    check(len(targets) == 3, f"{taper}: three point targets measured")
+    targets = [t for t in j["point_targets"] if "range_resolution_m" in t]
+    check(len(targets) == 3, f"{taper}: three static trihedrals measured")
+    # The mover: imaged -R v_r / V along track off its place (Raney 1971), R and v_r at the time
+    # the platform passes it, from the case's geometry (track on the +y side, flying +x).
+    mover = [t for t in j["point_targets"] if t["name"] == "mover"]
+    check(len(mover) == 1 and "measured_azimuth_shift_m" in mover[0], f"{taper}: the mover")
+    if mover and "measured_azimuth_shift_m" in mover[0]:
+        m = mover[0]
+        V = j["platform"]["speed_mps"]
+        x0, y_track = j["platform"]["start_position_m"][0], j["platform"]["start_position_m"][1]
+        tb = (m["position_m"][0] - x0) / V
+        yb = m["position_m"][1] - 1.0 * tb  # velocity (0, -1, 0) m/s
+        R = math.hypot(y_track - yb, H)
+        v_r = (y_track - yb) / R  # the unit line of sight from the radar, dotted with (0, -1, 0)
+        shift = -R * v_r / V
+        print(f"{taper} mover: shift {m['measured_azimuth_shift_m']:.2f} m (theory {shift:.2f})")
+        check(abs(m["measured_azimuth_shift_m"] - shift) < 1.0, f"{taper}: mover's azimuth shift")
+        check(abs(m["measured_ground_range_offset_m"]) < 2.5, f"{taper}: mover's range")
     for t in targets:
         w = f"{taper} {t['name']}"
         print(f"{w}: res {t['range_resolution_m']:.3f}/{t['azimuth_resolution_m']:.3f} m "
@@ -114,7 +132,7 @@ for taper in ("none", "hamming"):
     check("Transverse Mercator" in wkt and "43.6" in wkt, f"{taper}: image.tif CRS {wkt[:80]}")
     gt = info.get("geoTransform", [0] * 6)
     for t in targets:
-        x, y = t["position_m"][0], t["position_m"][1]
+        x, y = t["position_m"][0], t["position_m"][1]  # static: their place at every pulse
         # Invert X = gt0 + c gt1 + r gt2, Y = gt3 + c gt4 + r gt5 (pixel corners), then centres.
         det = gt[1] * gt[5] - gt[2] * gt[4]
         c = ((x - gt[0]) * gt[5] - (y - gt[3]) * gt[2]) / det - 0.5
