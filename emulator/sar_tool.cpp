@@ -661,8 +661,10 @@ int run_sar_tool(const SarToolOptions& o) {
   const glm::dmat3 w = rd::sar_world_from_antenna(p);
   double echo_s = 0.0;
   std::size_t target_echoes = 0;
-  if (!c.targets.empty()) {
-    for (std::size_t i = 0; i < p.pulses; ++i) {
+  // Pulses [begin, end) of the targets' echoes into the preallocated raw matrix (the clutter's
+  // synthesise_points takes the same range): a rank of a scale-out can run its share.
+  auto target_pulses = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
       const double t = rd::sar_pulse_time_s(p, i);
       const auto t0 = Clock::now();
       scene.set_time(t);
@@ -686,7 +688,9 @@ int run_sar_tool(const SarToolOptions& o) {
       rd::add_echoes(p, echoes, dirs, std::span(raw.data).subspan(i * raw.samples, raw.samples));
       echo_s += seconds_since(t1);
     }
-  }
+  };
+  if (!c.targets.empty())
+    target_pulses(0, p.pulses);
   const double raw_s = seconds_since(t_raw0);
 
   // --- image.
