@@ -27,7 +27,7 @@ bool positive(double x) {
   return std::isfinite(x) && x > 0.0;
 }
 
-// Hamming taper over u in [-1/2, 1/2] (Harris 1978, eq. 30a with the window centred).
+// Hamming taper over u in [-1/2, 1/2] (Harris 1978, the Hamming window, centred).
 double taper_weight(SarTaper t, double u) noexcept {
   if (t == SarTaper::kNone)
     return 1.0;

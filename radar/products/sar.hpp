@@ -14,26 +14,27 @@
 //
 // Echo. A scatterer of complex scattering amplitude A [m] (|A|^2 = sigma, phase exp(-j k L) of
 // its whole path L = 2R, radar/em/sbr.hpp's Contribution::amplitude) at range R gives the
-// demodulated voltage (radar equation, Skolnik, Introduction to Radar Systems, 3rd ed., 2001,
-// eq. 2.1, P_r = P_t G^2 lambda^2 sigma / ((4 pi)^3 R^4), as an amplitude into 1 ohm)
+// demodulated voltage (the radar equation's received power P_r = P_t G^2 lambda^2 sigma /
+// ((4 pi)^3 R^4), Richards, Fundamentals of Radar Signal Processing, 2nd ed., 2014, the
+// numerator of eq. 2.84 as in radar/sensor/sensor.cpp, as an amplitude into 1 ohm)
 //   s(t) = sqrt(P_t) G lambda / ((4 pi)^(3/2) R^2) A e((t - tau) / T) exp(j pi K (t - tau)^2),
-// tau = 2R/c, K = B/T, the linear FM (chirp) pulse centred on its delay, its envelope e a
+// tau = 2R/c, K = B/T, the linear FM (chirp) pulse centred on its delay (Cumming & Wong, Digital
+// Processing of Synthetic Aperture Radar Data, 2005, ch. 3), its envelope e a
 // rectangle with raised-cosine edges over kSarPulseEdge of T at each end (a transmitter's finite
 // rise time; it also keeps the sampled pulse free of the aliased spectral tails of a hard-edged
-// one, which would otherwise differ from pulse to pulse with the fractional delay) (Cumming & Wong,
-// Digital Processing of Synthetic Aperture Radar Data, 2005, eq. 4.1 and 3.31). The carrier phase
-// exp(-j 2 pi f_c tau) is A's own phase (sbr.hpp: exp(-j k L)); point scatterers given without a
-// path phase (PointScatterer) get it from their range here.
+// one, which would otherwise differ from pulse to pulse with the fractional delay). The carrier
+// phase exp(-j 2 pi f_c tau) is A's own phase (sbr.hpp: exp(-j k L)); point scatterers given
+// without a path phase (PointScatterer) get it from their range here.
 //
-// Range compression: the replica's matched filter conj(S(f)) (Cumming & Wong 2005, sec. 3.3),
+// Range compression: the replica's matched filter conj(S(f)) (Cumming & Wong 2005, ch. 3),
 // amplitude-equalised over the band, H(f) = conj(S(f)) / |S(f)|^2 W(f / B) on |f| <= B/2 (W: none
 // or Hamming, 0.54 + 0.46 cos(2 pi f / B), Harris, Proc. IEEE 66(1), 1978): the compressed
 // spectrum is then exactly the taper, without the Fresnel ripple of a chirp's spectrum (which
 // raises the sidelobes of a short chirp by a dB and more); normalised so that a point scatterer's
 // peak is its amplitude whatever the taper. Gate g is at slant range near_range + g c / (2 f_s).
 //
-// Backprojection (Soumekh, Synthetic Aperture Radar Signal Processing, 1999, sec. 4.5; Cumming &
-// Wong 2005, sec. 1.4): pixel X gets
+// Backprojection (time-domain correlation; Soumekh, Synthetic Aperture Radar Signal Processing
+// with MATLAB Algorithms, 1999; Cumming & Wong 2005, ch. 1): pixel X gets
 //   I(X) = sum_i w_i c_i(R_i) exp(+j 4 pi R_i / lambda) (4 pi)^(3/2) R_i^2 / (sqrt(P_t) G_i
 //          lambda) / sum_i w_i * exp(-j 4 pi R0(X) / lambda),   R_i = |P_i - X|,
 // (the last factor basebands the image to each pixel's zero-Doppler range R0, its distance from
@@ -138,7 +139,8 @@ struct PointScatterer {
   std::complex<double> amplitude_m{1.0, 0.0};
 };
 /// Synthesises pulses [begin, end) of the point scatterers into `raw` (added), threads over
-/// pulses (TBB). Scatterers outside the beam's -30 dB two-way contour are skipped.
+/// pulses (TBB). Scatterers where the two-way voltage gain is under 1e-3 of the peak (-60 dB in
+/// power) are skipped.
 void synthesise_points(const SarParams& p, std::span<const PointScatterer> points,
                        std::size_t begin, std::size_t end, SarRaw& raw);
 

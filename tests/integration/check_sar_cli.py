@@ -11,7 +11,8 @@ reader, an independent tool):
     within 1 dB of the same windows applied to the continuous sinc (Hamming: 0.54 sinc(x) +
     0.23 (sinc(x-1) + sinc(x+1))) integrated here by the midpoint rule; the peak within 0.25
     resolution cell of the trihedral's corner; integrated energy (unweighted) within 0.5 dB of
-    the square trihedral's sigma = 12 pi a^4 / lambda^2 (Knott, Shaeffer & Tuley 2004, Table 6.1);
+    the square trihedral's closed form sigma = 12 pi a^4 / lambda^2 on its axis (the canonical
+    targets of docs/validation.md);
   - gdalinfo reads image.tif as a CFloat32 GeoTIFF in a transverse Mercator at the scene anchor,
     its geotransform puts each trihedral's world position at the pixel the processing expected,
     and raw.tif as CFloat32 pulses x samples with ground control points;
