@@ -803,10 +803,11 @@ int main(int argc, char** argv) {
   };
   try {
     // Only the sweeps are split: N copies of another command would write the same files.
-    if (emu::mpi_work::launched_size() > 1 && !rcs->parsed() && !profile->parsed()) {
+    if (emu::mpi_work::launched_size() > 1 && !rcs->parsed() && !profile->parsed() &&
+        !sar->parsed()) {
       throw std::invalid_argument(
           "launched by mpirun as " + std::to_string(emu::mpi_work::launched_size()) +
-          " ranks: only rcs and profile split their work over MPI ranks; run this command "
+          " ranks: only rcs, profile and sar split their work over MPI ranks; run this command "
           "without mpirun");
     }
     if (run->parsed()) {

@@ -27,6 +27,7 @@
 
 #include "emulator/canvas.hpp"
 #include "emulator/charts.hpp"
+#include "emulator/mpi_work.hpp"
 #include "radar/clutter/speckle.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "radar/constants.hpp"
@@ -651,8 +652,13 @@ int run_sar_tool(const SarToolOptions& o) {
 
   // --- raw data: clutter cells, then the tracer's coherent returns per pulse.
   rd::SarRaw raw = rd::make_raw(p);
+  // Under mpirun the pulses split into one contiguous block a rank (docs/cluster.md): each rank
+  // synthesises its rows exactly as one process would, rank 0 gathers them and alone forms the
+  // image and writes. The clutter cells above are computed by every rank (setup, not split).
+  mpi_work::start();
+  const mpi_work::Block block = mpi_work::my_block(p.pulses);
   const auto t_cl = Clock::now();
-  rd::synthesise_points(p, cells, 0, p.pulses, raw);
+  rd::synthesise_points(p, cells, block.begin, block.end, raw);
   const double clutter_s = seconds_since(t_cl);
   std::vector<rd::Contribution> out(tracer.max_contributions());
   std::vector<rd::SarEcho> echoes;
@@ -660,7 +666,8 @@ int run_sar_tool(const SarToolOptions& o) {
   rd::TraceStats stats;
   const glm::dmat3 w = rd::sar_world_from_antenna(p);
   double echo_s = 0.0;
-  std::size_t target_echoes = 0;
+  // Per pulse, gathered with the raw rows: target echoes and rays traced.
+  std::vector<std::uint64_t> echoes_per_pulse(p.pulses, 0), rays_per_pulse(p.pulses, 0);
   // Pulses [begin, end) of the targets' echoes into the preallocated raw matrix (the clutter's
   // synthesise_points takes the same range): a rank of a scale-out can run its share.
   auto target_pulses = [&](std::size_t begin, std::size_t end) {
@@ -672,7 +679,9 @@ int run_sar_tool(const SarToolOptions& o) {
       pose.position_m = rd::sar_platform_m(p, t);
       pose.velocity_mps = p.velocity_mps;
       pose.world_from_antenna = w;
+      const std::uint64_t rays_before = stats.rays;
       const std::size_t n = tracer.trace(pose, out, stats);
+      rays_per_pulse[i] = stats.rays - rays_before;
       const auto t1 = Clock::now();
       trace_s += std::chrono::duration<double>(t1 - t0).count();
       echoes.clear();
@@ -684,13 +693,23 @@ int run_sar_tool(const SarToolOptions& o) {
         echoes.push_back({ct.amplitude, ct.range_m});
         dirs.push_back(w * rd::direction_from_azel({ct.azimuth_rad, ct.elevation_rad}));
       }
-      target_echoes += echoes.size();
+      echoes_per_pulse[i] = echoes.size();
       rd::add_echoes(p, echoes, dirs, std::span(raw.data).subspan(i * raw.samples, raw.samples));
       echo_s += seconds_since(t1);
     }
   };
   if (!c.targets.empty())
-    target_pulses(0, p.pulses);
+    target_pulses(block.begin, block.end);
+  mpi_work::gather_blocks(std::span(raw.data), raw.samples);
+  mpi_work::gather_blocks(std::span(echoes_per_pulse));
+  mpi_work::gather_blocks(std::span(rays_per_pulse));
+  if (!mpi_work::is_root())
+    return 0;
+  std::uint64_t target_echoes = 0, rays = 0;
+  for (std::size_t i = 0; i < p.pulses; ++i) {
+    target_echoes += echoes_per_pulse[i];
+    rays += rays_per_pulse[i];
+  }
   const double raw_s = seconds_since(t_raw0);
 
   // --- image.
@@ -940,7 +959,7 @@ int run_sar_tool(const SarToolOptions& o) {
                 {"speckle_seed", c.speckle_seed},
                 {"targets", c.targets.size()},
                 {"target_echoes", target_echoes},
-                {"rays", stats.rays},
+                {"rays", rays},
                 {"latitude_deg", c.latitude_deg},
                 {"longitude_deg", c.longitude_deg}};
   j["timing_s"] = {{"raw", raw_s},

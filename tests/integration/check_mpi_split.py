@@ -5,11 +5,13 @@ the files of one process (`radar-emu rcs ...` without mpirun): CSVs, statistics,
     multi-bounce paths (a trihedral), edge terms, --window-deg statistics and a plot, on 2 ranks;
   - the same on 3 ranks, and a 2-direction sweep on 3 ranks (one rank with nothing to do);
   - profile with an ISAR image over a phi sweep, on 2 ranks;
+  - sar (pulses split) on three trihedrals and on a grass field with speckle, on 2 ranks;
   - rank 0 alone prints (one summary), and a command that does not split (scene target) is
     refused under mpirun with a one-line error.
 Usage: check_mpi_split.py RADAR_EMU MPIEXEC WORK_DIR
 MPIEXEC is "none" for a build without MPI: the test is then skipped (exit 77)."""
 import filecmp
+import json
 import os
 import subprocess
 import sys
@@ -108,12 +110,41 @@ run(*prof_into(os.path.join(work, "prof_1")))
 mpirun_ok(2, *prof_into(os.path.join(work, "prof_2")))
 same_files(os.path.join(work, "prof_1"), os.path.join(work, "prof_2"), pnames, "profile on 2 ranks")
 
+# sar: the pulses split (three trihedrals, examples/sar_trihedrals.toml, and a grass field with
+# speckle): raw data, image, PNGs and the JSON but its timings equal one process's.
+src = os.environ.get("RADAR_EMU_SOURCE_DIR",
+                     os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
+sar_case = os.path.join(src, "examples", "sar_trihedrals.toml")
+with open(sar_case) as f:
+    # Coarse cells (5 m): the split, not the clutter, is under test; a few thousand cells.
+    field = f.read().replace('ground_material = "none"',
+                             'ground_material = "grass"\nclutter_cell_m = 5.0')
+field_case = os.path.join(work, "sar_field.toml")
+with open(field_case, "w") as f:
+    f.write(field)
+check(field.count('ground_material = "grass"') == 1, "sar: the field case has clutter")
+
+
+def sar_json(d):
+    with open(os.path.join(d, "sar.json")) as f:
+        j = json.load(f)
+    j.pop("timing_s", None)
+    return j
+
+
+for tag, case in (("sar", sar_case), ("sar_field", field_case)):
+    d1, d2 = os.path.join(work, f"{tag}_1"), os.path.join(work, f"{tag}_2")
+    run("sar", case, "--out", d1, "-q")
+    mpirun_ok(2, "sar", case, "--out", d2, "-q")
+    same_files(d1, d2, ["raw.tif", "image.tif", "image.png"], f"{tag} on 2 ranks")
+    check(sar_json(d1) == sar_json(d2), f"{tag} on 2 ranks: sar.json (but timings) differs")
+
 # A command that does not split its work is refused, on every rank, in one line each.
 r = mpirun(2, "scene", "target", "plate", "--a-m", "1", "--b-m", "1",
            "--out", os.path.join(work, "plate.obj"))
 check(r.returncode != 0, "scene target under mpirun -np 2: refused")
 errors = [ln for ln in r.stderr.splitlines() if ln.startswith("radar-emu: error")]
-check(len(errors) == 2 and all("only rcs and profile split" in e for e in errors),
+check(len(errors) == 2 and all("only rcs, profile and sar split" in e for e in errors),
       f"scene target under mpirun: one error line a rank, got {errors}")
 check(not os.path.exists(os.path.join(work, "plate.obj")), "scene target under mpirun: no file")
 
