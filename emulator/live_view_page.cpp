@@ -93,12 +93,19 @@ function drawBScope(m) {
   c.strokeStyle = TRUTH;
   c.lineWidth = 2;
   c.font = "11px monospace";
+  const labels = [];  // a label that would overlap one already drawn is left out
   for (const t of m.truth) {
     const x = xOf(t.azimuth_deg, lay), y = yOf(t.range_m, lay);
     c.beginPath();
     c.arc(x, y, 9, 0, 2 * Math.PI);
     c.stroke();
-    if (t.object) { c.fillStyle = "rgb(140,150,170)"; c.fillText(t.object, x + 12, y - 8); }
+    if (!t.object) continue;
+    const box = { x0: x + 12, y0: y - 18, x1: x + 12 + 7 * t.object.length, y1: y - 6 };
+    if (labels.some((b) => box.x0 < b.x1 && b.x0 < box.x1 && box.y0 < b.y1 && b.y0 < box.y1))
+      continue;
+    labels.push(box);
+    c.fillStyle = "rgb(140,150,170)";
+    c.fillText(t.object, x + 12, y - 8);
   }
   c.fillStyle = DET;
   for (const d of m.detections) {
