@@ -131,7 +131,8 @@ function drawTiming(m) {
                                 : "rgb(90,150,230)";
     if (v !== null && v !== undefined) c.fillRect(left, y, Math.max(1, px(v) - left), barH);
     c.fillStyle = INK;
-    c.fillText(fmt(v, 3) + " ms", left + 4, y + barH + 9 > H ? y + 15 : y + 15);
+    const xv = v !== null && v !== undefined ? px(v) : left;
+    c.fillText(fmt(v, 3) + " ms", Math.min(xv + 6, W - 80), y + 15);
   });
   const xb = Math.round(px(m.budget_ms));
   c.fillStyle = "rgb(230,60,60)";

@@ -236,8 +236,9 @@ struct Server::Impl {
   int listen_fd = -1;
   std::atomic<bool> stop{false};
   Counters counters;
-  std::vector<Client> clients;
-  std::string last_message;  // sent to each client as it connects
+  std::vector<Client> clients;  // at most max_clients (reserved at setup)
+  std::vector<pollfd> fds;      // max_clients + 1 (reserved: an idle server allocates nothing)
+  std::string last_message;     // sent to each client as it connects
   bool have_message = false;
 
   ~Impl() {
@@ -543,7 +544,6 @@ struct Server::Impl {
   }
 
   void main_loop() {
-    std::vector<pollfd> fds;
     std::string message;
     const auto interval = std::chrono::milliseconds(std::max(1, config.poll_interval_ms));
     auto next_source = Clock::now();
@@ -556,8 +556,9 @@ struct Server::Impl {
       }
       const auto wait =
           std::chrono::duration_cast<std::chrono::milliseconds>(next_source - Clock::now());
+      // At most 50 ms, so that a stop request is seen whatever the interval.
       (void)::poll(fds.data(), fds.size(),
-                   static_cast<int>(std::max<std::int64_t>(0, wait.count())));
+                   static_cast<int>(std::clamp<std::int64_t>(wait.count(), 0, 50)));
       const std::size_t polled = clients.size();
       for (std::size_t i = 0; i < polled; ++i) {
         Client& c = clients[i];
@@ -635,6 +636,8 @@ Server::Server(ServerConfig config) : impl_(std::make_unique<Impl>()) {
   }
   address_ = (c.host.find(':') != std::string::npos ? "[" + c.host + "]" : c.host) + ":" +
              std::to_string(port_);
+  impl_->clients.reserve(c.max_clients);
+  impl_->fds.reserve(c.max_clients + 1);
   thread_ = std::thread([this] { impl_->main_loop(); });
 }
 
