@@ -176,10 +176,10 @@ int run_ambiguity_tool(const AmbiguityToolOptions& o) {
   Heatmap map;
   map.title = std::string(o.train ? "coherent train of " + std::to_string(w.pulses) + " " : "") +
               "LFM, B " + std::to_string(w.bandwidth_hz / 1e6).substr(0, 6) + " MHz, T " +
-              std::to_string(t * 1e6).substr(0, 6) + " us: |chi| [dB]";
+              std::to_string(t * 1e6).substr(0, 6) + " us: ambiguity function |chi|";
   map.x_label = "delay [us]";
   map.y_label = o.train ? "Doppler [kHz]" : "Doppler [MHz]";
-  map.value_label = "dB";
+  map.value_label = "|chi| [dB]";
   for (double d : delays)
     map.x.push_back(d * 1e6);
   for (double f : dopplers)
@@ -193,7 +193,7 @@ int run_ambiguity_tool(const AmbiguityToolOptions& o) {
   // Cuts: computed vs the single-pulse closed form (train: the train's closed form itself).
   LineChart cuts;
   cuts.title = "cuts through the origin: computed and closed form (Richards eq. 4.98)";
-  cuts.x_label = o.train ? "delay [us] | Doppler x PRI" : "delay x B | Doppler x T";
+  cuts.x_label = o.train ? "delay [us] | Doppler x PRI [1]" : "delay x B | Doppler x T [1]";
   cuts.y_label = "|chi| [dB]";
   cuts.y_min = -o.dynamic_range_db;
   cuts.y_max = 3.0;
@@ -221,6 +221,7 @@ int run_ambiguity_tool(const AmbiguityToolOptions& o) {
     std::snprintf(line, sizeof line, "doppler_hz,%.9g,%.8g,%.8g\n", cut_dopplers[j], cut_f[j], cf);
     cuts_csv += line;
   }
+  s_delay_cf.dashed = s_dopp_cf.dashed = true;
   cuts.series = {s_delay, s_delay_cf, s_dopp, s_dopp_cf};
   write_line_chart_png(cuts, o.out_dir / "cuts.png");
   write_text(o.out_dir / "cuts.csv", cuts_csv);

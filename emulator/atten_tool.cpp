@@ -50,9 +50,8 @@ int run_atten_tool(const AttenToolOptions& o) {
       std::fprintf(f, "%.8g", r.veg);
     std::fprintf(f, "\n");
   }
-  const bool ok = std::ferror(f) == 0;
-  std::fclose(f);
-  if (!ok)
+  const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
+  if (std::fclose(f) != 0 || !ok)
     throw std::runtime_error(o.out_csv + ": write failed");
   if (!o.plot_png.empty() && rows.size() > 1) {
     LineChart chart;
@@ -62,13 +61,14 @@ int run_atten_tool(const AttenToolOptions& o) {
         o.dry_pressure_hpa, o.temperature_c, o.water_vapour_gm3, o.rain_mm_per_h, o.fog_gm3);
     chart.title = title;
     chart.x_label = "frequency [GHz]";
-    chart.y_label = "log10 of dB/km";
+    chart.y_label = "specific attenuation [dB/km]";
+    chart.log_y = true;
     auto series = [&](const char* label, double Row::*field) {
       Series s;
       s.label = label;
       for (const Row& r : rows) {
         s.x.push_back(r.f * 1e-9);
-        s.y.push_back(r.*field > 0.0 ? std::log10(r.*field) : std::nan(""));
+        s.y.push_back(r.*field > 0.0 ? r.*field : std::nan(""));
       }
       if (!s.y.empty())
         chart.series.push_back(std::move(s));

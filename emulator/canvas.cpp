@@ -69,9 +69,12 @@ void Canvas::line(int x0, int y0, int x1, int y1, Rgb c) noexcept {
   }
 }
 
-void Canvas::text(int x, int y, const std::string& s, Rgb c, int scale) {
-  // stb_easy_font returns quads: 4 vertices of 16 bytes (x, y, z floats, RGBA); vertex 0 is the
-  // top-left corner, vertex 2 the bottom-right.
+namespace {
+
+// The glyph quads of `s` (stb_easy_font: 4 vertices of 16 bytes, x, y, z floats and RGBA; vertex
+// 0 is the top-left corner, vertex 2 the bottom-right), as (x0, y0, x1, y1) at scale 1.
+template <class F>
+void for_each_quad(const std::string& s, F&& f) {
   std::array<char, 40000> buf{};
   std::array<char, 256> str{};
   std::strncpy(str.data(), s.c_str(), str.size() - 1);
@@ -80,9 +83,25 @@ void Canvas::text(int x, int y, const std::string& s, Rgb c, int scale) {
   for (int q = 0; q < quads; ++q) {
     float v[12];
     std::memcpy(v, buf.data() + static_cast<std::size_t>(q) * 64, sizeof v);
-    rect(x + scale * static_cast<int>(v[0]), y + scale * static_cast<int>(v[1]),
-         x + scale * static_cast<int>(v[8]) - 1, y + scale * static_cast<int>(v[9]) - 1, c);
+    f(static_cast<int>(v[0]), static_cast<int>(v[1]), static_cast<int>(v[8]),
+      static_cast<int>(v[9]));
   }
+}
+
+}  // namespace
+
+void Canvas::text(int x, int y, const std::string& s, Rgb c, int scale) {
+  for_each_quad(s, [&](int x0, int y0, int x1, int y1) {
+    rect(x + scale * x0, y + scale * y0, x + scale * x1 - 1, y + scale * y1 - 1, c);
+  });
+}
+
+void Canvas::text_up(int x, int y, const std::string& s, Rgb c, int scale) {
+  // Text point (u, v) (u along the line, v down) goes to (x + v, y + width - u).
+  const int w = text_width(s, scale);
+  for_each_quad(s, [&](int x0, int y0, int x1, int y1) {
+    rect(x + scale * y0, y + w - scale * x1, x + scale * y1 - 1, y + w - scale * x0 - 1, c);
+  });
 }
 
 int Canvas::text_width(const std::string& s, int scale) {

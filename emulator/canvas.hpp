@@ -21,7 +21,12 @@ class Canvas {
   void blit(const Canvas& src, int x, int y) noexcept;        ///< src's top-left at (x, y), clipped
   /// Text (stb_easy_font, about 6 x 12 pixels per character at scale 1), top-left at (x, y).
   void text(int x, int y, const std::string& s, Rgb c, int scale = 1);
+  /// The same text turned a quarter counter-clockwise (read bottom to top), the top-left of its
+  /// box at (x, y): text_height(scale) wide, text_width(s, scale) high.
+  void text_up(int x, int y, const std::string& s, Rgb c, int scale = 1);
   [[nodiscard]] static int text_width(const std::string& s, int scale = 1);
+  /// Height of a line of text, descenders included.
+  [[nodiscard]] static int text_height(int scale = 1) noexcept { return 10 * scale; }
   [[nodiscard]] int width() const noexcept { return w_; }
   [[nodiscard]] int height() const noexcept { return h_; }
   [[nodiscard]] const std::uint8_t* data() const noexcept { return px_.data(); }

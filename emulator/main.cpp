@@ -22,7 +22,9 @@
 #include "emulator/atten_tool.hpp"
 #include "emulator/cli_checks.hpp"
 #include "emulator/closed_loop.hpp"
+#include "emulator/image_tool.hpp"
 #include "emulator/live_view.hpp"
+#include "emulator/mpi_work.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/scenario.hpp"
 #include "emulator/scene_tool.hpp"
@@ -411,6 +413,8 @@ int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec sp
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Under mpirun, rcs and profile split their sweeps over the ranks (docs/cluster.md).
+  const emu::mpi_work::Scope mpi_scope;
   CLI::App app{"radar-emu: hardware-in-the-loop radar emulator (SBR physics on Embree)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "radar-emu 0.1.0");
@@ -558,6 +562,8 @@ int main(int argc, char** argv) {
       ->check(emu::output_file({".glb", ".gltf", ".obj", ".stl"}));
   emu::SceneCommands scene_tools;  // scene gen | info | preview (emulator/scene_tool.hpp)
   emu::add_scene_commands(*scene_cmd, scene_tools);
+  emu::ImageCommand image_tool;  // image (emulator/image_tool.hpp)
+  emu::add_image_command(app, image_tool);
 
   // rcs / profile: options are kept as text and parsed by the tool, so errors name the option.
   struct SweepText {
@@ -847,6 +853,13 @@ int main(int argc, char** argv) {
       emu::check_output_dir(path, opt->get_name());
   };
   try {
+    // Only the sweeps are split: N copies of another command would write the same files.
+    if (emu::mpi_work::launched_size() > 1 && !rcs->parsed() && !profile->parsed()) {
+      throw std::invalid_argument(
+          "launched by mpirun as " + std::to_string(emu::mpi_work::launched_size()) +
+          " ranks: only rcs and profile split their work over MPI ranks; run this command "
+          "without mpirun");
+    }
     if (run->parsed()) {
       return run_command(scenario_file, frames, out, realtime, print_scenario, quiet, rt_priority,
                          lock_memory, cpu, bus_args);
@@ -859,6 +872,8 @@ int main(int argc, char** argv) {
       return target_command(target_kind, spec, target_out, *target, max_triangles);
     if (const auto scene_status = emu::run_scene_command(scene_tools))
       return *scene_status;
+    if (const auto image_status = emu::run_image_command(image_tool))
+      return *image_status;
     if (rcs->parsed()) {
       rcs_opt.freqs_hz = frequencies(rcs_text);
       rcs_opt.theta_deg = emu::parse_sweep(rcs_text.theta, "--theta-deg");
@@ -926,7 +941,14 @@ int main(int argc, char** argv) {
       return emu::run_profile_tool(prof_opt);
     }
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "radar-emu: error: %s\n", e.what());
+    // Under mpirun every rank reports (a file missing on one node only must be heard); ranks
+    // other than 0 say which they are.
+    if (emu::mpi_work::is_root())
+      std::fprintf(stderr, "radar-emu: error: %s\n", e.what());
+    else
+      std::fprintf(stderr, "radar-emu: error (rank %d): %s\n", emu::mpi_work::launched_rank(),
+                   e.what());
+    emu::mpi_work::abort_job(1);  // under mpirun, after the split started: the others may wait
     return 1;
   }
   return 0;

@@ -50,25 +50,35 @@ BScope::BScope(const Scenario& s, std::uint64_t frames_planned)
   L.range_max_m = s.sensor.max_range_m;
   Canvas& c = canvas_;
   char label[64];
-  // Range grid every 500 m (labelled every km), azimuth grid every 2 deg.
-  for (double r = 0.0; r <= L.range_max_m + 1e-9; r += 500.0) {
-    const int y = L.y_of(r);
+  // Grids and labels at 1-2-5 steps (charts.hpp's ticks): range in km up the left, azimuth in
+  // deg along the bottom; the axis titles with their units.
+  const std::vector<double> range_km = nice_ticks(0.0, L.range_max_m / 1000.0, 6);
+  for (double r : range_km) {
+    const int y = L.y_of(r * 1000.0);
     c.rect(BScopeLayout::kLeft, y, BScopeLayout::kWidth - BScopeLayout::kRight - 1, y, kBScopeGrid);
-    if (std::fmod(r, 1000.0) < 1e-9) {
-      std::snprintf(label, sizeof label, "%.0f km", r / 1000.0);
-      c.text(8, y - 6, label, kBScopeInk, 2);
-    }
+    const std::string t = format_tick(r, range_km.size() > 1 ? range_km[1] - range_km[0] : 1.0);
+    c.text(BScopeLayout::kLeft - 8 - Canvas::text_width(t, 2), y - 6, t, kBScopeInk, 2);
   }
-  for (double a = std::ceil(L.azimuth_min_deg / 2.0) * 2.0; a <= L.azimuth_max_deg + 1e-9;
-       a += 2.0) {
+  const std::string range_title = "range [km]";
+  c.text_up(6,
+            (BScopeLayout::kTop + BScopeLayout::kHeight - BScopeLayout::kBottom -
+             Canvas::text_width(range_title, 2)) /
+                2,
+            range_title, kBScopeInk, 2);
+  const std::vector<double> az = nice_ticks(L.azimuth_min_deg, L.azimuth_max_deg, 8);
+  for (double a : az) {
     const int x = L.x_of(a);
     c.rect(x, BScopeLayout::kTop, x, BScopeLayout::kHeight - BScopeLayout::kBottom - 1,
            kBScopeGrid);
-    std::snprintf(label, sizeof label, "%+.0f", a);
-    c.text(x - 12, BScopeLayout::kHeight - BScopeLayout::kBottom + 8, label, kBScopeInk, 2);
+    std::snprintf(label, sizeof label, std::abs(a) < 1e-9 ? "0" : "%+g", a);
+    c.text(x - Canvas::text_width(label, 2) / 2, BScopeLayout::kHeight - BScopeLayout::kBottom + 8,
+           label, kBScopeInk, 2);
   }
-  c.text(BScopeLayout::kWidth / 2 - 120, BScopeLayout::kHeight - 18,
-         "azimuth [deg], right of boresight", kBScopeInk, 1);
+  const std::string az_title = "azimuth [deg], right of boresight";
+  c.text((BScopeLayout::kLeft + BScopeLayout::kWidth - BScopeLayout::kRight -
+          Canvas::text_width(az_title, 2)) /
+             2,
+         BScopeLayout::kHeight - 24, az_title, kBScopeInk, 2);
 }
 
 void BScope::add_frame(std::span<const io::icd::Detection> detections) noexcept {
@@ -136,8 +146,11 @@ void write_timing_png(const timing::StageProfiler& profiler, double period_s,
   for (std::size_t i = 0; i < n; ++i)
     frame.y[i] = static_cast<double>(frame_ns[i]) * 1e-6;
   stages.series.push_back(std::move(frame));
-  stages.series.push_back(
-      Series{"budget", {0.0, n > 1 ? static_cast<double>(n - 1) : 1.0}, {budget_ms, budget_ms}});
+  stages.series.push_back(Series{"budget",
+                                 {0.0, n > 1 ? static_cast<double>(n - 1) : 1.0},
+                                 {budget_ms, budget_ms},
+                                 false,
+                                 true});
   stages.y_min = 0.0;
   out.blit(render_line_chart(stages), 0, 0);
 
@@ -172,7 +185,7 @@ void write_timing_png(const timing::StageProfiler& profiler, double period_s,
   steps.x.push_back(top_ms);
   steps.y.push_back(0.0);
   hist.series.push_back(std::move(steps));
-  hist.series.push_back(Series{"budget", {budget_ms, budget_ms}, {0.0, count_max}});
+  hist.series.push_back(Series{"budget", {budget_ms, budget_ms}, {0.0, count_max}, false, true});
   hist.y_min = 0.0;
   out.blit(render_line_chart(hist), 0, kTimingPngHeight / 2);
   out.write_png(path);

@@ -1,6 +1,7 @@
 #include "emulator/rcs_tool.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <stdexcept>
 
 #include "emulator/charts.hpp"
+#include "emulator/mpi_work.hpp"
 #include "radar/constants.hpp"
 #include "radar/materials.hpp"
 #include "radar/products/fluctuation.hpp"
@@ -64,6 +66,15 @@ struct FileCloser {
   void operator()(FILE* f) const noexcept { std::fclose(f); }
 };
 using File = std::unique_ptr<FILE, FileCloser>;
+
+// Flushes and closes a written file: an error buffered until then (a full disk, /dev/full) is a
+// failed write, not a silent empty file.
+void close_or_throw(File& f, const std::string& path) {
+  const bool flushed = std::fflush(f.get()) == 0 && std::ferror(f.get()) == 0;
+  const bool closed = std::fclose(f.release()) == 0;
+  if (!flushed || !closed)
+    throw std::runtime_error(path + ": write failed");
+}
 
 double db_of_power(double p) {
   return p > 0.0 ? 10.0 * std::log10(p) : -400.0;
@@ -119,6 +130,21 @@ void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
   total.edges_guarded += one.edges_guarded;
   for (std::size_t b = 0; b <= static_cast<std::size_t>(radar::kMaxRcsBounces); ++b)
     total.paths_by_bounce[b] += one.paths_by_bounce[b];
+}
+
+// Adds a sweep's counters to `total`: this rank's `mine`; on rank 0 of an MPI split, every
+// rank's, gathered one record a rank and added in rank order (integers: the same sum as one
+// process).
+void add_gathered_stats(radar::RcsStats& total, const radar::RcsStats& mine) {
+  std::vector<radar::RcsStats> per_rank(static_cast<std::size_t>(mpi_work::size()));
+  per_rank[static_cast<std::size_t>(mpi_work::rank())] = mine;
+  mpi_work::gather_blocks(std::span<radar::RcsStats>(per_rank));  // one item a rank
+  if (!mpi_work::is_root()) {
+    add_stats(total, mine);
+    return;
+  }
+  for (const radar::RcsStats& one : per_rank)
+    add_stats(total, one);
 }
 
 // Tubes still bouncing at the cap: the return may still be growing (a cavity).
@@ -195,10 +221,22 @@ struct ToolTarget {
         scene(loaded.description),
         engine(scene, loaded.surfaces,
                rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg)) {
+    if (!mpi_work::is_root())
+      return;  // under mpirun, rank 0 alone prints (every rank loads the same target)
     print_target(loaded, engine, quiet);
     warn_electrical_size(engine, min_freq_hz);
   }
 };
+
+// Starts the MPI split of a sweep of `items` work items (nothing in one process) and says, on
+// rank 0 unless quiet, how the ranks share them.
+void start_split(std::size_t items, const char* what, bool quiet) {
+  mpi_work::start();
+  if (quiet || mpi_work::size() == 1 || !mpi_work::is_root())
+    return;
+  std::printf("MPI: %zu %s over %d ranks (%zu on rank 0), %d TBB thread(s) per rank\n", items, what,
+              mpi_work::size(), mpi_work::my_block(items).size(), mpi_work::threads_per_rank());
+}
 
 // A plot overlay "FILE=LABEL" (RcsToolOptions::overlays): x and y from the last two numbers of
 // each line.
@@ -458,21 +496,27 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
   const std::size_t nt = theta_deg.size(), np = phi_deg.size(), nf = freqs_hz.size();
   if (s.size() != nt * np * nf || per_direction.size() != nt * np)
     throw std::invalid_argument("sweep_rcs: output sizes do not match the sweep");
-  for (std::size_t it = 0; it < nt; ++it) {
-    for (std::size_t ip = 0; ip < np; ++ip) {
-      const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
-      const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
-                                                                  bistatic_deg->second * kDegToRad}
-                                               : tx;
-      radar::RcsStats one;
-      engine.compute(tx, rx, freqs_hz, s.subspan((it * np + ip) * nf, nf), one);
-      per_direction[it * np + ip] = {one.facets_lit, one.facets_partial, one.tubes_cut_off,
-                                     one.edges_used};
-      add_stats(total, one);
-      if (progress)
-        progress(it * np + ip + 1);
-    }
+  // The work items are the directions d = it * np + ip, all frequencies each: one ray trace
+  // serves every frequency (the tube density follows the highest), so a direction is computed
+  // whole, exactly as in one process. MPI ranks take contiguous blocks (mpi_work.hpp).
+  const mpi_work::Block mine = mpi_work::my_block(nt * np);
+  radar::RcsStats mine_total;
+  for (std::size_t d = mine.begin; d < mine.end; ++d) {
+    const std::size_t it = d / np, ip = d % np;
+    const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
+    const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
+                                                                bistatic_deg->second * kDegToRad}
+                                             : tx;
+    radar::RcsStats one;
+    engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
+    per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
+    add_stats(mine_total, one);
+    if (progress)
+      progress(d - mine.begin + 1);
   }
+  mpi_work::gather_blocks(s, nf);
+  mpi_work::gather_blocks(per_direction);
+  add_gathered_stats(total, mine_total);
 }
 
 void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
@@ -485,16 +529,188 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
     throw std::invalid_argument("sweep theta or phi, not both (ISAR uses one angle)");
   if (s.size() != na * nf || edges_used.size() != na)
     throw std::invalid_argument("sweep_profile: output sizes do not match the sweep");
-  for (std::size_t a = 0; a < na; ++a) {
+  // The work items are the angles, all frequencies each (as sweep_rcs), split over MPI ranks.
+  const mpi_work::Block mine = mpi_work::my_block(na);
+  radar::RcsStats mine_total;
+  for (std::size_t a = mine.begin; a < mine.end; ++a) {
     const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
     const radar::Direction dir{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
-    const std::uint64_t before = total.edges_used;
-    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), total);
-    edges_used[a] = total.edges_used - before;
+    const std::uint64_t before = mine_total.edges_used;
+    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), mine_total);
+    edges_used[a] = mine_total.edges_used - before;
     if (progress)
-      progress(a + 1);
+      progress(a - mine.begin + 1);
   }
+  mpi_work::gather_blocks(s, nf);
+  mpi_work::gather_blocks(edges_used);
+  add_gathered_stats(total, mine_total);
 }
+
+namespace {
+
+// One swept dimension (theta, phi or frequency): RCS against it, a curve per polarisation, the
+// overlays beside them; 60 dB under the peak kept (deep nulls would squash the pattern).
+void write_rcs_chart(const RcsToolOptions& o, const std::vector<radar::ScatteringMatrix>& s,
+                     const std::string& name, std::vector<Series> overlays) {
+  const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
+  const bool sweep_theta = nt > 1, sweep_phi = np > 1;
+  LineChart chart;
+  chart.y_label = "RCS [dBsm]";
+  char title[200];
+  if (sweep_theta || sweep_phi) {
+    chart.x_label = sweep_theta ? "theta [deg]" : "phi [deg]";
+    std::snprintf(title, sizeof title, "%s: RCS at %.4g GHz%s, %s = %g deg", name.c_str(),
+                  o.freqs_hz[0] / 1e9, o.bistatic_theta_deg ? " (bistatic)" : "",
+                  sweep_theta ? "phi" : "theta", sweep_theta ? o.phi_deg[0] : o.theta_deg[0]);
+  } else {
+    chart.x_label = "frequency [GHz]";
+    std::snprintf(title, sizeof title, "%s: RCS at theta %g deg, phi %g deg", name.c_str(),
+                  o.theta_deg[0], o.phi_deg[0]);
+  }
+  chart.title = title;
+  for (Pol p : o.pols) {
+    Series ser;
+    ser.label = std::string(pol_name(p));
+    if (sweep_theta || sweep_phi) {
+      const std::size_t n = sweep_theta ? nt : np;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t it = sweep_theta ? i : 0, ip = sweep_theta ? 0 : i;
+        ser.x.push_back(sweep_theta ? o.theta_deg[i] : o.phi_deg[i]);
+        ser.y.push_back(radar::dbsm(component(s[(it * np + ip) * nf], p)));
+      }
+    } else {
+      for (std::size_t k = 0; k < nf; ++k) {
+        ser.x.push_back(o.freqs_hz[k] / 1e9);
+        ser.y.push_back(radar::dbsm(component(s[k], p)));
+      }
+    }
+    chart.series.push_back(std::move(ser));
+  }
+  for (Series& ser : overlays)
+    chart.series.push_back(std::move(ser));
+  double peak = -400.0;
+  for (const Series& ser : chart.series) {
+    for (double y : ser.y)
+      peak = std::max(peak, y);
+  }
+  double low = peak;
+  for (const Series& ser : chart.series) {
+    for (double y : ser.y)
+      low = std::min(low, y);
+  }
+  chart.y_min = std::max(low, peak - 60.0);
+  write_line_chart_png(chart, o.plot_png);
+}
+
+// Indices of `v` in ascending order (a map's axis must ascend).
+std::vector<std::size_t> ascending(const std::vector<double>& v) {
+  std::vector<std::size_t> idx(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i)
+    idx[i] = i;
+  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  return idx;
+}
+
+// Two or three swept dimensions: a map (dBsm colour, 60 dB under the peak) of the first two
+// swept of (theta, phi, frequency) per polarisation, and per value of the third one swept, as
+// panels one under the other (at most kMaxPanels; the CSV has everything).
+void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::ScatteringMatrix>& s,
+                    const std::string& name) {
+  constexpr std::size_t kMaxPanels = 12;
+  const std::size_t np = o.phi_deg.size(), nf = o.freqs_hz.size();
+  // Axes 0 theta, 1 phi, 2 frequency [GHz].
+  std::vector<double> ghz(nf);
+  for (std::size_t k = 0; k < nf; ++k)
+    ghz[k] = o.freqs_hz[k] / 1e9;
+  const std::array<const std::vector<double>*, 3> values{&o.theta_deg, &o.phi_deg, &ghz};
+  const std::array<const char*, 3> labels{"theta [deg]", "phi [deg]", "frequency [GHz]"};
+  const std::array<const char*, 3> names{"theta", "phi", "f"};
+  const std::array<const char*, 3> units{"deg", "deg", "GHz"};
+  std::vector<int> swept;
+  for (int a = 0; a < 3; ++a) {
+    if (values[static_cast<std::size_t>(a)]->size() > 1)
+      swept.push_back(a);
+  }
+  // x: an angle (phi before theta when both are swept, the pattern's usual cut); y: the other.
+  int ax = swept[0], ay = swept[1];
+  if (ax == 0 && ay == 1)
+    std::swap(ax, ay);
+  const int slice_axis = swept.size() > 2 ? swept[2] : -1;
+  auto idx3 = [&](std::array<std::size_t, 3> i) { return (i[0] * np + i[1]) * nf + i[2]; };
+  const auto& xs = *values[static_cast<std::size_t>(ax)];
+  const auto& ys = *values[static_cast<std::size_t>(ay)];
+  const std::vector<std::size_t> ox = ascending(xs), oy = ascending(ys);
+  for (std::size_t i = 1; i < ox.size(); ++i) {
+    if (!(xs[ox[i]] > xs[ox[i - 1]]))
+      throw std::invalid_argument(std::string("--plot: the map needs distinct ") +
+                                  names[static_cast<std::size_t>(ax)] + " values");
+  }
+  for (std::size_t i = 1; i < oy.size(); ++i) {
+    if (!(ys[oy[i]] > ys[oy[i - 1]]))
+      throw std::invalid_argument(std::string("--plot: the map needs distinct ") +
+                                  names[static_cast<std::size_t>(ay)] + " values");
+  }
+  const std::size_t n_slices =
+      slice_axis < 0 ? 1 : values[static_cast<std::size_t>(slice_axis)]->size();
+  double peak = -400.0;
+  for (const radar::ScatteringMatrix& m : s) {
+    for (Pol p : o.pols)
+      peak = std::max(peak, radar::dbsm(component(m, p)));
+  }
+  std::vector<Canvas> panels;
+  std::size_t skipped = 0;
+  for (std::size_t sl = 0; sl < n_slices; ++sl) {
+    for (Pol p : o.pols) {
+      if (panels.size() == kMaxPanels) {
+        ++skipped;
+        continue;
+      }
+      Heatmap m;
+      std::string fixed;
+      char buf[64];
+      for (int a = 0; a < 3; ++a) {
+        if (a == ax || a == ay)
+          continue;
+        const auto ua = static_cast<std::size_t>(a);
+        std::snprintf(buf, sizeof buf, ", %s %g %s", names[ua],
+                      (*values[ua])[a == slice_axis ? sl : 0], units[ua]);
+        fixed += buf;
+      }
+      m.title = name + ": RCS " + std::string(pol_name(p)) + fixed +
+                (o.bistatic_theta_deg ? " (bistatic)" : "");
+      m.x_label = labels[static_cast<std::size_t>(ax)];
+      m.y_label = labels[static_cast<std::size_t>(ay)];
+      m.value_label = "RCS [dBsm]";
+      m.equal_aspect = false;
+      m.height = 560;
+      for (std::size_t i : ox)
+        m.x.push_back(xs[i]);
+      for (std::size_t j : oy)
+        m.y.push_back(ys[j]);
+      for (std::size_t j : oy) {
+        for (std::size_t i : ox) {
+          std::array<std::size_t, 3> at{0, 0, 0};
+          at[static_cast<std::size_t>(ax)] = i;
+          at[static_cast<std::size_t>(ay)] = j;
+          if (slice_axis >= 0)
+            at[static_cast<std::size_t>(slice_axis)] = sl;
+          m.values.push_back(radar::dbsm(component(s[idx3(at)], p)));
+        }
+      }
+      m.value_max = std::ceil(peak);
+      m.value_range = 60.0;
+      panels.push_back(render_heatmap(m));
+    }
+  }
+  if (skipped > 0) {
+    std::fprintf(stderr,
+                 "radar-emu: warning: --plot: drew the first %zu maps of %zu (the CSV has all)\n",
+                 kMaxPanels, kMaxPanels + skipped);
+  }
+  stack_panels(panels).write_png(o.plot_png);
+}
+
+}  // namespace
 
 int run_rcs_tool(const RcsToolOptions& o) {
   if (o.freqs_hz.empty())
@@ -509,9 +725,15 @@ int run_rcs_tool(const RcsToolOptions& o) {
     throw std::invalid_argument("give both --bistatic-theta-deg and --bistatic-phi-deg");
   if (!o.overlays.empty() && o.plot_png.empty())
     throw std::invalid_argument("--overlay needs --plot");
+  if (!o.overlays.empty() &&
+      int(o.theta_deg.size() > 1) + int(o.phi_deg.size() > 1) + int(o.freqs_hz.size() > 1) > 1)
+    throw std::invalid_argument(
+        "--overlay: curves go on a plot of one swept dimension (with two swept, --plot is a map)");
   std::vector<Series> overlays;  // read before the sweep: a bad file fails fast
-  for (const std::string& spec : o.overlays)
-    overlays.push_back(read_overlay(spec));
+  if (mpi_work::is_root()) {     // under mpirun, rank 0 alone plots
+    for (const std::string& spec : o.overlays)
+      overlays.push_back(read_overlay(spec));
+  }
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
                           o.edge_turn_deg, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()),
                           o.quiet);
@@ -522,7 +744,10 @@ int run_rcs_tool(const RcsToolOptions& o) {
   radar::RcsStats stats;
   // Per direction, for the CSV: how bounce 1 was lit and how many tubes the bounce cap cut off.
   std::vector<RcsDirectionStats> per_direction(nt * np);
-  Progress progress(!o.quiet && nt * np > 4, "direction", nt * np);
+  start_split(nt * np, "directions", o.quiet);
+  // Under mpirun: rank 0's block (the others keep pace), the others quiet.
+  const std::size_t my_items = mpi_work::my_block(nt * np).size();
+  Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "direction", my_items);
   const auto t0 = std::chrono::steady_clock::now();
   std::optional<std::pair<double, double>> bistatic;
   if (o.bistatic_theta_deg)
@@ -531,6 +756,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
             [&progress](std::size_t done) { progress.update(done); });
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!mpi_work::is_root())
+    return 0;  // rank 0 has gathered every direction: it alone writes
 
   {
     File f(open_or_throw(o.out_csv));
@@ -559,8 +786,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
         }
       }
     }
-    if (std::ferror(f.get()))
-      throw std::runtime_error(o.out_csv + ": write failed");
+    close_or_throw(f, o.out_csv);
   }
 
   // Fluctuation statistics over a sliding aspect window of the swept angle.
@@ -606,57 +832,15 @@ int run_rcs_tool(const RcsToolOptions& o) {
         }
       }
     }
+    close_or_throw(f, stats_path);
   }
 
   if (!o.plot_png.empty()) {
-    LineChart chart;
-    chart.y_label = "RCS [dBsm]";
     const std::string name = std::filesystem::path(o.mesh).filename().string();
-    char title[200];
-    if (sweep_theta || sweep_phi) {
-      chart.x_label = sweep_theta ? "theta [deg]" : "phi [deg]";
-      std::snprintf(title, sizeof title, "%s: RCS at %.4g GHz%s, %s = %g deg", name.c_str(),
-                    o.freqs_hz[0] / 1e9, o.bistatic_theta_deg ? " (bistatic)" : "",
-                    sweep_theta ? "phi" : "theta", sweep_theta ? o.phi_deg[0] : o.theta_deg[0]);
-    } else {
-      chart.x_label = "frequency [GHz]";
-      std::snprintf(title, sizeof title, "%s: RCS at theta %g deg, phi %g deg", name.c_str(),
-                    o.theta_deg[0], o.phi_deg[0]);
-    }
-    chart.title = title;
-    for (Pol p : o.pols) {
-      Series ser;
-      ser.label = std::string(pol_name(p));
-      if (sweep_theta || sweep_phi) {
-        const std::size_t n = sweep_theta ? nt : np;
-        for (std::size_t i = 0; i < n; ++i) {
-          const std::size_t it = sweep_theta ? i : 0, ip = sweep_theta ? 0 : i;
-          ser.x.push_back(sweep_theta ? o.theta_deg[i] : o.phi_deg[i]);
-          ser.y.push_back(radar::dbsm(component(s[(it * np + ip) * nf], p)));
-        }
-      } else {
-        for (std::size_t k = 0; k < nf; ++k) {
-          ser.x.push_back(o.freqs_hz[k] / 1e9);
-          ser.y.push_back(radar::dbsm(component(s[k], p)));
-        }
-      }
-      chart.series.push_back(std::move(ser));
-    }
-    for (Series& ser : overlays)
-      chart.series.push_back(std::move(ser));
-    // Keep 60 dB under the peak: deep nulls would squash the pattern.
-    double peak = -400.0;
-    for (const Series& ser : chart.series) {
-      for (double y : ser.y)
-        peak = std::max(peak, y);
-    }
-    double low = peak;
-    for (const Series& ser : chart.series) {
-      for (double y : ser.y)
-        low = std::min(low, y);
-    }
-    chart.y_min = std::max(low, peak - 60.0);
-    write_line_chart_png(chart, o.plot_png);
+    if (int(sweep_theta) + int(sweep_phi) + int(nf > 1) >= 2)
+      write_rcs_maps(o, s, name);
+    else
+      write_rcs_chart(o, s, name, std::move(overlays));
   }
 
   if (!o.quiet) {
@@ -704,12 +888,16 @@ int run_profile_tool(const ProfileToolOptions& o) {
   std::vector<radar::ScatteringMatrix> s(na * nf);
   std::vector<std::uint64_t> edges_used(na);
   radar::RcsStats stats;
-  Progress progress(!o.quiet && na > 4, "angle", na);
+  start_split(na, "angles", o.quiet);
+  const std::size_t my_items = mpi_work::my_block(na).size();
+  Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "angle", my_items);
   const auto t0 = std::chrono::steady_clock::now();
   sweep_profile(engine, o.theta_deg, o.phi_deg, o.freqs_hz, s, edges_used, stats,
                 [&progress](std::size_t done) { progress.update(done); });
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (!mpi_work::is_root())
+    return 0;  // rank 0 has gathered every angle: it alone writes
 
   const radar::FrequencyGrid grid{o.freqs_hz.front(), df, nf};
   // Aliasing: the target must fit in the unambiguous windows (c / 2 df in range,
@@ -760,6 +948,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
                      static_cast<unsigned long long>(edges_used[a]));
       }
     }
+    close_or_throw(f, o.out_csv);
   }
   const radar::RangeProfile& centre = profiles[na / 2];
   const std::string name = std::filesystem::path(o.mesh).filename().string();
@@ -818,6 +1007,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
                      values[r * img.range_m.size() + c]);
       }
     }
+    close_or_throw(f, isar_csv);
     isar_png = o.isar_png;
     if (isar_png.empty() && !o.plot_png.empty())
       isar_png = sibling(o.plot_png, "_isar.png").string();
@@ -830,12 +1020,13 @@ int run_profile_tool(const ProfileToolOptions& o) {
       m.title = title;
       m.x_label = "range [m]";
       m.y_label = "cross-range [m]";
-      m.value_label = "dBsm";
+      m.value_label = "image amplitude [dBsm]";
       m.x = img.range_m;
       m.y = img.cross_range_m;
       m.values = std::move(values);
       m.value_max = peak;
       m.value_range = o.dynamic_range_db;
+      m.scale_bar = 0.0;  // equal scales (both axes in m) and a scale bar
       write_heatmap_png(m, isar_png);
     }
   }

@@ -65,7 +65,10 @@ struct RcsDirectionStats {
 /// `freqs_hz`; the receiver at `bistatic_deg` (theta, phi) when given, else monostatic.
 /// Writes s[(it * np + ip) * nf + k] and per_direction[it * np + ip] (sizes nt * np * nf and
 /// nt * np), adds every counter to `total`, and calls `progress` (may be empty) with the number
-/// of directions done after each one.
+/// of directions done after each one. Under mpirun, after mpi_work::start(): each rank computes
+/// its block of directions (mpi_work::my_block(nt * np)), `progress` counts within it, and rank
+/// 0 gathers every direction bit for bit (other ranks' outputs and `total` hold their block
+/// only). Collective then: every rank calls it.
 void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg,
                std::span<const double> phi_deg, std::span<const double> freqs_hz,
                std::optional<std::pair<double, double>> bistatic_deg,
@@ -75,7 +78,8 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
 /// The angle sweep of `radar-emu profile`: theta or phi swept (the other one value, degrees),
 /// monostatic, at all `freqs_hz`. Writes s[a * nf + k] and edges_used[a] (the edge terms of
 /// angle a; sizes na * nf and na, na = nt * np), adds every counter to `total`, and calls
-/// `progress` (may be empty) with the number of angles done after each one.
+/// `progress` (may be empty) with the number of angles done after each one. Split over MPI
+/// ranks by angle as sweep_rcs is by direction.
 void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
                    std::span<const double> phi_deg, std::span<const double> freqs_hz,
                    std::span<radar::ScatteringMatrix> s, std::span<std::uint64_t> edges_used,

@@ -161,12 +161,55 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     seen |= flags;
     std::fprintf(f, ",%d\n", flags == 0 ? 1 : 0);
   }
-  const bool ok = std::ferror(f) == 0;
-  std::fclose(f);
-  if (!ok)
+  const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
+  if (std::fclose(f) != 0 || !ok)
     throw std::runtime_error(o.out_csv + ": write failed");
 
-  if (!o.plot_png.empty() && rows.size() > 1) {
+  const bool map = bistatic && o.theta_deg.size() > 1 && o.theta_s_deg.size() > 1;
+  if (!o.plot_png.empty() && map) {
+    // Two swept angles (incidence and scattering): a map per polarisation, one under the other;
+    // invalid cells grey.
+    std::vector<double> ti = o.theta_deg, ts = o.theta_s_deg;
+    std::sort(ti.begin(), ti.end());
+    std::sort(ts.begin(), ts.end());
+    if (std::adjacent_find(ti.begin(), ti.end()) != ti.end() ||
+        std::adjacent_find(ts.begin(), ts.end()) != ts.end())
+      throw std::invalid_argument("--plot: the map needs distinct incidence and scattering angles");
+    std::vector<Canvas> panels;
+    for (Pol p : pols) {
+      Heatmap m;
+      char title[200];
+      std::snprintf(title, sizeof title,
+                    "sigma0 %s of %s, %s model, %.4g GHz, phi_s %g deg (grey: outside validity)",
+                    std::string(pol_name(p)).c_str(), what.c_str(), cl::to_string(model),
+                    o.freq_hz * 1e-9, o.phi_s_deg);
+      m.title = title;
+      m.x_label = "scattering angle theta_s [deg]";
+      m.y_label = "incidence angle theta_i [deg]";
+      m.value_label = "sigma0 [dB]";
+      m.equal_aspect = false;
+      m.height = 560;
+      m.x = ts;
+      m.y = ti;
+      m.values.assign(ts.size() * ti.size(), std::nan(""));
+      double peak = -400.0;
+      for (const Row& r : rows) {
+        const double y = to_db(sigma_of(r.s.incoherent, p));
+        if (row_valid(r) != 0 || !(y > kFloorDb))
+          continue;
+        const auto i = static_cast<std::size_t>(std::lower_bound(ts.begin(), ts.end(), r.theta_s) -
+                                                ts.begin());
+        const auto j =
+            static_cast<std::size_t>(std::lower_bound(ti.begin(), ti.end(), r.theta) - ti.begin());
+        m.values[j * ts.size() + i] = y;
+        peak = std::max(peak, y);
+      }
+      m.value_max = peak > -400.0 ? std::ceil(peak / 5.0) * 5.0 : 0.0;
+      m.value_range = 60.0;
+      panels.push_back(render_heatmap(m));
+    }
+    stack_panels(panels).write_png(o.plot_png);
+  } else if (!o.plot_png.empty() && rows.size() > 1) {
     LineChart chart;
     char title[200];
     std::snprintf(title, sizeof title, "sigma0 of %s, %s model, %.4g GHz%s", what.c_str(),
@@ -183,6 +226,7 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     const bool reciprocal = !bistatic && std::all_of(rows.begin(), rows.end(), [](const Row& r) {
       return r.s.incoherent.hv == r.s.incoherent.vh;
     });
+    std::size_t colour_index = 0;
     for (Pol p : pols) {
       if (p == Pol::kVH && has_hv && reciprocal)
         continue;
@@ -202,6 +246,9 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
         outside.x.push_back(x);
         outside.y.push_back(!valid && y > kFloorDb ? y : std::nan(""));
       }
+      // Outside the model's validity: the same colour, dashed.
+      inside.colour = outside.colour = series_colour(colour_index++);
+      outside.dashed = true;
       for (Series* series : {&inside, &outside}) {
         if (std::any_of(series->y.begin(), series->y.end(),
                         [](double y) { return std::isfinite(y); }))

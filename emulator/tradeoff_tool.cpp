@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "emulator/canvas.hpp"
+#include "emulator/charts.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/ownship.hpp"
 #include "emulator/scenario.hpp"
@@ -758,160 +758,21 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Charts: log or linear axes, a marker at every point, the legend outside the plot on the right
+// Charts (emulator/charts.hpp): a marker at every point, the legend outside the plot.
 
-struct PlotSeries {
-  std::string label;
-  std::vector<double> x, y;  ///< non-finite (or, on a log axis, non-positive) points are skipped
+using PlotSeries = Series;
+
+struct Plot : LineChart {
+  Plot() {
+    width = 1200;
+    height = 820;
+  }
 };
 
-struct Plot {
-  std::string title, x_label, y_label;
-  bool log_x = false, log_y = false;
-  std::vector<PlotSeries> series;
-};
-
-constexpr int kW = 1200, kH = 660, kL = 90, kR = 330, kT = 50, kB = 70;
-const Rgb kWhite{255, 255, 255}, kInk{30, 30, 30}, kGridInk{225, 225, 225};
-constexpr std::array<Rgb, 10> kColours{{{31, 119, 180},
-                                        {214, 39, 40},
-                                        {44, 160, 44},
-                                        {255, 127, 14},
-                                        {148, 103, 189},
-                                        {23, 190, 207},
-                                        {140, 86, 75},
-                                        {227, 119, 194},
-                                        {127, 127, 127},
-                                        {188, 189, 34}}};
-
-std::vector<double> axis_ticks(double lo, double hi, bool log_axis) {
-  std::vector<double> t;
-  if (!log_axis) {
-    const double raw = (hi - lo) / 6.0;
-    const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-    double step = mag;
-    for (double m : {1.0, 2.0, 5.0, 10.0}) {
-      step = m * mag;
-      if (step >= raw)
-        break;
-    }
-    for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9 * step; v += step)
-      t.push_back(std::abs(v) < 1e-12 * step ? 0.0 : v);
-    return t;
-  }
-  const double decades = std::log10(hi / lo);
-  const std::vector<double> mant =
-      decades <= 2.5 ? std::vector<double>{1, 2, 5} : std::vector<double>{1};
-  for (int p = static_cast<int>(std::floor(std::log10(lo))) - 1;
-       p <= static_cast<int>(std::ceil(std::log10(hi))); ++p)
-    for (double m : mant) {
-      const double v = m * std::pow(10.0, p);
-      if (v >= lo * (1 - 1e-9) && v <= hi * (1 + 1e-9))
-        t.push_back(v);
-    }
-  return t;
-}
-
-void write_plot_png(const Plot& plot, const std::filesystem::path& path) {
-  auto ok_x = [&](double v) { return std::isfinite(v) && (!plot.log_x || v > 0.0); };
-  auto ok_y = [&](double v) { return std::isfinite(v) && (!plot.log_y || v > 0.0); };
-  double x0 = std::numeric_limits<double>::max(), x1 = -x0, y0 = x0, y1 = -x0;
-  for (const PlotSeries& s : plot.series)
-    for (std::size_t i = 0; i < s.x.size(); ++i)
-      if (ok_x(s.x[i]) && ok_y(s.y[i])) {
-        x0 = std::min(x0, s.x[i]);
-        x1 = std::max(x1, s.x[i]);
-        y0 = std::min(y0, s.y[i]);
-        y1 = std::max(y1, s.y[i]);
-      }
-  if (!(x1 >= x0))
-    throw std::invalid_argument("chart '" + plot.title + "': no data to plot");
-  auto widen = [](double& lo, double& hi, bool log_axis) {
-    if (log_axis) {
-      lo = std::pow(10.0, std::floor(std::log10(lo) * 4.0) / 4.0 - 0.02);
-      hi = std::pow(10.0, std::ceil(std::log10(hi) * 4.0) / 4.0 + 0.02);
-    } else {
-      const double pad = hi > lo ? 0.05 * (hi - lo) : 1.0;
-      lo -= pad;
-      hi += pad;
-    }
-  };
-  widen(x0, x1, plot.log_x);
-  widen(y0, y1, plot.log_y);
-  auto tx = [&](double v) { return plot.log_x ? std::log10(v) : v; };
-  auto ty = [&](double v) { return plot.log_y ? std::log10(v) : v; };
-  const double ax0 = tx(x0), ax1 = tx(x1), ay0 = ty(y0), ay1 = ty(y1);
-  auto px = [&](double v) {
-    return kL + static_cast<int>(std::lround((tx(v) - ax0) / (ax1 - ax0) * (kW - kL - kR)));
-  };
-  auto py = [&](double v) {
-    return kH - kB - static_cast<int>(std::lround((ty(v) - ay0) / (ay1 - ay0) * (kH - kT - kB)));
-  };
-  Canvas c(kW, kH, kWhite);
-  auto label = [](double v) {
-    char b[32];
-    std::snprintf(b, sizeof b, "%g", v);
-    return std::string(b);
-  };
-  for (double t : axis_ticks(x0, x1, plot.log_x)) {
-    const int x = px(t);
-    c.line(x, kT, x, kH - kB, kGridInk);
-    c.line(x, kH - kB, x, kH - kB + 5, kInk);
-    c.text(x - Canvas::text_width(label(t), 2) / 2, kH - kB + 10, label(t), kInk, 2);
-  }
-  for (double t : axis_ticks(y0, y1, plot.log_y)) {
-    const int y = py(t);
-    c.line(kL, y, kW - kR, y, kGridInk);
-    c.line(kL - 5, y, kL, y, kInk);
-    c.text(kL - 10 - Canvas::text_width(label(t), 2), y - 7, label(t), kInk, 2);
-  }
-  c.line(kL, kT, kL, kH - kB, kInk);
-  c.line(kL, kH - kB, kW - kR, kH - kB, kInk);
-  c.line(kW - kR, kT, kW - kR, kH - kB, kInk);
-  c.line(kL, kT, kW - kR, kT, kInk);
-  c.text(kL, 8, plot.title, kInk, 2);
-  c.text((kL + kW - kR - Canvas::text_width(plot.x_label, 2)) / 2, kH - 30, plot.x_label, kInk, 2);
-  c.text(8, kT - 22, plot.y_label, kInk, 2);
-  for (std::size_t k = 0; k < plot.series.size(); ++k) {
-    const PlotSeries& s = plot.series[k];
-    const Rgb col = kColours[k % kColours.size()];
-    bool have = false;
-    int xp = 0, yp = 0;
-    for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!ok_x(s.x[i]) || !ok_y(s.y[i])) {
-        have = false;
-        continue;
-      }
-      const int x = px(s.x[i]), y = py(s.y[i]);
-      if (have) {
-        c.line(xp, yp, x, y, col);
-        c.line(xp, yp + 1, x, y + 1, col);
-      }
-      // A different marker shape every ten series: filled square, hollow square, cross.
-      const int shape = static_cast<int>(k / kColours.size()) % 3;
-      if (shape == 0) {
-        c.rect(x - 3, y - 3, x + 3, y + 3, col);
-      } else if (shape == 1) {
-        c.line(x - 4, y - 4, x + 4, y - 4, col);
-        c.line(x - 4, y + 4, x + 4, y + 4, col);
-        c.line(x - 4, y - 4, x - 4, y + 4, col);
-        c.line(x + 4, y - 4, x + 4, y + 4, col);
-      } else {
-        c.line(x - 4, y - 4, x + 4, y + 4, col);
-        c.line(x - 4, y + 4, x + 4, y - 4, col);
-      }
-      have = true;
-      xp = x;
-      yp = y;
-    }
-    // Legend, outside the plot on the right.
-    const int ly = kT + static_cast<int>(k) * 20;
-    const int lx = kW - kR + 14;
-    c.rect(lx, ly + 5, lx + 20, ly + 7, col);
-    c.rect(lx + 7, ly + 3, lx + 13, ly + 9, col);
-    c.text(lx + 28, ly + 1, s.label, kInk, 1);
-  }
-  c.write_png(path);
+void write_plot_png(Plot plot, const std::filesystem::path& path) {
+  for (Series& s : plot.series)
+    s.markers = true;
+  write_line_chart_png(plot, path);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -925,9 +786,8 @@ void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path) 
     std::fprintf(f, "%s,%s,%.6g,%.3f,%llu,%s,%.6g,\"%s\",\"%s\"\n", r.case_name.c_str(),
                  r.knob.c_str(), r.value, r.cost_ms, static_cast<unsigned long long>(r.rays),
                  r.metric.c_str(), r.error, r.reference.c_str(), r.validity.c_str());
-  const bool ok = std::ferror(f) == 0;
-  std::fclose(f);
-  if (!ok)
+  const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
+  if (std::fclose(f) != 0 || !ok)
     throw std::runtime_error(path.string() + ": write failed");
 }
 
@@ -1069,6 +929,8 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
       for (std::size_t j : models) {
         PlotSeries in{std::string(names[j]) + " " + surf.tag + " (valid)", {}, {}};
         PlotSeries out{std::string(names[j]) + " " + surf.tag + " (outside validity)", {}, {}};
+        out.dashed = true;
+        in.colour = out.colour = series_colour(p.series.size() / 2);
         for (std::size_t i = 0; i < curves.ks.size(); ++i) {
           const bool v = curves.valid[j][i];
           in.x.push_back(curves.ks[i]);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -31,6 +32,25 @@ std::uint8_t srgb8(double linear) {
   return static_cast<std::uint8_t>(std::lround(255.0 * e));
 }
 
+// The pixel colour of one primary ray (header), linear RGB.
+glm::dvec3 shade(const Scene& scene, std::span<const Material> materials, const Ray& ray) {
+  using Light = PreviewLighting;
+  const double beta = 3.912 / Light::kVisibility_m;  // Koschmieder: exp(-beta V) = 0.02
+  Hit hit;
+  if (!scene.intersect(ray, hit))
+    return Light::kSky;
+  glm::dvec3 n = hit.normal;
+  if (glm::dot(n, ray.direction) > 0.0)
+    n = -n;  // the side the camera sees
+  const glm::dvec3 base = hit.material_id < materials.size()
+                              ? glm::dvec3(materials[hit.material_id].base_color)
+                              : glm::dvec3(0.5);
+  const glm::dvec3 lit =
+      base * (Light::kAmbient + Light::kDiffuse * std::max(0.0, glm::dot(n, Light::kSun)));
+  const double transmittance = std::exp(-beta * hit.t_m);
+  return lit * transmittance + Light::kSky * (1.0 - transmittance);
+}
+
 }  // namespace
 
 PreviewImage render_preview(const Scene& scene, const PreviewCamera& cam) {
@@ -50,8 +70,6 @@ PreviewImage render_preview(const Scene& scene, const PreviewCamera& cam) {
   const glm::dvec3 up = glm::cross(right, forward);
   const double tan_half = std::tan(0.5 * cam.vertical_fov_rad);
   const double aspect = static_cast<double>(cam.width_px) / cam.height_px;
-  using Light = PreviewLighting;
-  const double beta = 3.912 / Light::kVisibility_m;  // Koschmieder: exp(-beta V) = 0.02
 
   PreviewImage image;
   image.width_px = cam.width_px;
@@ -70,26 +88,55 @@ PreviewImage render_preview(const Scene& scene, const PreviewCamera& cam) {
             Ray ray;
             ray.origin_m = cam.position_m;
             ray.direction = glm::normalize(forward + x * right + y * up);
-            Hit hit;
-            glm::dvec3 c = Light::kSky;
-            if (scene.intersect(ray, hit)) {
-              glm::dvec3 n = hit.normal;
-              if (glm::dot(n, ray.direction) > 0.0)
-                n = -n;  // the side the camera sees
-              const glm::dvec3 base = hit.material_id < materials.size()
-                                          ? glm::dvec3(materials[hit.material_id].base_color)
-                                          : glm::dvec3(0.5);
-              const glm::dvec3 lit =
-                  base *
-                  (Light::kAmbient + Light::kDiffuse * std::max(0.0, glm::dot(n, Light::kSun)));
-              const double transmittance = std::exp(-beta * hit.t_m);
-              c = lit * transmittance + Light::kSky * (1.0 - transmittance);
-            }
+            const glm::dvec3 c = shade(scene, materials, ray);
             for (int k = 0; k < 3; ++k)
               out[3 * i + k] = srgb8(c[k]);
           }
         }
       });
+  return image;
+}
+
+PreviewImage render_preview_angular(const Scene& scene, const AngularCamera& cam) {
+  require(cam.width_px >= 1 && cam.width_px <= kMaxSize_px, "width_px", "must be in 1..16384");
+  require(cam.height_px >= 1 && cam.height_px <= kMaxSize_px, "height_px", "must be in 1..16384");
+  require(finite(cam.position_m), "position_m", "must be finite");
+  const double half_pi = 0.5 * std::numbers::pi;
+  require(std::isfinite(cam.azimuth_min_rad) && std::isfinite(cam.azimuth_max_rad) &&
+              cam.azimuth_min_rad < cam.azimuth_max_rad && cam.azimuth_min_rad > -half_pi &&
+              cam.azimuth_max_rad < half_pi,
+          "azimuth_min/max_rad", "must satisfy -pi/2 < min < max < pi/2");
+  require(std::isfinite(cam.elevation_min_rad) && std::isfinite(cam.elevation_max_rad) &&
+              cam.elevation_min_rad < cam.elevation_max_rad && cam.elevation_min_rad > -half_pi &&
+              cam.elevation_max_rad < half_pi,
+          "elevation_min/max_rad", "must satisfy -pi/2 < min < max < pi/2");
+  PreviewImage image;
+  image.width_px = cam.width_px;
+  image.height_px = cam.height_px;
+  image.rgb.assign(
+      static_cast<std::size_t>(cam.width_px) * static_cast<std::size_t>(cam.height_px) * 3, 0);
+  const auto materials = scene.materials();
+  const double daz = (cam.azimuth_max_rad - cam.azimuth_min_rad) / cam.width_px;
+  const double del = (cam.elevation_max_rad - cam.elevation_min_rad) / cam.height_px;
+  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height_px), [&](const tbb::blocked_range<int>&
+                                                                       rows) {
+    for (int j = rows.begin(); j != rows.end(); ++j) {
+      const double el = cam.elevation_max_rad - (j + 0.5) * del;
+      std::uint8_t* out = image.rgb.data() +
+                          static_cast<std::size_t>(j) * static_cast<std::size_t>(cam.width_px) * 3;
+      for (int i = 0; i < cam.width_px; ++i) {
+        const double az = cam.azimuth_min_rad + (i + 0.5) * daz;
+        // Camera frame x forward, y right, z down (radar/em/sbr.hpp's antenna frame).
+        const glm::dvec3 d{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), -std::sin(el)};
+        Ray ray;
+        ray.origin_m = cam.position_m;
+        ray.direction = glm::normalize(cam.world_from_camera * d);
+        const glm::dvec3 c = shade(scene, materials, ray);
+        for (int k = 0; k < 3; ++k)
+          out[3 * i + k] = srgb8(c[k]);
+      }
+    }
+  });
   return image;
 }
 

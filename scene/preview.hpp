@@ -52,6 +52,25 @@ struct PreviewImage {
 /// to look_at, up parallel to the view, fov or size out of range). Setup/offline only.
 [[nodiscard]] PreviewImage render_preview(const Scene& scene, const PreviewCamera& camera);
 
+/// A camera on an azimuth-elevation grid (equiangular, like a scanning radar's image): pixel
+/// (i, j), row j from the top, sees along azimuth az_min + (i + 0.5) (az_max - az_min) / width
+/// (positive right) and elevation el_max - (j + 0.5) (el_max - el_min) / height (positive up),
+/// in the camera frame x forward, y right, z down (radar/em/sbr.hpp's antenna frame), turned into
+/// the world by world_from_camera. The same lighting as render_preview.
+struct AngularCamera {
+  glm::dvec3 position_m{0.0};
+  glm::dmat3 world_from_camera{1.0};  ///< rotation world (ENU) from camera
+  double azimuth_min_rad = -0.26;     ///< in (-pi/2, pi/2)
+  double azimuth_max_rad = 0.26;
+  double elevation_min_rad = -0.09;  ///< in (-pi/2, pi/2)
+  double elevation_max_rad = 0.09;
+  int width_px = 640;  ///< 1..16384
+  int height_px = 200;
+};
+/// Renders the scene at its current time on the camera's grid (rows in parallel, TBB). Throws
+/// std::invalid_argument naming the field for a bad camera. Setup/offline only.
+[[nodiscard]] PreviewImage render_preview_angular(const Scene& scene, const AngularCamera& camera);
+
 /// An oblique overview of the whole scene from the south-west, 35 degrees above the horizon,
 /// with a 40 degree vertical field of view, looking at the centre of the bounds of every active
 /// object at the current time and far enough that their enclosing sphere fits the picture.

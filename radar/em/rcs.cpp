@@ -389,12 +389,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           if (!scene_->intersect(ray, hit))
             break;
           ++l_hits;
-          if (bounce == 1) {
-            path_m += hit.t_m;
-          } else {  // shot lifted off the surface: back onto the ray from the previous hit
-            hit.position_m = onto_ray(last_hit, d, hit.position_m, hit.normal);
-            path_m += glm::length(hit.position_m - last_hit);
-          }
+          hit.position_m =
+              extend_path(bounce == 1, hit.t_m, last_hit, d, hit.position_m, hit.normal, path_m);
           last_hit = hit.position_m;
           glm::dvec3 n = hit.normal;
           double cos_i = -glm::dot(n, d);

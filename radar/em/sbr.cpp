@@ -553,12 +553,8 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
     }
     const RadarMaterial& mat = materials_[hit.material_id];
     const glm::dvec3 v_obj = scene_->objects()[hit.object_id].velocity_mps;
-    if (bounce == 0) {
-      path_m += hit.t_m;
-    } else {  // shot lifted off the surface: back onto the ray from the previous hit
-      hit.position_m = onto_ray(last_hit, d, hit.position_m, hit.normal);
-      path_m += glm::length(hit.position_m - last_hit);
-    }
+    hit.position_m =
+        extend_path(bounce == 0, hit.t_m, last_hit, d, hit.position_m, hit.normal, path_m);
     last_hit = hit.position_m;
     path_rate += glm::dot(v_obj - v_prev, d);
     glm::dvec3 n = hit.normal;

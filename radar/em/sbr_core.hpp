@@ -155,6 +155,23 @@ inline constexpr double kGrazingCos = 1e-3;
   return origin + d * (glm::dot(normal, hit - origin) / n_d);
 }
 
+/// One segment added to a ray's unfolded path: on the first segment (shot from outside the
+/// scene) the hit's ray distance `t_m`; after a lifted shot, the hit moved back onto the unlifted
+/// ray from `origin` (onto_ray) and its distance from there. Returns the hit's position on the
+/// path; `path_m` grows by the segment.
+[[nodiscard]] inline glm::dvec3 extend_path(bool first_segment, double t_m,
+                                            const glm::dvec3& origin, const glm::dvec3& d,
+                                            const glm::dvec3& hit, const glm::dvec3& normal,
+                                            double& path_m) noexcept {
+  if (first_segment) {
+    path_m += t_m;
+    return hit;
+  }
+  const glm::dvec3 on_ray = onto_ray(origin, d, hit, normal);
+  path_m += glm::length(on_ray - origin);
+  return on_ray;
+}
+
 /// A facet met at |cos theta_i| <= kEdgeOnCos is edge-on: no bounce-1 PO at all.
 inline constexpr double kEdgeOnCos = 1e-12;
 

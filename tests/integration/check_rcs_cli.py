@@ -60,6 +60,17 @@ print(f"plate pattern via CLI: worst deviation {worst:.2e} dB")
 check(worst < 0.2, f"plate pattern within 0.2 dB (worst {worst})")
 with open(png, "rb") as f:
     check(f.read(8) == b"\x89PNG\r\n\x1a\n", "plot is a PNG")
+# Two swept dimensions (theta and frequency): a map per polarisation, panels 560 pixels high one
+# under the other (docs/plotting.md); the PNG's size from its IHDR chunk.
+map_png = os.path.join(work, "plate_map.png")
+run("rcs", "--mesh", plate, "--no-edges", "--scale", "0.001", "--freq-sweep-hz", "9e9:11e9:5",
+    "--theta-deg", "0:20:11", "--pol", "HH,VV", "--bounces", "1", "--out",
+    os.path.join(work, "plate_map.csv"), "--plot", map_png, "-q")
+with open(map_png, "rb") as f:
+    head = f.read(24)
+check(head[:8] == b"\x89PNG\r\n\x1a\n" and head[12:16] == b"IHDR", "map is a PNG")
+mw, mh = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+check((mw, mh) == (1000, 2 * 560), f"two map panels of 1000 x 560, got {mw} x {mh}")
 stats = os.path.join(work, "plate_stats.csv")
 check(os.path.exists(stats), "fluctuation statistics written next to the CSV")
 with open(stats, newline="") as f:
