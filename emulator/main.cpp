@@ -26,6 +26,7 @@
 #include "emulator/live_view.hpp"
 #include "emulator/mpi_work.hpp"
 #include "emulator/rcs_tool.hpp"
+#include "emulator/sar_tool.hpp"
 #include "emulator/scenario.hpp"
 #include "emulator/scene_tool.hpp"
 #include "emulator/sigma0_tool.hpp"
@@ -837,6 +838,20 @@ int main(int argc, char** argv) {
                      "Coarse grids: the whole run in well under a minute (the CI test)");
   tradeoff->add_flag("-q,--quiet", to_opt.quiet, "No progress and no summary");
 
+  // sar (issue 17): stripmap SAR over a scene, from a TOML case.
+  CLI::App* sar = app.add_subcommand(
+      "sar", "Stripmap SAR: raw echoes from the SBR tracer and terrain clutter, backprojection");
+  emu::SarToolOptions sar_opt;
+  sar->add_option("config", sar_opt.config, "TOML case (examples/sar_seed.toml)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  CLI::Option* sar_out =
+      sar->add_option("--out", sar_opt.out_dir,
+                      "Output directory: raw.tif, image.tif, image.png, sar.json (default sar_out)")
+          ->check(emu::output_dir());
+  sar->add_flag("--no-raw", sar_opt.no_raw, "Do not write raw.tif");
+  sar->add_flag("-q,--quiet", sar_opt.quiet, "No summary");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -920,6 +935,10 @@ int main(int argc, char** argv) {
         throw std::invalid_argument("--plot: needs a frequency sweep (--freq-hz START:STOP:N)");
       check_default_file(atten_out, atten_opt.out_csv);
       return emu::run_atten_tool(atten_opt);
+    }
+    if (sar->parsed()) {
+      check_default_dir(sar_out, sar_opt.out_dir);
+      return emu::run_sar_tool(sar_opt);
     }
     if (profile->parsed()) {
       prof_opt.freqs_hz = frequencies(prof_text);

@@ -10,6 +10,8 @@ PACKAGES=(
   libembree-dev libglm-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libtbb-dev
   libusb-1.0-0-dev libsocketcan-dev libmodbus-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # GeoTIFF output of `radar-emu sar` (optional at build time) and gdalinfo, which its test reads
+  libgdal-dev gdal-bin
   # coverage-guided fuzzing (tests/fuzz, scripts/fuzz.sh): clang 14 and its libFuzzer runtime
   clang libclang-rt-14-dev
   # independent peers used by the tests (buses.md)
@@ -22,6 +24,9 @@ PACKAGES=(
   # the live view's test (run --serve): headless Chromium screenshots the page
   chromium
 )
+# Not installed here, needed only to regenerate the full-wave table tests/data/openems_plate
+# (scripts/openems_rcs.py; the tests read the checked-in table):
+#   openems python3-openems python3-h5py python3-scipy
 
 missing=()
 for p in "${PACKAGES[@]}"; do

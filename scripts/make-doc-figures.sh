@@ -43,6 +43,9 @@ bist=(--eps-r "5,0.09" --rms-height-m 0.0005 --corr-length-m 0.005 --freq-hz 94e
   -q 2>/dev/null
 "$exe" tradeoff --cases sphere,grazing,iem --out trade -q
 cp trade/tradeoff_sphere.png trade/tradeoff_grazing.png trade/tradeoff_iem.png "$img/"
+# The openEMS plate overlays (docs/validation.md): its check script draws them from the table.
+/usr/bin/python3 "$root/tests/integration/check_openems_plate.py" "$exe" "$work/openems" \
+  --charts "$img" > /dev/null
 if [ "$slow" = 1 ]; then
   "$exe" scene target vehicle --a-m 7 --b-m 3.5 --c-m 2.5 --out veh.glb > /dev/null
   "$exe" rcs --mesh veh.glb --freq-hz 35e9 --theta-deg 80 --phi-deg 0:360:361 \

@@ -260,6 +260,27 @@ BAD = [
     # tradeoff
     (["tradeoff", "--out", a_file + "/to"], "cannot create the output directory"),
     (["tradeoff", "--cases", "sphere,cone", "--out", os.path.join(d, "to")], "cone"),
+    # sar (issue 17): bad TOML keys and values refused before any pulse is made
+    (["sar", write("sar_key.toml", "[radar]\ncarrier = 35e9\n"), "--out", os.path.join(d, "sr")],
+     "[radar] carrier: unknown key"),
+    (["sar", write("sar_table.toml", "[radr]\n"), "--out", os.path.join(d, "sr")], "radr"),
+    (["sar", write("sar_bw.toml", "[radar]\nbandwidth_hz = 0\n"), "--out",
+      os.path.join(d, "sr")], "bandwidth_hz: value 0 outside"),
+    (["sar", write("sar_prf.toml", "[radar]\nprf_hz = 10.0\n"), "--out", os.path.join(d, "sr")],
+     "prf_hz: pulses every 10"),
+    (["sar", write("sar_inc.toml", "[antenna]\nincidence_deg = 95\n"), "--out",
+      os.path.join(d, "sr")], "incidence_deg: value 95 outside"),
+    (["sar", write("sar_syn.toml", "[processing]\nsynthetic_beamwidth_deg = 0.001\n"), "--out",
+      os.path.join(d, "sr")], "wider than the antenna's azimuth beamwidth"),
+    (["sar", write("sar_taper.toml", "[processing]\ntaper = \"hann\"\n"), "--out",
+      os.path.join(d, "sr")], "taper: expected"),
+    (["sar", write("sar_mat.toml", "[scene]\nground_material = \"lava\"\n"), "--out",
+      os.path.join(d, "sr")], "ground_material: unknown material"),
+    (["sar", write("sar_kind.toml", "[[scene.target]]\nkind = \"cone\"\n"), "--out",
+      os.path.join(d, "sr")], "kind: unknown"),
+    (["sar", os.path.join(d, "no_such_case.toml")], "no_such_case.toml"),
+    (["sar", write("sar_ok.toml", ""), "--out", a_file + "/sar"],
+     "cannot create the output directory"),
 ]
 
 # (command line, fragment of the warning that -q must keep on stderr).
