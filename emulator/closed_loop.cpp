@@ -263,6 +263,8 @@ struct ClosedLoop::Impl {
     frame_truth.resize(truth_objects.size());
     if (!o.out_dir.empty())
       setup_outputs(o);
+    if (!o.serve.empty())
+      setup_live_view(o);
   }
 
   // The streamed outputs (emulator/output_stream.hpp): real-time runs drop what the writer
@@ -281,6 +283,19 @@ struct ClosedLoop::Impl {
     c.wait_when_full = !o.realtime;
     c.wake_latency = o.realtime;
     outputs = std::make_unique<OutputStream>(std::move(c));
+  }
+
+  // The live view (emulator/live_view.hpp): binds its server now, so that a bad address or a
+  // port in use is an error before the run.
+  void setup_live_view(const RunOptions& o) {
+    LiveViewConfig c;
+    c.serve = o.serve;
+    c.scenario = &scenario;
+    for (const auto& obj : scene.description().objects)
+      c.object_names.push_back(obj.name);
+    c.max_detections = detections.size();
+    c.max_truth = std::max<std::size_t>(frame_truth.size(), 1);
+    live_view = std::make_unique<LiveView>(std::move(c));
   }
 
   // [weather]: the one-way specific attenuation at the carrier, built once from the ITU-R
@@ -449,6 +464,7 @@ struct ClosedLoop::Impl {
   std::uint64_t timed_frames;     ///< frames whose stage times are kept one by one
   timing::StageProfiler profiler;
   std::unique_ptr<OutputStream> outputs;  ///< null without an output directory
+  std::unique_ptr<LiveView> live_view;    ///< null without RunOptions::serve
   std::vector<ObjectTruth> frame_truth;   ///< the current frame's objects in view
   double weather_db_per_m = 0.0;          ///< one-way specific attenuation [dB/m]; 0: free space
   double weather_gas_db_per_km = 0.0, weather_rain_db_per_km = 0.0, weather_fog_db_per_km = 0.0;
@@ -503,6 +519,20 @@ ClosedLoop::~ClosedLoop() = default;
 
 const Scenario& ClosedLoop::scenario() const noexcept {
   return impl_->scenario;
+}
+
+std::string ClosedLoop::live_view_address() const {
+  return impl_->live_view ? impl_->live_view->address() : std::string();
+}
+
+bool ClosedLoop::wait_for_viewer(double timeout_s) const {
+  return impl_->live_view && impl_->live_view->wait_for_client(timeout_s, impl_->options.stop);
+}
+
+std::optional<LiveViewCounters> ClosedLoop::live_view_counters() const {
+  if (!impl_->live_view)
+    return std::nullopt;
+  return impl_->live_view->counters();
 }
 
 std::string ClosedLoop::modbus_server_address() const {
@@ -824,12 +854,19 @@ bool ClosedLoop::step(FrameOutput& out, const OwnshipInput* ownship) {
 
   // The frame's record: to the writer thread, and to memory for the first recorded_frames.
   const std::span<const ObjectTruth> truth(m.frame_truth.data(), n_truth);
-  if (m.outputs) {
+  if (m.outputs || m.live_view) {
     std::array<std::int64_t, timing::kStageCount> stage_ns{};
     for (std::size_t k = 0; k < timing::kStageCount; ++k)
       stage_ns[k] = m.profiler.last_ns(static_cast<timing::Stage>(k));
-    m.outputs->frame(rec, stage_ns, std::span(m.icd_detections.data(), n_det),
-                     std::span(m.detections.data(), n_det), truth);
+    if (m.outputs) {
+      m.outputs->frame(rec, stage_ns, std::span(m.icd_detections.data(), n_det),
+                       std::span(m.detections.data(), n_det), truth);
+    }
+    // The live view: a copy into a preallocated snapshot and one atomic exchange.
+    if (m.live_view) {
+      m.live_view->publish(rec, valid ? pose.velocity_mps : glm::dvec3(0.0), stage_ns,
+                           std::span(m.icd_detections.data(), n_det), truth);
+    }
   }
   out.record = rec;
   out.detections = std::span<const io::icd::Detection>(m.icd_detections.data(), n_det);
@@ -872,6 +909,8 @@ RunResult ClosedLoop::finish() {
   if (rs.finished)
     throw std::logic_error("ClosedLoop: finish() called twice");
   rs.finished = true;
+  if (m.live_view)
+    m.live_view->end();
   RunResult& r = rs.r;
   r.wall_time_s = static_cast<double>(rs.wall.now_ns() - rs.run_start_wall) * 1e-9;
   r.overruns = rs.scheduler->overruns();
@@ -1255,6 +1294,34 @@ void ClosedLoop::write_outputs(const RunResult& r) {
         {"detections_written", oc.detections_written},
         {"writer_waits", oc.waits},
         {"files", std::move(files)}};
+  }
+  if (m.live_view) {
+    // The live view: updates the frame loop handed over, and what became of them.
+    const LiveViewCounters lc = m.live_view->counters();
+    const io::ws::ServerCounters& sc = lc.server;
+    rep["live_view"] = {
+        {"address", "http://" + lc.address + "/"},
+        {"view_updates_published", lc.updates_published},
+        {"view_updates_dropped", lc.updates_dropped},
+        {"view_updates_taken", lc.updates_taken},
+        {"view_updates_sent", lc.updates_sent},
+        {"view_updates_unseen", lc.updates_unseen},
+        {"note",
+         "dropped: superseded before the server took it (it takes the newest every 40 ms); "
+         "sent: pushed to at least one browser; unseen: taken with no browser connected"},
+        {"server",
+         {{"connections", sc.connections},
+          {"refused", sc.refused},
+          {"pages_served", sc.pages_served},
+          {"not_found", sc.not_found},
+          {"bad_requests", sc.bad_requests},
+          {"bad_handshakes", sc.bad_handshakes},
+          {"websocket_clients", sc.websocket_clients},
+          {"messages", sc.messages},
+          {"frames_queued", sc.frames_queued},
+          {"frames_skipped_slow_client", sc.frames_skipped},
+          {"slow_clients_closed", sc.slow_clients_closed},
+          {"clients_closed", sc.clients_closed}}}};
   }
   if (!m.options.trace_events_file.empty()) {
     rep["trace_events"] = {{"file", m.options.trace_events_file.string()},

@@ -8,11 +8,13 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "emulator/governor.hpp"
+#include "emulator/live_view.hpp"
 #include "emulator/scenario.hpp"
 #include "emulator/truth.hpp"
 #include "io/can_frame.hpp"
@@ -65,6 +67,10 @@ struct RunOptions {
   /// Chrome trace-event JSON of every stage of the first timing_frames_max frames, written by
   /// write_trace_events() (the path is checked, and the file created, at setup); "" = none.
   std::filesystem::path trace_events_file;
+  /// Live view (emulator/live_view.hpp): serve the page on "HOST:PORT", ":PORT" or "PORT"
+  /// (127.0.0.1; port 0 picks a free one, see live_view_address()); "" = off. The server is
+  /// bound at setup and serves the last frame until the ClosedLoop is destroyed.
+  std::string serve;
 };
 
 /// What one frame put on the bus.
@@ -244,6 +250,13 @@ class ClosedLoop {
   void write_trace_events() const;
 
   [[nodiscard]] const Scenario& scenario() const noexcept;
+  /// "HOST:PORT" the live view is served on ("" when not serving).
+  [[nodiscard]] std::string live_view_address() const;
+  /// Before run(): waits until a browser has opened the live view, at most `timeout_s` (or
+  /// until options.stop is raised). Returns whether one did (false without a live view).
+  bool wait_for_viewer(double timeout_s) const;
+  /// The live view's counters (nullopt without one). Thread-safe.
+  [[nodiscard]] std::optional<LiveViewCounters> live_view_counters() const;
   /// "HOST:PORT" the Modbus detection table is served on ("" when not serving). The server
   /// keeps serving the last table until the ClosedLoop is destroyed.
   [[nodiscard]] std::string modbus_server_address() const;

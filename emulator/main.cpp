@@ -23,6 +23,7 @@
 #include "emulator/cli_checks.hpp"
 #include "emulator/closed_loop.hpp"
 #include "emulator/image_tool.hpp"
+#include "emulator/live_view.hpp"
 #include "emulator/mpi_work.hpp"
 #include "emulator/rcs_tool.hpp"
 #include "emulator/sar_tool.hpp"
@@ -127,6 +128,16 @@ void print_summary(const emu::ClosedLoop& loop, const emu::RunResult& r, const s
                 static_cast<unsigned long long>(r.frames),
                 static_cast<unsigned long long>(r.frames_planned));
   }
+  if (const auto lv = loop.live_view_counters()) {
+    std::printf(
+        "  live view   http://%s/: %llu of %llu updates sent to browsers, %llu dropped "
+        "(superseded), %llu unseen (no browser); %llu browsers connected\n",
+        lv->address.c_str(), static_cast<unsigned long long>(lv->updates_sent),
+        static_cast<unsigned long long>(lv->updates_published),
+        static_cast<unsigned long long>(lv->updates_dropped),
+        static_cast<unsigned long long>(lv->updates_unseen),
+        static_cast<unsigned long long>(lv->server.websocket_clients));
+  }
   if (!out_dir.empty()) {
     std::printf(
         "  outputs     %s/{report.json,detections.json,truth.json,frames.csv,detections.png,"
@@ -158,7 +169,8 @@ emu::Scenario load_scenario_or_default(const std::string& scenario_file) {
 // outputs stream into `out` during the run; SIGINT or SIGTERM ends the run at a frame boundary
 // with every output written, report.json marked "interrupted", and exit status 128 + signal.
 int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const std::string& out,
-                 bool quiet, double linger_s = 0.0) {
+                 bool quiet, double linger_s = 0.0, double view_wait_s = 0.0,
+                 double view_linger_s = 0.0) {
   install_stop_handlers();
   options.stop = &g_stop_signal;
   options.out_dir = out;
@@ -185,6 +197,19 @@ int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const s
     std::fprintf(stderr, "radar-emu: modbus server listening on %s\n", modbus.c_str());
     std::fflush(stderr);
   }
+  // The live view (--serve): the readiness line, then (--serve-wait-s) the wait for a browser.
+  const std::string view = loop.live_view_address();
+  if (!view.empty()) {
+    std::fprintf(stderr, "radar-emu: live view on http://%s/\n", view.c_str());
+    std::fflush(stderr);
+    if (view_wait_s > 0.0 && !loop.wait_for_viewer(view_wait_s) &&
+        g_stop_signal.load(std::memory_order_relaxed) == 0) {
+      std::fprintf(stderr,
+                   "radar-emu: warning: --serve-wait-s: no browser opened the live view within "
+                   "%.1f s; running anyway\n",
+                   view_wait_s);
+    }
+  }
   const emu::RunResult result = loop.run();
   // Warnings go to stderr whatever -q says (-q silences progress and the summary only).
   for (const auto& w : result.realtime.warnings)
@@ -203,6 +228,19 @@ int execute_loop(const emu::Scenario& scenario, emu::RunOptions options, const s
     std::fflush(stderr);
     // In steps, so that a stop request ends the linger too.
     const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(linger_s);
+    while (std::chrono::steady_clock::now() < until &&
+           g_stop_signal.load(std::memory_order_relaxed) == 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  if (!view.empty() && view_linger_s > 0.0 && !result.interrupted) {
+    std::fprintf(stderr,
+                 "radar-emu: run complete; live view serving the last frame on "
+                 "http://%s/ for %.1f s\n",
+                 view.c_str(), view_linger_s);
+    std::fflush(stderr);
+    const auto until =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(view_linger_s);
     while (std::chrono::steady_clock::now() < until &&
            g_stop_signal.load(std::memory_order_relaxed) == 0) {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -230,6 +268,8 @@ struct BusArgs {
   std::string modbus_server;
   double modbus_linger_s = 0.0;
   std::string trace_events;
+  std::string serve;  // the live view (emulator/live_view.hpp)
+  double serve_wait_s = 0.0, serve_linger_s = 0.0;
 };
 
 int run_command(const std::string& scenario_file, std::uint64_t frames, const std::string& out,
@@ -251,7 +291,9 @@ int run_command(const std::string& scenario_file, std::uint64_t frames, const st
   options.nav_modbus = bus.nav_modbus;
   options.modbus_server = bus.modbus_server;
   options.trace_events_file = bus.trace_events;
-  return execute_loop(scenario, std::move(options), out, quiet, bus.modbus_linger_s);
+  options.serve = bus.serve;
+  return execute_loop(scenario, std::move(options), out, quiet, bus.modbus_linger_s,
+                      bus.serve_wait_s, bus.serve_linger_s);
 }
 
 // Replays a recorded input log (a run's bus_in.log, or any candump log of CANaerospace input)
@@ -435,6 +477,30 @@ int main(int argc, char** argv) {
                   "Write every stage of every frame as Chrome trace-event JSON to FILE (open in "
                   "https://ui.perfetto.dev or chrome://tracing)")
       ->check(emu::output_file());
+  CLI::Option* serve =
+      run->add_option("--serve", bus_args.serve,
+                      "Live view: serve a web page with the current frame's B-scope (detections "
+                      "against truth), the ownship and the stage times on HOST:PORT (:PORT or "
+                      "PORT: 127.0.0.1; port 0 picks a free one, printed on stderr)")
+          ->check(CLI::Validator(
+              [](std::string& v) {
+                try {
+                  (void)emu::parse_serve_address(v);
+                } catch (const std::invalid_argument& e) {
+                  const std::string m = e.what();
+                  return m.starts_with("--serve ") ? m.substr(8) : m;
+                }
+                return std::string();
+              },
+              "HOST:PORT"));
+  run->add_option("--serve-wait-s", bus_args.serve_wait_s,
+                  "Before the first frame, wait this long for a browser to open the live view [s]")
+      ->check(emu::in_range(0.0, 86400.0, "s"))
+      ->needs(serve);
+  run->add_option("--serve-linger-s", bus_args.serve_linger_s,
+                  "Keep serving the live view's last frame this long after the run [s]")
+      ->check(emu::in_range(0.0, 86400.0, "s"))
+      ->needs(serve);
   // --print-scenario prints and exits: every other option would be silently ignored.
   for (CLI::Option* o : run->get_options()) {
     if (o != print_flag && o->get_name() != "--help" && !o->get_name().empty())

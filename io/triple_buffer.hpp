@@ -24,11 +24,14 @@ class TripleBuffer {
   /// necessarily the last published value). Real-time safe.
   [[nodiscard]] T& write_slot() noexcept { return slots_[write_]; }
   /// Producer: makes write_slot() the newest value and takes a free slot for the next write.
-  /// Real-time safe (wait-free).
-  void publish() noexcept {
+  /// Returns true when the value it replaces had been published but never taken by update()
+  /// (superseded unread: a consumer that counts what it missed counts these). Real-time safe
+  /// (wait-free).
+  bool publish() noexcept {
     const std::uint8_t old =
         middle_.exchange(static_cast<std::uint8_t>(write_ | kDirty), std::memory_order_acq_rel);
     write_ = static_cast<std::uint8_t>(old & kIndexMask);
+    return (old & kDirty) != 0;
   }
 
   /// Consumer: takes the newest published value if there is one not yet taken; returns true

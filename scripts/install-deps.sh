@@ -21,6 +21,8 @@ PACKAGES=(
   # MPI scale-out of rcs / profile (emulator/mpi_work.hpp, docs/cluster.md; optional at build
   # time, CMake RADAR_EMU_MPI) and its mpirun test
   openmpi-bin libopenmpi-dev
+  # the live view's test (run --serve): headless Chromium screenshots the page
+  chromium
 )
 # Not installed here, needed only to regenerate the full-wave table tests/data/openems_plate
 # (scripts/openems_rcs.py; the tests read the checked-in table):

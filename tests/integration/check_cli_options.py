@@ -10,6 +10,7 @@ nothing on stdout (-q silences progress and the summary only).
 Usage: check_cli_options.py RADAR_EMU SOURCE_DIR WORK_DIR"""
 import json
 import os
+import socket
 import subprocess
 import sys
 import time
@@ -65,6 +66,11 @@ sc = {k: write(k + ".toml", v) for k, v in toml.items()}
 log = os.path.join(src, "tests", "data", "replay", "approach_gap.log")
 old_log = write("old.log", "(1000000000.000000) can0 137#0102\n")
 f10 = ["--freq-hz", "1e10"]
+# A port in use, for the live view's --serve (held open until the script ends).
+busy = socket.socket()
+busy.bind(("127.0.0.1", 0))
+busy.listen()
+busy_port = busy.getsockname()[1]
 
 BAD = [
     # unknown options, everywhere
@@ -81,6 +87,14 @@ BAD = [
     (["run", "--modbus-linger-s", "5"], "--modbus-linger-s requires --modbus-server"),
     (["run", "--modbus-server", ":0", "--modbus-linger-s", "-1"],
      "--modbus-linger-s: -1 is outside [0, 86400] s"),
+    # the live view (run --serve)
+    (["run", "--serve", "127.0.0.1:99999"],
+     "--serve: '127.0.0.1:99999': expected HOST:PORT, :PORT or PORT with a port 0-65535"),
+    (["run", "--serve-wait-s", "5"], "--serve-wait-s requires --serve"),
+    (["run", "--serve-linger-s", "5"], "--serve-linger-s requires --serve"),
+    (["run", "--serve", ":0", "--serve-wait-s", "-1"], "--serve-wait-s: -1 is outside [0, 86400] s"),
+    (["run", "--frames", "1000000", "--serve", f"127.0.0.1:{busy_port}"],
+     f"--serve 127.0.0.1:{busy_port}: cannot listen: Address already in use"),
     (["run", "--print-scenario", "--frames", "3"], "excludes --print-scenario"),
     (["run", "--print-scenario", "--out", d], "excludes --print-scenario"),
     (["run", "--frames", "0"], "--frames: Value 0 not in range"),

@@ -1,0 +1,120 @@
+#pragma once
+// A small HTTP/1.1 + WebSocket (RFC 6455) server that pushes text messages to browsers: it
+// serves one page (GET /) and upgrades GET <ws_path> to a WebSocket, over which it broadcasts
+// whatever its `source` hands it. It only pushes: what a client sends is parsed (RFC 6455
+// sec. 5.2) and answered where the protocol says so (ping: pong, close: close), its data
+// discarded.
+//
+// Why our own (about 500 lines on POSIX sockets) rather than a library: the server is push-only,
+// loopback by default, and has no TLS, so it needs the opening handshake (sec. 4.2, SHA-1 and
+// base64), unmasked server frames and the parsing of masked client frames: little protocol.
+// Boost.Beast would bring Boost into the build (Debian's 1.74, header-only, minutes more of
+// compile on CI's two cores for one source file); libwebsockets brings its own event loop and
+// TLS configuration to keep robust. Everything here runs on one thread with non-blocking
+// sockets and poll(): no client, however slow or hostile, blocks it or the caller.
+//
+// Robustness: a client's queued output is bounded (client_buffer_bytes): a message that does
+// not fit is skipped for that client and counted; a client that keeps not reading is closed.
+// Requests that are malformed, too long, not GET, or bad WebSocket handshakes get a 4xx answer
+// and are counted; a client that sends no complete request within request_timeout_s is closed;
+// beyond max_clients connections are refused with 503.
+
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <thread>
+
+namespace radar_emu::io::ws {
+
+/// SHA-1 of `data` (FIPS 180-4 sec. 6.1), as the WebSocket handshake needs it (RFC 6455
+/// sec. 4.2.2). Not for security.
+[[nodiscard]] std::array<std::uint8_t, 20> sha1(std::string_view data) noexcept;
+/// Base64 (RFC 4648 sec. 4, with padding).
+[[nodiscard]] std::string base64(std::span<const std::uint8_t> data);
+/// Sec-WebSocket-Accept for a client's Sec-WebSocket-Key: base64(SHA-1(key + the RFC 6455
+/// GUID)) (sec. 4.2.2 item 5.4).
+[[nodiscard]] std::string accept_key(std::string_view key);
+
+/// Opcodes (RFC 6455 sec. 5.2).
+enum class Opcode : std::uint8_t {
+  kText = 0x1,
+  kBinary = 0x2,
+  kClose = 0x8,
+  kPing = 0x9,
+  kPong = 0xA
+};
+/// Header of an unmasked, unfragmented (FIN) server frame carrying `payload_bytes` (RFC 6455
+/// sec. 5.2: 7-bit length, or 126 + 16-bit, or 127 + 64-bit, network byte order). Writes it to
+/// `out`; returns its length, 2, 4 or 10.
+std::size_t frame_header(Opcode opcode, std::uint64_t payload_bytes,
+                         std::array<std::uint8_t, 10>& out) noexcept;
+
+struct ServerConfig {
+  std::string host = "127.0.0.1";  ///< a numeric address or a name (getaddrinfo)
+  std::uint16_t port = 0;          ///< 0: a free one (see Server::address())
+  std::string page;                ///< served as text/html for GET / and GET /index.html
+  std::string ws_path = "/ws";     ///< the WebSocket endpoint
+  std::size_t max_clients = 32;    ///< connections beyond are answered 503 and closed
+  /// Output queued per client at most [bytes]; a message that does not fit is skipped for that
+  /// client (counted), and a client that misses slow_client_skips_max in a row is closed.
+  std::size_t client_buffer_bytes = 1u << 20;
+  std::uint32_t slow_client_skips_max = 100;
+  double request_timeout_s = 5.0;  ///< a client must send its whole request within this
+  std::size_t request_max_bytes = 8192;
+  int poll_interval_ms = 40;  ///< how often the server thread asks `source` for a message
+  /// Called on the server thread every poll_interval_ms with the WebSocket clients connected:
+  /// writes a new message into its first argument and returns true, or returns false when
+  /// there is nothing new. The last message is also sent to every client as it connects.
+  std::function<bool(std::string&, std::uint64_t)> source;
+};
+
+/// What the server did (all of it since it started).
+struct ServerCounters {
+  std::uint64_t connections = 0;          ///< TCP connections accepted
+  std::uint64_t refused = 0;              ///< over max_clients (503)
+  std::uint64_t pages_served = 0;         ///< GET / (200)
+  std::uint64_t not_found = 0;            ///< other paths (404)
+  std::uint64_t bad_requests = 0;         ///< malformed, too long, not GET, timed out (400/405/408)
+  std::uint64_t bad_handshakes = 0;       ///< GET ws_path without a valid RFC 6455 handshake (400)
+  std::uint64_t websocket_clients = 0;    ///< handshakes completed
+  std::uint64_t messages = 0;             ///< distinct messages taken from `source`
+  std::uint64_t frames_queued = 0;        ///< message frames queued to clients (one per client)
+  std::uint64_t frames_skipped = 0;       ///< ... skipped: the client's buffer was full
+  std::uint64_t slow_clients_closed = 0;  ///< closed after slow_client_skips_max skips in a row
+  std::uint64_t clients_closed = 0;       ///< WebSocket clients gone (close frame, EOF, error)
+  std::uint64_t clients_now = 0;          ///< WebSocket clients connected now
+};
+
+class Server {
+ public:
+  /// Binds and listens (throws std::runtime_error "HOST:PORT: cannot listen: REASON" when the
+  /// address does not resolve, is not local, or the port is taken), then starts the thread.
+  explicit Server(ServerConfig config);
+  /// Stops the thread and closes every connection.
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  /// "HOST:PORT" bound (the port the system chose when config.port was 0).
+  [[nodiscard]] const std::string& address() const noexcept { return address_; }
+  [[nodiscard]] std::uint16_t port() const noexcept { return port_; }
+  /// Thread-safe snapshot.
+  [[nodiscard]] ServerCounters counters() const noexcept;
+  /// WebSocket clients connected now (thread-safe).
+  [[nodiscard]] std::uint64_t clients() const noexcept;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string address_;
+  std::uint16_t port_ = 0;
+  std::thread thread_;
+};
+
+}  // namespace radar_emu::io::ws
