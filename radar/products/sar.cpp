@@ -128,6 +128,9 @@ std::size_t sar_chirp_samples(const SarParams& p) noexcept {
   const auto half = static_cast<std::size_t>(std::floor(p.pulse_duration_s * p.sample_rate_hz / 2));
   return 2 * half + 1;
 }
+std::size_t sar_filter_half_length(const SarParams& p) noexcept {
+  return sar_chirp_samples(p);
+}
 std::size_t sar_raw_samples(const SarParams& p) noexcept {
   return p.gates + sar_chirp_samples(p) - 1;
 }
@@ -290,7 +293,10 @@ SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper tap
               raw.data.size() == raw.pulses * raw.samples,
           "raw matrix does not match the parameters");
   const std::size_t nc = sar_chirp_samples(p), h = (nc - 1) / 2;
-  const std::size_t n = fft_size(raw.samples + nc);
+  // The filter's impulse response is kept to |k| <= m (header): an FFT of n >= samples + 2m + 1
+  // points makes the circular convolution a linear one over every output gate (no wrap-around).
+  const std::size_t m = sar_filter_half_length(p);
+  const std::size_t n = fft_size(raw.samples + 2 * m + 1);
   const double fs = p.sample_rate_hz, k_rate = p.bandwidth_hz / p.pulse_duration_s;
   // Replica at circular index (k mod n), k in [-h, h].
   Buffer ref = make_buffer(n);
@@ -299,14 +305,15 @@ SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper tap
     const double t = k / fs;
     ref[(j + n - h) % n] = std::polar(envelope(t, p.pulse_duration_s), kPi * k_rate * t * t);
   }
-  {
-    Plan plan(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(ref.get()), as_fftw(ref.get()),
-                               FFTW_FORWARD, FFTW_ESTIMATE));
-    fftw_execute(plan.p);
-  }
-  // Filter conj(S) W on |f| <= B/2; gain = the compressed peak of the replica itself.
-  std::vector<std::complex<double>> filter(n);
-  double gain = 0.0;
+  Buffer fil = make_buffer(n);
+  Plan fwd_ref(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(ref.get()), as_fftw(ref.get()),
+                                FFTW_FORWARD, FFTW_ESTIMATE));
+  Plan inv_fil(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(fil.get()), as_fftw(fil.get()),
+                                FFTW_BACKWARD, FFTW_ESTIMATE));
+  Plan fwd_fil(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(fil.get()), as_fftw(fil.get()),
+                                FFTW_FORWARD, FFTW_ESTIMATE));
+  fftw_execute(fwd_ref.p);
+  // Filter conj(S) W on |f| <= B/2.
   for (std::size_t j = 0; j < n; ++j) {
     const double f = (j < (n + 1) / 2 ? static_cast<double>(j)
                                       : static_cast<double>(j) - static_cast<double>(n)) *
@@ -318,7 +325,28 @@ SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper tap
     const double mag2 = std::norm(ref[j]);
     if (mag2 <= 0.0)
       continue;
-    filter[j] = std::conj(ref[j]) / mag2 * taper_weight(taper, u);
+    fil[j] = std::conj(ref[j]) / mag2 * taper_weight(taper, u);
+  }
+  // Its impulse response, band-limited by a hard edge, rings as 1/k forever: kept to |k| <= m
+  // with raised-cosine ends over the outer quarter (Tukey window; header).
+  fftw_execute(inv_fil.p);
+  const std::size_t flat = m - m / 4;
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::size_t k = std::min(j, n - j);  // |lag|
+    double w = 1.0;
+    if (k > m)
+      w = 0.0;
+    else if (k > flat)
+      w = 0.5 *
+          (1.0 + std::cos(kPi * static_cast<double>(k - flat) / static_cast<double>(m + 1 - flat)));
+    fil[j] *= w;
+  }
+  fftw_execute(fwd_fil.p);
+  // Gain: the compressed peak of the replica itself (FFTW's transforms are unnormalised).
+  std::vector<std::complex<double>> filter(n);
+  double gain = 0.0;
+  for (std::size_t j = 0; j < n; ++j) {
+    filter[j] = fil[j] / static_cast<double>(n);
     gain += (filter[j] * ref[j]).real();
   }
   gain /= static_cast<double>(n);

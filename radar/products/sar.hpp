@@ -31,7 +31,16 @@
 // or Hamming, 0.54 + 0.46 cos(2 pi f / B), Harris, Proc. IEEE 66(1), 1978): the compressed
 // spectrum is then exactly the taper, without the Fresnel ripple of a chirp's spectrum (which
 // raises the sidelobes of a short chirp by a dB and more); normalised so that a point scatterer's
-// peak is its amplitude whatever the taper. Gate g is at slant range near_range + g c / (2 f_s).
+// peak is its amplitude whatever the taper. That H, cut hard at +-B/2, has an impulse response
+// that rings as 1/k without end (the sinc of a rectangular spectrum): a point's compressed
+// sidelobes then spread over the whole swath (-62 dB at 300 gates unweighted, so a 60 dBsm return
+// drew a line over the speckle), and the FFT's finite length wrapped them around. The filter is
+// therefore kept to taps |k| <= m = sar_filter_half_length() (one replica length), with
+// raised-cosine ends over its outer quarter (a Tukey window, Harris 1978), and applied by an FFT
+// long enough for a linear convolution: a point's compressed response ends within (replica - 1)
+// / 2 + m gates of it, a matched filter's own reach (its autocorrelation spans +-T) plus half,
+// while the main lobe and first sidelobes keep the equalised ones (unit-tested PSLR and ISLR).
+// Gate g is at slant range near_range + g c / (2 f_s).
 //
 // Backprojection (time-domain correlation; Soumekh, Synthetic Aperture Radar Signal Processing
 // with MATLAB Algorithms, 1999; Cumming & Wong 2005, ch. 1): pixel X gets
@@ -93,6 +102,8 @@ void validate(const SarParams& p);
 /// Samples in one chirp replica (odd, centred), and in one raw pulse (gates + replica - 1).
 [[nodiscard]] std::size_t sar_chirp_samples(const SarParams& p) noexcept;
 [[nodiscard]] std::size_t sar_raw_samples(const SarParams& p) noexcept;
+/// Half length m of the range-compression filter's impulse response (taps |k| <= m).
+[[nodiscard]] std::size_t sar_filter_half_length(const SarParams& p) noexcept;
 [[nodiscard]] double sar_pulse_time_s(const SarParams& p, std::size_t pulse) noexcept;
 [[nodiscard]] glm::dvec3 sar_platform_m(const SarParams& p, double t_s) noexcept;
 /// World from antenna (x boresight, y right, z down), the same for every pulse.

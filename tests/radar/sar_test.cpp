@@ -11,6 +11,7 @@
 #include <cmath>
 #include <complex>
 #include <iostream>
+#include <span>
 #include <vector>
 
 #include "radar/clutter/speckle.hpp"
@@ -234,6 +235,70 @@ TEST(SarClutter, HomogeneousFieldMeanSigma0AndExponentialSpeckle) {
             << " over " << xs.size() << " samples (critical " << critical << ")\n";
   EXPECT_NEAR(db(est), db(sigma0), 0.5);
   EXPECT_LT(d, critical);
+}
+
+// A point's range-compressed response is confined near it: beyond two pulse lengths (the
+// matched filter's own support is one, the equalising filter's sar.hpp gives it 1.5) nothing of it
+// is left above -100 dB of its peak, even for an echo that the recorded window clips. An
+// equalising filter with a hard band edge rings as 1/(pi B/fs n) forever (about -62 dB at 300
+// gates) and, in a finite FFT, wraps around: a strong return (a truck's 60 dBsm dihedral) then
+// drew a line over the whole swath at the clutter's level.
+TEST(Sar, RangeCompressedPointIsConfinedNearIt) {
+  SarParams p = small_case();
+  p.pulses = 2;
+  p.gates = 1024;
+  const double gate = sar_gate_m(p);
+  const auto h = static_cast<std::ptrdiff_t>((sar_chirp_samples(p) - 1) / 2);
+  const auto reach = static_cast<std::ptrdiff_t>(2 * sar_chirp_samples(p));
+  const glm::dvec3 boresight = sar_world_from_antenna(p)[0];
+  const auto range_of = [&](double g) { return p.near_range_m + g * gate; };
+  SarRaw raw = make_raw(p);
+  auto row = [&](std::size_t i) {
+    return std::span(raw.data).subspan(i * raw.samples, raw.samples);
+  };
+  // Pulse 0: one whole echo at gate 300.3. Pulse 1: two echoes centred 10 samples inside each end
+  // of the recorded window, most of their chirp outside it (clipped).
+  const std::vector<glm::dvec3> dirs = {boresight, boresight};
+  const double g0 = 300.3;
+  const double g_near = static_cast<double>(10 - h);
+  const double g_far = static_cast<double>(static_cast<std::ptrdiff_t>(raw.samples) - 10 - h);
+  const std::vector<SarEcho> whole = {{{1.0, 0.0}, range_of(g0)}};
+  const std::vector<SarEcho> clipped = {{{1.0, 0.0}, range_of(g_near)},
+                                        {{1.0, 0.0}, range_of(g_far)}};
+  add_echoes(p, whole, std::span(dirs).first(1), row(0));
+  add_echoes(p, clipped, dirs, row(1));
+  for (const SarTaper taper : {SarTaper::kNone, SarTaper::kHamming}) {
+    const SarCompressed rc = range_compress(p, raw, taper);
+    const auto at = [&](std::size_t i, std::ptrdiff_t g) {
+      return std::abs(rc.data[i * rc.gates + static_cast<std::size_t>(g)]);
+    };
+    double peak = 0.0;
+    for (std::ptrdiff_t g = 0; g < static_cast<std::ptrdiff_t>(p.gates); ++g)
+      peak = std::max(peak, static_cast<double>(at(0, g)));
+    // The whole echo's peak is its amplitude through the radar equation (sar.hpp), read 0.3 gate
+    // off its centre: times the taper's response there, (B / f_s) 0.3 bins out.
+    const bool hamming = taper == SarTaper::kHamming;
+    const double off =
+        response(p.bandwidth_hz / p.sample_rate_hz * 0.3, hamming) / response(0.0, hamming);
+    const double expected = std::sqrt(p.transmit_power_w) * sar_wavelength_m(p) *
+                            sar_two_way_gain(p, boresight) /
+                            (std::pow(4.0 * kPi, 1.5) * range_of(g0) * range_of(g0)) * off;
+    EXPECT_NEAR(peak / expected, 1.0, 0.01);
+    double far0 = 0.0, far1 = 0.0;
+    for (std::ptrdiff_t g = 0; g < static_cast<std::ptrdiff_t>(p.gates); ++g) {
+      if (std::abs(static_cast<double>(g) - g0) > static_cast<double>(reach))
+        far0 = std::max(far0, static_cast<double>(at(0, g)));
+      if (static_cast<double>(g) - g_near > static_cast<double>(reach) &&
+          g_far - static_cast<double>(g) > static_cast<double>(reach))
+        far1 = std::max(far1, static_cast<double>(at(1, g)));
+    }
+    std::cout << (taper == SarTaper::kNone ? "unweighted" : "hamming") << ": beyond " << reach
+              << " gates, whole echo " << 20.0 * std::log10(far0 / peak + 1e-300)
+              << " dB, clipped echoes " << 20.0 * std::log10(far1 / peak + 1e-300)
+              << " dB of the peak\n";
+    EXPECT_LT(far0, 1e-5 * peak);
+    EXPECT_LT(far1, 1e-5 * peak);
+  }
 }
 
 TEST(Sar, BadParametersAreClearErrors) {
