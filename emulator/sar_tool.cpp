@@ -743,13 +743,27 @@ int run_sar_tool(const SarToolOptions& o) {
       j["radial_velocity_mps"] = v_r;
       const double shift = -range * v_r / c.speed_mps;
       j["predicted_azimuth_shift_m"] = shift;
+      // The shift is where the mover's echo has zero Doppler: the radar sees that only when the
+      // beam reaches that place. With the Gaussian beam (radar/products/sar.hpp) the two-way
+      // power gain at azimuth angle a = |shift| / R is -8 ln2 (a / theta_az)^2 nepers, in dB
+      // 10 log10 of it; below the synthesis' own cut (-60 dB) the mover is seen only near
+      // broadside, at a Doppler 2 v_r / lambda the processing does not pass: it images (faint,
+      // defocused) near its own place, not at the shift.
+      const double a_rel = std::abs(shift) / range / p.azimuth_beamwidth_rad;
+      const double gain_db = -80.0 * std::log10(2.0) * a_rel * a_rel;  // 10 log10 e^(-8 ln2 x^2)
+      const bool in_beam = gain_db >= -60.0;
+      j["doppler_hz"] = 2.0 * v_r / lambda;
+      j["zero_doppler_two_way_gain_db"] = gain_db;
+      j["zero_doppler_in_beam"] = in_beam;
+      const double search_shift = in_beam ? shift : 0.0;
       // Where it imaged: the brightest pixel within +-15 m along track and +-10 m in ground range
-      // of the predicted place (its ground range where the platform passes its along-track place).
+      // of the predicted place (the zero-Doppler place when in the beam, else its own; its ground
+      // range where the platform passes its along-track place).
       const double t_b = glm::dot(t.position_m - p.start_position_m, tdir) / c.speed_mps;
       const glm::dvec3 at_b = t.position_m + t.velocity_mps * t_b;
       const double col_b = glm::dot(at_b - grid.origin_m, ldir) / grid.ground_range_spacing_m;
       const double row_p = glm::dot(at_b - grid.origin_m, tdir) / grid.azimuth_spacing_m +
-                           shift / grid.azimuth_spacing_m;
+                           search_shift / grid.azimuth_spacing_m;
       const auto span_r = static_cast<std::ptrdiff_t>(15.0 / grid.azimuth_spacing_m);
       const auto span_c = static_cast<std::ptrdiff_t>(10.0 / grid.ground_range_spacing_m);
       double best = -1.0;
@@ -770,7 +784,7 @@ int run_sar_tool(const SarToolOptions& o) {
         }
       if (br >= 0) {
         j["measured_azimuth_shift_m"] =
-            (static_cast<double>(br) - (row_p - shift / grid.azimuth_spacing_m)) *
+            (static_cast<double>(br) - (row_p - search_shift / grid.azimuth_spacing_m)) *
             grid.azimuth_spacing_m;
         j["measured_ground_range_offset_m"] =
             (static_cast<double>(bc) - col_b) * grid.ground_range_spacing_m;

@@ -106,6 +106,12 @@ for taper in ("none", "hamming"):
         shift = -R * v_r / V
         print(f"{taper} mover: shift {m['measured_azimuth_shift_m']:.2f} m (theory {shift:.2f})")
         check(abs(m["measured_azimuth_shift_m"] - shift) < 1.0, f"{taper}: mover's azimuth shift")
+        # Its zero-Doppler place is one beamwidth off broadside: two-way Gaussian gain
+        # -8 ln2 (a / theta)^2 nepers = -24.08 (a / theta)^2 dB, in the beam (above -60 dB).
+        a = abs(shift) / R / math.radians(j["antenna"]["azimuth_beamwidth_deg"])
+        check(m["zero_doppler_in_beam"] and abs(m["zero_doppler_two_way_gain_db"] +
+                                                24.0824 * a * a) < 0.05,
+              f"{taper}: the mover's zero-Doppler gain {m['zero_doppler_two_way_gain_db']}")
         check(abs(m["measured_ground_range_offset_m"]) < 2.5, f"{taper}: mover's range")
     for t in targets:
         w = f"{taper} {t['name']}"
