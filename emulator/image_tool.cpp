@@ -86,7 +86,8 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
     if (v > 0.0f)
       sorted.push_back(v);
   std::sort(sorted.begin(), sorted.end());
-  const double top_db = sorted.empty() ? 0.0 : db(sorted[(sorted.size() - 1) * 995 / 1000]);
+  const double top_db =
+      sorted.empty() ? 0.0 : db(static_cast<double>(sorted[(sorted.size() - 1) * 995 / 1000]));
   constexpr double kRangeDb = 40.0;
   const radar::EvImageConfig& g = p.config;
   const double az0 = g.azimuth_min_rad * kDeg, el1 = g.elevation_max_rad * kDeg;
@@ -115,7 +116,8 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
   radar_map.value_range = kRangeDb;
   for (std::size_t y = 0; y < rows; ++y) {
     for (std::size_t x = 0; x < cols; ++x)
-      radar_map.values.push_back(db(im.at(static_cast<int>(rows - 1 - y), static_cast<int>(x))));
+      radar_map.values.push_back(
+          db(static_cast<double>(im.at(static_cast<int>(rows - 1 - y), static_cast<int>(x)))));
   }
   std::vector<Canvas> panels{render_heatmap(radar_map)};
   const auto w = static_cast<std::size_t>(im.columns * s),
@@ -232,7 +234,8 @@ int run_image_tool(const ImageToolOptions& o) {
         std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.2f,%.2f,%.3f,%.3f\n", r, col,
                       radar::ev_column_azimuth_rad(g, col) * kDeg,
                       radar::ev_row_elevation_rad(g, r) * kDeg, e[r + 1], e[r],
-                      db(im.intensity_m2[i]), db(im.mean_m2[i]));
+                      db(static_cast<double>(im.intensity_m2[i])),
+                      db(static_cast<double>(im.mean_m2[i])));
         f << line;
       }
     }

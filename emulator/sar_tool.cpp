@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "emulator/sar_case.hpp"
+
 #ifdef RADAR_EMU_HAVE_GDAL
 #include <cpl_conv.h>
 #include <cpl_string.h>
@@ -156,38 +158,6 @@ class Reader {
   std::string origin_, name_;
 };
 
-struct TargetCase {
-  std::string name;
-  sc::TargetSpec spec;
-  glm::dvec3 position_m{0.0};
-  glm::dvec3 velocity_mps{0.0};
-  double heading_rad = 0.0;  ///< non-trihedrals: body +x toward this heading (0 north, cw)
-};
-
-struct SarCase {
-  rd::SarParams p;
-  double altitude_m = 2000.0;
-  double speed_mps = 100.0;
-  double heading_rad = 90.0 * kDeg;
-  double synthetic_beamwidth_rad = 0.032 * kDeg;
-  rd::SarTaper taper = rd::SarTaper::kNone;
-  std::size_t upsample = 16;
-  double image_width_m = 2000.0;
-  double azimuth_spacing_m = 0.0, ground_range_spacing_m = 0.0;  ///< 0: from the resolution
-  double theta_rad = 0.0;                                        ///< derived
-  double ground_centre_m = 0.0;                                  ///< derived
-  rd::Polarisation pol = rd::Polarisation::kVV;
-  std::string pol_name = "VV";
-  std::string ground_material = "grass";
-  bool clutter = true;
-  double clutter_cell_m = 0.0;  ///< 0: a third of the finer resolution
-  std::uint64_t speckle_seed = 20261124;
-  double target_ray_spacing_m = 0.05;
-  int max_bounces = 3;
-  double latitude_deg = 43.6, longitude_deg = 1.4;
-  std::vector<TargetCase> targets;
-};
-
 rd::Polarisation parse_pol(const std::string& s, const Reader& r) {
   if (s == "HH")
     return rd::Polarisation::kHH;
@@ -200,15 +170,8 @@ rd::Polarisation parse_pol(const std::string& s, const Reader& r) {
   r.fail("polarisation", "expected HH, HV, VH or VV");
 }
 
-SarCase load_case(const std::string& path) {
-  toml::table root;
-  try {
-    root = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << path << ":" << e.source().begin.line << ": " << e.description();
-    throw std::invalid_argument(os.str());
-  }
+// The case from its parsed TOML; `path` names the file (or text) in every error.
+SarCase case_from_table(const toml::table& root, const std::string& path) {
   for (const auto& [key, value] : root) {
     const std::string k(key.str());
     if (k != "radar" && k != "platform" && k != "antenna" && k != "processing" && k != "scene")
@@ -374,6 +337,22 @@ SarCase load_case(const std::string& path) {
     throw std::invalid_argument(path + ": " + e.what());
   }
   return c;
+}
+
+std::invalid_argument toml_error(const std::string& origin, const toml::parse_error& e) {
+  std::ostringstream os;
+  os << origin << ":" << e.source().begin.line << ": " << e.description();
+  return std::invalid_argument(os.str());
+}
+
+SarCase load_case(const std::string& path) {
+  toml::table root;
+  try {
+    root = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw toml_error(path, e);
+  }
+  return case_from_table(root, path);
 }
 
 // ------------------------------------------------------------------------------ the scene
@@ -576,6 +555,16 @@ std::string fmt(double v) {
 }
 
 }  // namespace
+
+SarCase parse_sar_case(std::string_view text, const std::string& origin) {
+  toml::table root;
+  try {
+    root = toml::parse(text, std::string_view(origin));
+  } catch (const toml::parse_error& e) {
+    throw toml_error(origin, e);
+  }
+  return case_from_table(root, origin);
+}
 
 bool sar_geotiff_available() noexcept {
 #ifdef RADAR_EMU_HAVE_GDAL

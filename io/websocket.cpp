@@ -212,6 +212,141 @@ std::string plain(std::string_view status, std::string_view extra = {}) {
 
 }  // namespace
 
+int http_status(Request::Kind kind) noexcept {
+  switch (kind) {
+    case Request::Kind::kMalformed:
+    case Request::Kind::kBadHandshake:
+      return 400;
+    case Request::Kind::kMethodNotAllowed:
+      return 405;
+    case Request::Kind::kWrongVersion:
+      return 426;
+    case Request::Kind::kWebSocket:
+      return 101;
+    case Request::Kind::kPage:
+      return 200;
+    case Request::Kind::kNotFound:
+      return 404;
+  }
+  return 400;
+}
+
+Request parse_request(std::string_view head, std::string_view ws_path) {
+  Request r;
+  // Request line: METHOD SP TARGET SP HTTP/1.x (RFC 9112 sec. 3).
+  const std::size_t eol = head.find("\r\n");
+  const std::string_view line = head.substr(0, eol);
+  const std::size_t sp1 = line.find(' ');
+  const std::size_t sp2 = sp1 == std::string_view::npos ? sp1 : line.find(' ', sp1 + 1);
+  if (sp2 == std::string_view::npos || !line.substr(sp2 + 1).starts_with("HTTP/1.")) {
+    r.kind = Request::Kind::kMalformed;
+    return r;
+  }
+  const std::string_view method = line.substr(0, sp1);
+  std::string_view path = line.substr(sp1 + 1, sp2 - sp1 - 1);
+  path = path.substr(0, path.find('?'));
+  // Headers, names case-insensitive.
+  std::string upgrade, connection, version, key;
+  bool host = false;
+  std::string_view rest = eol == std::string_view::npos ? std::string_view() : head.substr(eol + 2);
+  while (!rest.empty()) {
+    const std::size_t e = rest.find("\r\n");
+    const std::string_view h = rest.substr(0, e);
+    rest = e == std::string_view::npos ? std::string_view() : rest.substr(e + 2);
+    const std::size_t colon = h.find(':');
+    if (colon == std::string_view::npos)
+      continue;
+    const std::string name = lower(trim(h.substr(0, colon)));
+    const std::string_view value = trim(h.substr(colon + 1));
+    if (name == "upgrade")
+      upgrade = value;
+    else if (name == "connection")
+      connection = value;
+    else if (name == "sec-websocket-version")
+      version = value;
+    else if (name == "sec-websocket-key")
+      key = value;
+    else if (name == "host")
+      host = true;
+  }
+  if (method != "GET") {
+    r.kind = Request::Kind::kMethodNotAllowed;
+    return r;
+  }
+  if (path == ws_path) {
+    // The opening handshake, RFC 6455 sec. 4.2.1: Host, Upgrade: websocket, Connection:
+    // Upgrade, a 16-byte key, version 13 (else 426 with the version we speak, sec. 4.4).
+    if (version != "13") {
+      r.kind = Request::Kind::kWrongVersion;
+      return r;
+    }
+    if (!host || !has_token(upgrade, "websocket") || !has_token(connection, "upgrade") ||
+        !valid_key(key)) {
+      r.kind = Request::Kind::kBadHandshake;
+      return r;
+    }
+    r.kind = Request::Kind::kWebSocket;
+    r.key = std::move(key);
+    return r;
+  }
+  r.kind = path == "/" || path == "/index.html" ? Request::Kind::kPage : Request::Kind::kNotFound;
+  return r;
+}
+
+ClientFrame parse_client_frame(std::span<const std::uint8_t> in, std::size_t max_payload_bytes,
+                               std::string& payload) {
+  ClientFrame f;
+  const std::size_t avail = in.size();
+  if (avail < 2)
+    return f;
+  const std::uint8_t op = in[0] & 0x0fu;
+  const bool masked = (in[1] & 0x80u) != 0;
+  std::uint64_t len = in[1] & 0x7fu;
+  std::size_t hdr = 2;
+  if (len == 126) {
+    hdr = 4;
+    if (avail < hdr)
+      return f;
+    len = static_cast<std::uint64_t>(in[2]) << 8 | in[3];
+  } else if (len == 127) {
+    hdr = 10;
+    if (avail < hdr)
+      return f;
+    len = 0;
+    for (std::size_t i = 0; i < 8; ++i)
+      len = len << 8 | in[2 + i];
+  }
+  if (!masked) {
+    f.status = ClientFrame::Status::kError;
+    f.close_code = 1002;  // protocol error
+    return f;
+  }
+  if (len > max_payload_bytes) {
+    f.status = ClientFrame::Status::kError;
+    f.close_code = 1009;  // message too big
+    return f;
+  }
+  const std::size_t total = hdr + 4 + static_cast<std::size_t>(len);
+  if (avail < total)
+    return f;
+  const bool control = (op & 0x8u) != 0;
+  const bool known = op <= 0x2 || op == static_cast<std::uint8_t>(Opcode::kClose) ||
+                     op == static_cast<std::uint8_t>(Opcode::kPing) ||
+                     op == static_cast<std::uint8_t>(Opcode::kPong);
+  if ((control && len > 125) || !known) {
+    f.status = ClientFrame::Status::kError;
+    f.close_code = 1002;  // a control frame over 125 bytes (sec. 5.5), or a reserved opcode
+    return f;
+  }
+  payload.assign(static_cast<std::size_t>(len), '\0');
+  for (std::size_t i = 0; i < payload.size(); ++i)
+    payload[i] = static_cast<char>(in[hdr + 4 + i] ^ in[hdr + (i & 3u)]);
+  f.status = ClientFrame::Status::kFrame;
+  f.opcode = op;
+  f.size = total;
+  return f;
+}
+
 struct Server::Impl {
   struct Client {
     int fd = -1;
@@ -346,132 +481,66 @@ struct Server::Impl {
   }
 
   void handle_request(Client& c, std::string_view head) {
-    // Request line: METHOD SP TARGET SP HTTP/1.x (RFC 9112 sec. 3).
-    const std::size_t eol = head.find("\r\n");
-    const std::string_view line = head.substr(0, eol);
-    const std::size_t sp1 = line.find(' ');
-    const std::size_t sp2 = sp1 == std::string_view::npos ? sp1 : line.find(' ', sp1 + 1);
-    if (sp2 == std::string_view::npos || !line.substr(sp2 + 1).starts_with("HTTP/1.")) {
-      bump(counters.bad_requests);
-      answer_and_close(c, plain("400 Bad Request"));
-      return;
-    }
-    const std::string_view method = line.substr(0, sp1);
-    std::string_view path = line.substr(sp1 + 1, sp2 - sp1 - 1);
-    path = path.substr(0, path.find('?'));
-    // Headers, names case-insensitive.
-    std::string upgrade, connection, version, key;
-    bool host = false;
-    std::string_view rest =
-        eol == std::string_view::npos ? std::string_view() : head.substr(eol + 2);
-    while (!rest.empty()) {
-      const std::size_t e = rest.find("\r\n");
-      const std::string_view h = rest.substr(0, e);
-      rest = e == std::string_view::npos ? std::string_view() : rest.substr(e + 2);
-      const std::size_t colon = h.find(':');
-      if (colon == std::string_view::npos)
-        continue;
-      const std::string name = lower(trim(h.substr(0, colon)));
-      const std::string_view value = trim(h.substr(colon + 1));
-      if (name == "upgrade")
-        upgrade = value;
-      else if (name == "connection")
-        connection = value;
-      else if (name == "sec-websocket-version")
-        version = value;
-      else if (name == "sec-websocket-key")
-        key = value;
-      else if (name == "host")
-        host = true;
-    }
-    if (method != "GET") {
-      bump(counters.bad_requests);
-      answer_and_close(c, plain("405 Method Not Allowed", "Allow: GET\r\n"));
-      return;
-    }
-    if (path == config.ws_path) {
-      // The opening handshake, RFC 6455 sec. 4.2.1: Host, Upgrade: websocket, Connection:
-      // Upgrade, a 16-byte key, version 13 (else 426 with the version we speak, sec. 4.4).
-      if (version != "13") {
+    Request req = parse_request(head, config.ws_path);
+    switch (req.kind) {
+      case Request::Kind::kMalformed:
+        bump(counters.bad_requests);
+        answer_and_close(c, plain("400 Bad Request"));
+        return;
+      case Request::Kind::kMethodNotAllowed:
+        bump(counters.bad_requests);
+        answer_and_close(c, plain("405 Method Not Allowed", "Allow: GET\r\n"));
+        return;
+      case Request::Kind::kWrongVersion:
         bump(counters.bad_handshakes);
         answer_and_close(c, plain("426 Upgrade Required", "Sec-WebSocket-Version: 13\r\n"));
         return;
-      }
-      if (!host || !has_token(upgrade, "websocket") || !has_token(connection, "upgrade") ||
-          !valid_key(key)) {
+      case Request::Kind::kBadHandshake:
         bump(counters.bad_handshakes);
         answer_and_close(c, plain("400 Bad Request"));
         return;
+      case Request::Kind::kWebSocket: {
+        std::string r =
+            "HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+            "Sec-WebSocket-Accept: ";
+        r += accept_key(req.key);
+        r += "\r\n\r\n";
+        (void)queue(c, r);
+        c.state = Client::State::kWebSocket;
+        bump(counters.websocket_clients);
+        bump(counters.clients_now);
+        if (have_message && queue_frame(c, Opcode::kText, last_message))
+          bump(counters.frames_queued);
+        return;
       }
-      std::string r =
-          "HTTP/1.1 101 Switching Protocols\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-          "Sec-WebSocket-Accept: ";
-      r += accept_key(key);
-      r += "\r\n\r\n";
-      (void)queue(c, r);
-      c.state = Client::State::kWebSocket;
-      bump(counters.websocket_clients);
-      bump(counters.clients_now);
-      if (have_message && queue_frame(c, Opcode::kText, last_message))
-        bump(counters.frames_queued);
-      return;
-    }
-    if (path == "/" || path == "/index.html") {
-      bump(counters.pages_served);
-      answer_and_close(c, response("200 OK", "", "text/html; charset=utf-8", config.page));
-      return;
+      case Request::Kind::kPage:
+        bump(counters.pages_served);
+        answer_and_close(c, response("200 OK", "", "text/html; charset=utf-8", config.page));
+        return;
+      case Request::Kind::kNotFound:
+        break;
     }
     bump(counters.not_found);
     answer_and_close(c, plain("404 Not Found"));
   }
 
-  // Client frames (RFC 6455 sec. 5.2): masked (sec. 5.3; unmasked is a protocol error, 1002).
-  // Data is discarded; ping is answered with pong, close with close (sec. 5.5.1).
+  // Client frames (RFC 6455 sec. 5.2, parse_client_frame): data is discarded; ping is answered
+  // with pong, close with close (sec. 5.5.1); a protocol error closes with its code.
   void handle_frames(Client& c) {
     std::size_t pos = 0;
     const auto* b = reinterpret_cast<const std::uint8_t*>(c.in.data());
+    std::string payload;
     while (c.state == Client::State::kWebSocket) {
-      const std::size_t avail = c.in.size() - pos;
-      if (avail < 2)
+      const ClientFrame f = parse_client_frame(std::span(b + pos, c.in.size() - pos),
+                                               config.request_max_bytes, payload);
+      if (f.status == ClientFrame::Status::kIncomplete)
         break;
-      const std::uint8_t op = b[pos] & 0x0fu;
-      const bool masked = (b[pos + 1] & 0x80u) != 0;
-      std::uint64_t len = b[pos + 1] & 0x7fu;
-      std::size_t hdr = 2;
-      if (len == 126) {
-        hdr = 4;
-        if (avail < hdr)
-          break;
-        len = static_cast<std::uint64_t>(b[pos + 2]) << 8 | b[pos + 3];
-      } else if (len == 127) {
-        hdr = 10;
-        if (avail < hdr)
-          break;
-        len = 0;
-        for (std::size_t i = 0; i < 8; ++i)
-          len = len << 8 | b[pos + 2 + i];
-      }
-      if (!masked) {
-        close_frame_and_close(c, 1002);  // protocol error
+      if (f.status == ClientFrame::Status::kError) {
+        close_frame_and_close(c, f.close_code);
         return;
       }
-      if (len > config.request_max_bytes) {
-        close_frame_and_close(c, 1009);  // message too big
-        return;
-      }
-      const std::size_t total = hdr + 4 + static_cast<std::size_t>(len);
-      if (avail < total)
-        break;
-      const bool control = (op & 0x8u) != 0;
-      if (control && len > 125) {
-        close_frame_and_close(c, 1002);
-        return;
-      }
-      std::string payload(static_cast<std::size_t>(len), '\0');
-      for (std::size_t i = 0; i < payload.size(); ++i)
-        payload[i] = static_cast<char>(b[pos + hdr + 4 + i] ^ b[pos + hdr + (i & 3u)]);
-      pos += total;
-      if (op == static_cast<std::uint8_t>(Opcode::kClose)) {
+      pos += f.size;
+      if (f.opcode == static_cast<std::uint8_t>(Opcode::kClose)) {
         std::array<std::uint8_t, 10> h{};
         const std::size_t n =
             frame_header(Opcode::kClose, std::min<std::size_t>(payload.size(), 2), h);
@@ -480,12 +549,8 @@ struct Server::Impl {
         answer_and_close(c, reply);
         return;
       }
-      if (op == static_cast<std::uint8_t>(Opcode::kPing)) {
+      if (f.opcode == static_cast<std::uint8_t>(Opcode::kPing))
         (void)queue_frame(c, Opcode::kPong, payload);
-      } else if (op > 0x2 && op != static_cast<std::uint8_t>(Opcode::kPong)) {
-        close_frame_and_close(c, 1002);  // reserved opcode
-        return;
-      }
     }
     c.in.erase(0, pos);
   }

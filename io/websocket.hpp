@@ -55,6 +55,48 @@ enum class Opcode : std::uint8_t {
 std::size_t frame_header(Opcode opcode, std::uint64_t payload_bytes,
                          std::array<std::uint8_t, 10>& out) noexcept;
 
+/// What the server makes of one HTTP request head (the bytes before the blank line that ends
+/// it, RFC 9112 sec. 2.1), given its WebSocket endpoint. Pure: the server calls it on every
+/// request, the fuzz harness (tests/fuzz/fuzz_websocket.cpp) on arbitrary bytes.
+struct Request {
+  enum class Kind : std::uint8_t {
+    kMalformed,         ///< no "METHOD SP TARGET SP HTTP/1.x" request line: 400
+    kMethodNotAllowed,  ///< a method other than GET: 405 (Allow: GET)
+    kWrongVersion,      ///< GET ws_path without Sec-WebSocket-Version: 13: 426 (sec. 4.4)
+    kBadHandshake,      ///< GET ws_path without Host, Upgrade: websocket, Connection: Upgrade
+                        ///< or a valid 16-byte Sec-WebSocket-Key: 400 (sec. 4.2.1)
+    kWebSocket,         ///< a valid opening handshake: 101 Switching Protocols
+    kPage,              ///< GET / or GET /index.html (query ignored): 200
+    kNotFound           ///< GET of any other path: 404
+  };
+  Kind kind = Kind::kMalformed;
+  std::string key;  ///< kWebSocket: the client's Sec-WebSocket-Key (24 base64 characters)
+};
+/// The HTTP status code of each kind (101, 200, 400, 404, 405 or 426).
+[[nodiscard]] int http_status(Request::Kind kind) noexcept;
+/// Parses a request head (no trailing "\r\n\r\n"); never throws anything but std::bad_alloc.
+[[nodiscard]] Request parse_request(std::string_view head, std::string_view ws_path);
+
+/// One client frame (RFC 6455 sec. 5.2) at the front of the bytes received.
+struct ClientFrame {
+  enum class Status : std::uint8_t {
+    kIncomplete,  ///< more bytes needed; nothing consumed
+    kFrame,       ///< a whole frame: `opcode`, `payload` (unmasked), `size` bytes consumed
+    kError        ///< a protocol violation: the server closes with `close_code`
+  };
+  Status status = Status::kIncomplete;
+  std::uint8_t opcode = 0;  ///< kFrame: 0x0 (continuation), text, binary, close, ping or pong
+  std::size_t size = 0;     ///< kFrame: header + mask + payload bytes
+  /// kError: 1002 (protocol error: unmasked, a control frame over 125 bytes, a reserved opcode)
+  /// or 1009 (payload over max_payload_bytes, sec. 7.4.1).
+  std::uint16_t close_code = 0;
+};
+/// Parses the frame at the front of `in` (client frames must be masked, sec. 5.3) and writes
+/// its unmasked payload (at most max_payload_bytes, and never more than `in` holds) to
+/// `payload` (left as is unless kFrame). FIN and RSV bits are not checked (data is discarded).
+[[nodiscard]] ClientFrame parse_client_frame(std::span<const std::uint8_t> in,
+                                             std::size_t max_payload_bytes, std::string& payload);
+
 struct ServerConfig {
   std::string host = "127.0.0.1";  ///< a numeric address or a name (getaddrinfo)
   std::uint16_t port = 0;          ///< 0: a free one (see Server::address())

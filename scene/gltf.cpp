@@ -777,7 +777,9 @@ void write_gltf(const SceneDescription& d, const std::filesystem::path& path) {
   for (const Material& m : d.materials) {
     tinygltf::Material gm;
     gm.name = m.name;
-    gm.pbrMetallicRoughness.baseColorFactor = {m.base_color.r, m.base_color.g, m.base_color.b, 1.0};
+    gm.pbrMetallicRoughness.baseColorFactor = {static_cast<double>(m.base_color.r),
+                                               static_cast<double>(m.base_color.g),
+                                               static_cast<double>(m.base_color.b), 1.0};
     gm.doubleSided = false;
     tinygltf::Value::Object r;
     r["radar_material"] = tinygltf::Value(m.name);

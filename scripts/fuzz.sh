@@ -12,14 +12,15 @@
 #   --build DIR   the clang build tree (default build-fuzz)
 #   --report FILE append the table of results (markdown) to FILE
 #   HARNESS       any of: canaerospace icd_classic icd_fd candump modbus_nav modbus_table
-#                 scenario_toml gltf obj stl (default: all)
+#                 scenario_toml gltf obj stl websocket sar_case (default: all)
 # A finding (crash, sanitizer report, leak, broken FUZZ_CHECK, timeout, out-of-memory) stops
 # that harness, leaves the input in DIR/artifacts/<name>/ and makes the script exit 1. Replay
 # one with DIR/tests/fuzz/fuzz_<name> FILE; keep it as a regression test by copying it to
 # tests/fuzz/regressions/<name>/ (fuzz_replay_tests runs those in every build).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-all=(canaerospace icd_classic icd_fd candump modbus_nav modbus_table scenario_toml gltf obj stl)
+all=(canaerospace icd_classic icd_fd candump modbus_nav modbus_table scenario_toml gltf obj stl
+     websocket sar_case)
 time_s=600
 runs=""
 parallel=1
@@ -76,9 +77,10 @@ run_one() {  # run_one NAME -> writes $logs/NAME.log and $logs/NAME.result
   # -max_len: frame sequences stay short; a round trip of 255 detections takes 13 kB; scenario
   # and mesh files are larger (16 kB: a few hundred triangles; larger random meshes only slow
   # the mesh check's quadratic T-junction pass, bounded at 5000 open edges, down).
+  # websocket: a request head up to the server's 8 kB limit, then frames.
   local max_len=4096
   case "$name" in
-    icd_classic|icd_fd|modbus_table|scenario_toml|gltf|obj|stl) max_len=16384 ;;
+    icd_classic|icd_fd|modbus_table|scenario_toml|gltf|obj|stl|websocket|sar_case) max_len=16384 ;;
   esac
   (cd "$artifacts" && "$build/tests/fuzz/fuzz_$name" "${limit[@]}" -timeout=10 -rss_limit_mb=2048 \
       -max_len="$max_len" -print_final_stats=1 -artifact_prefix="$artifacts/" "$corpus" \

@@ -596,7 +596,8 @@ Sigma0Table::Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, 
     });
     for (std::size_t p : {std::size_t{kHV}, std::size_t{kVH}}) {
       for (int node = 0; node + kCrossPolStride < kSamples; node += kCrossPolStride) {
-        const double a = row[p][node], b = row[p][node + kCrossPolStride];
+        const auto a = static_cast<double>(row[p][node]);
+        const auto b = static_cast<double>(row[p][node + kCrossPolStride]);
         for (int j = 1; j < kCrossPolStride; ++j) {
           const double w = static_cast<double>(j) / kCrossPolStride;
           // Geometric (dB-linear) where both ends carry power, linear otherwise.

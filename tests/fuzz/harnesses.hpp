@@ -19,5 +19,7 @@ int scenario_toml(const std::uint8_t* data, std::size_t size);  // emulator/scen
 int gltf(const std::uint8_t* data, std::size_t size);           // scene/gltf (.gltf and .glb)
 int obj(const std::uint8_t* data, std::size_t size);            // scene/mesh_io, Wavefront OBJ
 int stl(const std::uint8_t* data, std::size_t size);            // scene/mesh_io, STL
+int websocket(const std::uint8_t* data, std::size_t size);      // io/websocket, requests, frames
+int sar_case(const std::uint8_t* data, std::size_t size);       // emulator/sar_tool, TOML case
 
 }  // namespace radar_emu::fuzz

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Writes the seed corpora of the fuzz harnesses (tests/fuzz/corpus/<name>/), from the formats'
-documents (docs/icd/*.md, the glTF 2.0, OBJ and STL formats) and the harnesses' input layouts
-(each harness's header comment). Deterministic (random.Random(19)); run it again after a
-harness's input layout changes:
+documents (docs/icd/*.md, the glTF 2.0, OBJ and STL formats, RFC 6455 and RFC 9112) and the
+harnesses' input layouts (each harness's header comment). Deterministic (random.Random(19));
+run it again after a harness's input layout changes:
 
     tests/fuzz/make_seeds.py [--radar-emu build/emulator/radar-emu]
 
@@ -277,6 +277,77 @@ def scenario_seeds(radar_emu):
     write("scenario_toml", "bad_key.toml", '[run]\nframez = 5\n')
 
 
+# ---- websocket (io/websocket.hpp; RFC 6455, RFC 9112) ---------------------------------------
+# Input: mode byte (even: a request then frames; odd: frames only), limit byte (% 5 picks
+# max_payload_bytes: 0, 125, 126, 8192, 65536), then the client's bytes.
+def ws_frame(op, payload, mask=b"\x37\xfa\x21\x3d", fin=True, masked=True):
+    n = len(payload)
+    b0 = (0x80 if fin else 0) | op
+    m = 0x80 if masked else 0
+    if n < 126:
+        h = bytes([b0, m | n])
+    elif n <= 0xFFFF:
+        h = bytes([b0, m | 126]) + struct.pack(">H", n)
+    else:
+        h = bytes([b0, m | 127]) + struct.pack(">Q", n)
+    if not masked:
+        return h + payload
+    return h + mask + bytes(c ^ mask[i % 4] for i, c in enumerate(payload))
+
+
+def websocket_seeds():
+    hs = ("GET /ws HTTP/1.1\r\nHost: localhost:8080\r\nUpgrade: websocket\r\n"
+          "Connection: keep-alive, Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+          "Sec-WebSocket-Version: 13\r\n\r\n").encode()
+    # RFC 6455 sec. 5.7: a masked "Hello" (its example bytes), then ping, pong, binary, close
+    frames = ws_frame(1, b"Hello") + ws_frame(9, b"Hello") + ws_frame(0xA, b"") + \
+        ws_frame(2, bytes(range(200))) + ws_frame(1, b"Hel", fin=False) + ws_frame(0, b"lo") + \
+        ws_frame(8, struct.pack(">H", 1000) + b"bye")
+    write("websocket", "handshake_and_frames", bytes([0, 3]) + hs + frames)
+    write("websocket", "handshake_partial_frame", bytes([0, 3]) + hs + ws_frame(1, b"x" * 300)[:50])
+    reqs = {
+        "page": "GET / HTTP/1.1\r\nHost: x\r\n\r\n",
+        "index_query": "GET /index.html?a=1 HTTP/1.0\r\n\r\n",
+        "not_found": "GET /nope HTTP/1.1\r\nHost: x\r\n\r\n",
+        "post": "POST /ws HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n",
+        "wrong_version": "GET /ws HTTP/1.1\r\nHost: x\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                         "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 8\r\n\r\n",
+        "bad_key": "GET /ws?x HTTP/1.1\r\nhost: x\r\nUPGRADE: WebSocket\r\nconnection: upgrade\r\n"
+                   "sec-websocket-key: short==\r\nsec-websocket-version: 13\r\n\r\n",
+        "no_host": "GET /ws HTTP/1.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                   "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n",
+        "malformed": "HELLO\r\nHost: x\r\n\r\n",
+        "no_blank_line": "GET / HTTP/1.1\r\nHost: x\r\n",
+    }
+    for name, text in reqs.items():
+        write("websocket", "request_" + name, bytes([0, 3]) + text.encode())
+    # frames only: the RFC's unmasked "Hello" (a protocol error from a client), 16- and 64-bit
+    # lengths, a reserved opcode, a control frame over 125 bytes, a frame over the limit
+    write("websocket", "frames_unmasked", bytes([1, 3]) + ws_frame(1, b"Hello", masked=False))
+    write("websocket", "frames_lengths", bytes([1, 4]) + ws_frame(2, bytes(300)) + ws_frame(2, bytes(70000))[:2000])
+    write("websocket", "frames_reserved_opcode", bytes([1, 3]) + ws_frame(1, b"ok") + ws_frame(3, b"?"))
+    write("websocket", "frames_long_ping", bytes([1, 3]) + ws_frame(9, bytes(126)))
+    write("websocket", "frames_too_big", bytes([1, 1]) + ws_frame(1, bytes(126)))
+
+
+# ---- sar case TOML (emulator/sar_tool.hpp; examples/sar_seed.toml documents the keys) ----------
+def sar_case_seeds():
+    ex = os.path.join(ROOT, "examples")
+    for f in sorted(os.listdir(ex)):
+        if f.startswith("sar") and f.endswith(".toml"):
+            shutil.copy(os.path.join(ex, f), os.path.join(HERE, "corpus", "sar_case", f))
+    write("sar_case", "empty_tables.toml", "[radar]\n[platform]\n[antenna]\n[processing]\n[scene]\n")
+    write("sar_case", "targets.toml",
+          '[platform]\nlook = "left"\nheading_deg = -45.0\n[processing]\ntaper = "hamming"\n'
+          '[scene]\nground_material = "none"\n'
+          '[[scene.target]]\nkind = "trihedral-tri"\na_m = 0.5\nposition_m = [10.0, -20.0, 0.0]\n'
+          '[[scene.target]]\nname = "car"\nkind = "box"\na_m = 4.0\nb_m = 2.0\nc_m = 1.5\n'
+          'velocity_mps = [0.0, 10.0, 0.0]\nheading_deg = 90.0\n')
+    write("sar_case", "bad_value.toml", "[radar]\ncarrier_hz = 1e20\n")
+    write("sar_case", "bad_table.toml", "[radr]\n")
+    write("sar_case", "nadir.toml", "[processing]\ngates = 65536\n")
+
+
 # ---- meshes ----------------------------------------------------------------------------------
 CUBE_V = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
 CUBE_F = [(1, 3, 4, 2), (5, 6, 8, 7), (1, 2, 6, 5), (3, 7, 8, 4), (1, 5, 7, 3), (2, 4, 8, 6)]
@@ -373,12 +444,15 @@ def main():
     if radar_emu is None:
         print("make_seeds: no radar-emu executable: skipping the seeds it writes", file=sys.stderr)
     os.makedirs(os.path.join(HERE, "corpus", "scenario_toml"), exist_ok=True)
+    os.makedirs(os.path.join(HERE, "corpus", "sar_case"), exist_ok=True)
     canaerospace_seeds()
     icd_seeds()
     candump_seeds()
     modbus_seeds()
     scenario_seeds(radar_emu)
     mesh_seeds(radar_emu)
+    websocket_seeds()
+    sar_case_seeds()
 
 
 if __name__ == "__main__":

@@ -36,6 +36,8 @@ constexpr Target kTargets[] = {
     {"gltf", gltf},
     {"obj", obj},
     {"stl", stl},
+    {"websocket", websocket},
+    {"sar_case", sar_case},
 };
 
 // gtest prints the parameter in test listings: its name, not its bytes.
