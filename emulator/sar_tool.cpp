@@ -618,7 +618,7 @@ int run_sar_tool(const SarToolOptions& o) {
   // --- clutter cells (setup ray casting counted as ray tracing).
   const auto t_raw0 = Clock::now();
   double trace_s = 0.0;
-  std::vector<rd::PointScatterer> cells;
+  std::vector<rd::SarScatterer> cells;
   std::size_t shadowed = 0;
   if (c.clutter && c.ground_material != "none") {
     const auto t0 = Clock::now();

@@ -234,8 +234,8 @@ void finish_pulse(const SarParams& p, std::span<const std::complex<double>> acc,
   }
 }
 
-void synthesise_points(const SarParams& p, std::span<const PointScatterer> points,
-                       std::size_t begin, std::size_t end, SarRaw& raw) {
+void synthesise_points(const SarParams& p, std::span<const SarScatterer> points, std::size_t begin,
+                       std::size_t end, SarRaw& raw) {
   validate(p);
   require(raw.pulses == p.pulses && raw.samples == sar_raw_samples(p) &&
               raw.data.size() == raw.pulses * raw.samples,
@@ -269,7 +269,7 @@ void synthesise_points(const SarParams& p, std::span<const PointScatterer> point
           echoes.clear();
           dirs.clear();
           for (; it != order.end() && it->first <= along + reach; ++it) {
-            const PointScatterer& s = points[it->second];
+            const SarScatterer& s = points[it->second];
             const glm::dvec3 d = s.position_m - pos;
             const double range = glm::length(d);
             if (range < near_m || range > far_m)

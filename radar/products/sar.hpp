@@ -24,7 +24,7 @@
 // rise time; it also keeps the sampled pulse free of the aliased spectral tails of a hard-edged
 // one, which would otherwise differ from pulse to pulse with the fractional delay). The carrier
 // phase exp(-j 2 pi f_c tau) is A's own phase (sbr.hpp: exp(-j k L)); point scatterers given
-// without a path phase (PointScatterer) get it from their range here.
+// without a path phase (SarScatterer) get it from their range here.
 //
 // Range compression: the replica's matched filter conj(S(f)) (Cumming & Wong 2005, ch. 3),
 // amplitude-equalised over the band, H(f) = conj(S(f)) / |S(f)|^2 W(f / B) on |f| <= B/2 (W: none
@@ -145,15 +145,15 @@ void finish_pulse(const SarParams& p, std::span<const std::complex<double>> acc,
 
 /// A point scatterer fixed in the world (its path phase from its range): the test's and the
 /// clutter's building block. amplitude_m: sqrt(sigma) times any fixed phase (speckle).
-struct PointScatterer {
+struct SarScatterer {
   glm::dvec3 position_m{0.0};
   std::complex<double> amplitude_m{1.0, 0.0};
 };
 /// Synthesises pulses [begin, end) of the point scatterers into `raw` (added), threads over
 /// pulses (TBB). Scatterers where the two-way voltage gain is under 1e-3 of the peak (-60 dB in
 /// power) are skipped.
-void synthesise_points(const SarParams& p, std::span<const PointScatterer> points,
-                       std::size_t begin, std::size_t end, SarRaw& raw);
+void synthesise_points(const SarParams& p, std::span<const SarScatterer> points, std::size_t begin,
+                       std::size_t end, SarRaw& raw);
 
 /// Range-compressed data: pulses x gates (gate g at near_range + g gate_m).
 struct SarCompressed {

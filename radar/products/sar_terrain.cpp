@@ -56,7 +56,7 @@ TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, c
   const glm::dvec3 track = sar_track_dir(p), look = sar_look_dir(p);
 
   struct Line {
-    std::vector<PointScatterer> cells;
+    std::vector<SarScatterer> cells;
     std::size_t shadowed = 0, empty = 0;
   };
   std::vector<Line> lines(spec.along);

@@ -32,7 +32,7 @@ struct TerrainCellSpec {
 };
 
 struct TerrainCells {
-  std::vector<PointScatterer> cells;
+  std::vector<SarScatterer> cells;
   std::size_t shadowed = 0;  ///< left out: shadowed or facing away
   std::size_t empty = 0;     ///< no terrain under the cell (a target, or nothing)
 };

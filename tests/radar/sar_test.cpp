@@ -111,7 +111,7 @@ TEST_P(SarIrf, PointTargetsMatchTheory) {
   // first sidelobe by tenths of a dB); the look is to the right of +x, i.e. toward -y.
   const std::vector<Target> targets = {
       {0.0, ground0 - 250.0, 10.0}, {0.3, ground0 + 0.4, 31.6}, {-0.2, ground0 + 250.0, 3.16}};
-  std::vector<PointScatterer> pts;
+  std::vector<SarScatterer> pts;
   for (const Target& t : targets)
     pts.push_back({{t.x, -t.y, 0.0}, std::sqrt(t.rcs)});
   SarRaw raw = make_raw(p);
@@ -184,7 +184,7 @@ TEST(SarClutter, HomogeneousFieldMeanSigma0AndExponentialSpeckle) {
   clutter::SpeckleSpec spec;
   spec.seed = 20261124;
   std::cout << "speckle seed " << spec.seed << "\n";
-  std::vector<PointScatterer> pts;
+  std::vector<SarScatterer> pts;
   std::uint64_t index = 0;
   for (double x = -20.0; x <= 20.0; x += dx)
     for (double y = ground0 - 50.0; y <= ground0 + 50.0; y += dy) {
