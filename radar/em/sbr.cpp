@@ -40,7 +40,9 @@ glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
   return h ? glm::normalize(glm::cross(v, d)) : v;
 }
 
-clutter::Sigma0Table::Pol sigma0_channel(Polarisation p) {
+}  // namespace
+
+clutter::Sigma0Table::Pol sigma0_channel(Polarisation p) noexcept {
   switch (p) {
     case Polarisation::kHH:
       return clutter::Sigma0Table::kHH;
@@ -53,8 +55,6 @@ clutter::Sigma0Table::Pol sigma0_channel(Polarisation p) {
   }
   return clutter::Sigma0Table::kVV;
 }
-
-}  // namespace
 
 AzEl azel_from_direction(const glm::dvec3& d) noexcept {
   return {std::atan2(d.y, d.x), std::atan2(-d.z, std::hypot(d.x, d.y))};

@@ -186,6 +186,9 @@ struct TraceStats {
   std::uint64_t edges_skipped = 0;   ///< back-facing, along the Keller cone, out of view/range
 };
 
+/// The terrain sigma0 table's channel of a polarisation (radar/clutter/terrain.hpp).
+[[nodiscard]] clutter::Sigma0Table::Pol sigma0_channel(Polarisation p) noexcept;
+
 class SbrTracer {
  public:
   /// Setup: validates the configuration (throws std::invalid_argument with the field name) and

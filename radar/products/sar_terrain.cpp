@@ -11,24 +11,6 @@
 
 namespace radar_emu::radar {
 
-namespace {
-
-clutter::Sigma0Table::Pol channel(Polarisation p) {
-  switch (p) {
-    case Polarisation::kHH:
-      return clutter::Sigma0Table::kHH;
-    case Polarisation::kHV:
-      return clutter::Sigma0Table::kHV;
-    case Polarisation::kVH:
-      return clutter::Sigma0Table::kVH;
-    case Polarisation::kVV:
-      break;
-  }
-  return clutter::Sigma0Table::kVV;
-}
-
-}  // namespace
-
 TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, const SarParams& p,
                            const TerrainCellSpec& spec) {
   validate(p);
@@ -52,7 +34,7 @@ TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, c
   if (specs.empty())
     return out;
   const clutter::Sigma0Table table(specs, clutter::Sigma0Model::kTotal, p.carrier_hz);
-  const clutter::Sigma0Table::Pol pol = channel(spec.polarisation);
+  const clutter::Sigma0Table::Pol pol = sigma0_channel(spec.polarisation);
   const glm::dvec3 track = sar_track_dir(p), look = sar_look_dir(p);
 
   struct Line {
