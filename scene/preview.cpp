@@ -51,6 +51,34 @@ glm::dvec3 shade(const Scene& scene, std::span<const Material> materials, const 
   return lit * transmittance + Light::kSky * (1.0 - transmittance);
 }
 
+// Shades a width x height grid of rays from `origin`, row-parallel: dir_of(i, j) gives pixel
+// (column i, row j from the top) its world direction (unit).
+template <class DirOf>
+PreviewImage shade_grid(const Scene& scene, int width_px, int height_px, const glm::dvec3& origin,
+                        const DirOf& dir_of) {
+  PreviewImage image;
+  image.width_px = width_px;
+  image.height_px = height_px;
+  image.rgb.assign(static_cast<std::size_t>(width_px) * static_cast<std::size_t>(height_px) * 3, 0);
+  const auto materials = scene.materials();
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, height_px), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+          std::uint8_t* out = image.rgb.data() +
+                              static_cast<std::size_t>(j) * static_cast<std::size_t>(width_px) * 3;
+          for (int i = 0; i < width_px; ++i) {
+            Ray ray;
+            ray.origin_m = origin;
+            ray.direction = dir_of(i, j);
+            const glm::dvec3 c = shade(scene, materials, ray);
+            for (int k = 0; k < 3; ++k)
+              out[3 * i + k] = srgb8(c[k]);
+          }
+        }
+      });
+  return image;
+}
+
 }  // namespace
 
 PreviewImage render_preview(const Scene& scene, const PreviewCamera& cam) {
@@ -71,30 +99,11 @@ PreviewImage render_preview(const Scene& scene, const PreviewCamera& cam) {
   const double tan_half = std::tan(0.5 * cam.vertical_fov_rad);
   const double aspect = static_cast<double>(cam.width_px) / cam.height_px;
 
-  PreviewImage image;
-  image.width_px = cam.width_px;
-  image.height_px = cam.height_px;
-  image.rgb.assign(
-      static_cast<std::size_t>(cam.width_px) * static_cast<std::size_t>(cam.height_px) * 3, 0);
-  const auto materials = scene.materials();
-  tbb::parallel_for(
-      tbb::blocked_range<int>(0, cam.height_px), [&](const tbb::blocked_range<int>& rows) {
-        for (int j = rows.begin(); j != rows.end(); ++j) {
-          const double y = (1.0 - 2.0 * (j + 0.5) / cam.height_px) * tan_half;
-          std::uint8_t* out = image.rgb.data() + static_cast<std::size_t>(j) *
-                                                     static_cast<std::size_t>(cam.width_px) * 3;
-          for (int i = 0; i < cam.width_px; ++i) {
-            const double x = (2.0 * (i + 0.5) / cam.width_px - 1.0) * tan_half * aspect;
-            Ray ray;
-            ray.origin_m = cam.position_m;
-            ray.direction = glm::normalize(forward + x * right + y * up);
-            const glm::dvec3 c = shade(scene, materials, ray);
-            for (int k = 0; k < 3; ++k)
-              out[3 * i + k] = srgb8(c[k]);
-          }
-        }
-      });
-  return image;
+  return shade_grid(scene, cam.width_px, cam.height_px, cam.position_m, [&](int i, int j) {
+    const double y = (1.0 - 2.0 * (j + 0.5) / cam.height_px) * tan_half;
+    const double x = (2.0 * (i + 0.5) / cam.width_px - 1.0) * tan_half * aspect;
+    return glm::normalize(forward + x * right + y * up);
+  });
 }
 
 PreviewImage render_preview_angular(const Scene& scene, const AngularCamera& cam) {
@@ -110,34 +119,15 @@ PreviewImage render_preview_angular(const Scene& scene, const AngularCamera& cam
               cam.elevation_min_rad < cam.elevation_max_rad && cam.elevation_min_rad > -half_pi &&
               cam.elevation_max_rad < half_pi,
           "elevation_min/max_rad", "must satisfy -pi/2 < min < max < pi/2");
-  PreviewImage image;
-  image.width_px = cam.width_px;
-  image.height_px = cam.height_px;
-  image.rgb.assign(
-      static_cast<std::size_t>(cam.width_px) * static_cast<std::size_t>(cam.height_px) * 3, 0);
-  const auto materials = scene.materials();
   const double daz = (cam.azimuth_max_rad - cam.azimuth_min_rad) / cam.width_px;
   const double del = (cam.elevation_max_rad - cam.elevation_min_rad) / cam.height_px;
-  tbb::parallel_for(tbb::blocked_range<int>(0, cam.height_px), [&](const tbb::blocked_range<int>&
-                                                                       rows) {
-    for (int j = rows.begin(); j != rows.end(); ++j) {
-      const double el = cam.elevation_max_rad - (j + 0.5) * del;
-      std::uint8_t* out = image.rgb.data() +
-                          static_cast<std::size_t>(j) * static_cast<std::size_t>(cam.width_px) * 3;
-      for (int i = 0; i < cam.width_px; ++i) {
-        const double az = cam.azimuth_min_rad + (i + 0.5) * daz;
-        // Camera frame x forward, y right, z down (radar/em/sbr.hpp's antenna frame).
-        const glm::dvec3 d{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), -std::sin(el)};
-        Ray ray;
-        ray.origin_m = cam.position_m;
-        ray.direction = glm::normalize(cam.world_from_camera * d);
-        const glm::dvec3 c = shade(scene, materials, ray);
-        for (int k = 0; k < 3; ++k)
-          out[3 * i + k] = srgb8(c[k]);
-      }
-    }
+  return shade_grid(scene, cam.width_px, cam.height_px, cam.position_m, [&](int i, int j) {
+    const double el = cam.elevation_max_rad - (j + 0.5) * del;
+    const double az = cam.azimuth_min_rad + (i + 0.5) * daz;
+    // Camera frame x forward, y right, z down (radar/em/sbr.hpp's antenna frame).
+    const glm::dvec3 d{std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), -std::sin(el)};
+    return glm::normalize(cam.world_from_camera * d);
   });
-  return image;
 }
 
 PreviewCamera default_preview_camera(const Scene& scene, int width_px, int height_px) {
