@@ -1227,6 +1227,7 @@ void ClosedLoop::write_outputs(const RunResult& r) {
                   {"edges_used", r.trace.edges_used},
                   {"edges_shadowed", r.trace.edges_shadowed},
                   {"edges_skipped", r.trace.edges_skipped},
+                  {"edges_double", r.trace.edges_double},
                   {"knob_fallbacks", r.trace.knob_fallbacks}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   rep["sensor"] = {

@@ -629,6 +629,10 @@ int main(int argc, char** argv) {
   double bistatic_theta = 0.0, bistatic_phi = 0.0;
   add_common(rcs, rcs_text, rcs_opt.mesh, rcs_opt.scale, rcs_opt.materials, rcs_opt.bounces,
              rcs_opt.rays_per_wavelength, rcs_opt.quiet);
+  rcs->add_option("--edge-order", rcs_opt.edge_order,
+                  "1: first-order edge currents only; 2 (default): plus the double diffraction "
+                  "of the hard polarisation between parallel edges across a flat face")
+      ->check(CLI::Range(1, 2));
   rcs->add_option("--edge-turn-deg", rcs_opt.edge_turn_deg,
                   "A shared mesh edge diffracts when its faces turn by more than this (default "
                   "30 deg; open-sheet boundaries always do)");
@@ -668,6 +672,11 @@ int main(int argc, char** argv) {
   emu::ProfileToolOptions prof_opt;
   add_common(profile, prof_text, prof_opt.mesh, prof_opt.scale, prof_opt.materials,
              prof_opt.bounces, prof_opt.rays_per_wavelength, prof_opt.quiet);
+  profile
+      ->add_option("--edge-order", prof_opt.edge_order,
+                   "1: first-order edge currents only; 2 (default): plus the double diffraction "
+                   "of the hard polarisation between parallel edges across a flat face")
+      ->check(CLI::Range(1, 2));
   profile->add_option("--edge-turn-deg", prof_opt.edge_turn_deg,
                       "A shared mesh edge diffracts when its faces turn by more than this (default "
                       "30 deg; open-sheet boundaries always do)");

@@ -128,6 +128,7 @@ void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
   total.edges_shadowed += one.edges_shadowed;
   total.edges_skipped += one.edges_skipped;
   total.edges_guarded += one.edges_guarded;
+  total.edges_double += one.edges_double;
   for (std::size_t b = 0; b <= static_cast<std::size_t>(radar::kMaxRcsBounces); ++b)
     total.paths_by_bounce[b] += one.paths_by_bounce[b];
 }
@@ -193,6 +194,11 @@ void print_target(const LoadedTarget& t, const radar::RcsEngine& e, bool quiet) 
       e.edges().size(), static_cast<unsigned long long>(c.half_planes),
       static_cast<unsigned long long>(c.wedges), e.config().edge_min_turn_rad / kDegToRad,
       static_cast<unsigned long long>(c.smooth), static_cast<unsigned long long>(c.unsupported));
+  if (e.config().edge_order >= 2)
+    std::printf(
+        "double diffraction: %zu edge pairs across flat faces (hard polarisation; "
+        "--edge-order 1 leaves it out)\n",
+        e.edge_pairs().size());
 }
 
 // The summary line of the edge terms over a run.
@@ -201,11 +207,20 @@ void print_edge_stats(const radar::RcsEngine& e, const radar::RcsStats& st) {
     return;
   std::printf(
       "edge terms: %llu used, %llu shadowed, %llu without a term (no lit face, along the edge, "
-      "receiver inside the wedge), %llu boundary singularities stepped around\n",
+      "receiver inside the wedge), %llu boundary singularities stepped around, %llu "
+      "double-diffraction terms\n",
       static_cast<unsigned long long>(st.edges_used),
       static_cast<unsigned long long>(st.edges_shadowed),
       static_cast<unsigned long long>(st.edges_skipped),
-      static_cast<unsigned long long>(st.edges_guarded));
+      static_cast<unsigned long long>(st.edges_guarded),
+      static_cast<unsigned long long>(st.edges_double));
+}
+
+radar::RcsConfig with_edge_order(radar::RcsConfig c, int edge_order) {
+  if (edge_order != 1 && edge_order != 2)
+    throw std::invalid_argument("--edge-order must be 1 or 2");
+  c.edge_order = edge_order;
+  return c;
 }
 
 // The target as both tools set it up: loaded, built, with the engine over it (in place: the
@@ -216,11 +231,12 @@ struct ToolTarget {
   radar::RcsEngine engine;
   ToolTarget(const std::string& mesh, double scale, const std::vector<std::string>& materials,
              int bounces, double rays_per_wavelength, bool edges, double edge_turn_deg,
-             double min_freq_hz, bool quiet)
+             int edge_order, double min_freq_hz, bool quiet)
       : loaded(load_target(mesh, scale, materials)),
         scene(loaded.description),
         engine(scene, loaded.surfaces,
-               rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg)) {
+               with_edge_order(rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg),
+                               edge_order)) {
     if (!mpi_work::is_root())
       return;  // under mpirun, rank 0 alone prints (every rank loads the same target)
     print_target(loaded, engine, quiet);
@@ -735,8 +751,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
       overlays.push_back(read_overlay(spec));
   }
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
-                          o.edge_turn_deg, *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()),
-                          o.quiet);
+                          o.edge_turn_deg, o.edge_order,
+                          *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
   const radar::RcsEngine& engine = target.engine;
 
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
@@ -881,7 +897,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
   if (o.oversample < 1 || o.oversample > 64)
     throw std::invalid_argument("--oversample must be in 1..64");
   const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
-                          o.edge_turn_deg, o.freqs_hz.front(), o.quiet);
+                          o.edge_turn_deg, o.edge_order, o.freqs_hz.front(), o.quiet);
   const radar::RcsEngine& engine = target.engine;
 
   const std::size_t na = nt * np;

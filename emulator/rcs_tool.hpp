@@ -96,6 +96,7 @@ struct RcsToolOptions {
   double rays_per_wavelength = 4.0;
   bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
   double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
+  int edge_order = 2;  ///< 1: first-order edge currents; 2: plus double diffraction (edges.hpp)
   std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
   std::string out_csv = "rcs.csv";
   std::string plot_png;  ///< empty: no plot
@@ -122,6 +123,7 @@ struct ProfileToolOptions {
   double rays_per_wavelength = 4.0;
   bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
   double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
+  int edge_order = 2;  ///< 1: first-order edge currents; 2: plus double diffraction (edges.hpp)
   std::string window = "hann";
   std::size_t oversample = 4;
   double dynamic_range_db = 50.0;  ///< plots

@@ -120,6 +120,101 @@ struct EdgeTerm {
                                  const glm::dvec3& rx_h, const glm::dvec3& rx_v,
                                  EdgeCoefficient kind, EdgeTerm& term, bool& guarded) noexcept;
 
+// ---------------------------------------------------------------------------------------------
+// Double diffraction across a flat face (second order, hard polarisation).
+//
+// A wedge edge lit by the plane wave launches a diffracted wave along each of its faces. For the
+// soft scalar (E along the edge) that wave vanishes on the face; for the hard scalar (eta H . t)
+// it does not, and it crosses the face to a parallel edge bounding the same face, which
+// diffracts it again. First-order edge currents miss this: it is what separates a plate's HH
+// from its VV in a principal plane and makes the hard polarisation's travelling-wave lobe and its
+// fall at grazing (Ross, "Radar cross section of rectangular flat plates as a function of aspect
+// angle", IEEE TAP 14(3), 1966; Balanis, Advanced Engineering Electromagnetics, 2nd ed., 2012,
+// sec. 13.3: multiple diffractions of a strip, with the factor 1/2 of grazing incidence).
+//
+// Ray picture (Keller's GTD with the uniform coefficients of Kouyoumjian & Pathak, "A uniform
+// geometrical theory of diffraction for an edge in a perfectly conducting surface", Proc. IEEE
+// 62(11), 1974, eqs. 25-29; time convention exp(+j w t)): a point Q1 of the launching edge emits
+// on its Keller cone, along the face (angle phi_L = 0 or alpha of that edge), the ray
+// u = (d . t) t + sin(beta) x_face, which meets the parallel edge at Q2 = Q1 + s u after
+// s = w / sin(beta) (w: distance between the edges). There the hard scalar is
+//   psi(Q2) = psi_i(Q1) D_h(phi_L, phi0) exp(-j k s) / sqrt(s),
+//   D_h = exp(-j pi/4) g_utd(phi, phi0; k L) / (sqrt(2 pi k) sin(beta)),
+//   g_utd = -(1 / 2n) sum_{x = phi -+ phi0} [cot((pi + x) / 2n) F(k L a+(x))
+//                                          + cot((pi - x) / 2n) F(k L a-(x))]   (hard: +),
+//   a+-(x) = 2 cos^2((2 pi n N+- - x) / 2), N+- the integers nearest (x +- pi) / (2 pi n),
+//   F(X) = 2 j sqrt(X) exp(j X) int_sqrt(X)^inf exp(-j tau^2) d tau   (the transition function;
+// with F = 1, g_utd is the Sommerfeld g of the header), L = s sin^2(beta) = w sin(beta). The phase
+// of psi(Q2) advances along the second edge as the incident wave's does (d . t), so the second
+// edge carries the header's equivalent current with psi(Q2) for (d x e) . t and the exact
+// coefficient for grazing incidence from the face (phi0 = 0 or alpha), halved (incident and
+// reflected waves coincide at grazing; KP sec. V), with L = w sin(beta) again (a cylindrical
+// wave from the first edge, the receiver far). The far-field term of the segment of the second
+// edge that rays from the first reach:
+//   S = -(1 / (sqrt(pi) sin^2 beta)) ((d x e) . t1) (t1 . t2) p . (s x t2)
+//       * exp(-j pi/4) / sqrt(2 pi k w sin beta) g_utd1 (g_utd2 / 2)
+//       * L_seg sinc(k (s - d) . t2 L_seg / 2) exp(j k [(s - d) . c_seg - w sin(beta) (1 +
+//       cos(phi_L
+//       - phi0))]).
+// The soft scalar's grazing wave (slope diffraction) and third and higher orders are left out.
+// An open sheet's boundary launches along both sides of the sheet: two terms. The face must be
+// continuous between the edges (checked at the middle of the strip between them).
+
+/// An ordered pair of parallel edges bounding the same flat face, facing each other across it.
+struct EdgePair {
+  std::uint32_t from = 0, to = 0;       ///< indices into the edge list (launching, receiving edge)
+  double phi_launch_rad = 0.0;          ///< the face's angle at `from` (0 or its alpha)
+  double phi_arrive_rad = 0.0;          ///< the face's angle at `to` (0 or its alpha)
+  double width_m = 0.0;                 ///< distance between the two edges' lines
+  double to_lo_m = 0.0, to_hi_m = 0.0;  ///< `to`'s extent along from.t, from from.a_m
+};
+
+/// Finds the pairs among `edges` (as find_wedge_edges returns them; tris: the same mesh) whose
+/// double diffraction is carried: parallel within 1e-6 rad, on the same face plane within
+/// tolerance_m, each edge's face pointing toward the other, the two extents overlapping along
+/// the edges, and a facet of that plane under the middle of the strip between them.
+[[nodiscard]] std::vector<EdgePair> find_edge_pairs(std::span<const WedgeEdge> edges,
+                                                    std::span<const std::array<glm::dvec3, 3>> tris,
+                                                    double tolerance_m);
+
+/// One pair's double-diffraction term for a direction pair: frequency-free parts; the value at
+/// wavenumber k is pol[p] * double_edge_factor(term, k) (p = hh, hv, vh, vv).
+struct DoubleEdgeTerm {
+  std::array<double, 4> pol{};
+  double alpha_from_rad = 0.0, phi_launch_rad = 0.0, phi0_rad = 0.0;
+  double alpha_to_rad = 0.0, phi_arrive_rad = 0.0, phi_rad = 0.0;
+  double l_m = 0.0;  ///< w sin(beta): the UTD distance parameter of both diffractions
+  double length_m = 0.0, taper_m = 0.0, phase_m = 0.0;
+  glm::dvec3 centre_m{0.0};  ///< the middle of the receiving edge's segment
+};
+
+/// The term of `pair` (header of this section) for propagation direction d and receiver
+/// direction s. Returns kNone and fills `term`, kBackFace when the source is inside the
+/// launching wedge, kAlongEdge at the Keller-cone guard or when no ray from the launching edge
+/// reaches the receiving one, kInsideWedge when the receiver is inside the receiving wedge.
+[[nodiscard]] EdgeSkip double_edge_term(const EdgePair& pair, std::span<const WedgeEdge> edges,
+                                        const glm::dvec3& d, const glm::dvec3& s,
+                                        const glm::dvec3& tx_h, const glm::dvec3& tx_v,
+                                        const glm::dvec3& rx_h, const glm::dvec3& rx_v,
+                                        DoubleEdgeTerm& term) noexcept;
+
+/// The polarisation-free factor of a double-diffraction term at wavenumber k [rad/m]:
+/// exp(-j pi/4) / sqrt(2 pi k l) g_utd1 (g_utd2 / 2) L sinc(k taper) exp(j k phase).
+[[nodiscard]] std::complex<double> double_edge_factor(const DoubleEdgeTerm& term,
+                                                      double k) noexcept;
+
+/// The uniform hard (hard = true) or soft wedge coefficient g_utd / f_utd of Kouyoumjian and
+/// Pathak in the header's normalisation (it tends to wedge_coefficients' kExact far from the
+/// shadow and reflection boundaries); kl = k L, the distance parameter times the wavenumber.
+[[nodiscard]] std::complex<double> utd_wedge_coefficient(double alpha_rad, double phi_rad,
+                                                         double phi0_rad, double kl,
+                                                         bool hard) noexcept;
+
+/// The UTD transition function F(X) = 2 j sqrt(X) exp(j X) int_sqrt(X)^inf exp(-j tau^2) d tau
+/// (Kouyoumjian & Pathak 1974, eq. 27), X >= 0: power series of the Fresnel integral up to
+/// X = 16, the asymptotic series sum (-1)^m (2m - 1)!! / (2 j X)^m beyond.
+[[nodiscard]] std::complex<double> utd_transition(double x) noexcept;
+
 /// A point beside the edge's midpoint in the free space (along the exterior bisector), offset_m
 /// away: where the engine's occlusion test toward the transmitter starts.
 [[nodiscard]] glm::dvec3 edge_probe(const WedgeEdge& edge, double offset_m) noexcept;

@@ -129,6 +129,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   require(std::isfinite(config_.edge_min_turn_rad) && config_.edge_min_turn_rad >= 0.0 &&
               config_.edge_min_turn_rad < kPi,
           "edge threshold must be in [0, 180) deg");
+  require(config_.edge_order == 1 || config_.edge_order == 2, "edge order must be 1 or 2");
   if (config_.edges) {
     std::vector<std::array<glm::dvec3, 3>> tris(facets_.size());
     std::vector<std::int8_t> outward(facets_.size());
@@ -139,6 +140,8 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       pec[i] = surfaces_[facets_[i].surface].kind == SurfaceModel::Kind::kPec ? 1 : 0;
     }
     edges_ = find_wedge_edges(tris, outward, pec, config_.edge_min_turn_rad, census_);
+    if (config_.edge_order >= 2)
+      pairs_ = find_edge_pairs(edges_, tris, epsilon_m_);
   }
 }
 
@@ -350,6 +353,29 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     stats.edges_used += edge_terms.size();
     stats.edges_guarded += guarded;
     occl += e_occl;
+  }
+  // Double diffraction (edges.hpp): the launching edge's midpoint must see the transmitter and
+  // the receiving edge's the receiver (tests memoised per edge and direction).
+  std::vector<DoubleEdgeTerm> double_terms;
+  if (!pairs_.empty()) {
+    std::vector<std::int8_t> sees_tx(edges_.size(), -1), sees_rx(edges_.size(), -1);
+    auto sees = [&](std::vector<std::int8_t>& memo, std::uint32_t i, const glm::dvec3& toward) {
+      if (!shadowing)
+        return true;
+      if (memo[i] < 0) {
+        ++occl;
+        memo[i] = clear(edge_probe(edges_[i], 10.0 * eps), toward) ? 1 : 0;
+      }
+      return memo[i] == 1;
+    };
+    for (const EdgePair& pair : pairs_) {
+      DoubleEdgeTerm t;
+      if (double_edge_term(pair, edges_, d_i, s, tx_h, tx_v, rx_h, rx_v, t) != EdgeSkip::kNone)
+        continue;
+      if (sees(sees_tx, pair.from, r_t) && sees(sees_rx, pair.to, r_r))
+        double_terms.push_back(t);
+    }
+    stats.edges_double += double_terms.size();
   }
 
   stats.facets_lit += lit;
@@ -564,6 +590,11 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       const cplx a = std::polar(t.length_m * sinc(k * t.taper_m), k * t.phase_m);
       for (std::size_t p = 0; p < 4; ++p)
         e[p] += t.c[p] * a;
+    }
+    for (const DoubleEdgeTerm& t : double_terms) {
+      const cplx a = double_edge_factor(t, k);
+      for (std::size_t p = 0; p < 4; ++p)
+        e[p] += t.pol[p] * a;
     }
     out[fi].hh += e[0];
     out[fi].hv += e[1];

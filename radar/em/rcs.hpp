@@ -24,7 +24,10 @@
 //   edges      With RcsConfig::edges: edge diffraction, the fringe equivalent edge currents of the
 //              mesh's wedge edges and open-sheet boundaries (PTD; radar/em/edges.hpp), each
 //              integrated exactly along its straight edge and added to bounce 1; an edge
-//              radiates when a face of it is lit and its midpoint sees the transmitter.
+//              radiates when a face of it is lit and its midpoint sees the transmitter. With
+//              edge_order 2, the hard polarisation's double diffraction between parallel edges
+//              across a flat face (edges.hpp) is added too, when the launching edge's midpoint
+//              sees the transmitter and the receiving edge's sees the receiver.
 //   sweeps     Facet geometry and ray paths do not depend on frequency: they are found once per
 //              direction and every frequency is summed from them.
 //
@@ -96,6 +99,9 @@ struct RcsConfig {
   /// A shared edge diffracts when its exterior wedge angle departs from pi (flat) by more than
   /// this [rad]; smoother edges of a faceted curved surface are left to PO.
   double edge_min_turn_rad = 30.0 * 3.14159265358979323846 / 180.0;
+  /// With edges: 1 = first-order edge currents only; 2 = also the double diffraction of the hard
+  /// polarisation between parallel edges across a flat face (edges.hpp, find_edge_pairs).
+  int edge_order = 2;
 };
 
 struct RcsStats {
@@ -119,6 +125,7 @@ struct RcsStats {
   std::uint64_t edges_skipped = 0;   ///< no lit face, along the edge (Keller-cone guard) or the
                                      ///< receiver inside the wedge (edges.hpp, EdgeSkip)
   std::uint64_t edges_guarded = 0;   ///< boundary singularities stepped around (edges.hpp)
+  std::uint64_t edges_double = 0;    ///< edge-to-edge double-diffraction terms added
 };
 
 /// One reflection of a ray tube (for tests of the GO tracer). Reported from worker threads.
@@ -169,6 +176,8 @@ class RcsEngine {
   /// The diffracting edges found (empty unless config.edges) and how the mesh's edges sorted.
   [[nodiscard]] std::span<const WedgeEdge> edges() const noexcept { return edges_; }
   [[nodiscard]] const EdgeCensus& edge_census() const noexcept { return census_; }
+  /// The edge pairs whose double diffraction is added (empty unless edges and edge_order 2).
+  [[nodiscard]] std::span<const EdgePair> edge_pairs() const noexcept { return pairs_; }
 
  private:
   struct Facet {
@@ -188,6 +197,7 @@ class RcsEngine {
   double radius_m_ = 0.0;
   double epsilon_m_ = 0.0;  ///< ray offset, scaled with the target
   std::vector<WedgeEdge> edges_;
+  std::vector<EdgePair> pairs_;
   EdgeCensus census_;
 };
 

@@ -141,6 +141,8 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
               facet_outward_.begin() + static_cast<std::ptrdiff_t>(facet_first_[i]));
   }
   edge_first_.assign(desc.objects.size() + 1, 0);
+  pair_first_.assign(desc.objects.size() + 1, 0);
+  require(c.edge_order == 1 || c.edge_order == 2, "edge_order", "must be 1 or 2");
   if (c.edges) {
     require(std::isfinite(c.edge_min_turn_rad) && c.edge_min_turn_rad >= 0.0 &&
                 c.edge_min_turn_rad < kPi,
@@ -166,8 +168,23 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
           c.edge_min_turn_rad, census);
       edges_body_.insert(edges_body_.end(), found.begin(), found.end());
       edge_first_[i + 1] = edges_body_.size();
+      pair_first_[i + 1] = pair_first_[i];
+      if (c.edge_order < 2)
+        continue;
+      // Pairs in the body frame (a rigid placement keeps them); indices made global.
+      double extent_m = 0.0;
+      for (const auto& t : tris)
+        extent_m = std::max({extent_m, glm::length(t[0]), glm::length(t[1]), glm::length(t[2])});
+      for (EdgePair p : find_edge_pairs(found, tris, 1e-5 * extent_m)) {
+        p.from += static_cast<std::uint32_t>(edge_first_[i]);
+        p.to += static_cast<std::uint32_t>(edge_first_[i]);
+        pairs_.push_back(p);
+      }
+      pair_first_[i + 1] = pairs_.size();
     }
   }
+  pair_used_.assign(pairs_.size(), 0);
+  pair_out_.assign(pairs_.size(), Contribution{});
   edge_state_.assign(edges_body_.size(), 2);
   edge_out_.assign(edges_body_.size(), Contribution{});
   facet_light_.assign(facet_first_.back(), kLightByRays);
@@ -177,7 +194,7 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
 
 std::size_t SbrTracer::max_contributions() const noexcept {
   return counts_.size() * static_cast<std::size_t>(config_.max_bounces) + facet_out_.size() +
-         edge_out_.size();
+         edge_out_.size() + pair_out_.size();
 }
 
 namespace {
@@ -312,12 +329,7 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   return static_cast<std::uint8_t>(light);
 }
 
-std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::size_t e,
-                                  Contribution& out, std::uint64_t& queries) const noexcept {
-  const SbrConfig& c = config_;
-  constexpr std::uint8_t kUsed = 0, kShadowed = 1, kNoTerm = 2;
-  // The edge in the world now (a rigid placement: points by the transform, directions by its
-  // rotation).
+WedgeEdge SbrTracer::world_edge(std::uint32_t id, std::size_t e) const noexcept {
   const glm::dmat4& xf = frame_world_from_body_[id];
   const glm::dmat3 r(xf);
   const WedgeEdge& body = edges_body_[e];
@@ -327,6 +339,53 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   w.t = r * body.t;
   w.x0 = r * body.x0;
   w.y0 = r * body.y0;
+  return w;
+}
+
+bool SbrTracer::pair_pass(const RadarPose& pose, std::uint32_t id, std::size_t p,
+                          Contribution& out) const noexcept {
+  const SbrConfig& c = config_;
+  const EdgePair& body = pairs_[p];
+  // Both edges radiate this frame: lit, clear to the radar, in view, range and far field.
+  if (edge_state_[body.from] != 0 || edge_state_[body.to] != 0)
+    return false;
+  const std::array<WedgeEdge, 2> w{world_edge(id, body.from), world_edge(id, body.to)};
+  EdgePair local = body;
+  local.from = 0;
+  local.to = 1;
+  // The plane wave of the radar at the receiving edge's midpoint (as edge_pass takes it).
+  const glm::dvec3 to_radar = pose.position_m - 0.5 * (w[1].a_m + w[1].b_m);
+  const double mid_range_m = glm::length(to_radar);
+  if (!(mid_range_m > 0.0))
+    return false;
+  const glm::dvec3 s = to_radar / mid_range_m, d = -s;
+  const glm::dvec3 boresight = pose.world_from_antenna[0], up = -pose.world_from_antenna[2];
+  const glm::dvec3 h = pol_vector(true, up, boresight, d), v = pol_vector(false, up, boresight, d);
+  DoubleEdgeTerm term;
+  if (double_edge_term(local, w, d, s, h, v, h, v, term) != EdgeSkip::kNone)
+    return false;
+  // edges.hpp: pol * factor, with the plane-wave phase (s - d) . centre replaced by the
+  // spherical wave's two-way path to the middle of the receiving segment.
+  const double range_m = glm::length(pose.position_m - term.centre_m);
+  term.phase_m -= glm::dot(s - d, term.centre_m);
+  const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
+  const std::size_t channel = static_cast<std::size_t>(c.polarisation);  // hh, hv, vh, vv
+  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+  const AzEl ae = azel_from_direction(antenna_from_world * d);
+  const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
+  out = bounce1_return(
+      term.pol[channel] * double_edge_factor(term, k) * std::polar(1.0, -2.0 * k * range_m),
+      range_m, glm::dot(v_obj - pose.velocity_mps, d), ae, id);
+  return true;
+}
+
+std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::size_t e,
+                                  Contribution& out, std::uint64_t& queries) const noexcept {
+  const SbrConfig& c = config_;
+  constexpr std::uint8_t kUsed = 0, kShadowed = 1, kNoTerm = 2;
+  // The edge in the world now (a rigid placement: points by the transform, directions by its
+  // rotation).
+  const WedgeEdge w = world_edge(id, e);
   const glm::dvec3 centre = 0.5 * (w.a_m + w.b_m);
   const glm::dvec3 to_radar = pose.position_m - centre;
   const double range_m = glm::length(to_radar);
@@ -765,6 +824,23 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                         }
                         edge_queries += queries;
                       });
+    // Double diffraction between the edges that radiate (SbrConfig::edge_order 2).
+    std::size_t n_pairs = 0;
+    for (Bundle& bd : bundles_) {
+      bd.first_pair = n_pairs;
+      n_pairs += pair_first_[bd.object_id + 1] - pair_first_[bd.object_id];
+    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_pairs, 64),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        std::size_t b = 0;
+                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                          while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_pair)
+                            ++b;
+                          const Bundle& bd = bundles_[b];
+                          const std::size_t p = pair_first_[bd.object_id] + i - bd.first_pair;
+                          pair_used_[p] = pair_pass(pose, bd.object_id, p, pair_out_[p]) ? 1 : 0;
+                        }
+                      });
   }
   const std::size_t rays = next_ray;
   const auto per_ray = static_cast<std::size_t>(c.max_bounces);
@@ -837,6 +913,15 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         ++stats.edges_used;
         if (n < out.size())
           out[n++] = edge_out_[e];
+        else
+          ++stats.dropped_contributions;
+      }
+      for (std::size_t p = pair_first_[bd.object_id]; p < pair_first_[bd.object_id + 1]; ++p) {
+        if (pair_used_[p] == 0)
+          continue;
+        ++stats.edges_double;
+        if (n < out.size())
+          out[n++] = pair_out_[p];
         else
           ++stats.dropped_contributions;
       }

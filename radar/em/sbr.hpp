@@ -112,6 +112,10 @@ struct SbrConfig {
   bool edges = false;
   /// Shared edges turning by more than this diffract (open-sheet boundaries always do) [rad].
   double edge_min_turn_rad = 0.5235987755982988;
+  /// With edges: 1 = first-order edge currents; 2 = also the hard polarisation's double
+  /// diffraction between parallel edges across a flat face (edges.hpp), one contribution per
+  /// pair at the middle of its receiving segment when both edges radiate this frame.
+  int edge_order = 2;
 };
 
 /// Per-frame overrides for the fidelity governor. Defaults leave the configuration as it is.
@@ -184,6 +188,7 @@ struct TraceStats {
   std::uint64_t edges_used = 0;      ///< edge-diffraction contributions (SbrConfig::edges)
   std::uint64_t edges_shadowed = 0;  ///< edges whose midpoint does not see the radar
   std::uint64_t edges_skipped = 0;   ///< back-facing, along the Keller cone, out of view/range
+  std::uint64_t edges_double = 0;    ///< double-diffraction contributions (edge_order 2)
 };
 
 /// The terrain sigma0 table's channel of a polarisation (radar/clutter/terrain.hpp).
@@ -237,6 +242,7 @@ class SbrTracer {
     std::size_t n_az = 0, n_el = 0, first_ray = 0;
     std::size_t first_facet = 0;  ///< in this frame's run over the bundled targets' facets
     std::size_t first_edge = 0;   ///< in this frame's run over the bundled targets' edges
+    std::size_t first_pair = 0;   ///< the same for their edge pairs (double diffraction)
   };
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
@@ -285,6 +291,19 @@ class SbrTracer {
   /// contribution in `out` when used. Adds its occlusion query to `queries`.
   [[nodiscard]] std::uint8_t edge_pass(const RadarPose& pose, std::uint32_t id, std::size_t e,
                                        Contribution& out, std::uint64_t& queries) const noexcept;
+  /// Edge `e` of target `id` in the world this frame.
+  [[nodiscard]] WedgeEdge world_edge(std::uint32_t id, std::size_t e) const noexcept;
+  /// Edge pairs of the targets for double diffraction (SbrConfig::edge_order 2), indices into
+  /// edges_body_: object id's are pairs_[pair_first_[id] .. pair_first_[id + 1]); per frame,
+  /// whether each gave a contribution, and the contribution.
+  std::vector<std::size_t> pair_first_;
+  std::vector<EdgePair> pairs_;
+  std::vector<std::uint8_t> pair_used_;
+  std::vector<Contribution> pair_out_;
+  /// Pair `p` of target `id` when both its edges radiate this frame (edge_state_ 0): whether it
+  /// gives a term, and the term in `out`.
+  [[nodiscard]] bool pair_pass(const RadarPose& pose, std::uint32_t id, std::size_t p,
+                               Contribution& out) const noexcept;
   std::vector<std::uint8_t> is_target_;  ///< per object: has a conducting triangle
   std::size_t n_targets_ = 0;
   std::size_t n_az_ = 0, n_el_ = 0;                ///< terrain grid

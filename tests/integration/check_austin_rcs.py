@@ -9,11 +9,12 @@
     Woo et al., IEEE APS Magazine 35(1), 1993), phi cut 0..180 deg at 7 and 10.25 GHz: the median
     |difference| over the directions where the reference is within 20 dB of its peak, and the
     nose-on (phi = 0) HH difference.
-The issue's acceptance figures (plates: 0.2 dB at normal, median <= 2 dB to 70 deg; almond:
-median <= 1.0 dB at 10.25 GHz and <= 1.5 dB at 7 GHz, nose-on HH within 3 dB) are asserted where
-they are reached; where they are not, the figure reached is asserted (so a regression fails)
+The issue's acceptance figures (plates: 0.2 dB at normal, median <= 2 dB to 70 deg, all reached
+with the default edge order 2; almond: median <= 1.0 dB at 10.25 GHz and <= 1.5 dB at 7 GHz,
+nose-on HH within 3 dB) are asserted where they are reached; where they are not, the figure reached is asserted (so a regression fails)
 and the gap is printed as NOT REACHED (docs/validation.md, "Edge diffraction").
-Usage: check_austin_rcs.py RADAR_EMU WORK_DIR"""
+Usage: check_austin_rcs.py RADAR_EMU WORK_DIR [--charts DIR]  (--charts: also write the docs
+charts austin_plate_{2_56,7}ghz_*.png into DIR)"""
 import csv
 import math
 import os
@@ -23,6 +24,7 @@ import sys
 from cli_check import check, finish, runner
 
 exe, work = sys.argv[1], sys.argv[2]
+charts = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--charts" else None
 os.makedirs(work, exist_ok=True)
 data = os.path.join(os.environ.get("RADAR_EMU_SOURCE_DIR",
                                    os.path.join(os.path.dirname(__file__), "..", "..")),
@@ -113,32 +115,68 @@ def figure(name, value, target, reached_bound):
 # --- IIA plates. ------------------------------------------------------------------------------
 plate = os.path.join(work, "plate.obj")
 write_plate(plate)
-# Issue figures reached at 7 and 10.2 GHz; at 2.56 GHz (1.3 x 2.3 wavelengths) HH median and at
-# 5.12 GHz the normal-incidence level (PO's own, edges are in quadrature there) fall short.
-bounds = {"f9": (0.2, 0.3, 3.2, 1.0), "f10": (0.3, 0.3, 2.3, 1.0), "fx1": (0.2, 0.2, 2.0, 2.0),
-          "f11": (0.2, 0.2, 2.0, 2.0)}
+# Every plate figure is reached with the default edge order 2 (first-order edge currents plus the
+# hard polarisation's double diffraction across the plate, radar/em/edges.hpp). First order alone
+# (--edge-order 1) leaves HH at 2.56 GHz (1.3 x 2.3 wavelengths) at a median 2.9 dB and gives
+# HH = VV in this principal plane; its figures are printed beside and its two properties asserted.
+chart_name = {"f9": "2_56", "fx1": "7"}
 for tag, freq in (("f9", 2.56e9), ("f10", 5.12e9), ("fx1", 7e9), ("f11", 10.2e9)):
     on, off = os.path.join(work, f"plate_{tag}.csv"), os.path.join(work, f"plate_{tag}_po.csv")
+    first = os.path.join(work, f"plate_{tag}_first.csv")
     sweep(plate, freq, "0:90:181", on)
     sweep(plate, freq, "0:90:181", off, "--no-edges")
+    sweep(plate, freq, "0:90:181", first, "--edge-order", "1")
+    first_hh, _ = load_csv(first, "HH")
+    first_vv, _ = load_csv(first, "VV")
+    check(max(abs(first_hh[a] - first_vv[a]) for a in first_hh if a < 89.0) < 0.01,
+          "first-order edges: HH = VV in the principal plane (docs/validation.md)")
     for pol, p in (("HH", "H"), ("VV", "V")):
         ref = load_ref(f"ref_rcs.II.A.sx1.{tag}.{p}.txt")
         got, rows = load_csv(on, pol)
         po, _ = load_csv(off, pol)
+        one, _ = load_csv(first, pol)
         check(rows[0]["edges"] == "1" and int(rows[0]["edges_used"]) == 4,
               "plate: edges on, its 4 rim edges used")
         med = statistics.median(abs(got[a] - ref[a]) for a in ref if a <= 70.0)
         med_po = statistics.median(abs(po[a] - ref[a]) for a in ref if a <= 70.0)
-        normal_bound_hh, normal_bound_vv, med_bound_hh, med_bound_vv = bounds[tag]
+        med_one = statistics.median(abs(one[a] - ref[a]) for a in ref if a <= 70.0)
         print(f"plate {freq / 1e9:g} GHz {pol}: normal {got[0.0] - ref[0.0]:+.3f} dB "
-              f"(PO {po[0.0] - ref[0.0]:+.3f}); median |diff| 0-70 deg PO {med_po:.2f} dB, "
-              f"PO + edges {med:.2f} dB")
+              f"(PO {po[0.0] - ref[0.0]:+.3f}, first order {one[0.0] - ref[0.0]:+.3f}); median "
+              f"|diff| 0-70 deg PO {med_po:.2f} dB, first-order edges {med_one:.2f} dB, "
+              f"PO + edges (order 2) {med:.2f} dB")
         figure(f"plate {freq / 1e9:g} GHz {pol} normal |diff|", abs(got[0.0] - ref[0.0]), 0.2,
-               normal_bound_hh if pol == "HH" else normal_bound_vv)
-        figure(f"plate {freq / 1e9:g} GHz {pol} median |diff| 0-70 deg", med, 2.0,
-               med_bound_hh if pol == "HH" else med_bound_vv)
+               0.2)
+        figure(f"plate {freq / 1e9:g} GHz {pol} median |diff| 0-70 deg", med, 2.0, 2.0)
         check(med < med_po, f"plate {freq / 1e9:g} GHz {pol}: edges improve on PO")
-        check(abs(got[0.0] - po[0.0]) < 0.1, "at normal incidence edges change < 0.1 dB")
+        # First-order edge currents are in quadrature with PO at normal incidence.
+        check(abs(one[0.0] - po[0.0]) < 0.1,
+              "at normal incidence first-order edges change < 0.1 dB")
+    if charts and tag in chart_name:
+        # PO + edges from a fine run; first order, PO alone and the reference as overlays.
+        fine = {}
+        for name, extra in (("po", ("--no-edges",)), ("first", ("--edge-order", "1"))):
+            fine[name] = os.path.join(work, f"chart_{tag}_{name}.csv")
+            sweep(plate, freq, "0:90:361", fine[name], *extra)
+        for pol, p in (("HH", "H"), ("VV", "V")):
+            if tag == "f9" and pol == "VV":
+                continue
+            overlays = []
+            for name, label in (("first", "first-order edges"), ("po", "PO alone")):
+                vals, _ = load_csv(fine[name], pol)
+                txt = os.path.join(work, f"chart_{tag}_{name}_{pol}.txt")
+                with open(txt, "w") as f:
+                    f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(vals.items()))
+                overlays += ["--overlay", f"{txt}={label}"]
+            ref_txt = os.path.join(work, f"chart_{tag}_ref_{pol}.txt")
+            ref = load_ref(f"ref_rcs.II.A.sx1.{tag}.{p}.txt")
+            with open(ref_txt, "w") as f:
+                f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(ref.items()))
+            overlays += ["--overlay", f"{ref_txt}=reference (Austin, ARCHIE-AIM)"]
+            png = f"austin_plate_{chart_name[tag]}ghz_{pol.lower()}.png"
+            run("rcs", "--mesh", plate, "--freq-hz", str(freq), "--theta-deg", "90", "--phi-deg",
+                "0:90:361", "--pol", pol, "--bounces", "1", "-q",
+                "--out", os.path.join(work, f"chart_{tag}_{pol}.csv"),
+                "--plot", os.path.join(charts, png), *overlays)
 
 # --- IIIA almond. -----------------------------------------------------------------------------
 almond = os.path.join(work, "almond.obj")

@@ -279,3 +279,166 @@ TEST(Edges, BistaticSweepsStayFiniteAndCountTheirGuards) {
 
 }  // namespace
 }  // namespace radar_emu::radar
+
+// Double diffraction across a flat face (edges.hpp, second section):
+//  - the UTD transition function F(X) against an independent form of the same integral (the
+//    contour turned onto the steepest-descent path: F(X) = sqrt(X) int_0^inf e^{-v} /
+//    sqrt(X - j v) dv, integrated here by Simpson's rule after v = u^2) and its two limits
+//    sqrt(pi X) e^{j pi/4} (X -> 0) and 1 + j / (2X) (X -> inf) [Kouyoumjian & Pathak 1974];
+//  - the uniform coefficient tends to Keller's (wedge_coefficients, kExact) far from the shadow
+//    and reflection boundaries and stays finite on them;
+//  - the pairs found: a plate's 4 ordered pairs on each side, a box's 4 per face, none across a
+//    gap between two coplanar plates;
+//  - reciprocity, S_pq(d, s) = S_qp(-s, -d), of the summed double-diffraction terms on the
+//    Keller cone: a check of every frame, angle, polarisation factor and phase in the term.
+namespace radar_emu::radar {
+namespace {
+
+std::complex<double> transition_by_quadrature(double x) {
+  // sqrt(X) int_0^inf e^{-v} / sqrt(X - j v) dv with v = u^2: sqrt(X) int 2u e^{-u^2} /
+  // sqrt(X - j u^2) du, smooth at u = 0; Simpson on [0, 7] (e^{-49} is far below 1e-12).
+  const int n = 20000;
+  const double h = 7.0 / n;
+  std::complex<double> sum = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double u = i * h;
+    const double wgt = (i == 0 || i == n) ? 1.0 : (i % 2 == 1 ? 4.0 : 2.0);
+    const std::complex<double> den = std::sqrt(std::complex<double>(x, -u * u));
+    sum += wgt * (u == 0.0 ? std::complex<double>(0.0) : 2.0 * u * std::exp(-u * u) / den);
+  }
+  return std::sqrt(x) * sum * (h / 3.0);
+}
+
+TEST(EdgesDouble, UtdTransitionMatchesQuadratureAndItsLimits) {
+  for (double x : {0.01, 0.1, 0.5, 1.0, 3.0, 10.0, 15.9, 16.1, 30.0, 100.0}) {
+    const std::complex<double> f = utd_transition(x), q = transition_by_quadrature(x);
+    EXPECT_LT(std::abs(f - q), 2e-6) << "X = " << x << ": " << f << " vs " << q;
+  }
+  const double small = 1e-6;
+  EXPECT_LT(std::abs(utd_transition(small) - std::sqrt(kPi * small) * std::polar(1.0, kPi / 4)),
+            1e-2 * std::sqrt(small));
+  const double big = 1e3;
+  EXPECT_LT(std::abs(utd_transition(big) - std::complex<double>(1.0, 0.5 / big)), 1e-6);
+  EXPECT_EQ(utd_transition(0.0), std::complex<double>(0.0));
+}
+
+TEST(EdgesDouble, UniformCoefficientIsKellersAwayFromBoundariesAndFiniteOnThem) {
+  int compared = 0;
+  for (const double alpha : {1.5 * kPi, 2.0 * kPi}) {
+    for (double phi0 = 0.05; phi0 < alpha; phi0 += 0.37) {
+      for (double phi = 0.0; phi <= alpha; phi += 0.11) {
+        const std::complex<double> g = utd_wedge_coefficient(alpha, phi, phi0, 1e3, true);
+        const std::complex<double> f = utd_wedge_coefficient(alpha, phi, phi0, 1e3, false);
+        ASSERT_TRUE(std::isfinite(std::abs(g)) && std::isfinite(std::abs(f)));
+        // Away from pi -+ phi0 (mod 2 n pi), Keller's coefficient to O(1 / kL a).
+        const double n = alpha / kPi;
+        bool near = false;
+        for (const double x : {phi - phi0, phi + phi0}) {
+          for (int m = -2; m <= 2; ++m) {
+            near = near || std::abs(x - (2.0 * kPi * n * m + kPi)) < 0.3 ||
+                   std::abs(x - (2.0 * kPi * n * m - kPi)) < 0.3;
+          }
+        }
+        if (near)
+          continue;
+        bool guarded = false;
+        const WedgeCoefficients k =
+            wedge_coefficients(alpha, phi, phi0, EdgeCoefficient::kExact, guarded);
+        EXPECT_LT(std::abs(g - k.g), 2e-2 * (1.0 + std::abs(k.g)))
+            << alpha << " " << phi << " " << phi0;
+        EXPECT_LT(std::abs(f - k.f), 2e-2 * (1.0 + std::abs(k.f)));
+        ++compared;
+      }
+    }
+  }
+  EXPECT_GT(compared, 200);
+  // Exactly on the half-plane's shadow boundary phi = pi + phi0 and at grazing incidence: finite.
+  for (const double phi0 : {0.0, 0.7, kPi}) {
+    const std::complex<double> g = utd_wedge_coefficient(2.0 * kPi, kPi + phi0, phi0, 50.0, true);
+    EXPECT_TRUE(std::isfinite(std::abs(g))) << phi0;
+    EXPECT_LT(std::abs(g), 10.0 * std::sqrt(50.0));
+  }
+}
+
+std::vector<EdgePair> pairs_of(const scene::SceneDescription& d) {
+  const scene::Scene sc(d);
+  RcsConfig c;
+  c.edges = true;
+  const RcsEngine e(sc, {SurfaceModel{}}, c);
+  return {e.edge_pairs().begin(), e.edge_pairs().end()};
+}
+
+TEST(EdgesDouble, PairsAcrossPlatesAndBoxFacesNotAcrossAGap) {
+  const auto plate = pairs_of(scene::make_target({scene::TargetKind::kPlate, 0.5, 0.3, 1.0, 0.0}));
+  // 2 pairs of opposite edges x 2 directions x 2 sides (float vertices: widths to 1e-6 m)
+  EXPECT_EQ(plate.size(), 8u);
+  for (const EdgePair& p : plate) {
+    EXPECT_TRUE(std::abs(p.width_m - 0.5) < 1e-6 || std::abs(p.width_m - 0.3) < 1e-6) << p.width_m;
+  }
+  const auto box = pairs_of(scene::make_target({scene::TargetKind::kBox, 0.5, 0.4, 0.3, 0.0}));
+  EXPECT_EQ(box.size(), 24u);  // 6 faces x 2 pairs of opposite edges x 2 directions
+  // Two coplanar plates 0.2 m apart along x: each keeps its 8 pairs; the outer edges, which face
+  // each other across both plates and the gap, are not paired (no surface under the middle).
+  scene::SceneDescription two = scene::make_target({scene::TargetKind::kPlate, 0.5, 0.3, 1.0, 0.0});
+  const scene::SceneDescription other = two;
+  two.objects[0].world_from_body = glm::translate(glm::dmat4(1.0), glm::dvec3(-0.35, 0.0, 0.0));
+  two.objects.push_back(other.objects[0]);
+  two.objects[1].name = "second";
+  two.objects[1].world_from_body = glm::translate(glm::dmat4(1.0), glm::dvec3(0.35, 0.0, 0.0));
+  EXPECT_EQ(pairs_of(two).size(), 16u);
+}
+
+TEST(EdgesDouble, SummedTermsAreReciprocalOnTheKellerCone) {
+  // A 0.3 x 0.2 m plate in the x-y plane: the pairs of its edges along y. Directions with the
+  // same y component (the Keller cone of those edges), transmit e and receive p arbitrary.
+  const scene::SceneDescription desc =
+      scene::make_target({scene::TargetKind::kPlate, 0.3, 0.2, 1.0, 0.0});
+  const scene::Scene sc(desc);
+  RcsConfig c;
+  c.edges = true;
+  const RcsEngine eng(sc, {SurfaceModel{}}, c);
+  const auto edges = eng.edges();
+  const double k = 2.0 * kPi * 10e9 / 299792458.0;
+  auto amplitude = [&](const glm::dvec3& d, const glm::dvec3& s, const glm::dvec3& e,
+                       const glm::dvec3& p) {
+    std::complex<double> sum = 0.0;
+    int used = 0;
+    for (const EdgePair& pair : eng.edge_pairs()) {
+      if (std::abs(edges[pair.from].t.y) < 0.99)
+        continue;
+      DoubleEdgeTerm t;
+      // tx_h = e, rx_h = p: pol[0] is p . (...) e.
+      if (double_edge_term(pair, edges, d, s, e, e, p, p, t) != EdgeSkip::kNone)
+        continue;
+      sum += t.pol[0] * double_edge_factor(t, k);
+      ++used;
+    }
+    return std::make_pair(sum, used);
+  };
+  auto on_cone = [](double c_y, double az) {
+    const double r = std::sqrt(1.0 - c_y * c_y);
+    return glm::dvec3(r * std::cos(az), c_y, r * std::sin(az));
+  };
+  int checked = 0;
+  for (const double c_y : {0.0, 0.3}) {
+    for (const double a_in : {0.3, 1.0, 1.4}) {
+      for (const double a_out : {0.5, 1.2, 2.4}) {
+        const glm::dvec3 d = -on_cone(-c_y, a_in);  // from a source above the plate
+        const glm::dvec3 s = on_cone(c_y, a_out);
+        const glm::dvec3 e = glm::normalize(glm::cross(d, glm::dvec3(0.3, 0.8, 0.1)));
+        const glm::dvec3 p = glm::normalize(glm::cross(s, glm::dvec3(-0.6, 0.2, 0.5)));
+        const auto fwd = amplitude(d, s, e, p);
+        const auto rev = amplitude(-s, -d, p, e);
+        ASSERT_GT(fwd.second, 0) << c_y << " " << a_in << " " << a_out;
+        EXPECT_EQ(fwd.second, rev.second);
+        EXPECT_LT(std::abs(fwd.first - rev.first), 1e-9 * (1e-6 + std::abs(fwd.first)))
+            << c_y << " " << a_in << " " << a_out << ": " << fwd.first << " vs " << rev.first;
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 18);
+}
+
+}  // namespace
+}  // namespace radar_emu::radar
