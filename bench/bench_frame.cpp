@@ -75,6 +75,27 @@ void BM_Trace(benchmark::State& state) {
 }
 BENCHMARK(BM_Trace)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+// The airport frame with first-order edge currents only (argument 1) and with the double
+// diffraction of edge pairs (2, the default; radar/em/edges.hpp): its cost in the loop.
+void BM_TraceEdgeOrder(benchmark::State& state) {
+  Fixture& f = airport_fixture();
+  radar::SbrConfig c = f.s.sbr;
+  c.edge_order = static_cast<int>(state.range(0));
+  radar::SbrTracer tracer(f.scene, c);
+  std::vector<radar::Contribution> out(tracer.max_contributions());
+  radar::TraceStats stats;
+  std::size_t n = 0;
+  for (auto _ : state) {
+    stats = {};
+    n = tracer.trace(f.pose, out, stats);
+    benchmark::DoNotOptimize(n);
+  }
+  state.counters["edges_used"] = static_cast<double>(stats.edges_used);
+  state.counters["edges_double"] = static_cast<double>(stats.edges_double);
+  state.counters["contributions"] = static_cast<double>(n);
+}
+BENCHMARK(BM_TraceEdgeOrder)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 // The same frame at several target-bundle densities (argument: spacing in mm), side by side:
 // cost against the accuracy the tests measure (tests/radar: a trihedral converges to within
 // 0.2 dB of 12 pi a^4 / lambda^2 at 25 tubes per edge, a flat plate at any density).

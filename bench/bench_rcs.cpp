@@ -5,7 +5,9 @@
 //   BM_Vehicle361Angles/R      361 monostatic angles (phi 0..360 deg, theta 80 deg), one frequency
 //                              (35 GHz), R/2 rays per wavelength
 //   BM_VehicleProfileEdges/E   the range profile at 2 rays per wavelength without (E = 0) and with
-//                              (E = 1) edge diffraction (radar/em/edges.hpp): the cost of edges
+//                              edge diffraction (radar/em/edges.hpp), first order (E = 1) and
+//                              with the double diffraction of edge pairs (E = 2, the default):
+//                              the cost of edges
 //   BM_SbrThroughput           compute() at one frequency: ray-tube segments per second, and
 //   BM_EmbreeRawThroughput     raw Embree rtcIntersect1 bouncing the very same rays, side by side
 // Convergence of the profile (doubling the rays) is reported as a counter of the profile
@@ -119,6 +121,7 @@ void BM_VehicleProfileEdges(benchmark::State& state) {
   config.max_bounces = 3;
   config.rays_per_wavelength = 2.0;
   config.edges = state.range(0) != 0;
+  config.edge_order = state.range(0) == 2 ? 2 : 1;
   const radar::RcsEngine engine(v.scene, {radar::SurfaceModel{}}, config);
   const std::vector<double> f = profile_freqs();
   std::vector<radar::ScatteringMatrix> s(f.size());
@@ -130,9 +133,16 @@ void BM_VehicleProfileEdges(benchmark::State& state) {
   }
   state.counters["edges"] = static_cast<double>(engine.edges().size());
   state.counters["edges_used"] = static_cast<double>(stats.edges_used);
+  state.counters["edge_pairs"] = static_cast<double>(engine.edge_pairs().size());
+  state.counters["edges_double"] = static_cast<double>(stats.edges_double);
   state.counters["rays"] = static_cast<double>(stats.rays);
 }
-BENCHMARK(BM_VehicleProfileEdges)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_VehicleProfileEdges)
+    ->Arg(0)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 std::vector<double> pattern_db(const radar::RcsEngine& engine) {
   const double f[1] = {35e9};

@@ -43,8 +43,11 @@ bist=(--eps-r "5,0.09" --rms-height-m 0.0005 --corr-length-m 0.005 --freq-hz 94e
   -q 2>/dev/null
 "$exe" tradeoff --cases sphere,grazing,iem --out trade -q
 cp trade/tradeoff_sphere.png trade/tradeoff_grazing.png trade/tradeoff_iem.png "$img/"
-# The openEMS plate overlays (docs/validation.md): its check script draws them from the table.
+# The openEMS and Austin plate overlays (docs/validation.md): their check scripts draw them from
+# the tables.
 /usr/bin/python3 "$root/tests/integration/check_openems_plate.py" "$exe" "$work/openems" \
+  --charts "$img" > /dev/null
+/usr/bin/python3 "$root/tests/integration/check_austin_rcs.py" "$exe" "$work/austin" \
   --charts "$img" > /dev/null
 if [ "$slow" = 1 ]; then
   "$exe" scene target vehicle --a-m 7 --b-m 3.5 --c-m 2.5 --out veh.glb > /dev/null
