@@ -149,6 +149,7 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
             "edge_min_turn_rad", "must be in [0, pi)");
     for (std::size_t i = 0; i < desc.objects.size(); ++i) {
       edge_first_[i + 1] = edge_first_[i];
+      pair_first_[i + 1] = pair_first_[i];
       if (!is_target_[i])
         continue;
       const scene::Mesh& mesh = desc.objects[i].mesh;
@@ -168,7 +169,6 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
           c.edge_min_turn_rad, census);
       edges_body_.insert(edges_body_.end(), found.begin(), found.end());
       edge_first_[i + 1] = edges_body_.size();
-      pair_first_[i + 1] = pair_first_[i];
       if (c.edge_order < 2)
         continue;
       // Pairs in the body frame (a rigid placement keeps them); indices made global.
