@@ -267,7 +267,8 @@ def modbus_seeds():
 def scenario_seeds(radar_emu):
     ex = os.path.join(ROOT, "examples")
     for f in sorted(os.listdir(ex)):
-        if f.endswith(".toml"):
+        # sar_*.toml are `radar-emu sar` cases (the sar_case harness), not scenarios.
+        if f.endswith(".toml") and not f.startswith("sar"):
             shutil.copy(os.path.join(ex, f), os.path.join(HERE, "corpus", "scenario_toml", f))
     if radar_emu:
         text = subprocess.run([radar_emu, "run", "--print-scenario"], check=True,
