@@ -5,9 +5,9 @@
 //   BM_Vehicle361Angles/R      361 monostatic angles (phi 0..360 deg, theta 80 deg), one frequency
 //                              (35 GHz), R/2 rays per wavelength
 //   BM_VehicleProfileEdges/E   the range profile at 2 rays per wavelength without (E = 0) and with
-//                              edge diffraction (radar/em/edges.hpp), first order (E = 1) and
-//                              with the double diffraction of edge pairs (E = 2, the default):
-//                              the cost of edges
+//                              edge diffraction (radar/em/edges.hpp), first order and by way of a
+//                              reflection (E = 1) and with the double diffraction of edge pairs
+//                              too (E = 2, the default): the cost of edges
 //   BM_SbrThroughput           compute() at one frequency: ray-tube segments per second, and
 //   BM_EmbreeRawThroughput     raw Embree rtcIntersect1 bouncing the very same rays, side by side
 // Convergence of the profile (doubling the rays) is reported as a counter of the profile
@@ -135,6 +135,7 @@ void BM_VehicleProfileEdges(benchmark::State& state) {
   state.counters["edges_used"] = static_cast<double>(stats.edges_used);
   state.counters["edge_pairs"] = static_cast<double>(engine.edge_pairs().size());
   state.counters["edges_double"] = static_cast<double>(stats.edges_double);
+  state.counters["edges_reflected"] = static_cast<double>(stats.edges_reflected);
   state.counters["rays"] = static_cast<double>(stats.rays);
 }
 BENCHMARK(BM_VehicleProfileEdges)

@@ -129,6 +129,7 @@ void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
   total.edges_skipped += one.edges_skipped;
   total.edges_guarded += one.edges_guarded;
   total.edges_double += one.edges_double;
+  total.edges_reflected += one.edges_reflected;
   for (std::size_t b = 0; b <= static_cast<std::size_t>(radar::kMaxRcsBounces); ++b)
     total.paths_by_bounce[b] += one.paths_by_bounce[b];
 }
@@ -199,6 +200,9 @@ void print_target(const LoadedTarget& t, const radar::RcsEngine& e, bool quiet) 
         "double diffraction: %zu edge pairs across flat faces (hard polarisation; "
         "--edge-order 1 leaves it out)\n",
         e.edge_pairs().size());
+  std::printf(
+      "reflection-diffraction: %zu flat PEC faces light and relay edges by one reflection\n",
+      e.reflecting_planes().size());
 }
 
 // The summary line of the edge terms over a run.
@@ -208,12 +212,13 @@ void print_edge_stats(const radar::RcsEngine& e, const radar::RcsStats& st) {
   std::printf(
       "edge terms: %llu used, %llu shadowed, %llu without a term (no lit face, along the edge, "
       "receiver inside the wedge), %llu boundary singularities stepped around, %llu "
-      "double-diffraction terms\n",
+      "double-diffraction terms, %llu terms by way of a reflection\n",
       static_cast<unsigned long long>(st.edges_used),
       static_cast<unsigned long long>(st.edges_shadowed),
       static_cast<unsigned long long>(st.edges_skipped),
       static_cast<unsigned long long>(st.edges_guarded),
-      static_cast<unsigned long long>(st.edges_double));
+      static_cast<unsigned long long>(st.edges_double),
+      static_cast<unsigned long long>(st.edges_reflected));
 }
 
 radar::RcsConfig with_edge_order(radar::RcsConfig c, int edge_order) {

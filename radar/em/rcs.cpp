@@ -7,7 +7,9 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
+#include <tuple>
 
 #include "radar/constants.hpp"
 #include "radar/em/facet_po.hpp"
@@ -142,6 +144,40 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
     edges_ = find_wedge_edges(tris, outward, pec, config_.edge_min_turn_rad, census_);
     if (config_.edge_order >= 2)
       pairs_ = find_edge_pairs(edges_, tris, epsilon_m_);
+    // Reflecting planes: the PEC facets grouped by plane (normal to 1e-6, offset to 100 ray
+    // offsets), the largest kept.
+    using Key = std::tuple<long long, long long, long long, long long>;
+    std::map<Key, ReflectingPlane> by_plane;
+    const double step_m = 100.0 * epsilon_m_;
+    for (std::size_t i = 0; i < facets_.size(); ++i) {
+      if (!pec[i])
+        continue;
+      glm::dvec3 n = facets_[i].normal;
+      const double big = std::abs(n.x) >= std::abs(n.y) && std::abs(n.x) >= std::abs(n.z)
+                             ? n.x
+                             : (std::abs(n.y) >= std::abs(n.z) ? n.y : n.z);
+      if (big < 0.0)
+        n = -n;
+      const double offset = glm::dot(n, facets_[i].v0);
+      ReflectingPlane& p = by_plane[Key{std::llround(n.x * 1e6), std::llround(n.y * 1e6),
+                                        std::llround(n.z * 1e6), std::llround(offset / step_m)}];
+      if (p.area_m2 == 0.0) {
+        p.normal = n;
+        p.offset_m = offset;
+      }
+      p.area_m2 += facets_[i].area_m2;
+    }
+    for (const auto& [key, p] : by_plane)
+      planes_.push_back(p);
+    std::sort(
+        planes_.begin(), planes_.end(),
+        [](const ReflectingPlane& a, const ReflectingPlane& b) { return a.area_m2 > b.area_m2; });
+    if (planes_.size() > kMaxReflectingPlanes)
+      planes_.resize(kMaxReflectingPlanes);
+    if (!planes_.empty()) {
+      const double floor_m2 = kReflectingPlaneShare * planes_.front().area_m2;
+      std::erase_if(planes_, [floor_m2](const ReflectingPlane& p) { return p.area_m2 < floor_m2; });
+    }
   }
 }
 
@@ -353,6 +389,92 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     stats.edges_used += edge_terms.size();
     stats.edges_guarded += guarded;
     occl += e_occl;
+  }
+  // Reflection-diffraction (image theory): an edge lit by the transmitter's wave after one
+  // reflection off a reflecting plane (RD), seen by the receiver after one (DR), or both (RDR).
+  // A PEC plane reflects E into R(E) = 2 (n.E) n - E and a direction v into mirror(v, n); the
+  // reflected plane wave's phase at x is -k (d_r . x + 2 (d . n) offset), and a current at x
+  // radiating toward mirror(s, n) reaches the receiver with phase k (mirror(s, n) . x + 2 (s . n)
+  // offset) (Balanis, Advanced Engineering Electromagnetics, 2nd ed., 2012, sec. 7.4: image
+  // theory). The edge term is edges.hpp's with those directions, polarisations and phases. Paths:
+  // from beside the edge's midpoint along -d_r (RD) or mirror(s, n) (DR), the first hit must be
+  // a PEC facet of the plane, on the edge's side, and from there the transmitter (RD) or the
+  // receiver (DR) must be in sight. An edge lying in the plane is not lit by it.
+  if (!edges_.empty() && !planes_.empty()) {
+    const double tol_m = 100.0 * eps;
+    auto reflect_pol = [](const glm::dvec3& e, const glm::dvec3& n) {
+      return 2.0 * glm::dot(n, e) * n - e;
+    };
+    std::vector<std::vector<EdgeTerm>> found(edges_.size());
+    std::atomic<std::uint64_t> r_occl{0};
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, edges_.size(), 64),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          std::uint64_t n_occl = 0;
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const WedgeEdge& edge = edges_[i];
+            const glm::dvec3 probe = edge_probe(edge, 10.0 * eps);
+            for (const ReflectingPlane& plane : planes_) {
+              const glm::dvec3& n = plane.normal;
+              const double side = glm::dot(n, probe) - plane.offset_m;
+              if (std::abs(glm::dot(n, edge.a_m) - plane.offset_m) < tol_m &&
+                  std::abs(glm::dot(n, edge.b_m) - plane.offset_m) < tol_m)
+                continue;  // the edge lies in the plane
+              // Does the ray from the probe along `dir` meet the plane first, on a PEC facet,
+              // and see `toward` from there?
+              auto relayed = [&](const glm::dvec3& dir, const glm::dvec3& toward) {
+                if (side * glm::dot(n, toward) <= 0.0 || std::abs(glm::dot(n, dir)) < 1e-3)
+                  return false;  // the plane faces away, or the path grazes it
+                scene::Ray ray;
+                ray.origin_m = probe;
+                ray.direction = dir;
+                ray.t_near_m = 0.0;
+                ray.t_far_m = std::numeric_limits<double>::infinity();
+                scene::Hit hit;
+                ++n_occl;
+                if (!scene_->intersect(ray, hit) ||
+                    std::abs(glm::dot(hit.normal, n)) < 1.0 - 1e-6 ||
+                    std::abs(glm::dot(n, hit.position_m) - plane.offset_m) > tol_m ||
+                    surfaces_[hit.material_id].kind != SurfaceModel::Kind::kPec)
+                  return false;
+                if (!shadowing)
+                  return true;
+                ++n_occl;
+                const glm::dvec3 lift = (side > 0.0 ? eps : -eps) * n;
+                return clear(hit.position_m + lift, toward);
+              };
+              const glm::dvec3 d_r = mirror(d_i, n), s_r = mirror(s, n);
+              const bool rd = relayed(-d_r, r_t), dr = relayed(s_r, r_r);
+              const double phase_rd = -2.0 * glm::dot(d_i, n) * plane.offset_m;
+              const double phase_dr = 2.0 * glm::dot(s, n) * plane.offset_m;
+              const glm::dvec3 th = reflect_pol(tx_h, n), tv = reflect_pol(tx_v, n);
+              const glm::dvec3 rh = reflect_pol(rx_h, n), rv = reflect_pol(rx_v, n);
+              auto add = [&](const glm::dvec3& dd, const glm::dvec3& ss, const glm::dvec3& ah,
+                             const glm::dvec3& av, const glm::dvec3& bh, const glm::dvec3& bv,
+                             double phase_m) {
+                EdgeTerm t;
+                bool g = false;
+                if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g) !=
+                    EdgeSkip::kNone)
+                  return;
+                t.phase_m += phase_m;
+                found[i].push_back(t);
+              };
+              if (rd)
+                add(d_r, s, th, tv, rx_h, rx_v, phase_rd);
+              if (dr)
+                add(d_i, s_r, tx_h, tx_v, rh, rv, phase_dr);
+              if (rd && dr)
+                add(d_r, s_r, th, tv, rh, rv, phase_rd + phase_dr);
+            }
+          }
+          r_occl += n_occl;
+        });
+    for (const auto& v : found) {
+      edge_terms.insert(edge_terms.end(), v.begin(), v.end());
+      stats.edges_reflected += v.size();
+    }
+    occl += r_occl;
   }
   // Double diffraction (edges.hpp): the launching edge's midpoint must see the transmitter and
   // the receiving edge's the receiver (tests memoised per edge and direction).

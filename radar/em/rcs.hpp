@@ -27,7 +27,10 @@
 //              radiates when a face of it is lit and its midpoint sees the transmitter. With
 //              edge_order 2, the hard polarisation's double diffraction between parallel edges
 //              across a flat face (edges.hpp) is added too, when the launching edge's midpoint
-//              sees the transmitter and the receiving edge's sees the receiver.
+//              sees the transmitter and the receiving edge's sees the receiver. Edges are
+//              also lit and seen by way of one reflection off the target's largest flat PEC
+//              faces (reflection-diffraction, diffraction-reflection and both; image theory: the
+//              edge term with the mirrored directions and polarisations and the image phase).
 //   sweeps     Facet geometry and ray paths do not depend on frequency: they are found once per
 //              direction and every frequency is summed from them.
 //
@@ -121,12 +124,23 @@ struct RcsStats {
   std::uint64_t segments = 0;  ///< intersection queries of the ray tubes (rays x bounces)
   std::uint64_t paths_by_bounce[kMaxRcsBounces + 1] = {};  ///< [n]: footprints at bounce n >= 2
   std::uint64_t edges_used = 0;                            ///< edge terms added (config.edges)
-  std::uint64_t edges_shadowed = 0;  ///< lit faces, but the path to the transmitter is blocked
-  std::uint64_t edges_skipped = 0;   ///< no lit face, along the edge (Keller-cone guard) or the
-                                     ///< receiver inside the wedge (edges.hpp, EdgeSkip)
-  std::uint64_t edges_guarded = 0;   ///< boundary singularities stepped around (edges.hpp)
-  std::uint64_t edges_double = 0;    ///< edge-to-edge double-diffraction terms added
+  std::uint64_t edges_shadowed = 0;   ///< lit faces, but the path to the transmitter is blocked
+  std::uint64_t edges_skipped = 0;    ///< no lit face, along the edge (Keller-cone guard) or the
+                                      ///< receiver inside the wedge (edges.hpp, EdgeSkip)
+  std::uint64_t edges_guarded = 0;    ///< boundary singularities stepped around (edges.hpp)
+  std::uint64_t edges_double = 0;     ///< edge-to-edge double-diffraction terms added
+  std::uint64_t edges_reflected = 0;  ///< edge terms by way of a reflecting plane (RD, DR, RDR)
 };
+
+/// A flat PEC face of the target large enough to light edges by reflection (RcsEngine).
+struct ReflectingPlane {
+  glm::dvec3 normal{0.0, 0.0, 1.0};  ///< unit (sign-folded: largest component positive)
+  double offset_m = 0.0;             ///< normal . x on the plane
+  double area_m2 = 0.0;              ///< of the PEC facets in it
+};
+/// At most this many planes, each at least kReflectingPlaneShare of the largest one's area.
+inline constexpr std::size_t kMaxReflectingPlanes = 8;
+inline constexpr double kReflectingPlaneShare = 0.25;
 
 /// One reflection of a ray tube (for tests of the GO tracer). Reported from worker threads.
 struct BounceEvent {
@@ -178,6 +192,10 @@ class RcsEngine {
   [[nodiscard]] const EdgeCensus& edge_census() const noexcept { return census_; }
   /// The edge pairs whose double diffraction is added (empty unless edges and edge_order 2).
   [[nodiscard]] std::span<const EdgePair> edge_pairs() const noexcept { return pairs_; }
+  /// The planes that light and relay edge terms by one reflection (empty unless edges).
+  [[nodiscard]] std::span<const ReflectingPlane> reflecting_planes() const noexcept {
+    return planes_;
+  }
 
  private:
   struct Facet {
@@ -198,6 +216,7 @@ class RcsEngine {
   double epsilon_m_ = 0.0;  ///< ray offset, scaled with the target
   std::vector<WedgeEdge> edges_;
   std::vector<EdgePair> pairs_;
+  std::vector<ReflectingPlane> planes_;
   EdgeCensus census_;
 };
 
