@@ -25,6 +25,34 @@ glm::dvec3 normal_part(const glm::dvec3& v, const glm::dvec3& t) noexcept {
   return l > 0.0 ? u / l : glm::dvec3(0.0);
 }
 
+// The angles of a diffraction (edges.hpp): sin(beta) and the source's angle phi0 about `lit`
+// for propagation direction d, the receiver's angle phi about `seen` toward s (its projection on
+// the plane normal to the edge; within rounding of a face it is put on the face). `lit` and
+// `seen` are the same edge for a single diffraction, parallel ones for a double. Returns why
+// there is no term, or kNone.
+EdgeSkip edge_angles(const WedgeEdge& lit, const WedgeEdge& seen, const glm::dvec3& d,
+                     const glm::dvec3& s, double& sin_beta, double& phi0, double& phi) noexcept {
+  sin_beta = glm::length(glm::cross(d, lit.t));
+  const glm::dvec3 s_perp = s - glm::dot(s, seen.t) * seen.t;
+  if (sin_beta < kEdgeMinSin || glm::length(s_perp) < kEdgeMinSin)
+    return EdgeSkip::kAlongEdge;
+  const glm::dvec3 u = normal_part(-d, lit.t), v = s_perp / glm::length(s_perp);
+  phi0 = wrap_2pi(std::atan2(glm::dot(u, lit.y0), glm::dot(u, lit.x0)));
+  if (phi0 > lit.alpha_rad)
+    return EdgeSkip::kBackFace;
+  phi = wrap_2pi(std::atan2(glm::dot(v, seen.y0), glm::dot(v, seen.x0)));
+  if (phi > seen.alpha_rad) {
+    // Within rounding of face 0 (wrapped to ~2 pi) or face 1: on the face; else inside.
+    if (phi > 2.0 * kPi - 1e-9)
+      phi = 0.0;
+    else if (phi > seen.alpha_rad + 1e-9)
+      return EdgeSkip::kInsideWedge;
+    else
+      phi = seen.alpha_rad;
+  }
+  return EdgeSkip::kNone;
+}
+
 struct Coeffs {
   double f, g;
   double min_den;  // smallest |denominator| met (boundary singularities)
@@ -207,12 +235,7 @@ std::vector<EdgePair> find_edge_pairs(std::span<const WedgeEdge> edges,
   using Key = std::tuple<long long, long long, long long>;
   std::map<Key, std::vector<std::uint32_t>> buckets;
   for (std::uint32_t i = 0; i < edges.size(); ++i) {
-    glm::dvec3 t = edges[i].t;
-    const double big = std::abs(t.x) >= std::abs(t.y) && std::abs(t.x) >= std::abs(t.z)
-                           ? t.x
-                           : (std::abs(t.y) >= std::abs(t.z) ? t.y : t.z);
-    if (big < 0.0)
-      t = -t;
+    const glm::dvec3 t = sign_folded(edges[i].t);
     buckets[Key{std::llround(t.x * 1e6), std::llround(t.y * 1e6), std::llround(t.z * 1e6)}]
         .push_back(i);
   }
@@ -276,23 +299,9 @@ EdgeSkip double_edge_term(const EdgePair& pair, std::span<const WedgeEdge> edges
   const WedgeEdge& e1 = edges[pair.from];
   const WedgeEdge& e2 = edges[pair.to];
   const glm::dvec3& t1 = e1.t;
-  const double sin_beta = glm::length(glm::cross(d, t1));
-  const glm::dvec3 s_perp = s - glm::dot(s, e2.t) * e2.t;
-  if (sin_beta < kEdgeMinSin || glm::length(s_perp) < kEdgeMinSin)
-    return EdgeSkip::kAlongEdge;
-  const glm::dvec3 u = normal_part(-d, t1), v = s_perp / glm::length(s_perp);
-  const double phi0 = wrap_2pi(std::atan2(glm::dot(u, e1.y0), glm::dot(u, e1.x0)));
-  if (phi0 > e1.alpha_rad)
-    return EdgeSkip::kBackFace;
-  double phi = wrap_2pi(std::atan2(glm::dot(v, e2.y0), glm::dot(v, e2.x0)));
-  if (phi > e2.alpha_rad) {  // as edge_term: on a face within rounding, or inside the wedge
-    if (phi > 2.0 * kPi - 1e-9)
-      phi = 0.0;
-    else if (phi > e2.alpha_rad + 1e-9)
-      return EdgeSkip::kInsideWedge;
-    else
-      phi = e2.alpha_rad;
-  }
+  double sin_beta = 0.0, phi0 = 0.0, phi = 0.0;
+  if (const EdgeSkip why = edge_angles(e1, e2, d, s, sin_beta, phi0, phi); why != EdgeSkip::kNone)
+    return why;
   // Rays from Q1 in [0, L1] along t1 reach the second edge's line shifted by s (u . t1), with
   // s = w / sin(beta) and u . t1 = d . t1 (the Keller cone).
   const double w = pair.width_m;
@@ -385,6 +394,13 @@ std::complex<double> utd_transition(double x) noexcept {
   return 2.0 * j * a * std::polar(1.0, x) * tail;
 }
 
+glm::dvec3 sign_folded(const glm::dvec3& v) noexcept {
+  const double big = std::abs(v.x) >= std::abs(v.y) && std::abs(v.x) >= std::abs(v.z)
+                         ? v.x
+                         : (std::abs(v.y) >= std::abs(v.z) ? v.y : v.z);
+  return big < 0.0 ? -v : v;
+}
+
 glm::dvec3 edge_probe(const WedgeEdge& edge, double offset_m) noexcept {
   const double h = 0.5 * edge.alpha_rad;
   return 0.5 * (edge.a_m + edge.b_m) + offset_m * (std::cos(h) * edge.x0 + std::sin(h) * edge.y0);
@@ -396,24 +412,10 @@ EdgeSkip edge_term(const WedgeEdge& edge, const glm::dvec3& d, const glm::dvec3&
                    bool& guarded) noexcept {
   guarded = false;
   const glm::dvec3& t = edge.t;
-  const double sin_beta = glm::length(glm::cross(d, t));
-  const glm::dvec3 s_perp = s - glm::dot(s, t) * t;
-  if (sin_beta < kEdgeMinSin || glm::length(s_perp) < kEdgeMinSin)
-    return EdgeSkip::kAlongEdge;
-  const glm::dvec3 u = normal_part(-d, t), v = s_perp / glm::length(s_perp);
-  const double phi0 = wrap_2pi(std::atan2(glm::dot(u, edge.y0), glm::dot(u, edge.x0)));
-  if (phi0 > edge.alpha_rad)
-    return EdgeSkip::kBackFace;
-  double phi = wrap_2pi(std::atan2(glm::dot(v, edge.y0), glm::dot(v, edge.x0)));
-  if (phi > edge.alpha_rad) {
-    // Within rounding of face 0 (wrapped to ~2 pi) or face 1: on the face; else inside.
-    if (phi > 2.0 * kPi - 1e-9)
-      phi = 0.0;
-    else if (phi > edge.alpha_rad + 1e-9)
-      return EdgeSkip::kInsideWedge;
-    else
-      phi = edge.alpha_rad;
-  }
+  double sin_beta = 0.0, phi0 = 0.0, phi = 0.0;
+  if (const EdgeSkip why = edge_angles(edge, edge, d, s, sin_beta, phi0, phi);
+      why != EdgeSkip::kNone)
+    return why;
   const WedgeCoefficients w = wedge_coefficients(edge.alpha_rad, phi, phi0, kind, guarded);
   // S = -(1 / (sqrt(pi) sin^2 beta)) [(e.t) f p.(s x (s x t)) + ((d x e).t) g p.(s x t)]
   // (edges.hpp), times the segment integral.

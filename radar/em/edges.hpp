@@ -215,6 +215,10 @@ struct DoubleEdgeTerm {
 /// X = 16, the asymptotic series sum (-1)^m (2m - 1)!! / (2 j X)^m beyond.
 [[nodiscard]] std::complex<double> utd_transition(double x) noexcept;
 
+/// `v` or -v, whichever has its largest-magnitude component positive: one representative of a
+/// direction and its opposite (for grouping parallel edges and coplanar facets).
+[[nodiscard]] glm::dvec3 sign_folded(const glm::dvec3& v) noexcept;
+
 /// A point beside the edge's midpoint in the free space (along the exterior bisector), offset_m
 /// away: where the engine's occlusion test toward the transmitter starts.
 [[nodiscard]] glm::dvec3 edge_probe(const WedgeEdge& edge, double offset_m) noexcept;

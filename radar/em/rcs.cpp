@@ -152,12 +152,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
     for (std::size_t i = 0; i < facets_.size(); ++i) {
       if (!pec[i])
         continue;
-      glm::dvec3 n = facets_[i].normal;
-      const double big = std::abs(n.x) >= std::abs(n.y) && std::abs(n.x) >= std::abs(n.z)
-                             ? n.x
-                             : (std::abs(n.y) >= std::abs(n.z) ? n.y : n.z);
-      if (big < 0.0)
-        n = -n;
+      const glm::dvec3 n = sign_folded(facets_[i].normal);
       const double offset = glm::dot(n, facets_[i].v0);
       ReflectingPlane& p = by_plane[Key{std::llround(n.x * 1e6), std::llround(n.y * 1e6),
                                         std::llround(n.z * 1e6), std::llround(offset / step_m)}];
