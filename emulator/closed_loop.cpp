@@ -1322,7 +1322,8 @@ void ClosedLoop::write_outputs(const RunResult& r) {
           {"frames_queued", sc.frames_queued},
           {"frames_skipped_slow_client", sc.frames_skipped},
           {"slow_clients_closed", sc.slow_clients_closed},
-          {"clients_closed", sc.clients_closed}}}};
+          {"clients_closed", sc.clients_closed},
+          {"accept_failures", sc.accept_failures}}}};
   }
   if (!m.options.trace_events_file.empty()) {
     rep["trace_events"] = {{"file", m.options.trace_events_file.string()},

@@ -361,7 +361,8 @@ struct Server::Impl {
   struct Counters {
     std::atomic<std::uint64_t> connections{0}, refused{0}, pages_served{0}, not_found{0},
         bad_requests{0}, bad_handshakes{0}, websocket_clients{0}, messages{0}, frames_queued{0},
-        frames_skipped{0}, slow_clients_closed{0}, clients_closed{0}, clients_now{0};
+        frames_skipped{0}, slow_clients_closed{0}, clients_closed{0}, clients_now{0},
+        accept_failures{0};
   };
   static void bump(std::atomic<std::uint64_t>& x) noexcept {
     x.fetch_add(1, std::memory_order_relaxed);
@@ -369,6 +370,7 @@ struct Server::Impl {
 
   ServerConfig config;
   int listen_fd = -1;
+  Clock::time_point accept_resume{};  ///< no accept() before this (after running out of fds)
   std::atomic<bool> stop{false};
   Counters counters;
   std::vector<Client> clients;  // at most max_clients (reserved at setup)
@@ -461,8 +463,15 @@ struct Server::Impl {
   void accept_all() {
     for (;;) {
       const int fd = ::accept4(listen_fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
-      if (fd < 0)
+      if (fd < 0) {
+        // Out of descriptors or memory: the pending connection stays queued and the listening
+        // socket stays readable, so stop polling it for a while rather than spin on it.
+        if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM) {
+          bump(counters.accept_failures);
+          accept_resume = Clock::now() + std::chrono::milliseconds(kAcceptBackoffMs);
+        }
         return;  // EAGAIN, or a connection that went away before we took it
+      }
       bump(counters.connections);
       if (clients.size() >= config.max_clients) {
         bump(counters.refused);
@@ -614,7 +623,8 @@ struct Server::Impl {
     auto next_source = Clock::now();
     while (!stop.load(std::memory_order_acquire)) {
       fds.clear();
-      fds.push_back(pollfd{listen_fd, POLLIN, 0});
+      const bool listening = Clock::now() >= accept_resume;
+      fds.push_back(pollfd{listen_fd, static_cast<short>(listening ? POLLIN : 0), 0});
       for (const Client& c : clients) {
         const short ev = static_cast<short>(POLLIN | (c.pending() > 0 ? POLLOUT : 0));
         fds.push_back(pollfd{c.fd, ev, 0});
@@ -729,6 +739,7 @@ ServerCounters Server::counters() const noexcept {
   s.slow_clients_closed = v(k.slow_clients_closed);
   s.clients_closed = v(k.clients_closed);
   s.clients_now = v(k.clients_now);
+  s.accept_failures = v(k.accept_failures);
   return s;
 }
 

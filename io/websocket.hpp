@@ -117,6 +117,9 @@ struct ServerConfig {
 };
 
 /// What the server did (all of it since it started).
+/// How long the server stops taking connections after accept() ran out of descriptors [ms].
+inline constexpr int kAcceptBackoffMs = 100;
+
 struct ServerCounters {
   std::uint64_t connections = 0;          ///< TCP connections accepted
   std::uint64_t refused = 0;              ///< over max_clients (503)
@@ -131,6 +134,9 @@ struct ServerCounters {
   std::uint64_t slow_clients_closed = 0;  ///< closed after slow_client_skips_max skips in a row
   std::uint64_t clients_closed = 0;       ///< WebSocket clients gone (close frame, EOF, error)
   std::uint64_t clients_now = 0;          ///< WebSocket clients connected now
+  /// accept() failed for want of descriptors or memory (EMFILE, ENFILE, ENOBUFS, ENOMEM): the
+  /// server stops listening for kAcceptBackoffMs, then tries again (no busy loop meanwhile).
+  std::uint64_t accept_failures = 0;
 };
 
 class Server {

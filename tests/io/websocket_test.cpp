@@ -9,12 +9,14 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <poll.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <cstring>
+#include <iostream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -343,6 +345,38 @@ TEST(WebSocketServer, RefusesClientsBeyondTheLimit) {
   EXPECT_TRUE(r.starts_with("HTTP/1.1 503 Service Unavailable")) << r;
   EXPECT_EQ(s.counters().refused, 1u);
   EXPECT_EQ(s.clients(), 1u);
+}
+
+TEST(WebSocketServer, RunningOutOfDescriptorsBacksOffInsteadOfSpinning) {
+  // With the process's descriptor limit just above those in use, a client can connect (the
+  // kernel queues it) but the server's accept() fails with EMFILE. The listening socket stays
+  // readable; the server must stop polling it for kAcceptBackoffMs between tries (a busy loop
+  // would count thousands of failures in the 0.6 s below, the back-off at most about 7), and
+  // take the connection once descriptors are back.
+  ws::Server s(config());
+  rlimit old{};
+  ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &old), 0);
+  const int lowest_free = ::dup(0);
+  ASSERT_GE(lowest_free, 0);
+  ::close(lowest_free);
+  rlimit tight = old;
+  tight.rlim_cur = static_cast<rlim_t>(lowest_free + 1);  // room for the client's socket only
+  ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &tight), 0);
+  std::uint64_t failures = 0, connections = 0;
+  {
+    RawClient c(s.port());
+    const bool connected = c.connected();
+    std::this_thread::sleep_for(std::chrono::milliseconds(600));
+    failures = s.counters().accept_failures;
+    connections = s.counters().connections;
+    ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &old), 0);
+    ASSERT_TRUE(connected);
+    EXPECT_TRUE(eventually([&] { return s.counters().connections == 1; }));
+  }
+  std::cout << "accept failures in 0.6 s at the descriptor limit: " << failures << "\n";
+  EXPECT_GE(failures, 1u);
+  EXPECT_LE(failures, 20u);
+  EXPECT_EQ(connections, 0u);
 }
 
 TEST(WebSocketServer, ClosesASilentClient) {
