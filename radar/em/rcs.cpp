@@ -394,9 +394,13 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
   // theory). The edge term is edges.hpp's with those directions, polarisations and phases. Paths:
   // from beside the edge's midpoint along -d_r (RD) or mirror(s, n) (DR), the first hit must be
   // a PEC facet of the plane, on the edge's side, and from there the transmitter (RD) or the
-  // receiver (DR) must be in sight. An edge lying in the plane is not lit by it.
+  // receiver (DR) must be in sight. An edge lying in the plane is not lit by it, and a plane
+  // smaller than kReflectingPlaneMinWavelengths2 square wavelengths at the lowest frequency
+  // lights nothing (image theory needs a plane large against the wavelength).
   if (!edges_.empty() && !planes_.empty()) {
     const double tol_m = 100.0 * eps;
+    const double lambda_max_m = kSpeedOfLight_mps / f_lo;
+    const double min_plane_m2 = kReflectingPlaneMinWavelengths2 * lambda_max_m * lambda_max_m;
     auto reflect_pol = [](const glm::dvec3& e, const glm::dvec3& n) {
       return 2.0 * glm::dot(n, e) * n - e;
     };
@@ -410,6 +414,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             const WedgeEdge& edge = edges_[i];
             const glm::dvec3 probe = edge_probe(edge, 10.0 * eps);
             for (const ReflectingPlane& plane : planes_) {
+              if (plane.area_m2 < min_plane_m2)
+                continue;  // too small to reflect a plane wave at the lowest frequency
               const glm::dvec3& n = plane.normal;
               const double side = glm::dot(n, probe) - plane.offset_m;
               if (std::abs(glm::dot(n, edge.a_m) - plane.offset_m) < tol_m &&

@@ -141,6 +141,9 @@ struct ReflectingPlane {
 /// At most this many planes, each at least kReflectingPlaneShare of the largest one's area.
 inline constexpr std::size_t kMaxReflectingPlanes = 8;
 inline constexpr double kReflectingPlaneShare = 0.25;
+/// A plane reflects toward edges only when its PEC area is at least this many square
+/// wavelengths (at the lowest frequency of a call).
+inline constexpr double kReflectingPlaneMinWavelengths2 = 4.0;
 
 /// One reflection of a ray tube (for tests of the GO tracer). Reported from worker threads.
 struct BounceEvent {
