@@ -215,6 +215,30 @@ bool in_field_of_view(const SbrConfig& c, const RadarPose& pose, const glm::dvec
          ae.elevation_rad <= c.elevation_max_rad;
 }
 
+// The bundled targets' items of one kind (facets, edges or edge pairs: object id's are
+// object_first[id] .. object_first[id + 1]) laid end to end for one parallel loop: sets each
+// bundle's start in that run (member `first`) and returns the run's length.
+template <typename B>
+std::size_t lay_out_run(std::vector<B>& bundles, std::size_t B::*first,
+                        const std::vector<std::size_t>& object_first) noexcept {
+  std::size_t n = 0;
+  for (B& bd : bundles) {
+    bd.*first = n;
+    n += object_first[bd.object_id + 1] - object_first[bd.object_id];
+  }
+  return n;
+}
+
+// Item i of such a run: moves `b` (a chunk's cursor, walking i upward from 0) to its bundle and
+// returns the item's index within its object.
+template <typename B>
+std::size_t run_item(const std::vector<B>& bundles, std::size_t B::*first, std::size_t i,
+                     std::size_t& b) noexcept {
+  while (b + 1 < bundles.size() && i >= bundles[b + 1].*first)
+    ++b;
+  return i - bundles[b].*first;
+}
+
 // A bounce-1 return of target `id` (a facet's or an edge's): coherent, radiated by its owner.
 Contribution bounce1_return(std::complex<double> amplitude, double range_m,
                             double radial_velocity_mps, const AzEl& ae, std::uint32_t id) noexcept {
@@ -774,22 +798,17 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   frame.unbundled_in_range = unbundled_in_range_;
   // Bounce 1 of every facet of the bundled targets (header), before the rays that read it: one
   // parallel loop over all their facets (bundle b's run from its first_facet).
-  std::size_t n_facets = 0;
-  for (Bundle& bd : bundles_) {
+  for (const Bundle& bd : bundles_)
     frame_world_from_body_[bd.object_id] = scene_->world_from_body(bd.object_id);
-    bd.first_facet = n_facets;
-    n_facets += facet_first_[bd.object_id + 1] - facet_first_[bd.object_id];
-  }
+  const std::size_t n_facets = lay_out_run(bundles_, &Bundle::first_facet, facet_first_);
   std::atomic<std::uint64_t> lit_facets{0}, partial_facets{0}, facet_queries{0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_facets, 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
                       std::uint64_t queries = 0, n_lit = 0, n_partial = 0;
                       std::size_t b = 0;
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_facet)
-                          ++b;
+                        const std::size_t t = run_item(bundles_, &Bundle::first_facet, i, b);
                         const Bundle& bd = bundles_[b];
-                        const std::size_t t = i - bd.first_facet;
                         const std::size_t slot = facet_first_[bd.object_id] + t;
                         const std::uint8_t l =
                             facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only,
@@ -806,38 +825,28 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // Edge diffraction of the bundled targets (SbrConfig::edges), the same way.
   std::atomic<std::uint64_t> edge_queries{0};
   if (c.edges) {
-    std::size_t n_edges = 0;
-    for (Bundle& bd : bundles_) {
-      bd.first_edge = n_edges;
-      n_edges += edge_first_[bd.object_id + 1] - edge_first_[bd.object_id];
-    }
+    const std::size_t n_edges = lay_out_run(bundles_, &Bundle::first_edge, edge_first_);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_edges, 64),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         std::uint64_t queries = 0;
                         std::size_t b = 0;
                         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                          while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_edge)
-                            ++b;
+                          const std::size_t j = run_item(bundles_, &Bundle::first_edge, i, b);
                           const Bundle& bd = bundles_[b];
-                          const std::size_t e = edge_first_[bd.object_id] + i - bd.first_edge;
+                          const std::size_t e = edge_first_[bd.object_id] + j;
                           edge_state_[e] = edge_pass(pose, bd.object_id, e, edge_out_[e], queries);
                         }
                         edge_queries += queries;
                       });
     // Double diffraction between the edges that radiate (SbrConfig::edge_order 2).
-    std::size_t n_pairs = 0;
-    for (Bundle& bd : bundles_) {
-      bd.first_pair = n_pairs;
-      n_pairs += pair_first_[bd.object_id + 1] - pair_first_[bd.object_id];
-    }
+    const std::size_t n_pairs = lay_out_run(bundles_, &Bundle::first_pair, pair_first_);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_pairs, 64),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         std::size_t b = 0;
                         for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                          while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_pair)
-                            ++b;
+                          const std::size_t j = run_item(bundles_, &Bundle::first_pair, i, b);
                           const Bundle& bd = bundles_[b];
-                          const std::size_t p = pair_first_[bd.object_id] + i - bd.first_pair;
+                          const std::size_t p = pair_first_[bd.object_id] + j;
                           pair_used_[p] = pair_pass(pose, bd.object_id, p, pair_out_[p]) ? 1 : 0;
                         }
                       });
@@ -890,16 +899,20 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     for (std::uint8_t k = 0; k < counts_[i]; ++k)
       out[n++] = out[i * per_ray + k];
   }
-  // Then the lit and partly lit facets, in object and triangle order.
+  // Then the bounce-1 terms (each appended while there is room, else counted as dropped): the
+  // lit and partly lit facets, in object and triangle order.
+  auto append = [&](const Contribution& x) {
+    if (n < out.size())
+      out[n++] = x;
+    else
+      ++stats.dropped_contributions;
+  };
   for (const Bundle& bd : bundles_) {
     for (std::size_t f = facet_first_[bd.object_id]; f < facet_first_[bd.object_id + 1]; ++f) {
       if (facet_light_[f] != static_cast<std::uint8_t>(FacetLight::kLit) &&
           facet_light_[f] != static_cast<std::uint8_t>(FacetLight::kPartial))
         continue;
-      if (n < out.size())
-        out[n++] = facet_out_[f];
-      else
-        ++stats.dropped_contributions;
+      append(facet_out_[f]);
     }
   }
   // Then the edges that radiate, in object and edge order.
@@ -911,19 +924,13 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         if (edge_state_[e] != 0)
           continue;
         ++stats.edges_used;
-        if (n < out.size())
-          out[n++] = edge_out_[e];
-        else
-          ++stats.dropped_contributions;
+        append(edge_out_[e]);
       }
       for (std::size_t p = pair_first_[bd.object_id]; p < pair_first_[bd.object_id + 1]; ++p) {
         if (pair_used_[p] == 0)
           continue;
         ++stats.edges_double;
-        if (n < out.size())
-          out[n++] = pair_out_[p];
-        else
-          ++stats.dropped_contributions;
+        append(pair_out_[p]);
       }
     }
     stats.facet_queries += edge_queries.load();
