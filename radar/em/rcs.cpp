@@ -404,6 +404,22 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     auto reflect_pol = [](const glm::dvec3& e, const glm::dvec3& n) {
       return 2.0 * glm::dot(n, e) * n - e;
     };
+    // Per plane, once per direction pair: the mirrored directions, polarisations and phases.
+    struct Image {
+      const ReflectingPlane* plane;
+      glm::dvec3 d_r, s_r, th, tv, rh, rv;
+      double phase_rd, phase_dr;
+    };
+    std::vector<Image> images;
+    for (const ReflectingPlane& plane : planes_) {
+      if (plane.area_m2 < min_plane_m2)
+        continue;  // too small to reflect a plane wave at the lowest frequency
+      const glm::dvec3& n = plane.normal;
+      images.push_back({&plane, mirror(d_i, n), mirror(s, n), reflect_pol(tx_h, n),
+                        reflect_pol(tx_v, n), reflect_pol(rx_h, n), reflect_pol(rx_v, n),
+                        -2.0 * glm::dot(d_i, n) * plane.offset_m,
+                        2.0 * glm::dot(s, n) * plane.offset_m});
+    }
     std::vector<std::vector<EdgeTerm>> found(edges_.size());
     std::atomic<std::uint64_t> r_occl{0};
     tbb::parallel_for(
@@ -413,9 +429,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const WedgeEdge& edge = edges_[i];
             const glm::dvec3 probe = edge_probe(edge, 10.0 * eps);
-            for (const ReflectingPlane& plane : planes_) {
-              if (plane.area_m2 < min_plane_m2)
-                continue;  // too small to reflect a plane wave at the lowest frequency
+            for (const Image& im : images) {
+              const ReflectingPlane& plane = *im.plane;
               const glm::dvec3& n = plane.normal;
               const double side = glm::dot(n, probe) - plane.offset_m;
               if (std::abs(glm::dot(n, edge.a_m) - plane.offset_m) < tol_m &&
@@ -444,12 +459,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
                 const glm::dvec3 lift = (side > 0.0 ? eps : -eps) * n;
                 return clear(hit.position_m + lift, toward);
               };
-              const glm::dvec3 d_r = mirror(d_i, n), s_r = mirror(s, n);
-              const bool rd = relayed(-d_r, r_t), dr = relayed(s_r, r_r);
-              const double phase_rd = -2.0 * glm::dot(d_i, n) * plane.offset_m;
-              const double phase_dr = 2.0 * glm::dot(s, n) * plane.offset_m;
-              const glm::dvec3 th = reflect_pol(tx_h, n), tv = reflect_pol(tx_v, n);
-              const glm::dvec3 rh = reflect_pol(rx_h, n), rv = reflect_pol(rx_v, n);
+              const bool rd = relayed(-im.d_r, r_t), dr = relayed(im.s_r, r_r);
               auto add = [&](const glm::dvec3& dd, const glm::dvec3& ss, const glm::dvec3& ah,
                              const glm::dvec3& av, const glm::dvec3& bh, const glm::dvec3& bv,
                              double phase_m) {
@@ -462,11 +472,11 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
                 found[i].push_back(t);
               };
               if (rd)
-                add(d_r, s, th, tv, rx_h, rx_v, phase_rd);
+                add(im.d_r, s, im.th, im.tv, rx_h, rx_v, im.phase_rd);
               if (dr)
-                add(d_i, s_r, tx_h, tx_v, rh, rv, phase_dr);
+                add(d_i, im.s_r, tx_h, tx_v, im.rh, im.rv, im.phase_dr);
               if (rd && dr)
-                add(d_r, s_r, th, tv, rh, rv, phase_rd + phase_dr);
+                add(im.d_r, im.s_r, im.th, im.tv, im.rh, im.rv, im.phase_rd + im.phase_dr);
             }
           }
           r_occl += n_occl;
