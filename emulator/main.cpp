@@ -641,6 +641,20 @@ int main(int argc, char** argv) {
                 "wedge edges and sheet boundaries added to PO)");
   rcs->add_option("--pol", rcs_text.pol,
                   "Polarisations, receive letter first: HH,HV,VH,VV (default HH,VV)");
+  rcs->add_option("--method", rcs_opt.method,
+                  "po (default): physical optics + shooting and bouncing rays + edge "
+                  "diffraction; mom: method of moments, exact up to the mesh on PEC targets a "
+                  "few wavelengths across (triangles about lambda/10; memory 16 N^2 bytes for N "
+                  "~ 1.5 x triangles unknowns)")
+      ->check(CLI::IsMember({"po", "mom"}));
+  rcs->add_option("--mom-equation", rcs_opt.mom_equation,
+                  "With --method mom: efie (default, the accurate one), cfie (free of "
+                  "interior resonances, less accurate at tips) or mfie; closed surfaces only for "
+                  "mfie, and open sheets always take the EFIE")
+      ->check(CLI::IsMember({"efie", "mfie", "cfie"}));
+  rcs->add_option("--mom-max-unknowns", rcs_opt.mom_max_unknowns,
+                  "With --method mom: refuse meshes with more unknowns (default 20000, 6.4 GB)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{200000}));
   CLI::Option* bt = rcs->add_option("--bistatic-theta-deg", bistatic_theta,
                                     "Receiver direction theta in [0, 180] deg (bistatic)")
                         ->check(emu::in_range(0.0, 180.0, "deg"));
@@ -905,6 +919,19 @@ int main(int argc, char** argv) {
       rcs_opt.phi_deg = emu::parse_sweep(rcs_text.phi, "--phi-deg");
       rcs_opt.pols = emu::parse_pols(rcs_text.pol);
       check_rays(rcs, rcs_opt.bounces);
+      if (rcs_opt.method == "mom") {
+        for (const char* po_only : {"--bounces", "--rays-per-wavelength", "--edge-order",
+                                    "--edge-turn-deg", "--no-edges"}) {
+          if (rcs->count(po_only) > 0)
+            throw std::invalid_argument(std::string(po_only) +
+                                        ": a setting of --method po, not used with --method mom");
+        }
+      } else {
+        for (const char* mom_only : {"--mom-equation", "--mom-max-unknowns"}) {
+          if (rcs->count(mom_only) > 0)
+            throw std::invalid_argument(std::string(mom_only) + ": used with --method mom only");
+        }
+      }
       if (rcs_opt.window_deg > 0.0 && rcs_opt.theta_deg.size() == 1 && rcs_opt.phi_deg.size() == 1)
         throw std::invalid_argument("--window-deg: needs a sweep in theta or phi (A:B:N)");
       check_default_file(rcs_out, rcs_opt.out_csv);

@@ -14,6 +14,7 @@
 #include "emulator/charts.hpp"
 #include "emulator/mpi_work.hpp"
 #include "radar/constants.hpp"
+#include "radar/em/mom.hpp"
 #include "radar/materials.hpp"
 #include "radar/products/fluctuation.hpp"
 #include "radar/products/range_profile.hpp"
@@ -305,6 +306,78 @@ Series read_overlay(const std::string& spec) {
   if (ser.x.empty())
     throw std::invalid_argument("--overlay: " + path + " has no data line");
   return ser;
+}
+
+// The sweep of `rcs --method mom`: one fill and factorisation per frequency, every direction
+// solved from it (radar/em/mom.hpp). Writes s as sweep_rcs does; returns the seconds taken.
+double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, double>>& bistatic,
+                 std::vector<radar::ScatteringMatrix>& s) {
+  if (mpi_work::launched_size() > 1)
+    throw std::invalid_argument(
+        "--method mom runs in one process (its LU uses every core); "
+        "start it without mpirun");
+  radar::MomConfig cfg;
+  if (o.mom_equation == "efie")
+    cfg.equation = radar::MomEquation::kEfie;
+  else if (o.mom_equation == "mfie")
+    cfg.equation = radar::MomEquation::kMfie;
+  else if (o.mom_equation == "cfie")
+    cfg.equation = radar::MomEquation::kCfie;
+  else
+    throw std::invalid_argument("--mom-equation must be efie, mfie or cfie (got '" +
+                                o.mom_equation + "')");
+  cfg.max_unknowns = o.mom_max_unknowns;
+  const LoadedTarget loaded = load_target(o.mesh, o.scale, o.materials);
+  for (const std::string& w : loaded.warnings)
+    std::fprintf(stderr, "radar-emu: warning: %s\n", w.c_str());
+  radar::MomSolver solver(loaded.description, loaded.surfaces, cfg);
+  const radar::MomMeshInfo& mi = solver.mesh_info();
+  if (!o.quiet) {
+    std::printf(
+        "target: %zu triangles (%zu degenerate skipped), %zu vertices after welding, %zu "
+        "surfaces (%zu closed%s), %zu open edges\nmethod of moments: %s, %zu unknowns (RWG), "
+        "matrix %.2f GB, edges mean %.4g m, longest %.4g m\n",
+        mi.triangles, mi.degenerate_skipped, mi.vertices, mi.components, mi.closed_components,
+        mi.flipped_components > 0 ? ", some turned outward" : "", mi.boundary_edges,
+        radar::equation_name(solver.equation()), mi.unknowns,
+        16e-9 * static_cast<double>(mi.unknowns) * static_cast<double>(mi.unknowns), mi.mean_edge_m,
+        mi.max_edge_m);
+  }
+  const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
+  std::vector<radar::Direction> tx(nt * np), rx(nt * np);
+  for (std::size_t it = 0; it < nt; ++it) {
+    for (std::size_t ip = 0; ip < np; ++ip) {
+      tx[it * np + ip] = {o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
+      rx[it * np + ip] =
+          bistatic ? radar::Direction{bistatic->first * kDegToRad, bistatic->second * kDegToRad}
+                   : tx[it * np + ip];
+    }
+  }
+  std::vector<radar::ScatteringMatrix> one(nt * np);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::size_t k = 0; k < nf; ++k) {
+    const double f = o.freqs_hz[k];
+    const double lambda = radar::kSpeedOfLight_mps / f;
+    if (mi.max_edge_m > 0.25 * lambda || mi.mean_edge_m > 0.15 * lambda) {
+      std::fprintf(stderr,
+                   "radar-emu: warning: at %.4g Hz the mesh's edges are %.2g (mean) and %.2g "
+                   "(longest) wavelengths; the method of moments wants about 0.1 (results "
+                   "degrade past ~0.2): refine the mesh\n",
+                   f, mi.mean_edge_m / lambda, mi.max_edge_m / lambda);
+    }
+    if (!o.quiet) {
+      std::printf("%.6g Hz: filling and factorising...", f);
+      std::fflush(stdout);
+    }
+    const radar::MomFactorInfo fi = solver.factor(f);
+    solver.scatter(tx, rx, one);
+    if (!o.quiet)
+      std::printf(" fill %.1f s (%zu near triangle pairs), LU %.1f s\n", fi.fill_s, fi.near_pairs,
+                  fi.factor_s);
+    for (std::size_t d = 0; d < nt * np; ++d)
+      s[d * nf + k] = one[d];
+  }
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -755,30 +828,36 @@ int run_rcs_tool(const RcsToolOptions& o) {
     for (const std::string& spec : o.overlays)
       overlays.push_back(read_overlay(spec));
   }
-  const ToolTarget target(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
-                          o.edge_turn_deg, o.edge_order,
-                          *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
-  const radar::RcsEngine& engine = target.engine;
-
+  const bool mom = o.method == "mom";
+  if (!mom && o.method != "po")
+    throw std::invalid_argument("--method must be po or mom (got '" + o.method + "')");
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
   std::vector<radar::ScatteringMatrix> s(nt * np * nf);  // [theta][phi][freq]
   radar::RcsStats stats;
   // Per direction, for the CSV: how bounce 1 was lit and how many tubes the bounce cap cut off.
   std::vector<RcsDirectionStats> per_direction(nt * np);
-  start_split(nt * np, "directions", o.quiet);
-  // Under mpirun: rank 0's block (the others keep pace), the others quiet.
-  const std::size_t my_items = mpi_work::my_block(nt * np).size();
-  Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "direction", my_items);
-  const auto t0 = std::chrono::steady_clock::now();
   std::optional<std::pair<double, double>> bistatic;
   if (o.bistatic_theta_deg)
     bistatic.emplace(*o.bistatic_theta_deg, *o.bistatic_phi_deg);
-  sweep_rcs(engine, o.theta_deg, o.phi_deg, o.freqs_hz, bistatic, s, per_direction, stats,
-            [&progress](std::size_t done) { progress.update(done); });
-  const double elapsed_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (!mpi_work::is_root())
-    return 0;  // rank 0 has gathered every direction: it alone writes
+  std::optional<ToolTarget> target;
+  double elapsed_s = 0.0;
+  if (mom) {
+    elapsed_s = sweep_mom(o, bistatic, s);
+  } else {
+    target.emplace(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
+                   o.edge_turn_deg, o.edge_order,
+                   *std::min_element(o.freqs_hz.begin(), o.freqs_hz.end()), o.quiet);
+    start_split(nt * np, "directions", o.quiet);
+    // Under mpirun: rank 0's block (the others keep pace), the others quiet.
+    const std::size_t my_items = mpi_work::my_block(nt * np).size();
+    Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "direction", my_items);
+    const auto t0 = std::chrono::steady_clock::now();
+    sweep_rcs(target->engine, o.theta_deg, o.phi_deg, o.freqs_hz, bistatic, s, per_direction, stats,
+              [&progress](std::size_t done) { progress.update(done); });
+    elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!mpi_work::is_root())
+      return 0;  // rank 0 has gathered every direction: it alone writes
+  }
 
   {
     File f(open_or_throw(o.out_csv));
@@ -802,7 +881,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
           std::fprintf(f.get(), ",%llu,%llu,%llu,%d,%llu\n",
                        static_cast<unsigned long long>(ds.facets_lit),
                        static_cast<unsigned long long>(ds.facets_partial),
-                       static_cast<unsigned long long>(ds.tubes_cut_off), o.edges ? 1 : 0,
+                       static_cast<unsigned long long>(ds.tubes_cut_off), o.edges && !mom ? 1 : 0,
                        static_cast<unsigned long long>(ds.edges_used));
         }
       }
@@ -864,6 +943,17 @@ int run_rcs_tool(const RcsToolOptions& o) {
       write_rcs_chart(o, s, name, std::move(overlays));
   }
 
+  if (!o.quiet && mom) {
+    std::printf("%zu directions x %zu frequencies in %.2f s (method of moments)\nwrote %s", nt * np,
+                nf, elapsed_s, o.out_csv.c_str());
+    if (!stats_path.empty())
+      std::printf(", %s", stats_path.c_str());
+    if (!o.plot_png.empty())
+      std::printf(", %s", o.plot_png.c_str());
+    std::printf("\n");
+  }
+  if (mom)
+    return 0;
   if (!o.quiet) {
     std::printf(
         "%zu directions x %zu frequencies in %.2f s: %llu lit facets, %llu partly lit, %llu "
@@ -873,7 +963,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
         static_cast<unsigned long long>(stats.facets_shadowed),
         static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths),
         static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
-    print_edge_stats(engine, stats);
+    print_edge_stats(target->engine, stats);
     std::printf("wrote %s", o.out_csv.c_str());
     if (!stats_path.empty())
       std::printf(", %s", stats_path.c_str());
@@ -1057,7 +1147,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
         "at the bounce cap (%d))\n",
         na, nf, elapsed_s, static_cast<unsigned long long>(stats.paths),
         static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
-    print_edge_stats(engine, stats);
+    print_edge_stats(target.engine, stats);
     std::printf(
         "range resolution c/2B = %.4g m, sample spacing %.4g m, unambiguous window %.4g m\n",
         centre.resolution_m, centre.bin_m, centre.unambiguous_m);

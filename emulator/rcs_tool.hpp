@@ -97,6 +97,11 @@ struct RcsToolOptions {
   bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
   double edge_turn_deg = 30.0;  ///< a shared edge diffracts when it turns more [deg]
   int edge_order = 2;  ///< 1: first-order edge currents; 2: plus double diffraction (edges.hpp)
+  /// "po": physical optics + SBR + edges (RcsEngine); "mom": the method of moments
+  /// (radar/em/mom.hpp), exact up to discretisation on PEC targets a few wavelengths across.
+  std::string method = "po";
+  std::string mom_equation = "efie";  ///< efie, mfie or cfie (radar::MomEquation)
+  std::size_t mom_max_unknowns = 20'000;
   std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
   std::string out_csv = "rcs.csv";
   std::string plot_png;  ///< empty: no plot

@@ -10,6 +10,8 @@ PACKAGES=(
   libembree-dev libglm-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libtbb-dev
   libusb-1.0-0-dev libsocketcan-dev libmodbus-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  # dense LU of `rcs --method mom` (radar/em/mom.hpp): LAPACK as OpenBLAS builds it
+  libopenblas-dev
   # GeoTIFF output of `radar-emu sar` (optional at build time) and gdalinfo, which its test reads
   libgdal-dev gdal-bin
   # coverage-guided fuzzing (tests/fuzz, scripts/fuzz.sh): clang 14 and its libFuzzer runtime
