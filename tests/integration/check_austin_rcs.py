@@ -63,17 +63,22 @@ def write_plate(path):
         f.write("f 1 2 3\nf 1 3 4\n")
 
 
-def write_almond(path, d=9.936 * INCH, nt=120, npsi=96):
+def almond_radii(t, d):
     """The NASA almond (Woo et al. 1993), t = x / d: for -0.416667 < t < 0
     y = 0.193333 d sqrt(1 - (t/0.416667)^2) cos psi, z = 0.064444 d sqrt(...) sin psi; for
     0 < t < 0.583333 y = 4.83345 d (sqrt(1 - (t/2.08335)^2) - 0.96) cos psi,
-    z = 1.61115 d (sqrt(...) - 0.96) sin psi. Tip toward +x; rings cosine-spaced in t."""
+    z = 1.61115 d (sqrt(...) - 0.96) sin psi. Returns the semi-axes (y, z) at t."""
+    if t < 0:
+        r = math.sqrt(max(0.0, 1 - (t / 0.416667) ** 2))
+        return 0.193333 * d * r, 0.064444 * d * r
+    r = max(0.0, math.sqrt(max(0.0, 1 - (t / 2.08335) ** 2)) - 0.96)
+    return 4.83345 * d * r, 1.61115 * d * r
+
+
+def write_almond(path, d=9.936 * INCH, nt=120, npsi=96):
+    """The almond of almond_radii, tip toward +x; rings cosine-spaced in t."""
     def radii(t):
-        if t < 0:
-            r = math.sqrt(max(0.0, 1 - (t / 0.416667) ** 2))
-            return 0.193333 * d * r, 0.064444 * d * r
-        r = max(0.0, math.sqrt(max(0.0, 1 - (t / 2.08335) ** 2)) - 0.96)
-        return 4.83345 * d * r, 1.61115 * d * r
+        return almond_radii(t, d)
     t0, t1 = -0.416667, 0.583333
     ts = [t0 + (t1 - t0) * (1 - math.cos(math.pi * i / nt)) / 2 for i in range(nt + 1)]
     verts, rings = [(t0 * d, 0.0, 0.0)], []
@@ -123,11 +128,7 @@ def write_almond_uniform(path, h, d=9.936 * INCH):
     t0, t1 = -0.416667, 0.583333
 
     def radii(t):
-        if t < 0:
-            r = math.sqrt(max(0.0, 1 - (t / 0.416667) ** 2))
-            return 0.193333 * d * r, 0.064444 * d * r
-        r = max(0.0, math.sqrt(max(0.0, 1 - (t / 2.08335) ** 2)) - 0.96)
-        return 4.83345 * d * r, 1.61115 * d * r
+        return almond_radii(t, d)
 
     # The rim profile (x, a): the elliptic back by its angle, the front by x.
     prof = [(t0 * d * math.cos(th), 0.193333 * d * math.sin(th))
@@ -354,7 +355,9 @@ for tag, freq, target, per_wavelength in (("fx3", 7e9, 1.5, 10), ("fx4", 10.25e9
             check(math.isfinite(nose), "nose-on finite")
         if charts:
             overlays = []
-            for name, label in ((mom_csv, "method of moments"), (po_csv, "PO alone")):
+            # The main curve is PO + edges, the default (on the smooth almond: PO alone).
+            for name, label in ((mom_csv, "method of moments"),
+                                (rim_csv, "PO + rim edges (--edge-turn-deg 5)")):
                 vals, _ = load_csv(name, pol)
                 txt = os.path.join(work, f"chart_almond_{tag}_{len(overlays)}_{pol}.txt")
                 write_series(txt, vals)
