@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <new>
 #include <numeric>
 #include <stdexcept>
 #include <unordered_map>
@@ -421,8 +422,17 @@ MomFactorInfo MomSolver::factor(double frequency_hz) {
   fi.max_edge_wavelengths = info_.max_edge_m * k / (2.0 * kPi);
   const std::size_t n = unknowns_;
   const auto t0 = std::chrono::steady_clock::now();
-  lu_.assign(n * n, cd(0.0, 0.0));
-  pivots_.assign(n, 0);
+  try {
+    lu_.assign(n * n, cd(0.0, 0.0));
+    pivots_.assign(n, 0);
+  } catch (const std::bad_alloc&) {
+    lu_.clear();
+    throw std::runtime_error(
+        "MoM: cannot allocate the " + std::to_string(n) + " x " + std::to_string(n) +
+        " impedance matrix (" +
+        std::to_string(16e-9 * static_cast<double>(n) * static_cast<double>(n)) +
+        " GB); coarsen the mesh or lower --mom-max-unknowns");
+  }
 
   // Row weights: alpha of the EFIE per row (1 on open sheets or with the EFIE).
   const double alpha_closed = equation_ == MomEquation::kEfie   ? 1.0

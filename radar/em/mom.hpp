@@ -105,7 +105,7 @@ class MomSolver {
 
   /// Fills the impedance matrix at `frequency_hz` and factorises it (replaces the previous
   /// frequency). Throws std::invalid_argument for a non-positive or non-finite frequency and
-  /// std::runtime_error when the matrix is singular.
+  /// std::runtime_error when the matrix cannot be allocated or is singular.
   MomFactorInfo factor(double frequency_hz);
 
   /// Scattering matrices (rcs.hpp's convention) at the factored frequency for transmitters
