@@ -166,9 +166,10 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
   std::vector<glm::dvec3> raw;
   std::vector<std::array<std::uint32_t, 3>> tris;
   for (const scene::ObjectDesc& o : description.objects) {
-    glm::dmat4 m = o.world_from_body;
-    if (o.motion)
-      m = glm::dmat4(1.0), m[3] = glm::dvec4(o.motion->start_position_m, 1.0);
+    if (o.motion || o.trajectory)
+      throw std::invalid_argument("MoM: object '" + o.name +
+                                  "' moves; the method of moments takes static targets");
+    const glm::dmat4 m = o.world_from_body;
     const auto base = static_cast<std::uint32_t>(raw.size());
     for (const glm::vec3& p : o.mesh.positions_m) {
       const glm::dvec3 w(m * glm::dvec4(glm::dvec3(p), 1.0));
@@ -635,8 +636,6 @@ void MomSolver::scatter(std::span<const Direction> tx, std::span<const Direction
     zgetrs_(&trans, &ni, &nrhs, lu_.data(), &ni, pivots_.data(), rhs.data(), &ni, &info, 1);
     if (info != 0)
       throw std::runtime_error("MoM: LAPACK zgetrs failed (info " + std::to_string(info) + ")");
-    if (first == 0)
-      last_currents_.assign(rhs.begin(), rhs.begin() + static_cast<std::ptrdiff_t>(2 * n));
     // S = -jk / sqrt(4 pi) p . int (eta J) e^{jk s . r'} dS' (unknowns are eta J).
     tbb::parallel_for(std::size_t{0}, count, [&](std::size_t d) {
       const Direction& dir = rx[first + d];

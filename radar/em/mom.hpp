@@ -91,11 +91,12 @@ struct MomFactorInfo {
 
 class MomSolver {
  public:
-  /// Every triangle of every object of `description` (world placement; moving objects at t = 0),
+  /// Every triangle of every object of `description` (world placement; static objects only),
   /// `surfaces[i]` the model of material i: all must be PEC. Throws std::invalid_argument with
-  /// the reason and a location: a non-PEC material, a non-finite vertex, an edge shared by more
-  /// than two triangles, neighbours wound inconsistently, the MFIE asked of an open surface, no
-  /// unknown at all, more unknowns than config.max_unknowns, alpha outside (0, 1).
+  /// the reason and a location: a moving object, a non-PEC material, a non-finite vertex, an edge
+  /// shared by more than two triangles, a surface that cannot be oriented, the MFIE asked of an
+  /// open surface, no unknown at all, more unknowns than config.max_unknowns, alpha outside
+  /// (0, 1). Neighbours wound inconsistently are turned to agree.
   MomSolver(const scene::SceneDescription& description, std::span<const SurfaceModel> surfaces,
             MomConfig config = {});
 
@@ -113,12 +114,6 @@ class MomSolver {
   /// Throws std::logic_error before factor(), std::invalid_argument on mismatched sizes.
   void scatter(std::span<const Direction> tx, std::span<const Direction> rx,
                std::span<ScatteringMatrix> out) const;
-
-  /// The surface current coefficients of the last scatter() call's first transmitter, V then H
-  /// polarisation (for tests: 2 x unknowns values, amperes per metre of edge).
-  [[nodiscard]] std::span<const std::complex<double>> last_currents() const noexcept {
-    return last_currents_;
-  }
 
  private:
   struct Triangle {
@@ -142,7 +137,6 @@ class MomSolver {
   double k_rad_per_m_ = 0.0;
   std::vector<std::complex<double>> lu_;  ///< column-major N x N, LU factors after factor()
   std::vector<int> pivots_;
-  mutable std::vector<std::complex<double>> last_currents_;
 };
 
 }  // namespace radar_emu::radar
