@@ -63,6 +63,16 @@ def write_plate(path):
         f.write("f 1 2 3\nf 1 3 4\n")
 
 
+def write_obj(path, verts, faces):
+    """Writes vertices and 1-based triangles as OBJ; returns the triangle count."""
+    with open(path, "w") as f:
+        for v in verts:
+            f.write("v %.9g %.9g %.9g\n" % v)
+        for t in faces:
+            f.write("f %d %d %d\n" % t)
+    return len(faces)
+
+
 def almond_radii(t, d):
     """The NASA almond (Woo et al. 1993), t = x / d: for -0.416667 < t < 0
     y = 0.193333 d sqrt(1 - (t/0.416667)^2) cos psi, z = 0.064444 d sqrt(...) sin psi; for
@@ -98,12 +108,7 @@ def write_almond(path, d=9.936 * INCH, nt=120, npsi=96):
             a0, a1, b0, b1 = ra[j], ra[(j + 1) % npsi], rb[j], rb[(j + 1) % npsi]
             faces += [(a0, a1, b1), (a0, b1, b0)]
     faces += [(tip, rings[-1][j], rings[-1][(j + 1) % npsi]) for j in range(npsi)]
-    with open(path, "w") as f:
-        for v in verts:
-            f.write("v %.9g %.9g %.9g\n" % v)
-        for t in faces:
-            f.write("f %d %d %d\n" % t)
-    return len(faces)
+    return write_obj(path, verts, faces)
 
 
 def write_plate_grid(path, h):
@@ -173,12 +178,7 @@ def write_almond_uniform(path, h, d=9.936 * INCH):
                 k += 1
     last = rings[-1]
     faces += [(len(verts), last[m], last[(m + 1) % len(last)]) for m in range(len(last))]
-    with open(path, "w") as f:
-        for v in verts:
-            f.write("v %.9g %.9g %.9g\n" % v)
-        for t in faces:
-            f.write("f %d %d %d\n" % t)
-    return len(faces)
+    return write_obj(path, verts, faces)
 
 
 def sweep(mesh, freq, phis, out, *extra):
