@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "radar/em/mom.hpp"
 #include "radar/em/rcs.hpp"
 #include "scene/scene.hpp"
 
@@ -101,7 +102,7 @@ struct RcsToolOptions {
   /// (radar/em/mom.hpp), exact up to discretisation on PEC targets a few wavelengths across.
   std::string method = "po";
   std::string mom_equation = "efie";  ///< efie, mfie or cfie (radar::MomEquation)
-  std::size_t mom_max_unknowns = 20'000;
+  std::size_t mom_max_unknowns = radar::MomConfig{}.max_unknowns;
   std::optional<double> bistatic_theta_deg, bistatic_phi_deg;
   std::string out_csv = "rcs.csv";
   std::string plot_png;  ///< empty: no plot

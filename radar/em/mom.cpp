@@ -90,7 +90,7 @@ const TriRule kRule3 = strang3();
 struct Line {
   std::vector<double> x, w;
 };
-Line gauss_panel(const double* nodes, const double* weights, std::size_t half, double a, double b,
+void gauss_panel(const double* nodes, const double* weights, std::size_t half, double a, double b,
                  Line& out) {
   for (std::size_t i = 0; i < half; ++i) {
     for (double s : {-1.0, 1.0}) {
@@ -98,7 +98,6 @@ Line gauss_panel(const double* nodes, const double* weights, std::size_t half, d
       out.w.push_back((b - a) * 0.5 * weights[i]);
     }
   }
-  return out;
 }
 constexpr double kGl4x[2] = {0.3399810435848563, 0.8611363115940526};
 constexpr double kGl4w[2] = {0.6521451548625461, 0.3478548451374538};
@@ -259,14 +258,13 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
   // Edges: (low vertex, high vertex) -> the triangles and local indices that have it.
   struct EdgeUse {
     std::uint32_t triangle;
-    std::uint8_t local;  // the vertex opposite the edge
-    bool forward;        // the triangle runs low -> high along it
+    bool forward;  // the triangle runs low -> high along it
   };
   std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<EdgeUse>> edges;
   for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
-    for (std::uint8_t i = 0; i < 3; ++i) {
-      const std::uint32_t a = triangles_[t].v[(i + 1u) % 3u], b = triangles_[t].v[(i + 2u) % 3u];
-      edges[{std::min(a, b), std::max(a, b)}].push_back({t, i, a < b});
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::uint32_t a = triangles_[t].v[i], b = triangles_[t].v[(i + 1) % 3];
+      edges[{std::min(a, b), std::max(a, b)}].push_back({t, a < b});
     }
   }
   const auto where = [&](std::uint32_t v) {
@@ -357,6 +355,8 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
     t.size_m = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
     t.basis = {-1, -1, -1};
     t.coefficient = {0.0, 0.0, 0.0};
+    for (std::size_t q = 0; q < kRule6.n; ++q)
+      t.points[q] = kRule6.bary[q][0] * a + kRule6.bary[q][1] * b + kRule6.bary[q][2] * c;
   }
   // RWG functions on interior edges (Rao, Wilton & Glisson 1982, eq. 1): f = l / (2 A+) (r - p+)
   // on T+, l / (2 A-) (p- - r) on T-; T+ is the first triangle listed with the edge.
@@ -413,6 +413,12 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
   }
 }
 
+double MomSolver::efie_weight(const Triangle& t) const noexcept {
+  if (!t.closed || equation_ == MomEquation::kEfie)
+    return 1.0;
+  return equation_ == MomEquation::kMfie ? 0.0 : config_.cfie_alpha;
+}
+
 MomFactorInfo MomSolver::factor(double frequency_hz) {
   if (!(frequency_hz > 0.0) || !std::isfinite(frequency_hz))
     throw std::invalid_argument("MoM: the frequency must be a positive finite number");
@@ -420,7 +426,6 @@ MomFactorInfo MomSolver::factor(double frequency_hz) {
   fi.frequency_hz = frequency_hz;
   const double k = 2.0 * kPi * frequency_hz / kSpeedOfLight_mps;
   k_rad_per_m_ = k;
-  fi.max_edge_wavelengths = info_.max_edge_m * k / (2.0 * kPi);
   const std::size_t n = unknowns_;
   const auto t0 = std::chrono::steady_clock::now();
   try {
@@ -435,10 +440,6 @@ MomFactorInfo MomSolver::factor(double frequency_hz) {
         " GB); coarsen the mesh or lower --mom-max-unknowns");
   }
 
-  // Row weights: alpha of the EFIE per row (1 on open sheets or with the EFIE).
-  const double alpha_closed = equation_ == MomEquation::kEfie   ? 1.0
-                              : equation_ == MomEquation::kMfie ? 0.0
-                                                                : config_.cfie_alpha;
   std::uint8_t colours = 0;
   for (std::uint8_t c : colour_)
     colours = std::max<std::uint8_t>(colours, static_cast<std::uint8_t>(c + 1));
@@ -451,15 +452,12 @@ MomFactorInfo MomSolver::factor(double frequency_hz) {
         rows.push_back(t);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 1), [&](const auto& range) {
       std::array<Inner, 6> inner;
-      std::array<glm::dvec3, 6> rq;
       for (std::size_t ri = range.begin(); ri != range.end(); ++ri) {
         const std::uint32_t tm = rows[ri];
         const Triangle& m = triangles_[tm];
-        const double alpha = m.closed ? alpha_closed : 1.0;
+        const double alpha = efie_weight(m);
         const bool mfie = alpha < 1.0;
-        const glm::dvec3 a = vertices_m_[m.v[0]], b = vertices_m_[m.v[1]], c = vertices_m_[m.v[2]];
-        for (std::size_t q = 0; q < kRule6.n; ++q)
-          rq[q] = kRule6.bary[q][0] * a + kRule6.bary[q][1] * b + kRule6.bary[q][2] * c;
+        const std::array<glm::dvec3, 6>& rq = m.points;
         // The identity term of the MFIE, (1/2) <f_i, f_j> on the observation triangle.
         if (mfie) {
           for (std::size_t i = 0; i < 3; ++i) {
@@ -592,9 +590,6 @@ void MomSolver::scatter(std::span<const Direction> tx, std::span<const Direction
     throw std::invalid_argument("MoM: scatter() needs as many transmitters, receivers and outputs");
   const std::size_t n = unknowns_, nt = triangles_.size();
   const double k = k_rad_per_m_;
-  const double alpha_closed = equation_ == MomEquation::kEfie   ? 1.0
-                              : equation_ == MomEquation::kMfie ? 0.0
-                                                                : config_.cfie_alpha;
   // Directions in blocks: two right-hand sides (V, H transmit) each.
   constexpr std::size_t kBlock = 128;
   std::vector<cd> rhs;
@@ -609,12 +604,9 @@ void MomSolver::scatter(std::span<const Direction> tx, std::span<const Direction
       const std::array<glm::dvec3, 2> pol = {theta_hat(dir), phi_hat(dir)};
       for (std::size_t t = 0; t < nt; ++t) {
         const Triangle& tri = triangles_[t];
-        const double alpha = tri.closed ? alpha_closed : 1.0;
-        const glm::dvec3 a = vertices_m_[tri.v[0]], b = vertices_m_[tri.v[1]],
-                         c = vertices_m_[tri.v[2]];
+        const double alpha = efie_weight(tri);
         for (std::size_t q = 0; q < kRule6.n; ++q) {
-          const glm::dvec3 r =
-              kRule6.bary[q][0] * a + kRule6.bary[q][1] * b + kRule6.bary[q][2] * c;
+          const glm::dvec3& r = tri.points[q];
           const double phase = -k * glm::dot(ki, r + centre_m_);
           const cd e = kRule6.weight[q] * tri.area_m2 * cd(std::cos(phase), std::sin(phase));
           for (std::size_t p = 0; p < 2; ++p) {
@@ -643,11 +635,8 @@ void MomSolver::scatter(std::span<const Direction> tx, std::span<const Direction
       std::array<CplxVec, 2> field{};  // the radiation integral for V and H transmit
       for (std::size_t t = 0; t < nt; ++t) {
         const Triangle& tri = triangles_[t];
-        const glm::dvec3 a = vertices_m_[tri.v[0]], b = vertices_m_[tri.v[1]],
-                         c = vertices_m_[tri.v[2]];
         for (std::size_t q = 0; q < kRule6.n; ++q) {
-          const glm::dvec3 r =
-              kRule6.bary[q][0] * a + kRule6.bary[q][1] * b + kRule6.bary[q][2] * c;
+          const glm::dvec3& r = tri.points[q];
           const double phase = k * glm::dot(s, r + centre_m_);
           const cd e = kRule6.weight[q] * tri.area_m2 * cd(std::cos(phase), std::sin(phase));
           for (std::size_t i = 0; i < 3; ++i) {

@@ -85,8 +85,6 @@ struct MomFactorInfo {
   double frequency_hz = 0.0;
   double fill_s = 0.0, factor_s = 0.0;
   std::size_t near_pairs = 0;  ///< triangle pairs integrated in Duffy coordinates
-  /// The longest edge over the wavelength (RWG wants about 0.1; results degrade past ~0.2).
-  double max_edge_wavelengths = 0.0;
 };
 
 class MomSolver {
@@ -125,7 +123,10 @@ class MomSolver {
     std::array<std::int64_t, 3> basis{};  ///< RWG index of the edge opposite vertex i, or -1
     std::array<double, 3> coefficient{};  ///< +-l / (2 A): f = coefficient (r - v_i)
     bool closed = false;                  ///< on a closed surface (MFIE rows allowed)
+    std::array<glm::dvec3, 6> points{};   ///< the 6-point rule's points (fill, RHS, far field)
   };
+  /// The EFIE's weight alpha in the rows of `t`'s functions: 1 on open sheets and with the EFIE.
+  [[nodiscard]] double efie_weight(const Triangle& t) const noexcept;
   std::vector<glm::dvec3> vertices_m_;  ///< relative to centre_m_
   std::vector<Triangle> triangles_;
   std::vector<std::uint8_t> colour_;  ///< neighbours differ: rows filled in parallel per colour
