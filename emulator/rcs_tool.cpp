@@ -948,27 +948,22 @@ int run_rcs_tool(const RcsToolOptions& o) {
       write_rcs_chart(o, s, name, std::move(overlays));
   }
 
-  if (!o.quiet && mom) {
-    std::printf("%zu directions x %zu frequencies in %.2f s (method of moments)\nwrote %s", nt * np,
-                nf, elapsed_s, o.out_csv.c_str());
-    if (!stats_path.empty())
-      std::printf(", %s", stats_path.c_str());
-    if (!o.plot_png.empty())
-      std::printf(", %s", o.plot_png.c_str());
-    std::printf("\n");
-  }
-  if (mom)
-    return 0;
   if (!o.quiet) {
-    std::printf(
-        "%zu directions x %zu frequencies in %.2f s: %llu lit facets, %llu partly lit, %llu "
-        "shadowed, %llu rays, %llu multi-bounce paths, %llu tubes cut off at the bounce cap (%d)\n",
-        nt * np, nf, elapsed_s, static_cast<unsigned long long>(stats.facets_lit),
-        static_cast<unsigned long long>(stats.facets_partial),
-        static_cast<unsigned long long>(stats.facets_shadowed),
-        static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths),
-        static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
-    print_edge_stats(target->engine, stats);
+    if (mom) {
+      std::printf("%zu directions x %zu frequencies in %.2f s (method of moments)\n", nt * np, nf,
+                  elapsed_s);
+    } else {
+      std::printf(
+          "%zu directions x %zu frequencies in %.2f s: %llu lit facets, %llu partly lit, %llu "
+          "shadowed, %llu rays, %llu multi-bounce paths, %llu tubes cut off at the bounce cap "
+          "(%d)\n",
+          nt * np, nf, elapsed_s, static_cast<unsigned long long>(stats.facets_lit),
+          static_cast<unsigned long long>(stats.facets_partial),
+          static_cast<unsigned long long>(stats.facets_shadowed),
+          static_cast<unsigned long long>(stats.rays), static_cast<unsigned long long>(stats.paths),
+          static_cast<unsigned long long>(stats.tubes_cut_off), o.bounces);
+      print_edge_stats(target->engine, stats);
+    }
     std::printf("wrote %s", o.out_csv.c_str());
     if (!stats_path.empty())
       std::printf(", %s", stats_path.c_str());
@@ -976,7 +971,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
       std::printf(", %s", o.plot_png.c_str());
     std::printf("\n");
   }
-  warn_cut_off(stats, o.bounces);  // whatever -q says
+  warn_cut_off(stats, o.bounces);  // whatever -q says (no tube traced with --method mom)
   return 0;
 }
 

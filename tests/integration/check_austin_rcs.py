@@ -27,7 +27,7 @@ import statistics
 import sys
 import time
 
-from cli_check import check, finish, runner
+from cli_check import check, finish, runner, write_series
 
 exe, work = sys.argv[1], sys.argv[2]
 charts = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--charts" else None
@@ -251,13 +251,11 @@ for tag, freq in (("f9", 2.56e9), ("f10", 5.12e9), ("fx1", 7e9), ("f11", 10.2e9)
             for name, label in (("first", "first-order edges"), ("po", "PO alone")):
                 vals, _ = load_csv(fine[name], pol)
                 txt = os.path.join(work, f"chart_{tag}_{name}_{pol}.txt")
-                with open(txt, "w") as f:
-                    f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(vals.items()))
+                write_series(txt, vals)
                 overlays += ["--overlay", f"{txt}={label}"]
             ref_txt = os.path.join(work, f"chart_{tag}_ref_{pol}.txt")
             ref = load_ref(f"ref_rcs.II.A.sx1.{tag}.{p}.txt")
-            with open(ref_txt, "w") as f:
-                f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(ref.items()))
+            write_series(ref_txt, ref)
             overlays += ["--overlay", f"{ref_txt}=reference (Austin, ARCHIE-AIM)"]
             png = f"austin_plate_{chart_name[tag]}ghz_{pol.lower()}.png"
             run("rcs", "--mesh", plate, "--freq-hz", str(freq), "--theta-deg", "90", "--phi-deg",
@@ -272,11 +270,6 @@ C = 299792458.0
 def sweep_mom(mesh, freq, phis, out):
     run("rcs", "--mesh", mesh, "--freq-hz", str(freq), "--theta-deg", "90", "--phi-deg", phis,
         "--pol", "HH,VV", "--method", "mom", "--out", out, "-q")
-
-
-def write_series(path, values):
-    with open(path, "w") as f:
-        f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(values.items()))
 
 
 for tag, freq in (("f9", 2.56e9), ("fx1", 7e9)):

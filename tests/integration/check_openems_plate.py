@@ -18,7 +18,7 @@ import os
 import statistics
 import sys
 
-from cli_check import check, finish, runner
+from cli_check import check, finish, runner, write_series
 
 exe, work = sys.argv[1], sys.argv[2]
 charts = sys.argv[4] if len(sys.argv) > 4 and sys.argv[3] == "--charts" else None
@@ -134,12 +134,9 @@ if charts:
         one, _ = load_csv(fine_first, pol)
         po_txt, ref_txt = os.path.join(work, f"po_{pol}.txt"), os.path.join(work, f"ref_{pol}.txt")
         one_txt = os.path.join(work, f"first_{pol}.txt")
-        with open(po_txt, "w") as f:
-            f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(po.items()))
-        with open(one_txt, "w") as f:
-            f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(one.items()))
-        with open(ref_txt, "w") as f:
-            f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(ref[(freq, pol)].items()))
+        write_series(po_txt, po)
+        write_series(one_txt, one)
+        write_series(ref_txt, ref[(freq, pol)])
         run("rcs", "--mesh", plate, "--freq-hz", str(freq), "--theta-deg", "0:85:171",
             "--phi-deg", "0", "--pol", pol, "--bounces", "1", "-q",
             "--out", os.path.join(work, f"chart_{pol}.csv"),

@@ -1,4 +1,4 @@
-"""Shared by the CLI check scripts (check_rcs_cli.py, check_scene_cli.py): run radar-emu and
+"""Shared by the CLI check scripts (check_rcs_cli.py, check_scene_cli.py, ...): run radar-emu and
 collect failed checks, so that a script reports every failure before it exits non-zero."""
 import subprocess
 import sys
@@ -21,6 +21,12 @@ def runner(exe):
             sys.exit(f"radar-emu {' '.join(args)} exited {r.returncode}")
         return r
     return run
+
+
+def write_series(path, values):
+    """Writes {x: dB} as the "x dB" lines that `rcs --overlay FILE=LABEL` reads."""
+    with open(path, "w") as f:
+        f.writelines(f"{a:g} {v:.4f}\n" for a, v in sorted(values.items()))
 
 
 def finish():
