@@ -9,22 +9,24 @@
 
 #include <vector>
 
-#include "emulator/closed_loop.hpp"
-#include "emulator/image_tool.hpp"
-#include "emulator/ownship.hpp"
-#include "emulator/scenario.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/ownship.hpp"
+#include "loop/scenario.hpp"
 #include "radar/products/ev_image.hpp"
 #include "scene/scene.hpp"
+#include "tools/image.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
+namespace tools = radar_emu::tools;
 namespace radar = radar_emu::radar;
 
 namespace {
 
 constexpr double kTimeS = 52.0;
 
-const emu::Scenario& scenario() {
-  static const emu::Scenario s = emu::load_scenario(RADAR_EMU_EXAMPLES_DIR "/ev_radar_94ghz.toml");
+const loop::Scenario& scenario() {
+  static const loop::Scenario s =
+      loop::load_scenario(RADAR_EMU_EXAMPLES_DIR "/ev_radar_94ghz.toml");
   return s;
 }
 
@@ -32,7 +34,7 @@ void BM_EvImage(benchmark::State& state) {
   const int looks = static_cast<int>(state.range(0));
   std::size_t returns = 0;
   for (auto _ : state) {
-    const emu::EvImageProduct p = emu::compute_ev_image(scenario(), kTimeS, looks, 20261124, 4);
+    const tools::EvImageProduct p = tools::compute_ev_image(scenario(), kTimeS, looks, 20261124, 4);
     returns = p.contributions;
     benchmark::DoNotOptimize(p.image.intensity_m2.data());
   }
@@ -41,15 +43,15 @@ void BM_EvImage(benchmark::State& state) {
 BENCHMARK(BM_EvImage)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_EvImageForm(benchmark::State& state) {
-  const emu::Scenario& s = scenario();
-  radar_emu::scene::Scene scene(emu::scene_description(s));
+  const loop::Scenario& s = scenario();
+  radar_emu::scene::Scene scene(loop::scene_description(s));
   scene.set_time(kTimeS);
   radar::SbrTracer tracer(scene, s.sbr);
   radar::RadarPose pose;
   pose.position_m = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * kTimeS;
   pose.world_from_antenna =
-      emu::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      emu::body_from_antenna(s.antenna_depression_rad);
+      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      loop::body_from_antenna(s.antenna_depression_rad);
   std::vector<radar::Contribution> c(tracer.max_contributions());
   radar::TraceStats stats;
   c.resize(tracer.trace(pose, c, stats));

@@ -5,9 +5,9 @@
 
 #include <vector>
 
-#include "emulator/closed_loop.hpp"
-#include "emulator/ownship.hpp"
-#include "emulator/scenario.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/ownship.hpp"
+#include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/noise.hpp"
 #include "radar/sensor/sensor.hpp"
@@ -15,7 +15,7 @@
 #include "scene/default_scene.hpp"
 #include "scene/scene.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 namespace radar = radar_emu::radar;
 
 namespace {
@@ -23,7 +23,7 @@ namespace {
 struct Fixture {
   explicit Fixture(radar_emu::scene::SceneDescription d) : scene(std::move(d)) { init(); }
   Fixture() : Fixture(radar_emu::scene::default_scene()) {}
-  emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
   radar_emu::scene::Scene scene;
   radar::SbrTracer tracer{scene, s.sbr};
   radar::Sensor sensor{s.sensor};
@@ -35,8 +35,8 @@ struct Fixture {
     pose.position_m = s.ownship_start_enu_m;
     pose.velocity_mps = s.ownship_velocity_enu_mps;
     pose.world_from_antenna =
-        emu::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-        emu::body_from_antenna(s.antenna_depression_rad);
+        loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+        loop::body_from_antenna(s.antenna_depression_rad);
   }
 };
 
@@ -207,11 +207,11 @@ BENCHMARK(BM_SceneSetTime)->Unit(benchmark::kMicrosecond);
 
 // Whole closed-loop frames (bus in, trace, sensor, bus out), 50 frames per iteration.
 void BM_ClosedLoop50Frames(benchmark::State& state) {
-  emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
   s.frames = 50;
   for (auto _ : state) {
     state.PauseTiming();
-    emu::ClosedLoop loop(s, {});
+    loop::ClosedLoop loop(s, {});
     state.ResumeTiming();
     benchmark::DoNotOptimize(loop.run());
   }
@@ -228,14 +228,14 @@ BENCHMARK(BM_ClosedLoop50Frames)->Unit(benchmark::kMillisecond)->UseRealTime();
 void BM_FrameBudget(benchmark::State& state) {
   static constexpr const char* kFiles[] = {nullptr, "ev_radar_94ghz.toml", "terrain_movers.toml"};
   const char* file = kFiles[state.range(0)];
-  emu::Scenario s = file == nullptr
-                        ? emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>")
-                        : emu::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/" + file);
+  loop::Scenario s = file == nullptr
+                         ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
+                         : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/" + file);
   s.frames = 100;
-  emu::RunResult r;
+  loop::RunResult r;
   for (auto _ : state) {
     state.PauseTiming();
-    emu::ClosedLoop loop(s, {});
+    loop::ClosedLoop loop(s, {});
     state.ResumeTiming();
     r = loop.run();
   }

@@ -8,27 +8,27 @@
 
 #include <vector>
 
-#include "emulator/closed_loop.hpp"
-#include "emulator/live_view.hpp"
-#include "emulator/scenario.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/outputs/live_view.hpp"
+#include "loop/scenario.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 
 namespace {
 
 void BM_LiveViewPublish(benchmark::State& state) {
-  const emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default>");
-  emu::LiveViewConfig c;
+  const loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default>");
+  loop::LiveViewConfig c;
   c.serve = "127.0.0.1:0";
   c.scenario = &s;
   c.max_detections = 64;
   c.max_truth = 64;
   c.update_interval_ms = state.range(0) == 0 ? 3'600'000 : 1;
-  emu::LiveView view(c);
-  emu::FrameRecord rec;
+  loop::LiveView view(c);
+  loop::FrameRecord rec;
   rec.ownship_valid = true;
   std::vector<radar_emu::io::icd::Detection> det(64);
-  std::vector<emu::ObjectTruth> truth(64);
+  std::vector<loop::ObjectTruth> truth(64);
   for (std::size_t i = 0; i < det.size(); ++i) {
     det[i].azimuth_deg = -8.0 + 0.25 * static_cast<double>(i);
     det[i].range_m = 100.0 * static_cast<double>(i);
@@ -39,23 +39,23 @@ void BM_LiveViewPublish(benchmark::State& state) {
     rec.frame_index = frame++;
     view.publish(rec, glm::dvec3(0.0, 70.0, -3.7), stage_ns, det, truth);
   }
-  const emu::LiveViewCounters k = view.counters();
+  const loop::LiveViewCounters k = view.counters();
   state.counters["taken"] = static_cast<double>(k.updates_taken);
   state.counters["dropped"] = static_cast<double>(k.updates_dropped);
 }
 BENCHMARK(BM_LiveViewPublish)->Arg(0)->Arg(1)->Unit(benchmark::kNanosecond)->UseRealTime();
 
 void BM_FrameWithView(benchmark::State& state) {
-  emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default>");
+  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default>");
   s.frames = 1'000'000;
-  emu::RunOptions o;
+  loop::RunOptions o;
   o.record_frames_max = 0;
   o.timing_frames_max = 1;
   if (state.range(0) != 0)
     o.serve = "127.0.0.1:0";
-  emu::ClosedLoop loop(s, o);
+  loop::ClosedLoop loop(s, o);
   loop.begin();
-  emu::FrameOutput out;
+  loop::FrameOutput out;
   for (auto _ : state) {
     if (!loop.step(out))
       state.SkipWithError("the scenario ended");

@@ -30,12 +30,9 @@
 #include <variant>
 #include <vector>
 
-#include "emulator/atten_tool.hpp"
-#include "emulator/closed_loop.hpp"
-#include "emulator/rcs_tool.hpp"
-#include "emulator/scenario.hpp"
-#include "emulator/scene_tool.hpp"
-#include "emulator/sigma0_tool.hpp"
+#include "config/cli_args.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/scenario.hpp"
 #include "radar/constants.hpp"
 #include "radar/em/rcs.hpp"
 #include "radar/products/range_profile.hpp"
@@ -45,9 +42,15 @@
 #include "scene/scene.hpp"
 #include "scene/scene_info.hpp"
 #include "scene/targets.hpp"
+#include "tools/atten.hpp"
+#include "tools/rcs.hpp"
+#include "tools/scene.hpp"
+#include "tools/sigma0.hpp"
 
 namespace py = pybind11;
-namespace emu = radar_emu::emulator;
+namespace config = radar_emu::config;
+namespace loop = radar_emu::loop;
+namespace tools = radar_emu::tools;
 namespace radar = radar_emu::radar;
 namespace sc = radar_emu::scene;
 
@@ -123,13 +126,13 @@ class Table {
 
 // ---- argument conversion ---------------------------------------------------------------------
 
-// A sweep as the CLI takes it: "X" or "START:STOP:N" (emulator::parse_sweep, same errors), or
+// A sweep as the CLI takes it: "X" or "START:STOP:N" (config::parse_sweep, same errors), or
 // a number, or a sequence / array of numbers.
 using SweepArg = std::variant<std::string, double, std::vector<double>>;
 
 std::vector<double> sweep(const SweepArg& arg, const char* option) {
   if (const auto* text = std::get_if<std::string>(&arg))
-    return emu::parse_sweep(*text, option);
+    return config::parse_sweep(*text, option);
   if (const auto* x = std::get_if<double>(&arg))
     return {*x};
   const auto& v = std::get<std::vector<double>>(arg);
@@ -149,20 +152,20 @@ void warn(const std::string& text) {
 // ---- targets ---------------------------------------------------------------------------------
 
 // A loaded target with its engine, as `radar-emu rcs` and `profile` set it up (rcs_tool.cpp):
-// emulator::load_target, a scene over it, radar::RcsEngine with emulator::rcs_config (bounce
+// tools::load_target, a scene over it, radar::RcsEngine with tools::rcs_config (bounce
 // cap, ray density, edge diffraction), checked as the CLI checks them.
 struct Target {
   Target(const std::filesystem::path& mesh, double scale, const std::vector<std::string>& materials,
          int bounces, double rays_per_wavelength, bool edges, double edge_turn_deg)
       : path(path_text(mesh)),
-        config(emu::rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg,
-                               emu::OptionSpelling::kPython)),
-        loaded(emu::load_target(path, scale, materials)),
+        config(tools::rcs_config(bounces, rays_per_wavelength, edges, edge_turn_deg,
+                                 tools::OptionSpelling::kPython)),
+        loaded(tools::load_target(path, scale, materials)),
         scene(loaded.description),
         engine(scene, loaded.surfaces, config) {}
   std::string path;
   radar::RcsConfig config;  // checked before the mesh is loaded: bad settings fail fast
-  emu::LoadedTarget loaded;
+  tools::LoadedTarget loaded;
   sc::Scene scene;
   radar::RcsEngine engine;  // keeps a pointer to `scene`: Target is never moved
 };
@@ -190,7 +193,7 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
   const std::vector<double> freqs = sweep(freq_hz, "freq_hz");
   const std::vector<double> theta = sweep(theta_deg, "theta_deg");
   const std::vector<double> phi = sweep(phi_deg, "phi_deg");
-  const std::vector<emu::Pol> pols = emu::parse_pols(pol);
+  const std::vector<tools::Pol> pols = tools::parse_pols(pol);
   for (double f : freqs) {
     if (!(f > 0.0))
       throw std::invalid_argument("frequencies must be > 0 Hz");
@@ -201,19 +204,19 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
     throw std::invalid_argument("give both bistatic_theta_deg and bistatic_phi_deg");
   const std::size_t nt = theta.size(), np = phi.size(), nf = freqs.size();
   std::vector<radar::ScatteringMatrix> s(nt * np * nf);
-  std::vector<emu::RcsDirectionStats> per_direction(nt * np);
+  std::vector<tools::RcsDirectionStats> per_direction(nt * np);
   std::optional<std::pair<double, double>> bistatic;
   if (bistatic_theta_deg)
     bistatic.emplace(*bistatic_theta_deg, *bistatic_phi_deg);
   {
     py::gil_scoped_release release;
     radar::RcsStats total;
-    emu::sweep_rcs(t.engine, theta, phi, freqs, bistatic, s, per_direction, total);
+    tools::sweep_rcs(t.engine, theta, phi, freqs, bistatic, s, per_direction, total);
   }
   Table table;
   table.col("freq_hz", 'd').col("theta_deg", 'd').col("phi_deg", 'd');
-  for (emu::Pol p : pols) {
-    const std::string n(emu::pol_name(p));
+  for (tools::Pol p : pols) {
+    const std::string n(tools::pol_name(p));
     table.col("rcs_" + n + "_dbsm", 'd').col("re_" + n, 'd').col("im_" + n, 'd');
   }
   table.col("facets_lit", 'Q').col("facets_partial", 'Q').col("tubes_cut_off", 'Q');
@@ -222,15 +225,15 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
   std::size_t row = 0;
   for (std::size_t it = 0; it < nt; ++it) {
     for (std::size_t ip = 0; ip < np; ++ip) {
-      const emu::RcsDirectionStats& ds = per_direction[it * np + ip];
+      const tools::RcsDirectionStats& ds = per_direction[it * np + ip];
       for (std::size_t k = 0; k < nf; ++k, ++row) {
         const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
         std::size_t c = 0;
         table.set(out, row, c++, freqs[k]);
         table.set(out, row, c++, theta[it]);
         table.set(out, row, c++, phi[ip]);
-        for (emu::Pol p : pols) {
-          const std::complex<double> a = emu::component(m, p);
+        for (tools::Pol p : pols) {
+          const std::complex<double> a = tools::component(m, p);
           table.set(out, row, c++, radar::dbsm(a));
           table.set(out, row, c++, a.real());
           table.set(out, row, c++, a.imag());
@@ -256,7 +259,7 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
   const std::vector<double> freqs = sweep(freq_hz, "freq_hz");
   const std::vector<double> theta = sweep(theta_deg, "theta_deg");
   const std::vector<double> phi = sweep(phi_deg, "phi_deg");
-  const std::vector<emu::Pol> pols = emu::parse_pols(pol);
+  const std::vector<tools::Pol> pols = tools::parse_pols(pol);
   if (pols.size() != 1)
     throw std::invalid_argument("pol: a profile takes one polarisation");
   const std::size_t nf = freqs.size();
@@ -283,10 +286,10 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
   {
     py::gil_scoped_release release;
     radar::RcsStats stats;
-    emu::sweep_profile(t.engine, theta, phi, freqs, s, edges_used, stats);
+    tools::sweep_profile(t.engine, theta, phi, freqs, s, edges_used, stats);
     std::vector<std::complex<double>> samples(na * nf);
     for (std::size_t i = 0; i < na * nf; ++i)
-      samples[i] = emu::component(s[i], pols[0]);
+      samples[i] = tools::component(s[i], pols[0]);
     for (std::size_t a = 0; a < na; ++a) {
       profiles.push_back(
           radar::range_profile(std::span<const std::complex<double>>(samples.data() + a * nf, nf),
@@ -425,7 +428,7 @@ py::array sigma0(double freq_hz, const std::string& material, std::optional<doub
                  const std::string& model, const SweepArg& theta_deg,
                  const std::optional<SweepArg>& theta_s_deg, double phi_s_deg,
                  const std::string& pol) {
-  emu::Sigma0ToolOptions o;
+  tools::Sigma0ToolOptions o;
   o.material = material;
   o.eps_real = eps_real;
   o.eps_loss = eps_loss;
@@ -443,13 +446,13 @@ py::array sigma0(double freq_hz, const std::string& material, std::optional<doub
   TempCsv csv;
   o.out_csv = csv.path.string();
   o.quiet = true;
-  (void)emu::run_sigma0_tool(o);
+  (void)tools::run_sigma0_tool(o);
   return read_csv(csv.path, {"valid"});
 }
 
 py::array atten(const SweepArg& freq_hz, double pressure_hpa, double temp_c, double rho_gm3,
                 double rain_mmh, double fog_gm3, double veg_depth_m, bool out_of_leaf) {
-  emu::AttenToolOptions o;
+  tools::AttenToolOptions o;
   o.freqs_hz = sweep(freq_hz, "freq_hz");
   o.dry_pressure_hpa = pressure_hpa;
   o.temperature_c = temp_c;
@@ -461,7 +464,7 @@ py::array atten(const SweepArg& freq_hz, double pressure_hpa, double temp_c, dou
   TempCsv csv;
   o.out_csv = csv.path.string();
   o.quiet = true;
-  (void)emu::run_atten_tool(o);
+  (void)tools::run_atten_tool(o);
   return read_csv(csv.path, {});
 }
 
@@ -474,7 +477,7 @@ py::object scene_info(const std::filesystem::path& file) {
   for (const std::string& w : warnings)
     warn(w);
   const std::string json =
-      emu::scene_info_json(sc::scene_info(desc), file.string(), warnings.size());
+      tools::scene_info_json(sc::scene_info(desc), file.string(), warnings.size());
   return py::module_::import("json").attr("loads")(json);
 }
 
@@ -517,15 +520,15 @@ std::size_t write_target(const std::string& kind_name, const std::filesystem::pa
 
 // ---- the closed loop -------------------------------------------------------------------------
 
-emu::Scenario scenario_from(const std::optional<std::filesystem::path>& file,
-                            const std::optional<std::string>& toml) {
+loop::Scenario scenario_from(const std::optional<std::filesystem::path>& file,
+                             const std::optional<std::string>& toml) {
   if (file && toml)
     throw std::invalid_argument("give a scenario file or TOML text, not both");
   if (file)
-    return emu::load_scenario(*file);
+    return loop::load_scenario(*file);
   if (toml)
-    return emu::parse_scenario(*toml, "<python>");
-  return emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+    return loop::parse_scenario(*toml, "<python>");
+  return loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
 }
 
 const Table& detection_table() {
@@ -575,12 +578,12 @@ class Loop {
         throw std::invalid_argument("frames must be in 1..100000000");
       scenario_.frames = *frames;
     }
-    emu::RunOptions o;
+    loop::RunOptions o;
     o.record_frames_max = 0;  // each step hands its frame to Python; nothing kept in memory
     if (out_dir)
       o.out_dir = *out_dir;
     has_outputs_ = out_dir.has_value();
-    loop_ = std::make_unique<emu::ClosedLoop>(scenario_, o);
+    loop_ = std::make_unique<loop::ClosedLoop>(scenario_, o);
     for (const std::string& w : loop_->setup_warnings())
       warn(w);
   }
@@ -589,13 +592,13 @@ class Loop {
   py::object step(const std::optional<py::dict>& ownship) {
     if (finished_)
       throw std::runtime_error("the loop has finished");
-    emu::OwnshipInput in;
-    const emu::OwnshipInput* given = nullptr;
+    loop::OwnshipInput in;
+    const loop::OwnshipInput* given = nullptr;
     if (ownship) {
       in = ownship_from(*ownship);
       given = &in;
     }
-    emu::FrameOutput f;
+    loop::FrameOutput f;
     bool ran = false;
     {
       py::gil_scoped_release release;
@@ -613,7 +616,7 @@ class Loop {
     if (finished_)
       throw std::runtime_error("the loop has finished");
     finished_ = true;
-    const emu::RunResult r = loop_->finish();
+    const loop::RunResult r = loop_->finish();
     if (has_outputs_)
       loop_->write_outputs(r);
     py::dict d;
@@ -630,14 +633,14 @@ class Loop {
     return d;
   }
 
-  [[nodiscard]] const emu::Scenario& scenario() const noexcept { return scenario_; }
+  [[nodiscard]] const loop::Scenario& scenario() const noexcept { return scenario_; }
   [[nodiscard]] std::uint64_t frames_done() const noexcept { return frames_done_; }
   // The scene objects' names (detections' and truth's object_id index them), as
   // detections.json names them: the scenario's scene description, built on first use.
   [[nodiscard]] const std::vector<std::string>& object_names() {
     if (!names_) {
       names_.emplace();
-      for (const auto& o : emu::scene_description(loop_->scenario()).objects)
+      for (const auto& o : loop::scene_description(loop_->scenario()).objects)
         names_->push_back(o.name);
     }
     return *names_;
@@ -655,7 +658,7 @@ class Loop {
   static double number(const py::dict& d, const char* key) {
     return d.contains(key) ? d[key].cast<double>() : 0.0;
   }
-  static emu::OwnshipInput ownship_from(const py::dict& d) {
+  static loop::OwnshipInput ownship_from(const py::dict& d) {
     static const char* const kKeys[] = {"position_enu_m", "velocity_enu_mps", "heading_deg",
                                         "pitch_deg", "roll_deg"};
     for (const auto& item : d) {
@@ -669,7 +672,7 @@ class Loop {
     }
     if (!d.contains("position_enu_m"))
       throw std::invalid_argument("ownship: position_enu_m is required");
-    emu::OwnshipInput in;
+    loop::OwnshipInput in;
     in.position_enu_m = vec3(d, "position_enu_m");
     in.velocity_enu_mps = vec3(d, "velocity_enu_mps");
     in.heading_rad = number(d, "heading_deg") * kRadPerDeg;
@@ -684,8 +687,8 @@ class Loop {
     return in;
   }
 
-  py::dict frame_dict(const emu::FrameOutput& f) const {
-    const emu::FrameRecord& rec = f.record;
+  py::dict frame_dict(const loop::FrameOutput& f) const {
+    const loop::FrameRecord& rec = f.record;
     py::dict d;
     d["frame_index"] = rec.frame_index;
     d["frame_counter"] = rec.header.frame_counter;
@@ -726,7 +729,7 @@ class Loop {
     const Table& tt = truth_table();
     py::array truth = tt.make(f.truth.size());
     for (std::size_t i = 0; i < f.truth.size(); ++i) {
-      const emu::ObjectTruth& o = f.truth[i];
+      const loop::ObjectTruth& o = f.truth[i];
       tt.set(truth, i, 0, o.object_id);
       tt.set(truth, i, 1, o.range_m);
       tt.set(truth, i, 2, o.azimuth_rad * kDegPerRad);
@@ -737,8 +740,8 @@ class Loop {
     return d;
   }
 
-  emu::Scenario scenario_;
-  std::unique_ptr<emu::ClosedLoop> loop_;
+  loop::Scenario scenario_;
+  std::unique_ptr<loop::ClosedLoop> loop_;
   std::optional<std::vector<std::string>> names_;
   bool has_outputs_ = false;
   bool finished_ = false;
@@ -777,8 +780,8 @@ PYBIND11_MODULE(radar_emu, m) {
   m.def(
       "scenario_scene",
       [](const std::optional<std::filesystem::path>& file, const std::optional<std::string>& toml) {
-        const emu::Scenario s = scenario_from(file, toml);
-        const sc::SceneDescription d = emu::scene_description(s);
+        const loop::Scenario s = scenario_from(file, toml);
+        const sc::SceneDescription d = loop::scene_description(s);
         py::dict out;
         out["objects"] = objects_of(d);
         py::list mats;
@@ -794,7 +797,7 @@ PYBIND11_MODULE(radar_emu, m) {
       "The scene a scenario names (builtin or glTF, with its [[target]] tables), as the loop "
       "builds it: objects and materials.");
   m.def(
-      "default_scenario_toml", [] { return std::string(emu::default_scenario_toml()); },
+      "default_scenario_toml", [] { return std::string(loop::default_scenario_toml()); },
       "The embedded default scenario (radar-emu run --print-scenario).");
 
   py::class_<Target, std::shared_ptr<Target>>(

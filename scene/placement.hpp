@@ -5,7 +5,7 @@
 // (docs/scene_format.md). Setup only (allocates, throws).
 //
 // Angles here are compass angles in radians: clockwise from north seen from above (north 0,
-// east pi/2), as the ownship's true heading (emulator/ownship.hpp); the scene's ENU yaw
+// east pi/2), as the ownship's true heading (loop/ownship.hpp); the scene's ENU yaw
 // (counter-clockwise from east) is pi/2 minus it.
 
 #include <filesystem>

@@ -1,7 +1,7 @@
 #pragma once
 // Summary figures of a scene database (what `radar-emu scene info` prints): polygon counts per
 // material, area and level of detail, extent, objects. Plain structs; the JSON form lives in
-// emulator/ (scene_tool.cpp).
+// tools/ (tools/scene.cpp).
 
 #include <cstddef>
 #include <cstdint>

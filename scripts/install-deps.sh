@@ -20,7 +20,7 @@ PACKAGES=(
   python3 python3-can python3-canmatrix python3-pymodbus python3-serial-asyncio mbpoll socat
   # the Python module radar_emu (python/, optional at build time) and its tests
   python3-dev pybind11-dev python3-numpy python3-pytest
-  # MPI scale-out of rcs / profile (emulator/mpi_work.hpp, docs/cluster.md; optional at build
+  # MPI scale-out of rcs / profile (tools/mpi_work.hpp, docs/cluster.md; optional at build
   # time, CMake RADAR_EMU_MPI) and its mpirun test
   openmpi-bin libopenmpi-dev
   # the live view's test (run --serve): headless Chromium screenshots the page

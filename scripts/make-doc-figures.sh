@@ -14,7 +14,7 @@ for a in "$@"; do
     *) build="$a" ;;
   esac
 done
-exe="$build/emulator/radar-emu"
+exe="$build/app/radar-emu"
 [ -x "$exe" ] || { echo "make-doc-figures: $exe not found (build first: scripts/build.sh)" >&2; exit 1; }
 img="$root/docs/img"
 work="$(mktemp -d)"

@@ -5,4 +5,4 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$root/scripts/install-deps.sh"
 "$root/scripts/build.sh" "$root/build" -DRADAR_EMU_WERROR=ON
-exec "$root/build/emulator/radar-emu" run --out "${RADAR_EMU_OUT:-$root/out/run}" "$@"
+exec "$root/build/app/radar-emu" run --out "${RADAR_EMU_OUT:-$root/out/run}" "$@"

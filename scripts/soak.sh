@@ -18,7 +18,7 @@
 #   change what the outputs carry (16 pulses, 0.25 m target rays, a 3.5-5 km range gate around
 #   the objects): 3 to 6 detections and about 23 bus frames a frame (the default radar: 4 to 7
 #   detections), at about half its cost. Pass a scenario to soak another configuration.
-# environment: RADAR_EMU (default build/emulator/radar-emu), SOAK_OUT (default out/soak),
+# environment: RADAR_EMU (default build/app/radar-emu), SOAK_OUT (default out/soak),
 #   SOAK_SAMPLE_S (sampling period, default 1), SOAK_RSS_LIMIT_KB, SOAK_REPLAY,
 #   SOAK_CHECK_ONLY=1 (check the outputs of an earlier soak in SOAK_OUT without running again).
 # Writes SOAK_OUT/memory.csv (elapsed_s,frame,rss_kb), SOAK_OUT/run/ and SOAK_OUT/replay/ (the
@@ -30,7 +30,7 @@ if [ $# -lt 1 ] || ! [[ "$1" =~ ^[0-9]+$ ]] || [ "$1" -lt 1 ]; then
   exit 2
 fi
 frames="$1"
-exe="${RADAR_EMU:-$root/build/emulator/radar-emu}"
+exe="${RADAR_EMU:-$root/build/app/radar-emu}"
 out="${SOAK_OUT:-$root/out/soak}"
 period="${SOAK_SAMPLE_S:-1}"
 limit_kb="${SOAK_RSS_LIMIT_KB:-1024}"

@@ -1,7 +1,7 @@
 """radar_emu.rcs / Target.rcs against `radar-emu rcs` on the same mesh: every CSV cell equal.
 
 The CSV prints freq/theta/phi with %.10g, rcs_P_dbsm with %.6f, re_P / im_P with %.9e and the
-counters as integers (emulator/rcs_tool.cpp); the module returns full doubles. So each value
+counters as integers (tools/rcs.cpp); the module returns full doubles. So each value
 the module returns is printed here with the CSV's own format and the two texts must be
 identical: bit for bit to the CSV's printed precision (the CSV holds no more)."""
 import csv

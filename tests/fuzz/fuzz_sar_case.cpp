@@ -1,4 +1,4 @@
-// Harness: the TOML case parser of `radar-emu sar` (emulator/sar_case.hpp, parse_sar_case) on
+// Harness: the TOML case parser of `radar-emu sar` (tools/sar_case.hpp, parse_sar_case) on
 // arbitrary text.
 //
 // Oracle: parse_sar_case() returns or throws std::invalid_argument whose message starts with the
@@ -13,11 +13,11 @@
 #include <string>
 #include <string_view>
 
-#include "emulator/sar_case.hpp"
 #include "radar/constants.hpp"
 #include "radar/products/sar.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tests/fuzz/harnesses.hpp"
+#include "tools/sar_case.hpp"
 
 namespace radar_emu::fuzz {
 
@@ -36,7 +36,7 @@ int sar_case(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   constexpr double kDeg = radar::kPi / 180.0;
   try {
-    const emulator::SarCase c = emulator::parse_sar_case(text, "fuzz.toml");
+    const tools::SarCase c = tools::parse_sar_case(text, "fuzz.toml");
     const radar::SarParams& p = c.p;
     FUZZ_CHECK(in(p.carrier_hz, 1e8, 1e12));
     FUZZ_CHECK(in(p.bandwidth_hz, 1e5, 1e10));
@@ -70,7 +70,7 @@ int sar_case(const std::uint8_t* data, std::size_t size) {
     FUZZ_CHECK(std::isfinite(p.near_range_m) && p.near_range_m > c.altitude_m);
     FUZZ_CHECK(p.pulses >= 2 && p.pulses <= 200000);
     FUZZ_CHECK(finite3(p.start_position_m, 1e9) && finite3(p.velocity_mps, 2000.0 * (1 + 1e-12)));
-    for (const emulator::TargetCase& t : c.targets) {
+    for (const tools::TargetCase& t : c.targets) {
       FUZZ_CHECK(in(t.spec.a_m, 0.0, 100.0) && t.spec.a_m > 0.0);
       FUZZ_CHECK(in(t.spec.b_m, 0.0, 100.0) && t.spec.b_m > 0.0);
       FUZZ_CHECK(in(t.spec.c_m, 0.0, 100.0) && t.spec.c_m > 0.0);

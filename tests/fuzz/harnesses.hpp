@@ -15,11 +15,11 @@ int icd_fd(const std::uint8_t* data, std::size_t size);         // io/detection_
 int candump(const std::uint8_t* data, std::size_t size);        // io/candump
 int modbus_nav(const std::uint8_t* data, std::size_t size);     // io/modbus_map, navigation map
 int modbus_table(const std::uint8_t* data, std::size_t size);   // io/modbus_map, detection table
-int scenario_toml(const std::uint8_t* data, std::size_t size);  // emulator/scenario
+int scenario_toml(const std::uint8_t* data, std::size_t size);  // loop/scenario
 int gltf(const std::uint8_t* data, std::size_t size);           // scene/gltf (.gltf and .glb)
 int obj(const std::uint8_t* data, std::size_t size);            // scene/mesh_io, Wavefront OBJ
 int stl(const std::uint8_t* data, std::size_t size);            // scene/mesh_io, STL
 int websocket(const std::uint8_t* data, std::size_t size);      // io/websocket, requests, frames
-int sar_case(const std::uint8_t* data, std::size_t size);       // emulator/sar_tool, TOML case
+int sar_case(const std::uint8_t* data, std::size_t size);       // tools/sar, TOML case
 
 }  // namespace radar_emu::fuzz

@@ -4,7 +4,7 @@ documents (docs/icd/*.md, the glTF 2.0, OBJ and STL formats, RFC 6455 and RFC 91
 harnesses' input layouts (each harness's header comment). Deterministic (random.Random(19));
 run it again after a harness's input layout changes:
 
-    tests/fuzz/make_seeds.py [--radar-emu build/emulator/radar-emu]
+    tests/fuzz/make_seeds.py [--radar-emu build/app/radar-emu]
 
 With --radar-emu, `radar-emu scene target` adds meshes written by the project's own writers.
 """
@@ -331,7 +331,7 @@ def websocket_seeds():
     write("websocket", "frames_too_big", bytes([1, 1]) + ws_frame(1, bytes(126)))
 
 
-# ---- sar case TOML (emulator/sar_tool.hpp; examples/sar_seed.toml documents the keys) ----------
+# ---- sar case TOML (tools/sar.hpp; examples/sar_seed.toml documents the keys) ----------
 def sar_case_seeds():
     ex = os.path.join(ROOT, "examples")
     for f in sorted(os.listdir(ex)):

@@ -1,9 +1,9 @@
-// The plotting layer (emulator/charts.*) against what a reader of a report checks: tick values
+// The plotting layer (plot/charts.*) against what a reader of a report checks: tick values
 // where a 1-2-5 rule and decades put them, legends clear of the data, whole titles, square
 // metres on an image, and colours that read back through the colour bar. The PNGs are decoded
 // with stb_image, independent of the writer (stb_image_write).
 
-#include "emulator/charts.hpp"
+#include "plot/charts.hpp"
 
 #include <gtest/gtest.h>
 #include <stb/stb_image.h>

@@ -72,7 +72,7 @@ with open(os.path.join(out, "looks10", "image.png"), "rb") as f:
     head = f.read(24)
 check(head[:8] == b"\x89PNG\r\n\x1a\n", "image.png is a PNG")
 w, hgt = struct.unpack(">II", head[16:24])
-# Two 1000 x 400 panels side by side (emulator/image_tool.cpp: radar image and optical preview).
+# Two 1000 x 400 panels side by side (tools/image.cpp: radar image and optical preview).
 check((w, hgt) == (2000, 400), f"image.png is {w} x {hgt}, want 2000 x 400")
 
 meta1, rows1 = image(1, os.path.join(out, "looks1"))

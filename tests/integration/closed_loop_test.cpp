@@ -2,7 +2,7 @@
 // on its own: ownship on its scripted straight line, objects where the scene description puts
 // them, cells from the radar's parameters (c / 2B, lambda PRF / 4, azimuth cell width).
 
-#include "emulator/closed_loop.hpp"
+#include "loop/closed_loop.hpp"
 
 #include <gtest/gtest.h>
 #include <stb/stb_image.h>
@@ -22,15 +22,15 @@
 #include <string>
 #include <vector>
 
-#include "emulator/plot.hpp"
-#include "emulator/scenario.hpp"
 #include "io/candump.hpp"
 #include "io/detection_icd.hpp"
+#include "loop/outputs/run_plots.hpp"
+#include "loop/scenario.hpp"
 #include "radar/propagation/itu.hpp"
 #include "scene/airport_gen.hpp"
 #include "tests/alloc_counter.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 namespace fs = std::filesystem;
 
 namespace {
@@ -164,7 +164,7 @@ struct Cells {
   }
 };
 
-Cells cells_of(const emu::Scenario& s) {
+Cells cells_of(const loop::Scenario& s) {
   Cells c{};
   const auto& w = s.sensor.processing.waveform;
   c.range_cell_m = kC_mps / (2.0 * w.bandwidth_hz);
@@ -179,19 +179,19 @@ Cells cells_of(const emu::Scenario& s) {
 
 // The scripted ownship's true position at scenario time t, and its antenna axes (the default
 // flies wings level, so the antenna is the body pitched by pitch - depression).
-glm::dvec3 ownship_at(const emu::Scenario& s, double t_s) {
+glm::dvec3 ownship_at(const loop::Scenario& s, double t_s) {
   return s.ownship_start_enu_m + s.ownship_velocity_enu_mps * t_s;
 }
-Antenna scenario_antenna(const emu::Scenario& s) {
+Antenna scenario_antenna(const loop::Scenario& s) {
   return antenna_axes(s.ownship_heading_rad, s.ownship_pitch_rad - s.antenna_depression_rad);
 }
 
-emu::Scenario default_scenario() {
-  return emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+loop::Scenario default_scenario() {
+  return loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
 }
 
 // The default scenario flies over the generated airport (scene/airport_gen.hpp).
-radar_emu::scene::SceneDescription scenario_scene(const emu::Scenario& s) {
+radar_emu::scene::SceneDescription scenario_scene(const loop::Scenario& s) {
   EXPECT_EQ(s.scene_builtin, "airport");
   radar_emu::scene::AirportSpec spec;
   spec.seed = s.scene_seed;
@@ -204,14 +204,14 @@ radar_emu::scene::SceneDescription scenario_scene(const emu::Scenario& s) {
 class ClosedLoopDefault : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    scenario_ = new emu::Scenario(default_scenario());
+    scenario_ = new loop::Scenario(default_scenario());
     // The default scenario as a test range would fly it: the four closed-loop objects carry
     // their trihedrals ([scene] corner_reflectors), so that "detected in every frame with it in
     // the beam" is a statement about geometry. Without them they are detected from their own
     // ground coupling in 84-96 % of frames (docs/architecture.md).
     scenario_->scene_corner_reflectors = true;
     ASSERT_GE(scenario_->frames, 200u);
-    emu::RunOptions options;
+    loop::RunOptions options;
     // Count heap allocations between frame 5 and the end: the frame path must not allocate.
     options.progress = [](std::uint64_t done, std::uint64_t total) {
       if (done == 5)
@@ -225,8 +225,8 @@ class ClosedLoopDefault : public ::testing::Test {
     // The outputs stream during the run: the writer thread must not allocate either.
     out_ = temp_dir("default");
     options.out_dir = out_;
-    loop_ = new emu::ClosedLoop(*scenario_, options);
-    result_ = new emu::RunResult(loop_->run());
+    loop_ = new loop::ClosedLoop(*scenario_, options);
+    result_ = new loop::RunResult(loop_->run());
     allocations_ = radar_emu::test::stop_counting_allocations();  // the count frozen at the end
     loop_->write_outputs(*result_);
     loop_->write_trace_events();
@@ -238,16 +238,16 @@ class ClosedLoopDefault : public ::testing::Test {
     fs::remove_all(out_);
     fs::remove_all(trace_file_.parent_path());
   }
-  static emu::Scenario* scenario_;
-  static emu::ClosedLoop* loop_;
-  static emu::RunResult* result_;
+  static loop::Scenario* scenario_;
+  static loop::ClosedLoop* loop_;
+  static loop::RunResult* result_;
   static std::uint64_t allocations_;
   static fs::path out_;
   static fs::path trace_file_;
 };
-emu::Scenario* ClosedLoopDefault::scenario_ = nullptr;
-emu::ClosedLoop* ClosedLoopDefault::loop_ = nullptr;
-emu::RunResult* ClosedLoopDefault::result_ = nullptr;
+loop::Scenario* ClosedLoopDefault::scenario_ = nullptr;
+loop::ClosedLoop* ClosedLoopDefault::loop_ = nullptr;
+loop::RunResult* ClosedLoopDefault::result_ = nullptr;
 std::uint64_t ClosedLoopDefault::allocations_ = 0;
 fs::path ClosedLoopDefault::out_;
 fs::path ClosedLoopDefault::trace_file_;
@@ -268,7 +268,7 @@ TEST_F(ClosedLoopDefault, EveryFrameRunsWithAValidStateAndReachesTheAvionics) {
 }
 
 TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
-  const emu::Scenario& s = *scenario_;
+  const loop::Scenario& s = *scenario_;
   const Cells cells = cells_of(s);
   // The airport's objects are where its description puts them. The four objects carrying
   // corner reflectors must be detected in every frame that has them in the beam; a detection of
@@ -281,7 +281,7 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
   std::size_t frames_checked = 0, unmatched = 0;
   std::vector<std::size_t> detected_frames_per_object;
   std::vector<std::string> names;
-  for (const emu::FrameRecord& rec : result_->records) {
+  for (const loop::FrameRecord& rec : result_->records) {
     const double t = rec.time_s;
     const glm::dvec3 radar = ownship_at(s, t);
     const std::vector<TruthObject> objects = objects_at(desc, t);
@@ -379,12 +379,12 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
 TEST_F(ClosedLoopDefault, MovingVehicleRadialVelocityFromItsKnownVelocity) {
   // Tighter than the cell check: the reported radial velocity (a Doppler cell centre) is within
   // one Doppler cell of the value computed from the vehicle's and the ownship's known velocities.
-  const emu::Scenario& s = *scenario_;
+  const loop::Scenario& s = *scenario_;
   const Cells cells = cells_of(s);
   const auto desc = scenario_scene(s);
   const Antenna ant = scenario_antenna(s);
   std::size_t frames_with_vehicle = 0;
-  for (const emu::FrameRecord& rec : result_->records) {
+  for (const loop::FrameRecord& rec : result_->records) {
     const glm::dvec3 radar = ownship_at(s, rec.time_s);
     for (const auto& o : objects_at(desc, rec.time_s)) {
       if (o.name != "moving_vehicle")
@@ -440,7 +440,7 @@ TEST_F(ClosedLoopDefault, BusOutputDecodesToTheDetectionsWithinIcdQuantisation) 
     if (dec.feed(line.frame) != radar_emu::io::icd::FeedStatus::kComplete)
       continue;
     ASSERT_LT(list_index, result_->records.size());
-    const emu::FrameRecord& rec = result_->records[list_index++];
+    const loop::FrameRecord& rec = result_->records[list_index++];
     const auto& got = dec.list();
     ASSERT_EQ(got.count, rec.detection_count);
     EXPECT_EQ(got.header.frame_counter, rec.header.frame_counter);
@@ -464,9 +464,9 @@ TEST_F(ClosedLoopDefault, PictureShowsEachDetectionWhereItIs) {
   int w = 0, h = 0, channels = 0;
   unsigned char* px = stbi_load((out_ / "detections.png").c_str(), &w, &h, &channels, 3);
   ASSERT_NE(px, nullptr) << "detections.png missing or not a PNG";
-  EXPECT_EQ(w, emu::BScopeLayout::kWidth);
-  EXPECT_EQ(h, emu::BScopeLayout::kHeight);
-  emu::BScopeLayout layout;
+  EXPECT_EQ(w, loop::BScopeLayout::kWidth);
+  EXPECT_EQ(h, loop::BScopeLayout::kHeight);
+  loop::BScopeLayout layout;
   layout.azimuth_min_deg = scenario_->sbr.azimuth_min_rad * 180.0 / std::numbers::pi;
   layout.azimuth_max_deg = scenario_->sbr.azimuth_max_rad * 180.0 / std::numbers::pi;
   layout.range_max_m = scenario_->sensor.max_range_m;
@@ -476,8 +476,8 @@ TEST_F(ClosedLoopDefault, PictureShowsEachDetectionWhereItIs) {
                                       3;
     return std::array<int, 3>{p[0], p[1], p[2]};
   };
-  const std::array<int, 3> background = rgb(w - 30, emu::BScopeLayout::kTop + 30);
-  for (const emu::FrameRecord* rec : {&result_->records.front(), &result_->records.back()}) {
+  const std::array<int, 3> background = rgb(w - 30, loop::BScopeLayout::kTop + 30);
+  for (const loop::FrameRecord* rec : {&result_->records.front(), &result_->records.back()}) {
     ASSERT_GT(rec->detection_count, 0u);
     const auto& d = result_->detections[rec->first_detection];
     const auto c = rgb(layout.x_of(d.azimuth_deg), layout.y_of(d.range_m));
@@ -541,8 +541,8 @@ TEST_F(ClosedLoopDefault, TimingPictureHasItsSize) {
   int w = 0, h = 0, channels = 0;
   unsigned char* px = stbi_load((out_ / "timing.png").c_str(), &w, &h, &channels, 3);
   ASSERT_NE(px, nullptr) << "timing.png missing or not a PNG";
-  EXPECT_EQ(w, emu::kTimingPngWidth);
-  EXPECT_EQ(h, emu::kTimingPngHeight);
+  EXPECT_EQ(w, loop::kTimingPngWidth);
+  EXPECT_EQ(h, loop::kTimingPngHeight);
   stbi_image_free(px);
 }
 
@@ -550,7 +550,7 @@ TEST_F(ClosedLoopDefault, TruthOfTheMovingVehicleIsItsClosedFormGeometry) {
   // truth.json against geometry computed here: the vehicle's box centre from its description
   // (start + v t, body x along v), seen from the frame's antenna position on the scenario's
   // attitude (the antenna axes of antenna_axes()), range rate (v_vehicle - v_ownship) . u.
-  const emu::Scenario& s = *scenario_;
+  const loop::Scenario& s = *scenario_;
   std::ifstream in(out_ / "truth.json");
   ASSERT_TRUE(in);
   const nlohmann::json truth = nlohmann::json::parse(in);
@@ -559,7 +559,7 @@ TEST_F(ClosedLoopDefault, TruthOfTheMovingVehicleIsItsClosedFormGeometry) {
   const Antenna ant = scenario_antenna(s);
   std::size_t checked = 0;
   for (std::size_t k = 0; k < result_->records.size(); ++k) {
-    const emu::FrameRecord& rec = result_->records[k];
+    const loop::FrameRecord& rec = result_->records[k];
     const nlohmann::json& frame = truth.at("frames")[k];
     for (const TruthObject& o : objects_at(desc, rec.time_s)) {
       if (o.name != "moving_vehicle")
@@ -630,7 +630,7 @@ TEST(Truth, PointSeenFromAMovingRadarByHand) {
   pose.velocity_mps = {0.0, 70.0, 0.0};
   pose.world_from_antenna =
       glm::dmat3(glm::dvec3(0, 1, 0), glm::dvec3(1, 0, 0), glm::dvec3(0, 0, -1));
-  const emu::ObjectTruth t = emu::point_truth(pose, {300.0, 4000.0, 0.0}, {0.0, -10.0, 0.0});
+  const loop::ObjectTruth t = loop::point_truth(pose, {300.0, 4000.0, 0.0}, {0.0, -10.0, 0.0});
   const double r = std::sqrt(300.0 * 300.0 + 4000.0 * 4000.0 + 400.0 * 400.0);  // 4031.13 m
   EXPECT_NEAR(t.range_m, r, 1e-9);
   EXPECT_NEAR(t.azimuth_rad, std::atan(300.0 / 4000.0), 1e-12);  // right of boresight: +
@@ -638,7 +638,7 @@ TEST(Truth, PointSeenFromAMovingRadarByHand) {
   // Closing at (70 + 10) m/s along north, projected on the line of sight: -80 * 4000 / r.
   EXPECT_NEAR(t.radial_velocity_mps, -80.0 * 4000.0 / r, 1e-9);
   // Receding: the same vehicle driving north at 90 m/s opens the range at 20 * 4000 / r.
-  EXPECT_NEAR(emu::point_truth(pose, {300.0, 4000.0, 0.0}, {0.0, 90.0, 0.0}).radial_velocity_mps,
+  EXPECT_NEAR(loop::point_truth(pose, {300.0, 4000.0, 0.0}, {0.0, 90.0, 0.0}).radial_velocity_mps,
               20.0 * 4000.0 / r, 1e-9);
 }
 
@@ -646,10 +646,10 @@ TEST(ClosedLoopWeather, FogLowersEachDetectionsSnrByTheTwoWayLoss) {
   // Thermal noise off: a detection's SNR is then its cell's power in noise units, deterministic.
   // The same approach in free space and in thick fog: each detection found in both has lost
   // 2 gamma R dB, gamma the ITU-R P.676 + P.840 one-way specific attenuation at 94 GHz.
-  emu::Scenario clear = default_scenario();
+  loop::Scenario clear = default_scenario();
   clear.frames = 20;
   clear.sensor.thermal_noise = false;
-  emu::Scenario fog = clear;
+  loop::Scenario fog = clear;
   fog.weather.enabled = true;
   fog.weather.condition = "fog";
   fog.weather.fog_water_gm3 = 0.5;
@@ -659,17 +659,17 @@ TEST(ClosedLoopWeather, FogLowersEachDetectionsSnrByTheTwoWayLoss) {
   const double gamma_db_per_m =
       1e-3 * (radar_emu::radar::gaseous_specific_attenuation(94e9, air).total_db_per_km() +
               radar_emu::radar::cloud_fog_specific_attenuation_db_per_km(94e9, 0.5, 283.15));
-  emu::ClosedLoop loop_clear(clear, {});
-  const emu::RunResult a = loop_clear.run();
-  emu::RunOptions options;
+  loop::ClosedLoop loop_clear(clear, {});
+  const loop::RunResult a = loop_clear.run();
+  loop::RunOptions options;
   options.progress = [](std::uint64_t done, std::uint64_t total) {
     if (done == 5)
       radar_emu::test::start_counting_allocations();
     if (done == total)
       (void)radar_emu::test::stop_counting_allocations();
   };
-  emu::ClosedLoop loop_fog(fog, options);
-  const emu::RunResult b = loop_fog.run();
+  loop::ClosedLoop loop_fog(fog, options);
+  const loop::RunResult b = loop_fog.run();
   EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u) << "the fog frame path allocated";
   std::vector<double> errors_db;
   for (std::size_t k = 0; k < a.records.size(); ++k) {
@@ -707,13 +707,13 @@ TEST(ClosedLoopWeather, FogLowersEachDetectionsSnrByTheTwoWayLoss) {
 }
 
 TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 40;
   const fs::path a = temp_dir("repeat_a"), b = temp_dir("repeat_b");
   for (const fs::path& dir : {a, b}) {
-    emu::RunOptions options;
+    loop::RunOptions options;
     options.out_dir = dir;
-    emu::ClosedLoop loop(s, options);
+    loop::ClosedLoop loop(s, options);
     loop.write_outputs(loop.run());
   }
   for (const char* f : {"bus_out.log", "bus_in.log", "detections.json"}) {
@@ -729,20 +729,20 @@ TEST(ClosedLoop, AStopRequestEndsTheRunAtAFrameBoundaryWithValidOutputs) {
   // The stop flag (what radar-emu's SIGINT / SIGTERM handler sets) is polled at each frame
   // boundary: raised before the first frame, the run does none and still writes every output;
   // raised after frame 3 (from the progress callback, between frames), it ends after 3.
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 40;
   for (const std::uint64_t stop_after : {std::uint64_t{0}, std::uint64_t{3}}) {
     const fs::path out = temp_dir("stop_" + std::to_string(stop_after));
     std::atomic<int> stop{stop_after == 0 ? SIGTERM : 0};
-    emu::RunOptions options;
+    loop::RunOptions options;
     options.out_dir = out;
     options.stop = &stop;
     options.progress = [&stop, stop_after](std::uint64_t done, std::uint64_t) {
       if (done == stop_after)
         stop.store(SIGINT);
     };
-    emu::ClosedLoop loop(s, options);
-    const emu::RunResult r = loop.run();
+    loop::ClosedLoop loop(s, options);
+    const loop::RunResult r = loop.run();
     EXPECT_EQ(r.frames, stop_after);
     EXPECT_TRUE(r.interrupted);
     EXPECT_EQ(r.stop_signal, stop_after == 0 ? SIGTERM : SIGINT);
@@ -770,14 +770,14 @@ TEST(ClosedLoop, AStopRequestEndsTheRunAtAFrameBoundaryWithValidOutputs) {
 }
 
 TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 40;
   s.malformed_every_n_frames = 3;  // frames 0, 3, ..., 39: 14 malformed frames
   const fs::path out = temp_dir("malformed");
-  emu::RunOptions options;
+  loop::RunOptions options;
   options.out_dir = out;
-  emu::ClosedLoop loop(s, options);
-  const emu::RunResult r = loop.run();
+  loop::ClosedLoop loop(s, options);
+  const loop::RunResult r = loop.run();
   const std::uint64_t injected = r.injected_malformed[0] + r.injected_malformed[1] +
                                  r.injected_malformed[2] + r.injected_malformed[3];
   EXPECT_EQ(injected, 14u);
@@ -801,11 +801,11 @@ TEST(ClosedLoop, MalformedInputFramesAreRejectedAndCounted) {
 TEST(ClosedLoop, StaleStateMarksOutputInvalidAndEmitsNoDetections) {
   // Navigation at 0.2 Hz with a 0.5 s timeout: position is stale most of the time. Frames with a
   // stale state must carry the invalid flag and no detections computed from old data.
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 40;
   s.navigation_rate_hz = 0.2;
-  emu::ClosedLoop loop(s, {});
-  const emu::RunResult r = loop.run();
+  loop::ClosedLoop loop(s, {});
+  const loop::RunResult r = loop.run();
   std::size_t invalid = 0;
   for (const auto& rec : r.records) {
     const bool flagged = (rec.header.status & radar_emu::io::icd::status::kOwnshipInvalid) != 0;
@@ -826,7 +826,7 @@ namespace {
 // Frames that carry at least four detections, as many as the scene has reflector-carrying
 // objects: a coarse check that the radar still sees the scene under faults (the geometric match
 // of every detection is ClosedLoopDefault.DetectionsMatchIndependentGeometry's).
-std::size_t frames_with_at_least_four_detections(const emu::RunResult& r) {
+std::size_t frames_with_at_least_four_detections(const loop::RunResult& r) {
   std::size_t n = 0;
   for (const auto& rec : r.records) {
     if (rec.detection_count >= 4)
@@ -841,15 +841,15 @@ TEST(ClosedLoopFaults, TenPercentDropWithJitterKeepsTheRateAndHoldsTheState) {
   // navigation at 10 Hz and attitude at 80 Hz, so the worst gap between two kept navigation
   // frames stays far below the 0.5 s timeout (P(5 losses in a row) = 1e-5): after start-up the
   // state is held (extrapolated with its velocity) in every frame, never flagged.
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 80;
   s.link_faults.drop_probability = 0.10;
   s.link_faults.delay_s = 0.020;
   s.link_faults.jitter_s = 0.015;
   s.link_faults.seed = 20261123;
   std::printf("  fault seed %llu\n", static_cast<unsigned long long>(s.link_faults.seed));
-  emu::ClosedLoop loop(s, {});
-  const emu::RunResult r = loop.run();
+  loop::ClosedLoop loop(s, {});
+  const loop::RunResult r = loop.run();
   EXPECT_EQ(r.frames, 80u);
   EXPECT_EQ(r.overruns, 0u);
   EXPECT_EQ(r.missed_periods, 0u);
@@ -897,15 +897,15 @@ TEST(ClosedLoopFaults, StaleSenderMakesExactlyTheFramesPastTheTimeoutInvalid) {
                        Case{radar_emu::sim_bus::StaleMode::kSilent, true},
                        Case{radar_emu::sim_bus::StaleMode::kFrozen, false}}) {
     const bool silent = c.silent;
-    emu::Scenario s = default_scenario();
+    loop::Scenario s = default_scenario();
     s.frames = 70;
     s.stale_sender = true;
     s.stale.mode = c.mode;
     s.stale.start_s = 2.0;
     s.stale.end_s = 3.0;
     s.stale_output_silent = silent;
-    emu::ClosedLoop loop(s, {});
-    const emu::RunResult r = loop.run();
+    loop::ClosedLoop loop(s, {});
+    const loop::RunResult r = loop.run();
     std::size_t flagged_n = 0, sent_n = 0;
     for (const auto& rec : r.records) {
       const bool expect_stale = rec.time_s > 2.4 + 1e-9 && rec.time_s < 3.0 - 1e-9;
@@ -938,14 +938,14 @@ TEST(ClosedLoopFaults, CorruptedFramesAreRejectedOrIgnoredAndNeverCrashTheLoop) 
   // frame, a flipped data-type byte an unknown type, a flipped exponent an out-of-range value:
   // all counted. Flips inside a mantissa pass as plausible values (the CRC of a real bus would
   // have caught them: sim_bus/fault_injector.hpp). The loop runs every frame.
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 60;
   s.link_faults.corrupt_probability = 0.05;
   s.link_faults.corrupt_max_bits = 3;
   s.link_faults.seed = 7;
   std::printf("  fault seed %llu\n", static_cast<unsigned long long>(s.link_faults.seed));
-  emu::ClosedLoop loop(s, {});
-  const emu::RunResult r = loop.run();
+  loop::ClosedLoop loop(s, {});
+  const loop::RunResult r = loop.run();
   EXPECT_EQ(r.frames, 60u);
   EXPECT_GT(r.link_faults.corrupted, 0u);
   const auto& c = r.decoder;
@@ -970,13 +970,13 @@ TEST(ClosedLoopFaults, CorruptedFramesAreRejectedOrIgnoredAndNeverCrashTheLoop) 
 TEST(ClosedLoopFaults, BabblingNodeIsIgnoredAndTheRadarKeepsItsState) {
   // A node floods identifier 0x010 (CANaerospace emergency-event range) at 5000 frames/s. The
   // radar ignores the identifier (counted), decodes the INS between the babble and stays valid.
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 40;
   s.babbling_node = true;
   s.babble.id = 0x010;
   s.babble.rate_hz = 5000.0;
-  emu::ClosedLoop loop(s, {});
-  const emu::RunResult r = loop.run();
+  loop::ClosedLoop loop(s, {});
+  const loop::RunResult r = loop.run();
   EXPECT_EQ(r.frames_valid, r.frames);
   EXPECT_GT(r.babble.sent, 9000u);  // 5000/s over the 1.95 s the 40 frames span
   EXPECT_GE(r.decoder.ignored_id, r.babble.sent);

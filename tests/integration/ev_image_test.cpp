@@ -19,10 +19,11 @@
 #include <string>
 #include <vector>
 
-#include "emulator/image_tool.hpp"
-#include "emulator/scenario.hpp"
+#include "loop/scenario.hpp"
+#include "tools/image.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
+namespace tools = radar_emu::tools;
 
 namespace {
 
@@ -145,9 +146,9 @@ class EvImageScenario : public ::testing::Test {
 }  // namespace
 
 TEST_F(EvImageScenario, SpeckleOverGrassHasCoefficientOfVariationOneOverRootLooks) {
-  const emu::Scenario s = emu::parse_scenario(text_, "ev_radar_94ghz.toml");
+  const loop::Scenario s = loop::parse_scenario(text_, "ev_radar_94ghz.toml");
   for (int looks : {1, 10}) {
-    const emu::EvImageProduct p = emu::compute_ev_image(s, kTimeS, looks, 20261124, 0);
+    const tools::EvImageProduct p = tools::compute_ev_image(s, kTimeS, looks, 20261124, 0);
     const auto& im = p.image;
     ASSERT_EQ(im.columns, 200);
     ASSERT_EQ(im.rows, 66);
@@ -175,8 +176,8 @@ TEST_F(EvImageScenario, SpeckleOverGrassHasCoefficientOfVariationOneOverRootLook
 }
 
 TEST_F(EvImageScenario, RunwayEdgesAndThresholdRegisterWithTheOpticalPreview) {
-  const emu::Scenario s = emu::parse_scenario(text_, "ev_radar_94ghz.toml");
-  const emu::EvImageProduct p = emu::compute_ev_image(s, kTimeS, 10, 20261124, kScale);
+  const loop::Scenario s = loop::parse_scenario(text_, "ev_radar_94ghz.toml");
+  const tools::EvImageProduct p = tools::compute_ev_image(s, kTimeS, 10, 20261124, kScale);
   const auto& im = p.image;
   const auto& opt = p.optical;
   ASSERT_EQ(opt.width_px, im.columns * kScale);
@@ -270,15 +271,15 @@ TEST_F(EvImageScenario, FogDimsATargetAt1KmByTheTwoWayP840Loss) {
       "\n[[target]]\nname = \"trihedral\"\nbuiltin = \"trihedral-tri\"\n"
       "size_m = 0.5\nheading_deg = 225.0\nposition_enu_m = [0.0, " +
       std::to_string(y) + ", 0.05]\n";
-  const emu::Scenario clear = emu::parse_scenario(
+  const loop::Scenario clear = loop::parse_scenario(
       text_ + target + "\n[weather]\ncondition = \"clear\"\n", "ev_radar_94ghz.toml + clear");
-  const emu::Scenario fog =
-      emu::parse_scenario(text_ + target +
-                              "\n[weather]\ncondition = \"fog\"\nfog_water_gpm3 = 0.05\n"
-                              "temperature_c = 15.0\n",
-                          "ev_radar_94ghz.toml + fog");
-  const emu::EvImageProduct a = emu::compute_ev_image(clear, kTimeS, 10, 20261124, 0);
-  const emu::EvImageProduct b = emu::compute_ev_image(fog, kTimeS, 10, 20261124, 0);
+  const loop::Scenario fog =
+      loop::parse_scenario(text_ + target +
+                               "\n[weather]\ncondition = \"fog\"\nfog_water_gpm3 = 0.05\n"
+                               "temperature_c = 15.0\n",
+                           "ev_radar_94ghz.toml + fog");
+  const tools::EvImageProduct a = tools::compute_ev_image(clear, kTimeS, 10, 20261124, 0);
+  const tools::EvImageProduct b = tools::compute_ev_image(fog, kTimeS, 10, 20261124, 0);
   // The target's pixel: the brightest within a pixel of its direction (azimuth 0, the
   // boundary of columns 99 and 100; the row whose range gates hold 1 km).
   const auto& ia = a.image.intensity_m2;

@@ -1,46 +1,46 @@
-// The fidelity governor (emulator/governor.hpp): it chooses the finest level predicted to fit
+// The fidelity governor (loop/governor.hpp): it chooses the finest level predicted to fit
 // the deadline, its levels cost less as they go up, the strongest target keeps the finest rays,
 // measured slowness makes it coarsen, and a degraded frame is flagged in the ICD header.
 
-#include "emulator/governor.hpp"
+#include "loop/governor.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "emulator/closed_loop.hpp"
-#include "emulator/ownship.hpp"
-#include "emulator/scenario.hpp"
 #include "io/detection_icd.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/ownship.hpp"
+#include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "scene/scene.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 namespace radar = radar_emu::radar;
 namespace sc = radar_emu::scene;
 
 namespace {
 
-emu::Scenario default_scenario() {
-  return emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+loop::Scenario default_scenario() {
+  return loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
 }
 
-radar::RadarPose start_pose(const emu::Scenario& s) {
+radar::RadarPose start_pose(const loop::Scenario& s) {
   radar::RadarPose pose;
   pose.position_m = s.ownship_start_enu_m;
   pose.velocity_mps = s.ownship_velocity_enu_mps;
   pose.world_from_antenna =
-      emu::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      emu::body_from_antenna(s.antenna_depression_rad);
+      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      loop::body_from_antenna(s.antenna_depression_rad);
   return pose;
 }
 
 // The default scenario's scene, tracer and sensor at the start pose.
 struct DefaultFrame {
-  emu::Scenario s = default_scenario();
-  sc::Scene scene{emu::scene_description(s)};
+  loop::Scenario s = default_scenario();
+  sc::Scene scene{loop::scene_description(s)};
   radar::SbrTracer tracer{scene, s.sbr};
   radar::Sensor sensor{s.sensor};
   radar::RadarPose pose = start_pose(s);
@@ -68,12 +68,12 @@ sc::ObjectDesc plate(const char* name, double a, double x, double y, double z) {
 
 TEST(Governor, AnAmpleBudgetKeepsTheScenariosFidelity) {
   DefaultFrame& f = default_frame();
-  emu::GovernorConfig g = f.s.governor;
-  g.mode = emu::GovernorConfig::Mode::kModel;
+  loop::GovernorConfig g = f.s.governor;
+  g.mode = loop::GovernorConfig::Mode::kModel;
   g.compute_fraction = 1.0;
   // 0.1 Hz: a 10 s deadline.
-  emu::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 10.0);
-  const emu::GovernorDecision& d = gov.decide(f.pose);
+  loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 10.0);
+  const loop::GovernorDecision& d = gov.decide(f.pose);
   EXPECT_EQ(d.level, 0);
   EXPECT_FALSE(d.degraded);
   EXPECT_EQ(d.rays, d.full_rays);
@@ -84,22 +84,22 @@ TEST(Governor, AnAmpleBudgetKeepsTheScenariosFidelity) {
 
 TEST(Governor, LevelsCostLessAsTheyGoUpAndTheChoiceIsTheFinestThatFits) {
   DefaultFrame& f = default_frame();
-  emu::GovernorConfig g = f.s.governor;
-  g.mode = emu::GovernorConfig::Mode::kModel;
-  g.max_level = emu::FidelityGovernor::kMaxLevel;
+  loop::GovernorConfig g = f.s.governor;
+  g.mode = loop::GovernorConfig::Mode::kModel;
+  g.max_level = loop::FidelityGovernor::kMaxLevel;
   const double period_s = 1.0;  // deadlines up to 1 s
-  emu::FidelityGovernor probe(g, f.scene, f.tracer, f.sensor, period_s);
+  loop::FidelityGovernor probe(g, f.scene, f.tracer, f.sensor, period_s);
   std::vector<double> predicted;
   std::size_t previous_rays = 0;
   for (int level = 0; level <= 10; ++level) {
-    const emu::GovernorDecision& d = probe.decide_at(f.pose, level);
+    const loop::GovernorDecision& d = probe.decide_at(f.pose, level);
     ASSERT_EQ(d.level, level);
     if (level > 0) {
       EXPECT_LT(d.rays, previous_rays) << "level " << level;
       EXPECT_LT(d.predicted_ms, predicted.back()) << "level " << level;
     }
     EXPECT_EQ(d.knobs.terrain_spacing_scale, std::pow(2.0, 0.25 * level));
-    EXPECT_EQ(d.knobs.max_bounces == 0, level < emu::FidelityGovernor::kBounceLevel);
+    EXPECT_EQ(d.knobs.max_bounces == 0, level < loop::FidelityGovernor::kBounceLevel);
     previous_rays = d.rays;
     predicted.push_back(d.predicted_ms);
     std::printf("level %2d: %7zu rays, predicted %.1f ms\n", level, d.rays, d.predicted_ms);
@@ -109,8 +109,8 @@ TEST(Governor, LevelsCostLessAsTheyGoUpAndTheChoiceIsTheFinestThatFits) {
     const auto k = static_cast<std::size_t>(level);
     const double deadline_ms = 0.5 * (predicted[k] + predicted[k - 1]);
     g.compute_fraction = deadline_ms * 1e-3 / period_s;
-    emu::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, period_s);
-    const emu::GovernorDecision& d = gov.decide(f.pose);
+    loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, period_s);
+    const loop::GovernorDecision& d = gov.decide(f.pose);
     EXPECT_EQ(d.level, level) << "deadline " << deadline_ms << " ms";
     EXPECT_LE(d.predicted_ms, d.deadline_ms);
     EXPECT_TRUE(d.degraded);
@@ -120,15 +120,15 @@ TEST(Governor, LevelsCostLessAsTheyGoUpAndTheChoiceIsTheFinestThatFits) {
   // level's cost, flagged as predicted late. With a deadline of 1 ns that is the coarsest.
   g.compute_fraction = 1e-6 / period_s;
   g.max_level = 6;
-  emu::FidelityGovernor late(g, f.scene, f.tracer, f.sensor, period_s);
+  loop::FidelityGovernor late(g, f.scene, f.tracer, f.sensor, period_s);
   EXPECT_EQ(late.decide(f.pose).level, 6);
   EXPECT_TRUE(late.decide(f.pose).over_deadline);
   // A deadline below the cost of every level: where the levels stop buying 5 % of the deadline.
   g.max_level = 10;
   const double deadline_ms = 0.5 * predicted[10];
   g.compute_fraction = deadline_ms * 1e-3 / period_s;
-  emu::FidelityGovernor floor(g, f.scene, f.tracer, f.sensor, period_s);
-  const emu::GovernorDecision& fd = floor.decide(f.pose);
+  loop::FidelityGovernor floor(g, f.scene, f.tracer, f.sensor, period_s);
+  const loop::GovernorDecision& fd = floor.decide(f.pose);
   EXPECT_TRUE(fd.over_deadline);
   std::size_t want = 10;
   while (want > 0 && predicted[want - 1] <= predicted[10] + 0.05 * deadline_ms)
@@ -137,7 +137,7 @@ TEST(Governor, LevelsCostLessAsTheyGoUpAndTheChoiceIsTheFinestThatFits) {
   EXPECT_LT(want, 10u) << "the levels' costs flatten out (the sensor's cells)";
   // Disabled: level 0 whatever the deadline.
   g.enabled = false;
-  emu::FidelityGovernor off(g, f.scene, f.tracer, f.sensor, period_s);
+  loop::FidelityGovernor off(g, f.scene, f.tracer, f.sensor, period_s);
   EXPECT_EQ(off.decide(f.pose).level, 0);
 }
 
@@ -149,7 +149,7 @@ TEST(Governor, TheStrongestTargetKeepsTheFinestRays) {
   d.objects = {plate("near", 2.0, 0.0, 500.0, 0.0), plate("far", 2.0, 0.0, 4000.0, 0.0)};
   sc::Scene scene(d);
   scene.set_time(0.0);
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.sbr.azimuth_min_rad = -0.1;
   s.sbr.azimuth_max_rad = 0.1;
   s.sbr.elevation_min_rad = -0.1;
@@ -161,12 +161,12 @@ TEST(Governor, TheStrongestTargetKeepsTheFinestRays) {
   // Antenna x (boresight) north, y east, z down.
   pose.world_from_antenna =
       glm::dmat3(glm::dvec3(0, 1, 0), glm::dvec3(1, 0, 0), glm::dvec3(0, 0, -1));
-  emu::GovernorConfig g = s.governor;
-  g.mode = emu::GovernorConfig::Mode::kModel;
-  emu::FidelityGovernor gov(g, scene, tracer, sensor, 1.0 / s.rate_hz);
+  loop::GovernorConfig g = s.governor;
+  g.mode = loop::GovernorConfig::Mode::kModel;
+  loop::FidelityGovernor gov(g, scene, tracer, sensor, 1.0 / s.rate_hz);
   const double base = s.sbr.target_ray_spacing_m;
   for (int level : {0, 1, 2, 4}) {
-    const emu::GovernorDecision& dec = gov.decide_at(pose, level);
+    const loop::GovernorDecision& dec = gov.decide_at(pose, level);
     ASSERT_EQ(dec.knobs.target_ray_spacing_m.size(), 2u);
     const double near = dec.knobs.target_ray_spacing_m[0], far = dec.knobs.target_ray_spacing_m[1];
     // Near: the frame's level. Far: level + min(rank 3, level).
@@ -178,19 +178,19 @@ TEST(Governor, TheStrongestTargetKeepsTheFinestRays) {
 
 TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
   DefaultFrame& f = default_frame();
-  emu::GovernorConfig g = f.s.governor;
-  g.mode = emu::GovernorConfig::Mode::kMeasured;
-  g.max_level = emu::FidelityGovernor::kMaxLevel;
-  emu::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
+  loop::GovernorConfig g = f.s.governor;
+  g.mode = loop::GovernorConfig::Mode::kMeasured;
+  g.max_level = loop::FidelityGovernor::kMaxLevel;
+  loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
   // A first frame exactly as fast as the model: the factors stay at 1.
-  const emu::GovernorDecision first = gov.decide(f.pose);
+  const loop::GovernorDecision first = gov.decide(f.pose);
   auto model_trace_ms = [&](std::size_t rays) {
     return g.trace_ns_per_ray * static_cast<double>(rays) * 1e-6;
   };
   constexpr std::uint64_t kCells = 300'000;
   const double sensor_ms = g.sensor_ns_per_cell * static_cast<double>(kCells) * 1e-6;
   gov.observe(model_trace_ms(first.rays), sensor_ms, first.rays, 0, kCells);
-  const emu::GovernorDecision steady = gov.decide(f.pose);
+  const loop::GovernorDecision steady = gov.decide(f.pose);
   EXPECT_EQ(gov.trace_factor(), 1.0);
   gov.observe(model_trace_ms(steady.rays), sensor_ms, steady.rays, 0, kCells);
   EXPECT_NEAR(gov.sensor_factor(), 1.0, 1e-9);
@@ -198,15 +198,15 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
   // next frame is coarser.
   gov.observe(3.0 * model_trace_ms(steady.rays), sensor_ms, steady.rays, 0, kCells);
   EXPECT_NEAR(gov.trace_factor(), 3.0, 1e-9);
-  const emu::GovernorDecision slow = gov.decide(f.pose);
+  const loop::GovernorDecision slow = gov.decide(f.pose);
   EXPECT_GT(slow.level, steady.level);
   EXPECT_LE(slow.predicted_ms, slow.deadline_ms);
   // A frame as fast as the model: the factor comes down by a tenth of the gap a frame.
   gov.observe(model_trace_ms(slow.rays), sensor_ms, slow.rays, 0, kCells);
   EXPECT_NEAR(gov.trace_factor(), 3.0 - 0.1 * (3.0 - 1.0), 1e-9);
   // Model mode never learns.
-  g.mode = emu::GovernorConfig::Mode::kModel;
-  emu::FidelityGovernor fixed(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
+  g.mode = loop::GovernorConfig::Mode::kModel;
+  loop::FidelityGovernor fixed(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
   (void)fixed.decide(f.pose);
   fixed.observe(100.0, 100.0, 1000, 500, 1000);
   EXPECT_EQ(fixed.trace_factor(), 1.0);
@@ -214,28 +214,28 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
 
 TEST(Governor, InvalidSettingsFailAtSetupNamingTheField) {
   DefaultFrame& f = default_frame();
-  emu::GovernorConfig g;
+  loop::GovernorConfig g;
   g.compute_fraction = 0.0;
   try {
-    emu::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 0.05);
+    loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 0.05);
     FAIL() << "no error";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("compute_fraction"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(emu::parse_scenario("[governor]\nmode = \"fast\"\n", "t.toml"), std::runtime_error);
-  EXPECT_THROW(emu::parse_scenario("[governor]\nmax_level = 40\n", "t.toml"), std::runtime_error);
-  EXPECT_THROW(emu::parse_scenario("[governor]\nrays = 4\n", "t.toml"), std::runtime_error);
+  EXPECT_THROW(loop::parse_scenario("[governor]\nmode = \"fast\"\n", "t.toml"), std::runtime_error);
+  EXPECT_THROW(loop::parse_scenario("[governor]\nmax_level = 40\n", "t.toml"), std::runtime_error);
+  EXPECT_THROW(loop::parse_scenario("[governor]\nrays = 4\n", "t.toml"), std::runtime_error);
 }
 
 TEST(Governor, DegradedFramesAreFlaggedInTheIcdHeaderAndReported) {
-  emu::Scenario s = default_scenario();
+  loop::Scenario s = default_scenario();
   s.frames = 6;
   s.governor.compute_fraction = 0.05;  // 2.5 ms: the default needs coarser levels
-  emu::ClosedLoop loop(s, {});
-  const emu::RunResult r = loop.run();
+  loop::ClosedLoop loop(s, {});
+  const loop::RunResult r = loop.run();
   ASSERT_EQ(r.records.size(), 6u);
   std::uint64_t degraded = 0;
-  for (const emu::FrameRecord& rec : r.records) {
+  for (const loop::FrameRecord& rec : r.records) {
     EXPECT_TRUE(rec.ownship_valid);
     EXPECT_GT(rec.governor_level, 0);
     EXPECT_NE(rec.header.status & radar_emu::io::icd::status::kDegraded, 0) << rec.frame_index;
@@ -245,9 +245,9 @@ TEST(Governor, DegradedFramesAreFlaggedInTheIcdHeaderAndReported) {
   // The same scenario with a deadline it meets at level 0: no flag.
   s.rate_hz = 0.05;
   s.governor.compute_fraction = 1.0;
-  emu::ClosedLoop easy(s, {});
-  const emu::RunResult e = easy.run();
-  for (const emu::FrameRecord& rec : e.records) {
+  loop::ClosedLoop easy(s, {});
+  const loop::RunResult e = easy.run();
+  for (const loop::FrameRecord& rec : e.records) {
     EXPECT_EQ(rec.governor_level, 0);
     EXPECT_EQ(rec.header.status & radar_emu::io::icd::status::kDegraded, 0);
   }

@@ -1,8 +1,8 @@
-// emulator/live_view.hpp: the frame thread's publish() does not allocate, superseded updates are
-// counted, the JSON message carries the frame as given (closed forms for the derived ownship
+// loop/outputs/live_view.hpp: the frame thread's publish() does not allocate, superseded updates
+// are counted, the JSON message carries the frame as given (closed forms for the derived ownship
 // values), and --serve addresses are parsed or refused in one line.
 
-#include "emulator/live_view.hpp"
+#include "loop/outputs/live_view.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,20 +13,20 @@
 #include <string>
 #include <vector>
 
-#include "emulator/closed_loop.hpp"
-#include "emulator/scenario.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/scenario.hpp"
 #include "tests/alloc_counter.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 
 namespace {
 
-emu::Scenario scenario() {
-  return emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+loop::Scenario scenario() {
+  return loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
 }
 
-emu::LiveViewConfig config(const emu::Scenario& s) {
-  emu::LiveViewConfig c;
+loop::LiveViewConfig config(const loop::Scenario& s) {
+  loop::LiveViewConfig c;
   c.serve = "127.0.0.1:0";
   c.scenario = &s;
   c.object_names = {"hangar", "tug \"7\""};
@@ -39,12 +39,12 @@ emu::LiveViewConfig config(const emu::Scenario& s) {
 }
 
 TEST(LiveView, PublishDoesNotAllocateAndCountsSupersededUpdates) {
-  const emu::Scenario s = scenario();
-  emu::LiveView view(config(s));
-  emu::FrameRecord rec;
+  const loop::Scenario s = scenario();
+  loop::LiveView view(config(s));
+  loop::FrameRecord rec;
   rec.ownship_valid = true;
   std::vector<radar_emu::io::icd::Detection> det(20);  // more than max_detections: clipped
-  std::vector<emu::ObjectTruth> truth(3);
+  std::vector<loop::ObjectTruth> truth(3);
   std::array<std::int64_t, radar_emu::timing::kStageCount> stage_ns{};
   radar_emu::test::start_counting_allocations();
   for (std::uint64_t i = 0; i < 10; ++i) {
@@ -52,16 +52,16 @@ TEST(LiveView, PublishDoesNotAllocateAndCountsSupersededUpdates) {
     view.publish(rec, glm::dvec3(1.0, 2.0, 3.0), stage_ns, det, truth);
   }
   EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u);
-  const emu::LiveViewCounters c = view.counters();
+  const loop::LiveViewCounters c = view.counters();
   EXPECT_EQ(c.updates_published, 10u);
   EXPECT_EQ(c.updates_dropped, 9u);  // each publish after the first replaced an untaken one
   EXPECT_EQ(c.updates_taken, 0u);
 }
 
 TEST(LiveView, MessageCarriesTheFrame) {
-  const emu::Scenario s = scenario();
-  emu::LiveView view(config(s));
-  emu::LiveView::Snapshot snap;
+  const loop::Scenario s = scenario();
+  loop::LiveView view(config(s));
+  loop::LiveView::Snapshot snap;
   snap.frame_index = 42;
   snap.time_s = 2.1;
   snap.ownship_valid = true;
@@ -108,13 +108,13 @@ TEST(LiveView, MessageCarriesTheFrame) {
 }
 
 TEST(LiveView, ServeAddresses) {
-  EXPECT_EQ(emu::parse_serve_address("127.0.0.1:8080").port, 8080);
-  EXPECT_EQ(emu::parse_serve_address(":0").host, "127.0.0.1");
-  EXPECT_EQ(emu::parse_serve_address("9000").host, "127.0.0.1");
-  EXPECT_EQ(emu::parse_serve_address("[::1]:9000").host, "::1");
+  EXPECT_EQ(loop::parse_serve_address("127.0.0.1:8080").port, 8080);
+  EXPECT_EQ(loop::parse_serve_address(":0").host, "127.0.0.1");
+  EXPECT_EQ(loop::parse_serve_address("9000").host, "127.0.0.1");
+  EXPECT_EQ(loop::parse_serve_address("[::1]:9000").host, "::1");
   for (const char* bad : {"", "host:", "host:65536", "host:-1", "host:80x"}) {
     try {
-      (void)emu::parse_serve_address(bad);
+      (void)loop::parse_serve_address(bad);
       ADD_FAILURE() << bad;
     } catch (const std::invalid_argument& e) {
       EXPECT_EQ(std::string(e.what()),
@@ -125,12 +125,12 @@ TEST(LiveView, ServeAddresses) {
 }
 
 TEST(LiveView, PortInUseNamesTheOption) {
-  const emu::Scenario s = scenario();
-  emu::LiveView first(config(s));
-  emu::LiveViewConfig c = config(s);
+  const loop::Scenario s = scenario();
+  loop::LiveView first(config(s));
+  loop::LiveViewConfig c = config(s);
   c.serve = first.address();
   try {
-    emu::LiveView second(c);
+    loop::LiveView second(c);
     FAIL() << "bound a port in use";
   } catch (const std::runtime_error& e) {
     EXPECT_EQ(std::string(e.what()),

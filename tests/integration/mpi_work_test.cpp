@@ -1,6 +1,6 @@
-// The split of emulator/mpi_work.hpp (the mpirun runs themselves: check_mpi_split.py). Here,
+// The split of tools/mpi_work.hpp (the mpirun runs themselves: check_mpi_split.py). Here,
 // outside mpirun, the layer must be the single-process case whatever the build.
-#include "emulator/mpi_work.hpp"
+#include "tools/mpi_work.hpp"
 
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace mw = radar_emu::emulator::mpi_work;
+namespace mw = radar_emu::tools::mpi_work;
 
 namespace {
 

@@ -1,9 +1,9 @@
-// The streamed outputs (emulator/output_stream.hpp) under a full disk, a writer that cannot keep
-// up, and back-pressure on the simulated clock: what is lost is counted, the frame thread never
-// blocks in real time, and the files that are written stay valid (read back with the project's
-// candump reader and nlohmann::json, independent of the writer's formatting code).
+// The streamed outputs (loop/outputs/output_stream.hpp) under a full disk, a writer that cannot
+// keep up, and back-pressure on the simulated clock: what is lost is counted, the frame thread
+// never blocks in real time, and the files that are written stay valid (read back with the
+// project's candump reader and nlohmann::json, independent of the writer's formatting code).
 
-#include "emulator/output_stream.hpp"
+#include "loop/outputs/output_stream.hpp"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -20,10 +20,10 @@
 #include <thread>
 #include <vector>
 
-#include "emulator/scenario.hpp"
 #include "io/candump.hpp"
+#include "loop/scenario.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 namespace fs = std::filesystem;
 namespace icd = radar_emu::io::icd;
 
@@ -39,12 +39,12 @@ fs::path temp_dir(const std::string& name) {
   return p;
 }
 
-emu::Scenario scenario() {
-  return emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+loop::Scenario scenario() {
+  return loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
 }
 
-emu::OutputStreamConfig config(const fs::path& dir, const emu::Scenario& s) {
-  emu::OutputStreamConfig c;
+loop::OutputStreamConfig config(const fs::path& dir, const loop::Scenario& s) {
+  loop::OutputStreamConfig c;
   c.dir = dir;
   c.scenario = &s;
   c.frames_planned = 100;
@@ -60,9 +60,9 @@ emu::OutputStreamConfig config(const fs::path& dir, const emu::Scenario& s) {
 struct Feeder {
   std::vector<icd::Detection> dets = std::vector<icd::Detection>(8);
   std::vector<radar_emu::radar::Detection> sensor = std::vector<radar_emu::radar::Detection>(8);
-  std::array<emu::ObjectTruth, 1> truth{};
+  std::array<loop::ObjectTruth, 1> truth{};
 
-  void frame(emu::OutputStream& out, std::uint64_t k) {
+  void frame(loop::OutputStream& out, std::uint64_t k) {
     radar_emu::io::CanFrame f;
     f.fd = true;
     f.len = 64;
@@ -85,7 +85,7 @@ struct Feeder {
     }
     truth[0].object_id = 2;
     truth[0].range_m = 1500.0;
-    emu::FrameRecord rec;
+    loop::FrameRecord rec;
     rec.frame_index = k;
     rec.time_s = static_cast<double>(k) * 0.05;
     rec.header.frame_counter = static_cast<std::uint16_t>(k);
@@ -113,13 +113,13 @@ std::size_t lines_of(const fs::path& p) {
 }  // namespace
 
 TEST(OutputStream, EveryFrameIsWrittenAndReadsBack) {
-  const emu::Scenario s = scenario();
+  const loop::Scenario s = scenario();
   const fs::path dir = temp_dir("all");
-  emu::OutputStream out(config(dir, s));
+  loop::OutputStream out(config(dir, s));
   Feeder feed;
   for (std::uint64_t k = 0; k < 100; ++k)
     feed.frame(out, k);
-  const emu::OutputCounters c = out.finish();
+  const loop::OutputCounters c = out.finish();
   EXPECT_TRUE(c.complete());
   EXPECT_EQ(c.frames_written, 100u);
   EXPECT_EQ(c.bus_frames_written, 100u * 41u);
@@ -152,17 +152,17 @@ TEST(OutputStream, EveryFrameIsWrittenAndReadsBack) {
 
 TEST(OutputStream, AFullDiskIsCountedPerFileAndTheOtherFilesStayValid) {
   // bus_out.log is /dev/full: every write fails with ENOSPC.
-  const emu::Scenario s = scenario();
+  const loop::Scenario s = scenario();
   const fs::path dir = temp_dir("full");
   fs::create_symlink("/dev/full", dir / "bus_out.log");
-  emu::OutputStream out(config(dir, s));
+  loop::OutputStream out(config(dir, s));
   Feeder feed;
   for (std::uint64_t k = 0; k < 50; ++k)
     feed.frame(out, k);
-  const emu::OutputCounters c = out.finish();
+  const loop::OutputCounters c = out.finish();
   EXPECT_FALSE(c.complete());
   EXPECT_EQ(c.frames_written, 50u);
-  for (const emu::OutputFileCounters& f : c.files) {
+  for (const loop::OutputFileCounters& f : c.files) {
     if (f.name == "bus_out.log") {
       EXPECT_GT(f.write_errors, 0u);
       EXPECT_GT(f.bytes_lost, 0u);
@@ -182,19 +182,19 @@ TEST(OutputStream, AStalledWriterMakesARealTimeProducerDropNotWait) {
   // write(). The producer (real-time policy) must carry on: every call returns, what the rings
   // cannot hold is dropped and counted. A producer that waited would never return, since the
   // pipe is drained only after the last frame.
-  const emu::Scenario s = scenario();
+  const loop::Scenario s = scenario();
   const fs::path dir = temp_dir("stall");
   const fs::path fifo = dir / "bus_in.log";
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
   const int reader = open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
   ASSERT_GE(reader, 0);
-  emu::OutputStreamConfig c = config(dir, s);
+  loop::OutputStreamConfig c = config(dir, s);
   c.wait_when_full = false;
   c.slack_frames = 4;
   std::uint64_t frames_dropped = 0, bus_dropped = 0;
-  emu::OutputCounters counters;
+  loop::OutputCounters counters;
   {
-    emu::OutputStream out(std::move(c));
+    loop::OutputStream out(std::move(c));
     Feeder feed;
     constexpr std::uint64_t kFrames = 400;  // 400 x 40 lines of about 170 bytes: 2.7 MB
     for (std::uint64_t k = 0; k < kFrames; ++k) {
@@ -233,17 +233,17 @@ TEST(OutputStream, AStalledWriterMakesARealTimeProducerDropNotWait) {
 TEST(OutputStream, OnTheSimulatedClockTheProducerWaitsAndNothingIsLost) {
   // Rings of two frames and a producer far faster than the writer (which sleeps 2 ms when idle):
   // the producer waits, counted, and every frame reaches the files.
-  const emu::Scenario s = scenario();
+  const loop::Scenario s = scenario();
   const fs::path dir = temp_dir("wait");
-  emu::OutputStreamConfig c = config(dir, s);
+  loop::OutputStreamConfig c = config(dir, s);
   c.slack_frames = 2;
-  emu::OutputStream out(std::move(c));
+  loop::OutputStream out(std::move(c));
   Feeder feed;
   for (std::uint64_t k = 0; k < 300; ++k) {
     out.wait_for_room();
     feed.frame(out, k);
   }
-  const emu::OutputCounters counters = out.finish();
+  const loop::OutputCounters counters = out.finish();
   EXPECT_TRUE(counters.complete());
   EXPECT_GT(counters.waits, 0u);
   EXPECT_EQ(counters.frames_written, 300u);
@@ -256,11 +256,11 @@ TEST(OutputStream, OnTheSimulatedClockTheProducerWaitsAndNothingIsLost) {
 }
 
 TEST(OutputStream, AnOutputDirectoryThatCannotBeMadeFailsAtSetupWithItsPath) {
-  const emu::Scenario s = scenario();
+  const loop::Scenario s = scenario();
   const fs::path dir = temp_dir("bad");
   std::ofstream(dir / "file") << "x";
   try {
-    emu::OutputStream out(config(dir / "file" / "out", s));
+    loop::OutputStream out(config(dir / "file" / "out", s));
     FAIL() << "no error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("file/out"), std::string::npos) << e.what();

@@ -1,7 +1,7 @@
 // Scenario parsing: the embedded default is complete and consistent, a user file overrides only
 // what it names, and every kind of bad input fails with a message that says where and why.
 
-#include "emulator/scenario.hpp"
+#include "loop/scenario.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -17,14 +17,14 @@
 #include <utility>
 #include <vector>
 
-#include "emulator/closed_loop.hpp"
+#include "loop/closed_loop.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 
 namespace {
 std::string error_of(const std::string& text) {
   try {
-    (void)emu::parse_scenario(text, "test.toml");
+    (void)loop::parse_scenario(text, "test.toml");
   } catch (const std::runtime_error& e) {
     return e.what();
   }
@@ -34,7 +34,8 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 }  // namespace
 
 TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
-  const emu::Scenario s = emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>");
+  const loop::Scenario s =
+      loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
   EXPECT_EQ(s.frames, 200u);
   EXPECT_DOUBLE_EQ(s.rate_hz, 20.0);
   EXPECT_DOUBLE_EQ(s.sensor.processing.waveform.carrier_hz, 94e9);
@@ -67,7 +68,7 @@ TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
 }
 
 TEST(Scenario, BusInputOutputAndFaultKeys) {
-  const emu::Scenario s = emu::parse_scenario(
+  const loop::Scenario s = loop::parse_scenario(
       "[run]\nstale_output = \"silent\"\n[input]\nnode_id = 7\nlatitude_id = 1049\n"
       "[output]\ncan_fd = true\n[faults]\ndrop_probability = 0.1\ndelay_s = 0.02\n"
       "jitter_s = 0.01\nstale_mode = \"frozen\"\nstale_start_s = 2\nstale_end_s = 3\n"
@@ -102,21 +103,21 @@ TEST(Scenario, BusInputOutputAndFaultKeys) {
 TEST(Scenario, AntennaPolarisationKey) {
   // Default VV (the tracer's behaviour before the key existed); receive first as in the RCS
   // tool: "HV" = receive H, transmit V.
-  EXPECT_EQ(emu::parse_scenario(emu::default_scenario_toml(), "<default>").sbr.polarisation,
+  EXPECT_EQ(loop::parse_scenario(loop::default_scenario_toml(), "<default>").sbr.polarisation,
             radar_emu::radar::Polarisation::kVV);
-  EXPECT_EQ(emu::parse_scenario("[antenna]\npolarisation = \"HH\"\n", "p.toml").sbr.polarisation,
+  EXPECT_EQ(loop::parse_scenario("[antenna]\npolarisation = \"HH\"\n", "p.toml").sbr.polarisation,
             radar_emu::radar::Polarisation::kHH);
-  EXPECT_EQ(emu::parse_scenario("[antenna]\npolarisation = \"HV\"\n", "p.toml").sbr.polarisation,
+  EXPECT_EQ(loop::parse_scenario("[antenna]\npolarisation = \"HV\"\n", "p.toml").sbr.polarisation,
             radar_emu::radar::Polarisation::kHV);
-  EXPECT_EQ(emu::parse_scenario("[antenna]\npolarisation = \"VH\"\n", "p.toml").sbr.polarisation,
+  EXPECT_EQ(loop::parse_scenario("[antenna]\npolarisation = \"VH\"\n", "p.toml").sbr.polarisation,
             radar_emu::radar::Polarisation::kVH);
   EXPECT_NE(error_of("[antenna]\npolarisation = \"RHC\"\n").find("[antenna] polarisation"),
             std::string::npos);
 }
 
 TEST(Scenario, UserFileOverridesOnlyWhatItNames) {
-  const emu::Scenario s =
-      emu::parse_scenario("[run]\nframes = 7\n[radar]\ncarrier_hz = 35.0e9\n", "user.toml");
+  const loop::Scenario s =
+      loop::parse_scenario("[run]\nframes = 7\n[radar]\ncarrier_hz = 35.0e9\n", "user.toml");
   EXPECT_EQ(s.frames, 7u);
   EXPECT_DOUBLE_EQ(s.sensor.processing.waveform.carrier_hz, 35e9);
   EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, 35e9);
@@ -163,7 +164,7 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
 
 TEST(Scenario, MissingFileNamesThePath) {
   try {
-    (void)emu::load_scenario("/nonexistent/dir/s.toml");
+    (void)loop::load_scenario("/nonexistent/dir/s.toml");
     FAIL() << "no error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/s.toml"), std::string::npos);
@@ -179,7 +180,7 @@ TEST(Scenario, TabulatedAntennaPatternFromCsvBesideTheScenario) {
     std::ofstream toml(dir / "s.toml");
     toml << "[antenna]\npattern = \"table\"\npattern_file = \"az.csv\"\nmonopulse = false\n";
   }
-  const emu::Scenario s = emu::load_scenario(dir / "s.toml");
+  const loop::Scenario s = loop::load_scenario(dir / "s.toml");
   ASSERT_EQ(s.sensor.antenna.azimuth.table_angle_rad.size(), 5u);
   EXPECT_NEAR(s.sensor.antenna.azimuth.table_angle_rad[1], -kDeg, 1e-15);
   EXPECT_DOUBLE_EQ(s.sensor.antenna.azimuth.table_gain_db[1], -3.0);
@@ -188,7 +189,7 @@ TEST(Scenario, TabulatedAntennaPatternFromCsvBesideTheScenario) {
     csv << "angle_deg,gain_db\n-5,-30\n-1;-3\n";
   }
   try {
-    (void)emu::load_scenario(dir / "s.toml");
+    (void)loop::load_scenario(dir / "s.toml");
     FAIL() << "accepted a malformed row";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("az.csv:3"), std::string::npos) << e.what();
@@ -201,8 +202,8 @@ TEST(Scenario, TheSeedsEnhancedVisionRadarExampleLoads) {
   const char* root = std::getenv("RADAR_EMU_SOURCE_DIR");
   if (root == nullptr)
     GTEST_SKIP() << "RADAR_EMU_SOURCE_DIR is not set (ctest sets it)";
-  const emu::Scenario s =
-      emu::load_scenario(std::filesystem::path(root) / "examples" / "ev_radar_94ghz.toml");
+  const loop::Scenario s =
+      loop::load_scenario(std::filesystem::path(root) / "examples" / "ev_radar_94ghz.toml");
   ASSERT_EQ(s.sensor.antenna.beam_azimuth_rad.size(), 200u);
   EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), (-15.0 + 0.075) * kDeg, 1e-12);
   EXPECT_NEAR(s.sensor.antenna.azimuth.beamwidth_rad, 0.15 * kDeg, 1e-15);
@@ -216,9 +217,9 @@ TEST(Scenario, TheSeedsEnhancedVisionRadarExampleLoads) {
 TEST(Scenario, WeatherTableDefaultsAndRangeChecks) {
   // No [weather] table: free space. A table: gases always, precipitation by condition, with the
   // documented typical amounts when not given.
-  const emu::Scenario none = emu::parse_scenario(emu::default_scenario_toml(), "<default>");
+  const loop::Scenario none = loop::parse_scenario(loop::default_scenario_toml(), "<default>");
   EXPECT_FALSE(none.weather.enabled);
-  const emu::Scenario clear = emu::parse_scenario("[weather]\n", "test.toml");
+  const loop::Scenario clear = loop::parse_scenario("[weather]\n", "test.toml");
   EXPECT_TRUE(clear.weather.enabled);
   EXPECT_EQ(clear.weather.condition, "clear");
   EXPECT_EQ(clear.weather.rain_mm_per_h, 0.0);
@@ -226,9 +227,9 @@ TEST(Scenario, WeatherTableDefaultsAndRangeChecks) {
   EXPECT_DOUBLE_EQ(clear.weather.humidity_gm3, 7.5);
   EXPECT_DOUBLE_EQ(clear.weather.temperature_k, 288.15);
   EXPECT_DOUBLE_EQ(clear.weather.pressure_hpa, 1013.25);
-  const emu::Scenario fog = emu::parse_scenario("[weather]\ncondition = \"fog\"\n", "test.toml");
+  const loop::Scenario fog = loop::parse_scenario("[weather]\ncondition = \"fog\"\n", "test.toml");
   EXPECT_DOUBLE_EQ(fog.weather.fog_water_gm3, 0.05);
-  const emu::Scenario both = emu::parse_scenario(
+  const loop::Scenario both = loop::parse_scenario(
       "[weather]\ncondition = \"rain_fog\"\nrain_rate_mmph = 12.5\ntemperature_c = -5\n",
       "test.toml");
   EXPECT_DOUBLE_EQ(both.weather.rain_mm_per_h, 12.5);
@@ -259,8 +260,8 @@ TEST(Scenario, TheFogApproachExampleLoads) {
   const char* root = std::getenv("RADAR_EMU_SOURCE_DIR");
   if (root == nullptr)
     GTEST_SKIP() << "RADAR_EMU_SOURCE_DIR is not set (ctest sets it)";
-  const emu::Scenario s =
-      emu::load_scenario(std::filesystem::path(root) / "examples" / "fog_approach.toml");
+  const loop::Scenario s =
+      loop::load_scenario(std::filesystem::path(root) / "examples" / "fog_approach.toml");
   EXPECT_TRUE(s.weather.enabled);
   EXPECT_EQ(s.weather.condition, "fog");
   EXPECT_DOUBLE_EQ(s.weather.fog_water_gm3, 0.5);
@@ -270,26 +271,26 @@ TEST(Scenario, TheFogApproachExampleLoads) {
 // a table wrong, each naming the file, the table's number (from 1) and the key.
 TEST(ScenarioTargets, TablesBecomePlacementsInSiUnits) {
   namespace sc = radar_emu::scene;
-  EXPECT_TRUE(emu::parse_scenario(emu::default_scenario_toml(), "<default scenario>")
+  EXPECT_TRUE(loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
                   .targets.empty());  // the default's example is commented out
   {
     // The default's commented-out example, uncommented, is a valid table.
-    const std::string text(emu::default_scenario_toml());
+    const std::string text(loop::default_scenario_toml());
     const std::size_t at = text.find("# [[target]]");
     ASSERT_NE(at, std::string::npos);
     std::istringstream lines(text.substr(at));
     std::string uncommented, line;
     while (std::getline(lines, line))
       uncommented += line.substr(std::min<std::size_t>(2, line.size())) + "\n";
-    const emu::Scenario ex = emu::parse_scenario(uncommented, "example.toml");
+    const loop::Scenario ex = loop::parse_scenario(uncommented, "example.toml");
     ASSERT_EQ(ex.targets.size(), 1u);
     EXPECT_EQ(ex.targets[0].name, "fuel_truck");
     EXPECT_EQ(ex.targets[0].speed_mps, 5.0);
     EXPECT_NEAR(ex.targets[0].course_rad, 1.5 * std::numbers::pi, 1e-15);
-    const auto d = emu::scene_description(ex);  // the airport, plus the truck on its ground
+    const auto d = loop::scene_description(ex);  // the airport, plus the truck on its ground
     EXPECT_EQ(d.objects.back().name, "fuel_truck");
   }
-  const emu::Scenario s = emu::parse_scenario(R"(
+  const loop::Scenario s = loop::parse_scenario(R"(
 [scene]
 builtin = "terrain"
 
@@ -332,7 +333,7 @@ position_enu_m = [0, 0, 0]
 speed_mps = 12
 heading_deg = 90
 )",
-                                              "t.toml");
+                                                "t.toml");
   ASSERT_EQ(s.targets.size(), 5u);
   const sc::TargetPlacement& a = s.targets[0];
   EXPECT_EQ(a.name, "target_1");  // the default name counts tables from 1
@@ -386,7 +387,7 @@ TEST(ScenarioTargets, MeshFilesAreFoundBesideTheScenario) {
             "[[target]]\nmesh_file = \"meshes/none.stl\"\nposition_enu_m = [0, 0, 0]\n";
   }
   try {
-    (void)emu::load_scenario(dir / "s.toml");
+    (void)loop::load_scenario(dir / "s.toml");
     FAIL() << "a missing mesh file was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_EQ(std::string(e.what()), (dir / "s.toml").string() +
@@ -398,7 +399,7 @@ TEST(ScenarioTargets, MeshFilesAreFoundBesideTheScenario) {
     toml << "[[target]]\nmesh_file = \"meshes/tri.obj\"\nmesh_scale = 0.001\n"
             "mesh_front_axis = \"-y\"\nmesh_up_axis = \"+z\"\nposition_enu_m = [0, 0, 0]\n";
   }
-  const emu::Scenario s = emu::load_scenario(dir / "s.toml");
+  const loop::Scenario s = loop::load_scenario(dir / "s.toml");
   ASSERT_EQ(s.targets.size(), 1u);
   EXPECT_EQ(s.targets[0].mesh_file, dir / "meshes" / "tri.obj");
   EXPECT_EQ(s.targets[0].mesh_scale, 0.001);
@@ -407,8 +408,8 @@ TEST(ScenarioTargets, MeshFilesAreFoundBesideTheScenario) {
   EXPECT_FALSE(s.targets[0].builtin.has_value());
   // The loop's scene: the database's objects, then the targets. The OBJ has no usemtl, so its
   // triangles take the loader's default, metal.
-  const auto plain = emu::scene_description(emu::parse_scenario("", "p.toml"));
-  const auto with = emu::scene_description(s);
+  const auto plain = loop::scene_description(loop::parse_scenario("", "p.toml"));
+  const auto with = loop::scene_description(s);
   ASSERT_EQ(with.objects.size(), plain.objects.size() + 1);
   EXPECT_EQ(with.objects.back().name, "target_1");
   EXPECT_EQ(with.objects.back().area, "target");
@@ -418,7 +419,7 @@ TEST(ScenarioTargets, MeshFilesAreFoundBesideTheScenario) {
     obj << "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl unobtainium\nf 1 2 3\n";
   }
   try {
-    (void)emu::scene_description(emu::load_scenario(dir / "s.toml"));
+    (void)loop::scene_description(loop::load_scenario(dir / "s.toml"));
     FAIL() << "an unknown material in a mesh file was accepted";
   } catch (const std::runtime_error& e) {
     EXPECT_EQ(std::string(e.what()).rfind((dir / "s.toml").string() +
@@ -434,7 +435,7 @@ TEST(ScenarioTargets, MeshFilesAreFoundBesideTheScenario) {
     std::ofstream toml(dir / "s.toml", std::ios::app);
     toml << "material = \"aluminium\"\n";
   }
-  const auto fixed = emu::scene_description(emu::load_scenario(dir / "s.toml"));
+  const auto fixed = loop::scene_description(loop::load_scenario(dir / "s.toml"));
   EXPECT_EQ(fixed.materials[fixed.objects.back().mesh.triangle_material[0]].name, "aluminium");
   std::filesystem::remove_all(dir);
 }
@@ -547,7 +548,7 @@ TEST(ScenarioTargets, TheExamplesLoad) {
   const std::filesystem::path examples = std::filesystem::path(root) / "examples";
   // examples/terrain_movers.toml: three vehicles on the terrain's roads (the loop run and its
   // detections are checked by the terrain_movers_example test).
-  const emu::Scenario movers = emu::load_scenario(examples / "terrain_movers.toml");
+  const loop::Scenario movers = loop::load_scenario(examples / "terrain_movers.toml");
   EXPECT_EQ(movers.scene_builtin, "terrain");
   ASSERT_EQ(movers.targets.size(), 3u);
   for (const auto& t : movers.targets) {
@@ -560,9 +561,9 @@ TEST(ScenarioTargets, TheExamplesLoad) {
 
   // examples/gltf_targets.toml on examples/scene_extras.gltf: the file's nodes with their extras
   // (the schema of docs/scene_format.md), then the two tables' targets.
-  const emu::Scenario g = emu::load_scenario(examples / "gltf_targets.toml");
+  const loop::Scenario g = loop::load_scenario(examples / "gltf_targets.toml");
   EXPECT_EQ(g.scene_file, examples / "scene_extras.gltf");
-  const radar_emu::scene::SceneDescription d = emu::scene_description(g);
+  const radar_emu::scene::SceneDescription d = loop::scene_description(g);
   ASSERT_EQ(d.objects.size(), 6u);
   EXPECT_EQ(d.objects[0].name, "ground");
   EXPECT_EQ(d.objects[0].area, "airport");

@@ -14,11 +14,11 @@
 #include <numbers>
 #include <string>
 
-#include "emulator/closed_loop.hpp"
-#include "emulator/scenario.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/scenario.hpp"
 #include "tests/alloc_counter.hpp"
 
-namespace emu = radar_emu::emulator;
+namespace loop = radar_emu::loop;
 namespace fs = std::filesystem;
 
 namespace {
@@ -71,13 +71,13 @@ nlohmann::json read_json(const fs::path& p) {
 }  // namespace
 
 TEST(TargetsInTheLoop, SpheresFromTheScenarioAreDetectedWhereTheyAreUnderTheirNames) {
-  const emu::Scenario s = emu::parse_scenario(kScenario, "targets.toml");
+  const loop::Scenario s = loop::parse_scenario(kScenario, "targets.toml");
   ASSERT_EQ(s.targets.size(), 2u);
   const fs::path out =
       fs::temp_directory_path() / ("radar_emu_targets_" + std::to_string(::getpid()));
   {
     // Targets move by transforms only: the frame path still allocates nothing (from frame 3).
-    emu::RunOptions options;
+    loop::RunOptions options;
     options.out_dir = out;
     options.progress = [](std::uint64_t done, std::uint64_t total) {
       if (done == 3)
@@ -85,8 +85,8 @@ TEST(TargetsInTheLoop, SpheresFromTheScenarioAreDetectedWhereTheyAreUnderTheirNa
       if (done == total)
         (void)radar_emu::test::stop_counting_allocations();
     };
-    emu::ClosedLoop loop(s, options);
-    const emu::RunResult r = loop.run();
+    loop::ClosedLoop loop(s, options);
+    const loop::RunResult r = loop.run();
     EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u) << "the frame path allocated";
     loop.write_outputs(r);
   }

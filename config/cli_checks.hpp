@@ -1,0 +1,36 @@
+#pragma once
+// Option checks shared by radar-emu's subcommands (issue 18, "no silent surprises"): CLI11
+// validators for output paths (checked when the command line is parsed, before any work) and for
+// physical ranges (the message in the option's own unit). A failed check is one line,
+// "OPTION: what is wrong", printed by main() as "radar-emu: error: ...".
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+namespace radar_emu::config {
+
+/// Throws std::invalid_argument "PATH: cannot open for writing: ..." unless PATH can be created:
+/// its directory exists, is a directory and is writable, PATH itself is not a directory, and
+/// (when `extensions` is not empty) its extension is one of them (case-insensitive, with the dot:
+/// ".png"). `option` names the option in the message.
+void check_output_file(const std::string& path, const std::string& option,
+                       const std::vector<std::string>& extensions = {});
+/// Throws std::invalid_argument "PATH: cannot create the output directory: ..." unless PATH is a
+/// writable directory or can be created (its nearest existing ancestor is a writable directory).
+void check_output_dir(const std::string& path, const std::string& option);
+
+/// CLI11 validators over the two checks above.
+[[nodiscard]] CLI::Validator output_file(std::vector<std::string> extensions = {});
+[[nodiscard]] CLI::Validator output_dir();
+
+/// A number in [lo, hi] (or (lo, hi] / [lo, hi) / (lo, hi) when open_lo / open_hi), refused as
+/// "VALUE is outside [LO, HI] UNIT" in the unit the option is given in.
+[[nodiscard]] CLI::Validator in_range(double lo, double hi, const std::string& unit,
+                                      bool open_lo = false, bool open_hi = false);
+/// A sweep "X" or "START:STOP:N" (config/cli_args.hpp parse_sweep) whose every value is in
+/// [lo, hi] (open ends as above).
+[[nodiscard]] CLI::Validator sweep_in_range(double lo, double hi, const std::string& unit,
+                                            bool open_lo = false, bool open_hi = false);
+
+}  // namespace radar_emu::config

@@ -1,0 +1,214 @@
+#include "loop/governor.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace radar_emu::loop {
+
+// Measured with `build/app/radar-emu tradeoff --cases frame` (series governor_level: mean
+// |SNR error| of the detections matched to the reference frame's, pooled over four frames of the
+// default approach at t = 0, 3, 6, 9 s, 42 reference detections; docs/performance.md, "The
+// fidelity governor"), on the default scene without corner reflectors, edges on:
+//   level     0     1     2     3     4     5     6     8    10
+//   dB     1.95  2.77  4.42  5.42  5.61  8.73  8.49  8.74 10.12
+// Made non-decreasing (a level is never estimated better than a finer one); levels 7 and 9 take
+// the next measured level's value, levels past 10 the largest measured.
+const std::array<double, FidelityGovernor::kMaxLevel + 1> FidelityGovernor::kLevelSnrError_db = {
+    1.95,  2.77,  4.42,  5.42,  5.61,  8.73,  8.73,  8.74, 8.74,
+    10.12, 10.12, 10.12, 10.12, 10.12, 10.12, 10.12, 10.12};
+
+namespace {
+
+void require(bool ok, const char* field, const char* rule) {
+  if (!ok)
+    throw std::invalid_argument(std::string("[governor] ") + field + " " + rule);
+}
+
+double db10(double x) noexcept {
+  return 10.0 * std::log10(std::max(x, 1e-300));
+}
+
+}  // namespace
+
+FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Scene& scene,
+                                   const radar::SbrTracer& tracer, const radar::Sensor& sensor,
+                                   double frame_period_s)
+    : config_(config), scene_(&scene), tracer_(&tracer), sensor_(&sensor) {
+  require(std::isfinite(config.compute_fraction) && config.compute_fraction > 0.0 &&
+              config.compute_fraction <= 1.0,
+          "compute_fraction", "must be in (0, 1]");
+  require(std::isfinite(config.trace_ns_per_ray) && config.trace_ns_per_ray > 0.0,
+          "trace_ns_per_ray", "must be > 0");
+  require(std::isfinite(config.sensor_ns_per_cell) && config.sensor_ns_per_cell >= 0.0,
+          "sensor_ns_per_cell", "must be >= 0");
+  require(std::isfinite(config.sensor_ns_per_return) && config.sensor_ns_per_return >= 0.0,
+          "sensor_ns_per_return", "must be >= 0");
+  require(config.max_level >= 0 && config.max_level <= kMaxLevel, "max_level", "must be in 0..16");
+  require(std::isfinite(frame_period_s) && frame_period_s > 0.0, "frame period", "must be > 0");
+  deadline_ms_ = config.compute_fraction * frame_period_s * 1e3;
+  const std::size_t n = scene.objects().size();
+  // Each target's mean projected area over all directions: a quarter of its surface for a
+  // convex body (Cauchy's surface area formula), used as its size in the ranking.
+  mean_area_m2_.assign(n, 0.0);
+  const scene::SceneDescription& desc = scene.description();
+  for (std::uint32_t id = 0; id < n; ++id) {
+    if (!tracer.is_target(id))
+      continue;
+    targets_.push_back(id);
+    if (id >= desc.objects.size())
+      continue;
+    const scene::ObjectDesc& o = desc.objects[id];
+    const glm::dmat3 linear(o.world_from_body);
+    double area_m2 = 0.0;
+    for (const auto& t : o.mesh.triangles) {
+      const glm::dvec3 a = linear * glm::dvec3(o.mesh.positions_m[t[0]]);
+      const glm::dvec3 b = linear * glm::dvec3(o.mesh.positions_m[t[1]]);
+      const glm::dvec3 c = linear * glm::dvec3(o.mesh.positions_m[t[2]]);
+      area_m2 += 0.5 * glm::length(glm::cross(b - a, c - a));
+    }
+    mean_area_m2_[id] = 0.25 * area_m2;
+  }
+  rank_.assign(n, 0);
+  spacing_m_.assign(n, 0.0);
+  decision_.deadline_ms = deadline_ms_;
+  // Before the first frame the sensor's work is unknown: assume the worst (every cell of the
+  // image synthesised) and half a return a ray, so the first frame errs on the early side.
+  prev_cells_ = static_cast<double>(sensor.antenna().beams() * sensor.processor().range_bins() *
+                                    sensor.processor().velocity_bins());
+  prev_rays_ = 2.0;
+  prev_returns_ = 1.0;
+  decision_.knobs.target_ray_spacing_m = spacing_m_;
+}
+
+double FidelityGovernor::predict_ms(std::size_t rays) const noexcept {
+  const auto r = static_cast<double>(rays);
+  const double trace_ms = trace_factor_ * config_.trace_ns_per_ray * r * 1e-6;
+  // The sensor's work follows the previous frame's: its cells (set by the clutter's extent, not
+  // by the rays) and its returns (in proportion to the rays).
+  const double returns = prev_rays_ > 0.0 ? prev_returns_ * r / prev_rays_ : 0.0;
+  const double sensor_ms =
+      sensor_factor_ * 1e-6 *
+      (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
+  return trace_ms + sensor_ms;
+}
+
+void FidelityGovernor::knobs_for(int level) noexcept {
+  const radar::SbrConfig& c = tracer_->config();
+  for (std::uint32_t id : targets_) {
+    // Level 0 is the scenario's fidelity for every target; above it the weaker targets coarsen
+    // faster (by their rank, at most by the level itself).
+    const int l = level + std::min(rank_[id], level);
+    spacing_m_[id] = c.target_ray_spacing_m * std::pow(2.0, 0.5 * l);
+  }
+  radar::TraceKnobs& k = decision_.knobs;
+  k.target_ray_spacing_m = spacing_m_;
+  k.terrain_spacing_scale = std::pow(2.0, 0.25 * level);
+  k.max_bounces =
+      level >= kBounceLevel ? std::max(std::min(2, c.max_bounces), c.max_bounces - 1) : 0;
+  k.facet_centroid_only = level >= kFacetLevel;
+}
+
+const GovernorDecision& FidelityGovernor::decide(const radar::RadarPose& pose) noexcept {
+  // Rank the targets by expected SNR (header).
+  const std::span<const scene::ObjectState> objects = scene_->objects();
+  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+  double best_db = -1e300;
+  for (std::uint32_t id : targets_) {
+    const scene::ObjectState& o = objects[id];
+    const glm::dvec3 los = 0.5 * (o.bounds_min_m + o.bounds_max_m) - pose.position_m;
+    const double range_m = glm::length(los);
+    double snr_db = -1e300;
+    if (range_m > 1e-6) {
+      const glm::dvec3 u = los / range_m;
+      const double area_m2 = mean_area_m2_[id];
+      const radar::AzEl ae = radar::azel_from_direction(antenna_from_world * u);
+      snr_db = db10(sensor_->expected_snr(std::max(area_m2, 1e-6), range_m) *
+                    sensor_->two_way_gain(0.0, ae.elevation_rad));
+    }
+    spacing_m_[id] = snr_db;  // scratch until the ranks are set
+    best_db = std::max(best_db, snr_db);
+  }
+  for (std::uint32_t id : targets_) {
+    const double below_db = best_db - spacing_m_[id];
+    rank_[id] = std::clamp(static_cast<int>(std::floor(below_db / kRankStep_db)), 0, kMaxRank);
+  }
+
+  return choose(pose, 0, config_.enabled ? config_.max_level : 0);
+}
+
+const GovernorDecision& FidelityGovernor::decide_at(const radar::RadarPose& pose,
+                                                    int level) noexcept {
+  (void)decide(pose);  // ranks the targets
+  const int l = std::clamp(level, 0, kMaxLevel);
+  return choose(pose, l, l);
+}
+
+const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, int min_level,
+                                                 int max_level) noexcept {
+  GovernorDecision& d = decision_;
+  knobs_for(0);
+  d.full_rays = tracer_->plan(pose, d.knobs).rays();
+  int level = min_level;
+  if (level > 0)
+    knobs_for(level);
+  std::size_t rays = level > 0 ? tracer_->plan(pose, d.knobs).rays() : d.full_rays;
+  double predicted = predict_ms(rays);
+  // The finest level that fits (the cost falls with the level: one plan per level tried).
+  std::array<double, kMaxLevel + 1> predicted_at{};
+  std::array<std::size_t, kMaxLevel + 1> rays_at{};
+  predicted_at[static_cast<std::size_t>(level)] = predicted;
+  rays_at[static_cast<std::size_t>(level)] = rays;
+  while (predicted > deadline_ms_ && level < max_level) {
+    ++level;
+    knobs_for(level);
+    rays = tracer_->plan(pose, d.knobs).rays();
+    predicted = predict_ms(rays);
+    predicted_at[static_cast<std::size_t>(level)] = predicted;
+    rays_at[static_cast<std::size_t>(level)] = rays;
+  }
+  if (predicted > deadline_ms_) {
+    // Nothing fits: the part of the cost the levels do not reach (the sensor's cells) is over
+    // the deadline. Degrade no further than to within 5 % of the deadline of the cheapest.
+    const double enough = predicted + 0.05 * deadline_ms_;
+    while (level > min_level && predicted_at[static_cast<std::size_t>(level - 1)] <= enough)
+      --level;
+    knobs_for(level);
+    predicted = predicted_at[static_cast<std::size_t>(level)];
+    rays = rays_at[static_cast<std::size_t>(level)];
+  }
+  d.level = level;
+  d.degraded = level > 0;
+  d.over_deadline = predicted > deadline_ms_;
+  d.predicted_ms = predicted;
+  d.rays = rays;
+  d.estimated_snr_error_db =
+      kLevelSnrError_db[static_cast<std::size_t>(std::min(level, kMaxLevel))];
+  const auto r = static_cast<double>(rays);
+  last_predicted_trace_ms_ = config_.trace_ns_per_ray * r * 1e-6;
+  const double returns = prev_rays_ > 0.0 ? prev_returns_ * r / prev_rays_ : 0.0;
+  last_predicted_sensor_ms_ =
+      1e-6 * (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
+  return d;
+}
+
+void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t rays,
+                               std::uint64_t returns, std::uint64_t cells_synthesised) noexcept {
+  if (config_.mode == GovernorConfig::Mode::kMeasured) {
+    // Factors of measured over modelled cost: up at once, down by an exponential average (a
+    // tenth a frame), bounded so one odd frame cannot stall the governor.
+    auto update = [](double& factor, double measured_ms, double model_ms) {
+      if (!(model_ms > 0.05) || !std::isfinite(measured_ms))
+        return;
+      const double ratio = std::clamp(measured_ms / model_ms, 0.05, 50.0);
+      factor = ratio > factor ? ratio : factor + 0.1 * (ratio - factor);
+    };
+    update(trace_factor_, trace_ms, last_predicted_trace_ms_);
+    update(sensor_factor_, sensor_ms, last_predicted_sensor_ms_);
+  }
+  prev_rays_ = static_cast<double>(rays);
+  prev_returns_ = static_cast<double>(returns);
+  prev_cells_ = static_cast<double>(cells_synthesised);
+}
+
+}  // namespace radar_emu::loop

@@ -1,0 +1,139 @@
+#pragma once
+// The fidelity governor: before a frame is traced it chooses how much of the scene to model so
+// that the frame's computation fits its deadline, and never the other way round.
+//
+// Levels. Level 0 is the scenario's own fidelity ([radar] ray spacings, bounces). Each level up
+// halves the rays of a target bundle (bundle spacing x sqrt 2) and coarsens the terrain grid by
+// 2^(1/4) (its rays x 0.71); from level kBounceLevel on, rays bounce one time less (at least
+// twice: the target-ground double bounce and dihedrals stay); from level kFacetLevel on, bounce
+// 1 judges each facet by its centroid's visibility alone (TraceKnobs::facet_centroid_only: a
+// seventh of the facet pass's occlusion queries, which dominate targets of tens of thousands of
+// facets over the 207k-triangle terrain). Up to kMaxLevel.
+//
+// Where the rays go. Above level 0 a target's level is the frame's level plus its "rank", at
+// most the frame's level again: rank 0 for targets whose expected SNR is within kRankStep_db of
+// the strongest target's, one more for every further kRankStep_db below (at most kMaxRank). So
+// the strongest returns keep the finest sampling and rays leave the weak ones first (issue 15:
+// "spending rays where the return is strongest"). The expected SNR is the radar equation
+// (Sensor::expected_snr) at the target's range, with the two-way elevation gain of the beam at
+// its direction, of an RCS equal to its mean projected area: a quarter of its surface (Cauchy's
+// surface area formula for convex bodies; a size, not a prediction of its RCS; a thin wire's
+// bounding box would be much larger than its surface).
+//
+// Cost model. predicted = trace + sensor, with
+//   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
+//   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
+//          + sensor_ns_per_return x returns of the previous frame x (rays / its rays)
+// The frame takes the finest level whose prediction is within the deadline (compute_fraction of
+// the frame period); if none is, the finest level within 5 % of the deadline of the coarsest
+// level's cost (degrading further would buy less than that). In "model" mode the coefficients are
+// the configured ones (defaults measured on the project's 2-core machine, docs/performance.md), so
+// the choice depends only on the scenario and the previous frames: runs and replays are
+// reproducible. In "measured" mode (the default with --realtime) two factors scale the trace and
+// sensor terms by what the last frames measured: a slower frame raises them at once, a faster
+// one lowers them slowly (exponential average), so the governor errs on the side of the
+// deadline.
+//
+// Estimated error. Each level carries the mean |SNR error| of matched detections that `radar-emu
+// tradeoff` measured on the default scenario's frame at that level against a high-fidelity
+// frame (kLevelSnrError_db, with the command in docs/performance.md). It is an estimate for
+// scenes like the default one, not a bound.
+//
+// Real-time: decide() and observe() do not allocate, block or throw.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "radar/em/sbr.hpp"
+#include "radar/sensor/sensor.hpp"
+#include "scene/scene.hpp"
+
+namespace radar_emu::loop {
+
+struct GovernorConfig {
+  bool enabled = true;  ///< false: every frame at level 0, whatever it costs
+  /// Deadline of a frame's computation (trace + sensor) as a fraction of the frame period. The
+  /// rest of the period absorbs the model's error and the machine's jitter.
+  double compute_fraction = 0.4;
+  /// kModel: fixed coefficients, reproducible; kMeasured: cost factors learnt from the measured
+  /// stage times; kAuto: kMeasured with --realtime, kModel otherwise (the loop resolves it).
+  enum class Mode { kAuto, kModel, kMeasured } mode = Mode::kAuto;
+  double trace_ns_per_ray = 180.0;      ///< wall time of the frame's tracing per ray [ns]
+  double sensor_ns_per_cell = 18.0;     ///< sensor wall time per cell synthesised [ns]
+  double sensor_ns_per_return = 110.0;  ///< sensor wall time per return (contribution) [ns]
+  int max_level = 12;                   ///< coarsest level allowed (0..kMaxLevel)
+};
+
+/// What the governor chose for one frame.
+struct GovernorDecision {
+  int level = 0;                        ///< 0: the scenario's fidelity
+  bool degraded = false;                ///< level > 0
+  bool over_deadline = false;           ///< even the coarsest level was predicted late
+  double predicted_ms = 0.0;            ///< trace + sensor predicted at the level
+  double deadline_ms = 0.0;             ///< compute_fraction x period
+  double estimated_snr_error_db = 0.0;  ///< kLevelSnrError_db at the level
+  std::size_t rays = 0;                 ///< rays planned
+  std::size_t full_rays = 0;            ///< rays level 0 would have shot
+  radar::TraceKnobs knobs{};            ///< spans point into the governor
+};
+
+class FidelityGovernor {
+ public:
+  static constexpr int kMaxLevel = 16;
+  static constexpr int kBounceLevel = 8;
+  static constexpr int kFacetLevel = 6;
+  static constexpr double kRankStep_db = 10.0;
+  static constexpr int kMaxRank = 4;
+  /// Mean |SNR error| [dB] of matched detections per level on the default frame (index: level,
+  /// clamped to the last entry), measured by `radar-emu tradeoff --cases frame` (its
+  /// governor_level series; docs/performance.md, "The fidelity governor").
+  static const std::array<double, kMaxLevel + 1> kLevelSnrError_db;
+
+  /// Setup: throws std::invalid_argument naming the field when the configuration is invalid.
+  /// Keeps references to the scene, tracer and sensor (they must outlive it).
+  FidelityGovernor(const GovernorConfig& config, const scene::Scene& scene,
+                   const radar::SbrTracer& tracer, const radar::Sensor& sensor,
+                   double frame_period_s);
+
+  /// Chooses the level and knobs for a frame seen from `pose` (scene at the frame's time).
+  [[nodiscard]] const GovernorDecision& decide(const radar::RadarPose& pose) noexcept;
+  /// The same at a given level (clamped to 0..kMaxLevel), whatever it costs: for measuring what
+  /// a level gives (radar-emu tradeoff, tests).
+  [[nodiscard]] const GovernorDecision& decide_at(const radar::RadarPose& pose, int level) noexcept;
+  /// What the frame decided last cost: stage wall times [ms] and what it processed.
+  void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
+               std::uint64_t cells_synthesised) noexcept;
+
+  [[nodiscard]] const GovernorConfig& config() const noexcept { return config_; }
+  /// Cost factors of measured mode (1 in model mode).
+  [[nodiscard]] double trace_factor() const noexcept { return trace_factor_; }
+  [[nodiscard]] double sensor_factor() const noexcept { return sensor_factor_; }
+
+ private:
+  [[nodiscard]] double predict_ms(std::size_t rays) const noexcept;
+  /// The finest level in [min_level, max_level] predicted within the deadline (else max_level).
+  const GovernorDecision& choose(const radar::RadarPose& pose, int min_level,
+                                 int max_level) noexcept;
+  void knobs_for(int level) noexcept;
+
+  GovernorConfig config_;
+  const scene::Scene* scene_;
+  const radar::SbrTracer* tracer_;
+  const radar::Sensor* sensor_;
+  double deadline_ms_;
+  std::vector<std::uint32_t> targets_;  ///< object ids of the tracer's targets
+  std::vector<int> rank_;               ///< per object id
+  std::vector<double> mean_area_m2_;    ///< per object id: surface / 4 (targets)
+  std::vector<double> spacing_m_;       ///< per object id, for TraceKnobs
+  GovernorDecision decision_{};
+  // The previous frame, for the sensor term.
+  double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;
+  double trace_factor_ = 1.0, sensor_factor_ = 1.0;
+  double last_predicted_trace_ms_ = 0.0, last_predicted_sensor_ms_ = 0.0;
+};
+
+}  // namespace radar_emu::loop

@@ -1,0 +1,105 @@
+#pragma once
+// A scenario: everything one closed-loop run needs, read from TOML (setup only). The embedded
+// default (default_scenario_toml()) is what `radar-emu run` runs with no file. Degrees, dB and
+// other edge units appear only in the TOML; the struct holds SI.
+
+#include <cstdint>
+#include <filesystem>
+#include <glm/glm.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "io/canaerospace.hpp"
+#include "loop/governor.hpp"
+#include "radar/em/sbr.hpp"
+#include "radar/sensor/sensor.hpp"
+#include "scene/placement.hpp"
+#include "sim_bus/fault_injector.hpp"
+
+namespace radar_emu::loop {
+
+/// [weather]: the atmosphere between the radar and the scene (ITU-R P.676 gases, P.838 rain,
+/// P.840 fog; radar/propagation/itu.hpp), uniform along every path. Without a [weather] table
+/// the paths are free space (no atmospheric loss), as before the table existed.
+struct WeatherSpec {
+  bool enabled = false;             ///< the scenario has a [weather] table
+  std::string condition = "clear";  ///< clear (gases only), rain, fog, rain_fog
+  double rain_mm_per_h = 0.0;       ///< rain rate [mm/h] (rain, rain_fog)
+  double fog_water_gm3 = 0.0;       ///< cloud/fog liquid water density [g/m^3] (fog, rain_fog)
+  double humidity_gm3 = 7.5;        ///< water-vapour density [g/m^3]
+  double temperature_k = 288.15;
+  double pressure_hpa = 1013.25;  ///< dry-air pressure [hPa]
+};
+
+struct Scenario {
+  std::string name;
+  // [run]
+  std::uint64_t frames = 200;
+  double rate_hz = 20.0;
+  std::int64_t epoch_unix_ns = 1'767'225'600LL * 1'000'000'000LL;  ///< bus time of t = 0
+  double state_timeout_s = 0.5;  ///< ownship fields older than this make the output invalid
+  /// What the radar sends while its ownship state is stale (docs/icd/detections.md): "flag"
+  /// (an empty list whose header has OWNSHIP_INVALID set) or "silent" (no list at all).
+  bool stale_output_silent = false;
+  // [scene]
+  /// Built-in database when scene_file is empty: "airport" (scene/airport_gen.hpp, the
+  /// default), "default" (the minimal runway scene of scene/default_scene.hpp) or "terrain"
+  /// (the seed paper's 5 x 7 km database, scene/terrain_gen.hpp; its own anchor).
+  std::string scene_builtin = "airport";
+  std::uint64_t scene_seed = 1;  ///< generator seed of the built-in database
+  /// Built-in "airport": its closed-loop objects carry 0.5 m trihedrals (a test range's).
+  bool scene_corner_reflectors = false;
+  std::filesystem::path scene_file;
+  /// [[target]] tables: objects added to whichever scene the [scene] table names
+  /// (docs/scene_format.md), in table order, named "target_N" (N from 1) unless named.
+  std::vector<scene::TargetPlacement> targets;
+  // [ownship]: constant-velocity straight flight in the scene's ENU frame
+  glm::dvec3 ownship_start_enu_m{0.0, -4000.0, 230.0};
+  glm::dvec3 ownship_velocity_enu_mps{0.0, 70.0, -3.67};
+  double ownship_pitch_rad = 0.0;
+  double ownship_roll_rad = 0.0;
+  double ownship_heading_rad = 0.0;
+  std::uint8_t ins_node_id = 1;
+  // [input]: how the radar reads CANaerospace (identifier per field, node-ID filter)
+  io::canas::DecoderConfig input{};
+  double attitude_rate_hz = 80.0;
+  double navigation_rate_hz = 10.0;
+  // [antenna]
+  double antenna_depression_rad = 0.0;   ///< boresight below the body x axis
+  double beam_spacing_rad = 0.0175;      ///< azimuth step of the scan's beam positions
+  double azimuth_beamwidth_rad = 0.0;    ///< 0: the beam spacing
+  double elevation_beamwidth_rad = 0.0;  ///< 0: the elevation field of view
+  double antenna_gain = 0.0;             ///< one-way, linear; 0: from beamwidths and efficiency
+  double aperture_efficiency = 0.6;
+  std::string pattern = "gaussian";    ///< uniform, cosine, gaussian, table
+  std::filesystem::path pattern_file;  ///< table: CSV "angle_deg,gain_db" (azimuth cut)
+  // [radar]
+  double prf_hz = 20e3;
+  double swath_start_m = -1.0;  ///< pulsed: first range bin; < 0: the blind range c T / 2
+  radar::SbrConfig sbr{};
+  radar::SensorConfig sensor{};  ///< derived from the tables above once the file is read
+  // [output]
+  bool can_fd = false;  ///< detection lists as packed CAN FD frames (docs/icd/detections.md)
+  // [faults] (sim_bus/fault_injector.hpp; seeded, so a run is reproducible from its seed)
+  std::uint64_t malformed_every_n_frames = 0;  ///< 0 = no malformed-frame injection
+  sim_bus::FaultConfig link_faults{};          ///< on the radar's receiving side of the bus
+  bool stale_sender = false;                   ///< the INS goes stale in stale.start_s..end_s
+  sim_bus::StaleConfig stale{};
+  bool babbling_node = false;  ///< a node floods the bus (babble.rate_hz > 0)
+  sim_bus::BabbleConfig babble{};
+  WeatherSpec weather{};
+  /// [governor]: the fidelity governor (loop/governor.hpp).
+  GovernorConfig governor{};
+};
+
+/// The embedded default scenario, as TOML text (printed by `radar-emu run --print-scenario`).
+[[nodiscard]] std::string_view default_scenario_toml() noexcept;
+
+/// Parses a scenario. `origin` names the source in error messages ("FILE" or "<default>").
+/// Throws std::runtime_error "ORIGIN: [table] key: what is wrong" for missing, mistyped or
+/// out-of-range values; unknown keys are errors too (typos must not pass silently).
+[[nodiscard]] Scenario parse_scenario(std::string_view toml_text, const std::string& origin);
+[[nodiscard]] Scenario load_scenario(const std::filesystem::path& path);
+
+}  // namespace radar_emu::loop

@@ -1,0 +1,349 @@
+#include "tools/image.hpp"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "config/cli_checks.hpp"
+#include "loop/closed_loop.hpp"
+#include "loop/ownship.hpp"
+#include "plot/charts.hpp"
+#include "radar/propagation/path.hpp"
+#include "scene/scene.hpp"
+#include "tools/scene.hpp"
+
+namespace radar_emu::tools {
+
+using config::check_output_dir;
+using config::in_range;
+using config::output_dir;
+using loop::body_from_antenna;
+using loop::default_scenario_toml;
+using loop::enu_from_body;
+using loop::load_scenario;
+using loop::parse_scenario;
+using loop::Scenario;
+using loop::scene_description;
+using loop::WeatherSpec;
+using plot::Canvas;
+using plot::Heatmap;
+using plot::join_panels;
+using plot::render_heatmap;
+
+namespace {
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// [weather]: the one-way specific attenuation at the carrier, as the closed loop builds it
+// (loop/closed_loop.cpp setup_weather: P.676 gases + P.838 rain at vertical polarisation +
+// P.840 fog, radar/propagation/path.hpp).
+double weather_db_per_m(const Scenario& s) {
+  const WeatherSpec& w = s.weather;
+  if (!w.enabled)
+    return 0.0;
+  radar::MediumSpec medium;
+  medium.name = w.condition;
+  medium.atmosphere = radar::Atmosphere{w.pressure_hpa, w.temperature_k, w.humidity_gm3};
+  medium.rain_mm_per_h = w.rain_mm_per_h;
+  medium.liquid_water_gm3 = w.fog_water_gm3;
+  try {
+    const radar::PathAttenuation path(s.sbr.carrier_hz, std::numbers::pi / 2.0,
+                                      std::span(&medium, 1));
+    return path.specific_db_per_m(0);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error("scenario: [weather] at carrier_hz " +
+                             std::to_string(s.sbr.carrier_hz) + ": " + e.what());
+  }
+}
+
+// The reference ground plane: the first surface straight below the antenna that is not a
+// target (targets are passed through), 0 when nothing is below.
+double ground_height_below(const scene::Scene& scene, const radar::SbrTracer& tracer,
+                           const glm::dvec3& p) {
+  scene::Ray ray;
+  ray.origin_m = p;
+  ray.direction = {0.0, 0.0, -1.0};
+  for (int k = 0; k < 16; ++k) {
+    scene::Hit hit;
+    if (!scene.intersect(ray, hit))
+      return 0.0;
+    if (!tracer.is_target(hit.object_id))
+      return hit.position_m.z;
+    ray.t_near_m = hit.t_m + 1e-3;
+  }
+  return 0.0;
+}
+
+double db(double v) {
+  return v > 0.0 ? 10.0 * std::log10(v) : -400.0;
+}
+
+// The radar image (grey, dB over 40 dB below the 99.5th percentile, like the seed's figure 5)
+// and the optical preview side by side, both at equal scales in degrees (docs/plotting.md).
+void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
+  const radar::EvImage& im = p.image;
+  const int s = std::max(1, p.optical_scale);
+  std::vector<float> sorted;
+  for (float v : im.intensity_m2)
+    if (v > 0.0f)
+      sorted.push_back(v);
+  std::sort(sorted.begin(), sorted.end());
+  const double top_db =
+      sorted.empty() ? 0.0 : db(static_cast<double>(sorted[(sorted.size() - 1) * 995 / 1000]));
+  constexpr double kRangeDb = 40.0;
+  const radar::EvImageConfig& g = p.config;
+  const double az0 = g.azimuth_min_rad * kDeg, el1 = g.elevation_max_rad * kDeg;
+  const double px_deg = g.pixel_rad * kDeg;
+  const auto rows = static_cast<std::size_t>(im.rows), cols = static_cast<std::size_t>(im.columns);
+  // Cell centres, elevation ascending (row 0 of the image is the top).
+  auto grid = [&](Heatmap& m, std::size_t nx, std::size_t ny, double step) {
+    for (std::size_t x = 0; x < nx; ++x)
+      m.x.push_back(az0 + (static_cast<double>(x) + 0.5) * step);
+    for (std::size_t y = 0; y < ny; ++y)
+      m.y.push_back(el1 - (static_cast<double>(ny - 1 - y) + 0.5) * step);
+    m.x_label = "azimuth [deg]";
+    m.y_label = "elevation [deg]";
+    m.width = 1000;
+    m.height = 400;
+  };
+  Heatmap radar_map;
+  grid(radar_map, cols, rows, px_deg);
+  char title[160];
+  std::snprintf(title, sizeof title, "%.0f GHz radar, %d looks, %.0f dB range (top %.1f dBsm)",
+                p.carrier_hz * 1e-9, p.config.looks, kRangeDb, top_db);
+  radar_map.title = title;
+  radar_map.value_label = "pixel [dBsm]";
+  radar_map.grey = true;
+  radar_map.value_max = top_db;
+  radar_map.value_range = kRangeDb;
+  for (std::size_t y = 0; y < rows; ++y) {
+    for (std::size_t x = 0; x < cols; ++x)
+      radar_map.values.push_back(
+          db(static_cast<double>(im.at(static_cast<int>(rows - 1 - y), static_cast<int>(x)))));
+  }
+  std::vector<Canvas> panels{render_heatmap(radar_map)};
+  const auto w = static_cast<std::size_t>(im.columns * s),
+             h = static_cast<std::size_t>(im.rows * s);
+  if (p.optical.width_px == static_cast<int>(w) && p.optical.height_px == static_cast<int>(h)) {
+    Heatmap optical;
+    grid(optical, w, h, px_deg / s);
+    optical.title = "optical preview, same view";
+    optical.rgb.resize(w * h * 3);
+    for (std::size_t y = 0; y < h; ++y)
+      std::copy_n(p.optical.rgb.data() + (h - 1 - y) * w * 3, w * 3,
+                  optical.rgb.data() + y * w * 3);
+    panels.push_back(render_heatmap(optical));
+  }
+  join_panels(panels).write_png(path);
+}
+
+}  // namespace
+
+EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std::uint64_t seed,
+                                int optical_scale) {
+  if (!std::isfinite(time_s) || time_s < 0.0)
+    throw std::runtime_error("--time-s: must be finite and >= 0");
+  if (looks < 1 || looks > 1000)
+    throw std::runtime_error("--looks: " + std::to_string(looks) + " is outside [1, 1000]");
+  const auto t0 = std::chrono::steady_clock::now();
+  EvImageProduct p;
+  p.optical_scale = optical_scale;
+  p.carrier_hz = s.sbr.carrier_hz;
+  scene::Scene scene(scene_description(s));
+  scene.set_time(time_s);
+  radar::SbrTracer tracer(scene, s.sbr);
+
+  p.pose.position_m = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * time_s;
+  p.pose.velocity_mps = s.ownship_velocity_enu_mps;
+  p.pose.world_from_antenna =
+      enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      body_from_antenna(s.antenna_depression_rad);
+
+  radar::EvImageConfig& g = p.config;
+  g.azimuth_min_rad = s.sbr.azimuth_min_rad;
+  g.azimuth_max_rad = s.sbr.azimuth_max_rad;
+  g.elevation_min_rad = s.sbr.elevation_min_rad;
+  g.elevation_max_rad = s.sbr.elevation_max_rad;
+  g.pixel_rad = s.beam_spacing_rad;  // one pixel per beam position; rows as tall (square)
+  g.looks = looks;
+  g.seed = seed;
+  g.ground_height_m = ground_height_below(scene, tracer, p.pose.position_m);
+  if (p.pose.position_m.z <= g.ground_height_m) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf,
+                  "--time-s: the ownship at t = %g s is at height %.1f m, not above the ground "
+                  "below it (%.1f m)",
+                  time_s, p.pose.position_m.z, g.ground_height_m);
+    throw std::runtime_error(buf);
+  }
+  try {
+    (void)radar::ev_image_rows(g);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("scenario [antenna]: ") + e.what());
+  }
+  p.weather_one_way_db_per_m = weather_db_per_m(s);
+
+  auto t = std::chrono::steady_clock::now();
+  std::vector<radar::Contribution> contributions(tracer.max_contributions());
+  const std::size_t n = tracer.trace(p.pose, contributions, p.trace);
+  contributions.resize(n);
+  // [weather]: every return loses the two-way attenuation of its path (as in `run`).
+  radar::apply_two_way_loss(contributions, p.weather_one_way_db_per_m);
+  p.contributions = n;
+  p.trace_s = seconds_since(t);
+
+  t = std::chrono::steady_clock::now();
+  p.image = radar::form_ev_image(contributions, p.pose, g);
+  p.form_s = seconds_since(t);
+
+  if (optical_scale > 0) {
+    t = std::chrono::steady_clock::now();
+    scene::AngularCamera cam;
+    cam.position_m = p.pose.position_m;
+    cam.world_from_camera = p.pose.world_from_antenna;
+    cam.azimuth_min_rad = g.azimuth_min_rad;
+    cam.azimuth_max_rad = g.azimuth_min_rad + p.image.columns * g.pixel_rad;
+    cam.elevation_max_rad = g.elevation_max_rad;
+    cam.elevation_min_rad = g.elevation_max_rad - p.image.rows * g.pixel_rad;
+    cam.width_px = p.image.columns * optical_scale;
+    cam.height_px = p.image.rows * optical_scale;
+    p.optical = scene::render_preview_angular(scene, cam);
+    p.optical_s = seconds_since(t);
+  }
+  p.total_s = seconds_since(t0);
+  return p;
+}
+
+int run_image_tool(const ImageToolOptions& o) {
+  const Scenario s = o.scenario.empty()
+                         ? parse_scenario(default_scenario_toml(), "<default scenario>")
+                         : load_scenario(o.scenario);
+  const std::filesystem::path dir(o.out_dir);
+  check_output_dir(o.out_dir, "--out");
+  const EvImageProduct p = compute_ev_image(s, o.time_s, o.looks, o.seed, o.optical_scale);
+  std::filesystem::create_directories(dir);
+  const radar::EvImage& im = p.image;
+  const radar::EvImageConfig& g = p.config;
+  {
+    std::ofstream f(dir / "image.csv");
+    f << "row,column,azimuth_deg,elevation_deg,range_near_m,range_far_m,intensity_dbsm,"
+         "mean_dbsm\n";
+    char line[200];
+    for (int r = 0; r < im.rows; ++r) {
+      for (int col = 0; col < im.columns; ++col) {
+        const std::size_t i = static_cast<std::size_t>(r * im.columns + col);
+        const double* e = im.range_edges_m.data() + static_cast<std::size_t>(col * (im.rows + 1));
+        std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.2f,%.2f,%.3f,%.3f\n", r, col,
+                      radar::ev_column_azimuth_rad(g, col) * kDeg,
+                      radar::ev_row_elevation_rad(g, r) * kDeg, e[r + 1], e[r],
+                      db(static_cast<double>(im.intensity_m2[i])),
+                      db(static_cast<double>(im.mean_m2[i])));
+        f << line;
+      }
+    }
+    if (!f)
+      throw std::runtime_error((dir / "image.csv").string() + ": write failed");
+  }
+  nlohmann::ordered_json j;
+  j["scenario"] = o.scenario.empty() ? "<default scenario>" : o.scenario;
+  j["name"] = s.name;
+  j["time_s"] = o.time_s;
+  j["carrier_hz"] = s.sbr.carrier_hz;
+  j["ownship_enu_m"] = {p.pose.position_m.x, p.pose.position_m.y, p.pose.position_m.z};
+  j["ground_height_m"] = g.ground_height_m;
+  j["grid"] = {{"azimuth_min_deg", g.azimuth_min_rad * kDeg},
+               {"elevation_max_deg", g.elevation_max_rad * kDeg},
+               {"pixel_deg", g.pixel_rad * kDeg},
+               {"columns", im.columns},
+               {"rows", im.rows},
+               {"row_mapping",
+                "slant range R to the elevation band whose ray meets the ground plane at R: "
+                "R = (z_antenna - z_ground) / (-w_z)"}};
+  j["looks"] = g.looks;
+  j["speckle"] =
+      "independent exponential-intensity, uniform-phase speckle per clutter return "
+      "and look (radar/clutter/speckle.hpp)";
+  j["speckle_seed"] = g.seed;
+  j["weather"] = {{"condition", s.weather.enabled ? s.weather.condition : "none (free space)"},
+                  {"rain_mm_per_h", s.weather.rain_mm_per_h},
+                  {"fog_water_gm3", s.weather.fog_water_gm3},
+                  {"one_way_db_per_km", p.weather_one_way_db_per_m * 1e3}};
+  j["pixel_value"] = "radar cross section of the cell [m^2] (range-compensated), dB in image.csv";
+  j["counts"] = {{"contributions", p.contributions},
+                 {"used", im.contributions_used},
+                 {"outside_columns", im.outside_columns},
+                 {"nearer_than_field", im.nearer_than_field},
+                 {"farther_than_field", im.farther_than_field},
+                 {"no_ground", im.no_ground},
+                 {"rays", p.trace.rays},
+                 {"dropped_contributions", p.trace.dropped_contributions}};
+  j["timing_s"] = {
+      {"trace", p.trace_s}, {"form", p.form_s}, {"optical", p.optical_s}, {"total", p.total_s}};
+  {
+    std::ofstream f(dir / "image.json");
+    f << j.dump(2) << "\n";
+    if (!f)
+      throw std::runtime_error((dir / "image.json").string() + ": write failed");
+  }
+  if (o.plot)
+    write_png(p, dir / "image.png");
+  if (!o.quiet) {
+    std::printf(
+        "EV image %d x %d pixels of %.3g deg, %d looks (speckle seed %llu), ownship (%.1f, %.1f, "
+        "%.1f) m, weather %s (%.3g dB/km one way)\n"
+        "%zu returns (%llu used), %llu rays; trace %.2f s, image %.2f s, optical %.2f s, total "
+        "%.2f s\nwrote %s\n",
+        im.columns, im.rows, g.pixel_rad * kDeg, g.looks, static_cast<unsigned long long>(g.seed),
+        p.pose.position_m.x, p.pose.position_m.y, p.pose.position_m.z,
+        s.weather.enabled ? s.weather.condition.c_str() : "none", p.weather_one_way_db_per_m * 1e3,
+        p.contributions, static_cast<unsigned long long>(im.contributions_used),
+        static_cast<unsigned long long>(p.trace.rays), p.trace_s, p.form_s, p.optical_s, p.total_s,
+        dir.string().c_str());
+  }
+  return 0;
+}
+
+void add_image_command(CLI::App& app, ImageCommand& c) {
+  c.app = app.add_subcommand(
+      "image", "94 GHz enhanced-vision radar image of a scenario's view, with its optical preview");
+  ImageToolOptions& o = c.options;
+  c.app->add_option("scenario", o.scenario, "Scenario TOML (default: the embedded one)")
+      ->check(CLI::ExistingFile);
+  c.app->add_option("--time-s", o.time_s, "Scenario time of the ownship pose [s] (default 0)")
+      ->check(in_range(0.0, 1e6, "s"));
+  c.app->add_option("--looks", o.looks, "Uncorrelated looks averaged (default 10)")
+      ->check(CLI::Range(1, 1000));
+  c.app->add_option("--seed", c.seed_text, "Speckle seed, 0..2^64-1 (default 20261124)");
+  c.app
+      ->add_option("--optical-scale", o.optical_scale,
+                   "Optical preview pixels per radar pixel, each way (default 4)")
+      ->check(CLI::Range(1, 16));
+  c.app->add_option("--out", o.out_dir, "Output directory (default ./image)")->check(output_dir());
+  c.app->add_flag("--plot", o.plot, "Also write image.png (radar and optical side by side)");
+  c.app->add_flag("-q,--quiet", o.quiet, "No summary");
+}
+
+std::optional<int> run_image_command(const ImageCommand& c) {
+  if (c.app == nullptr || !c.app->parsed())
+    return std::nullopt;
+  ImageToolOptions o = c.options;
+  if (!c.seed_text.empty())
+    o.seed = parse_seed(c.seed_text, "--seed");
+  return run_image_tool(o);
+}
+
+}  // namespace radar_emu::tools

@@ -1,0 +1,76 @@
+#pragma once
+// `radar-emu image SCENARIO.toml`: the seed paper's forward-looking 94 GHz enhanced-vision image
+// (radar/products/ev_image.hpp) from the scenario's ownship pose at a time, its antenna field
+// (the [antenna] azimuth/elevation limits, one pixel per azimuth beam position), its [radar]
+// tracer settings and its [weather] (ITU-R P.676 gases, P.838 rain, P.840 fog: the two-way loss
+// of every return, as in `run`), with the optical preview of the same view on the same angular
+// grid (scene/preview.hpp render_preview_angular) beside it.
+//
+// Outputs in --out (default ./image): image.csv (one row a pixel: row, column, azimuth_deg,
+// elevation_deg, range_near_m, range_far_m, intensity_dbsm, mean_dbsm), image.json (the
+// parameters, pose, weather, counts and timings) and with --plot image.png (the radar image and
+// the optical preview side by side, axes in degrees). Errors are exceptions whose message is one
+// line naming the option or file; main() prints them.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "loop/scenario.hpp"
+#include "radar/em/sbr.hpp"
+#include "radar/products/ev_image.hpp"
+#include "scene/preview.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace radar_emu::tools {
+
+struct ImageToolOptions {
+  std::string scenario;  ///< TOML; "" = the embedded default scenario
+  double time_s = 0.0;   ///< scenario time of the ownship pose [s]
+  int looks = 10;        ///< uncorrelated looks averaged
+  std::uint64_t seed = 20261124;
+  int optical_scale = 4;  ///< optical preview pixels per radar pixel, each way
+  std::string out_dir = "image";
+  bool plot = false;
+  bool quiet = false;
+};
+
+/// Everything the image command computes, without I/O (tests and benchmarks call this).
+struct EvImageProduct {
+  radar::EvImageConfig config;
+  radar::RadarPose pose;
+  radar::EvImage image;
+  scene::PreviewImage optical;  ///< columns x rows times optical_scale each way
+  int optical_scale = 1;
+  double carrier_hz = 0.0;
+  double weather_one_way_db_per_m = 0.0;  ///< 0: free space (no [weather] table)
+  std::size_t contributions = 0;
+  radar::TraceStats trace{};
+  double trace_s = 0.0, form_s = 0.0, optical_s = 0.0, total_s = 0.0;  ///< wall times
+};
+
+/// Forms the image of `scenario` at `time_s` (ownship start + velocity t, the scenario's
+/// attitude and antenna depression). The reference ground plane is the first non-target surface
+/// straight below the antenna (0 when there is none). `optical_scale` 0: no optical preview.
+/// Throws std::runtime_error with context for a bad scenario or option.
+[[nodiscard]] EvImageProduct compute_ev_image(const loop::Scenario& scenario, double time_s,
+                                              int looks, std::uint64_t seed, int optical_scale);
+
+/// Loads the scenario, computes, writes the outputs and prints a summary. Returns 0.
+int run_image_tool(const ImageToolOptions& options);
+
+/// The `image` subcommand and its option storage (must outlive parsing and stay at one address).
+struct ImageCommand {
+  CLI::App* app = nullptr;
+  ImageToolOptions options;
+  std::string seed_text;  ///< --seed as given (parsed by run_image_command: errors name it)
+};
+/// Registers `image` on the application.
+void add_image_command(CLI::App& app, ImageCommand& command);
+/// Runs it when it was parsed (its exit status); nullopt otherwise.
+[[nodiscard]] std::optional<int> run_image_command(const ImageCommand& command);
+
+}  // namespace radar_emu::tools

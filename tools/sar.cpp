@@ -1,0 +1,1008 @@
+#include "tools/sar.hpp"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <glm/gtc/matrix_transform.hpp>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tools/sar_case.hpp"
+
+#ifdef RADAR_EMU_HAVE_GDAL
+#include <cpl_conv.h>
+#include <cpl_string.h>
+#include <gdal.h>
+#include <ogr_srs_api.h>
+#endif
+
+#include "plot/canvas.hpp"
+#include "plot/charts.hpp"
+#include "radar/clutter/speckle.hpp"
+#include "radar/clutter/terrain.hpp"
+#include "radar/constants.hpp"
+#include "radar/em/sbr.hpp"
+#include "radar/products/irf.hpp"
+#include "radar/products/sar.hpp"
+#include "radar/products/sar_terrain.hpp"
+#include "scene/scene.hpp"
+#include "scene/targets.hpp"
+#include "tools/mpi_work.hpp"
+
+namespace radar_emu::tools {
+
+using plot::Canvas;
+using plot::LineChart;
+using plot::Rgb;
+using plot::Series;
+using plot::write_line_chart_png;
+
+namespace {
+
+namespace rd = radar_emu::radar;
+namespace sc = radar_emu::scene;
+namespace cl = radar_emu::radar::clutter;
+using Clock = std::chrono::steady_clock;
+
+constexpr double kDeg = rd::kPi / 180.0;
+constexpr double kC = rd::kSpeedOfLight_mps;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+double db10(double x) {
+  return 10.0 * std::log10(std::max(x, 1e-300));
+}
+
+// ------------------------------------------------------------------------------ the TOML case
+
+class Reader {
+ public:
+  Reader(const toml::table& root, std::string table, std::string origin,
+         std::set<std::string> allowed)
+      : origin_(std::move(origin)), name_(std::move(table)) {
+    if (const toml::node* n = root.get(name_)) {
+      table_ = n->as_table();
+      if (table_ == nullptr)
+        fail("", "must be a table");
+    }
+    check(allowed);
+  }
+  Reader(const toml::table& t, std::string name, std::string origin, std::set<std::string> allowed,
+         bool /*element*/)
+      : table_(&t), origin_(std::move(origin)), name_(std::move(name)) {
+    check(allowed);
+  }
+  [[noreturn]] void fail(std::string_view key, std::string_view what) const {
+    std::ostringstream os;
+    os << origin_ << ": [" << name_ << "] " << key << (key.empty() ? "" : ": ") << what;
+    throw std::invalid_argument(os.str());
+  }
+  const toml::node* node(std::string_view key) const {
+    return table_ == nullptr ? nullptr : table_->get(key);
+  }
+  void number(std::string_view key, double& out, double lo, double hi, bool open_lo = false) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    const std::optional<double> v = n->value<double>();
+    if (!v)
+      fail(key, "expected a number");
+    if (!std::isfinite(*v) || *v < lo || *v > hi || (open_lo && *v == lo)) {
+      std::ostringstream os;
+      os << "value " << *v << " outside " << (open_lo ? "(" : "[") << lo << ", " << hi << "]";
+      fail(key, os.str());
+    }
+    out = *v;
+  }
+  void integer(std::string_view key, std::size_t& out, std::int64_t lo, std::int64_t hi) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    if (!n->is_integer())
+      fail(key, "expected an integer");
+    const std::int64_t v = *n->value<std::int64_t>();
+    if (v < lo || v > hi)
+      fail(key, "value " + std::to_string(v) + " outside [" + std::to_string(lo) + ", " +
+                    std::to_string(hi) + "]");
+    out = static_cast<std::size_t>(v);
+  }
+  void boolean(std::string_view key, bool& out) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    if (!n->is_boolean())
+      fail(key, "expected true or false");
+    out = *n->value<bool>();
+  }
+  void string(std::string_view key, std::string& out) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    if (!n->is_string())
+      fail(key, "expected a string");
+    out = *n->value<std::string>();
+  }
+  void vec3(std::string_view key, glm::dvec3& out, double limit) const {
+    const toml::node* n = node(key);
+    if (n == nullptr)
+      return;
+    const toml::array* a = n->as_array();
+    if (a == nullptr || a->size() != 3)
+      fail(key, "expected an array of 3 numbers");
+    for (std::size_t i = 0; i < 3; ++i) {
+      const std::optional<double> v = (*a)[i].value<double>();
+      if (!v || !std::isfinite(*v) || std::abs(*v) > limit)
+        fail(key, "element " + std::to_string(i) + " is not a finite number within +-" +
+                      std::to_string(static_cast<long long>(limit)));
+      out[static_cast<glm::length_t>(i)] = *v;
+    }
+  }
+
+ private:
+  void check(const std::set<std::string>& allowed) const {
+    if (table_ == nullptr)
+      return;
+    for (const auto& [key, value] : *table_) {
+      const std::string k(key.str());
+      if (!allowed.contains(k) && !(value.is_array_of_tables() && allowed.contains(k + "[]")))
+        fail(k, "unknown key");
+    }
+  }
+  const toml::table* table_ = nullptr;
+  std::string origin_, name_;
+};
+
+rd::Polarisation parse_pol(const std::string& s, const Reader& r) {
+  if (s == "HH")
+    return rd::Polarisation::kHH;
+  if (s == "HV")
+    return rd::Polarisation::kHV;
+  if (s == "VH")
+    return rd::Polarisation::kVH;
+  if (s == "VV")
+    return rd::Polarisation::kVV;
+  r.fail("polarisation", "expected HH, HV, VH or VV");
+}
+
+// The case from its parsed TOML; `path` names the file (or text) in every error.
+SarCase case_from_table(const toml::table& root, const std::string& path) {
+  for (const auto& [key, value] : root) {
+    const std::string k(key.str());
+    if (k != "radar" && k != "platform" && k != "antenna" && k != "processing" && k != "scene")
+      throw std::invalid_argument(path + ": unknown table or key '" + k +
+                                  "' (radar, platform, antenna, processing, scene)");
+  }
+  SarCase c;
+  rd::SarParams& p = c.p;
+  const Reader radar(root, "radar", path,
+                     {"carrier_hz", "bandwidth_hz", "sample_rate_hz", "pulse_duration_s", "prf_hz",
+                      "transmit_power_w", "peak_gain_db", "polarisation"});
+  radar.number("carrier_hz", p.carrier_hz, 1e8, 1e12);
+  radar.number("bandwidth_hz", p.bandwidth_hz, 1e5, 1e10);
+  p.sample_rate_hz = 1.2 * p.bandwidth_hz;
+  radar.number("sample_rate_hz", p.sample_rate_hz, 1e5, 2e10);
+  radar.number("pulse_duration_s", p.pulse_duration_s, 1e-8, 1e-3);
+  radar.number("prf_hz", p.prf_hz, 1.0, 1e6);
+  radar.number("transmit_power_w", p.transmit_power_w, 1e-6, 1e9);
+  double gain_db = 0.0;
+  radar.number("peak_gain_db", gain_db, -20.0, 80.0);
+  p.peak_gain = std::pow(10.0, gain_db / 10.0);
+  radar.string("polarisation", c.pol_name);
+  c.pol = parse_pol(c.pol_name, radar);
+
+  const Reader plat(root, "platform", path, {"altitude_m", "speed_mps", "heading_deg", "look"});
+  plat.number("altitude_m", c.altitude_m, 10.0, 20000.0);
+  plat.number("speed_mps", c.speed_mps, 0.1, 2000.0);
+  double heading_deg = c.heading_rad / kDeg;
+  plat.number("heading_deg", heading_deg, -360.0, 360.0);
+  c.heading_rad = heading_deg * kDeg;
+  std::string look = "right";
+  plat.string("look", look);
+  if (look != "right" && look != "left")
+    plat.fail("look", "expected \"right\" or \"left\"");
+  p.look_right = look == "right";
+
+  const Reader ant(root, "antenna", path,
+                   {"incidence_deg", "azimuth_beamwidth_deg", "elevation_beamwidth_deg"});
+  double inc = 63.0, az_bw = 0.12, el_bw = 13.0;
+  ant.number("incidence_deg", inc, 5.0, 85.0);
+  ant.number("azimuth_beamwidth_deg", az_bw, 1e-3, 30.0, true);
+  ant.number("elevation_beamwidth_deg", el_bw, 1e-2, 60.0, true);
+  p.incidence_rad = inc * kDeg;
+  p.azimuth_beamwidth_rad = az_bw * kDeg;
+  p.elevation_beamwidth_rad = el_bw * kDeg;
+
+  const Reader proc(root, "processing", path,
+                    {"gates", "synthetic_beamwidth_deg", "taper", "upsample", "image_width_m",
+                     "azimuth_spacing_m", "ground_range_spacing_m"});
+  proc.integer("gates", p.gates, 8, 65536);
+  double syn = c.synthetic_beamwidth_rad / kDeg;
+  proc.number("synthetic_beamwidth_deg", syn, 1e-5, 5.0, true);
+  c.synthetic_beamwidth_rad = syn * kDeg;
+  std::string taper = "none";
+  proc.string("taper", taper);
+  if (taper == "hamming")
+    c.taper = rd::SarTaper::kHamming;
+  else if (taper != "none")
+    proc.fail("taper", "expected \"none\" or \"hamming\"");
+  proc.integer("upsample", c.upsample, 1, 64);
+  proc.number("image_width_m", c.image_width_m, 1.0, 20000.0);
+  proc.number("azimuth_spacing_m", c.azimuth_spacing_m, 0.0, 100.0);
+  proc.number("ground_range_spacing_m", c.ground_range_spacing_m, 0.0, 100.0);
+
+  const Reader scene(
+      root, "scene", path,
+      {"ground_material", "clutter", "clutter_cell_m", "speckle_seed", "target_ray_spacing_m",
+       "max_bounces", "latitude_deg", "longitude_deg", "target[]"});
+  scene.string("ground_material", c.ground_material);
+  if (c.ground_material != "none" && cl::find_terrain_material(c.ground_material) == nullptr)
+    scene.fail("ground_material", "unknown material (none, " + cl::terrain_material_names() + ")");
+  scene.boolean("clutter", c.clutter);
+  scene.number("clutter_cell_m", c.clutter_cell_m, 0.0, 100.0);
+  std::size_t seed = c.speckle_seed;
+  scene.integer("speckle_seed", seed, 0, std::numeric_limits<std::int64_t>::max());
+  c.speckle_seed = seed;
+  scene.number("target_ray_spacing_m", c.target_ray_spacing_m, 1e-3, 10.0);
+  std::size_t bounces = 3;
+  scene.integer("max_bounces", bounces, 1, 16);
+  c.max_bounces = static_cast<int>(bounces);
+  scene.number("latitude_deg", c.latitude_deg, -89.0, 89.0);
+  scene.number("longitude_deg", c.longitude_deg, -180.0, 180.0);
+  if (const toml::node* st = root.get("scene"); st != nullptr && st->as_table() != nullptr) {
+    if (const toml::node* tn = st->as_table()->get("target")) {
+      const toml::array* arr = tn->as_array();
+      if (arr == nullptr || !arr->is_array_of_tables())
+        scene.fail("target", "expected [[scene.target]] tables");
+      std::size_t i = 0;
+      for (const toml::node& e : *arr) {
+        const std::string ctx = "scene.target " + std::to_string(i++);
+        const Reader t(
+            *e.as_table(), ctx, path,
+            {"name", "kind", "a_m", "b_m", "c_m", "position_m", "velocity_mps", "heading_deg"},
+            true);
+        TargetCase tc;
+        tc.name = "target" + std::to_string(i - 1);
+        t.string("name", tc.name);
+        std::string kind = "trihedral-square";
+        t.string("kind", kind);
+        const auto k = sc::target_kind_from_name(kind);
+        if (!k)
+          t.fail("kind", "unknown (" + sc::target_names() + ")");
+        tc.spec.kind = *k;
+        t.number("a_m", tc.spec.a_m, 1e-3, 100.0, true);
+        tc.spec.b_m = tc.spec.a_m;
+        tc.spec.c_m = tc.spec.a_m;
+        t.number("b_m", tc.spec.b_m, 1e-3, 100.0, true);
+        t.number("c_m", tc.spec.c_m, 1e-3, 100.0, true);
+        t.vec3("position_m", tc.position_m, 15000.0);
+        t.vec3("velocity_mps", tc.velocity_mps, 1000.0);
+        double hd = 0.0;
+        t.number("heading_deg", hd, -360.0, 360.0);
+        tc.heading_rad = hd * kDeg;
+        c.targets.push_back(tc);
+      }
+    }
+  }
+
+  // Derived geometry: the image centre at the world origin, the track beside it.
+  const double lambda = kC / p.carrier_hz;
+  const double r0 = c.altitude_m / std::cos(p.incidence_rad);
+  c.ground_centre_m = c.altitude_m * std::tan(p.incidence_rad);
+  c.theta_rad = lambda / (2.0 * r0 * c.synthetic_beamwidth_rad);
+  if (c.theta_rad > p.azimuth_beamwidth_rad)
+    throw std::invalid_argument(
+        path + ": [processing] synthetic_beamwidth_deg: the processed aperture (" +
+        std::to_string(c.theta_rad / kDeg) +
+        " deg) is wider than the antenna's azimuth beamwidth; widen the beam or the synthetic "
+        "beamwidth");
+  const double gate = kC / (2.0 * p.sample_rate_hz);
+  p.near_range_m = r0 - 0.5 * static_cast<double>(p.gates) * gate;
+  if (p.near_range_m <= c.altitude_m)
+    throw std::invalid_argument(path + ": the swath (gates x gate) reaches nadir; fewer gates");
+  const double far = p.near_range_m + static_cast<double>(p.gates) * gate;
+  // Along-track sampling: everything the beam lights to -40 dB (two-way voltage 0.01, 1.29
+  // beamwidths off boresight) must be Nyquist-sampled in Doppler: spacing <= lambda / (4 sin).
+  const double spacing = c.speed_mps / p.prf_hz;
+  const double need = lambda / (4.0 * std::sin(1.29 * p.azimuth_beamwidth_rad));
+  if (spacing > need)
+    throw std::invalid_argument(path + ": [radar] prf_hz: pulses every " + std::to_string(spacing) +
+                                " m along track; the azimuth beam " + "needs at most " +
+                                std::to_string(need) + " m (raise prf_hz)");
+  const double aperture = 2.0 * far * std::tan(c.theta_rad / 2);
+  const double track = c.image_width_m + aperture + 2.0 * spacing;
+  p.pulses = static_cast<std::size_t>(std::ceil(track / spacing)) + 1;
+  if (p.pulses > 200000)
+    throw std::invalid_argument(path + ": " + std::to_string(p.pulses) +
+                                " pulses (over 200000): shorten image_width_m or lower prf_hz");
+  const glm::dvec3 tdir{std::sin(c.heading_rad), std::cos(c.heading_rad), 0.0};
+  p.velocity_mps = c.speed_mps * tdir;
+  const glm::dvec3 ldir = rd::sar_look_dir(p);
+  p.start_position_m =
+      -c.ground_centre_m * ldir - 0.5 * track * tdir + glm::dvec3(0.0, 0.0, c.altitude_m);
+  if (c.azimuth_spacing_m == 0.0)
+    c.azimuth_spacing_m = 0.8 * r0 * c.synthetic_beamwidth_rad;  // 0.8 x Nyquist
+  if (c.ground_range_spacing_m == 0.0)
+    c.ground_range_spacing_m = 0.8 * kC / (2.0 * p.bandwidth_hz) / std::sin(p.incidence_rad);
+  if (c.clutter_cell_m == 0.0)
+    c.clutter_cell_m = std::min(c.azimuth_spacing_m, c.ground_range_spacing_m) / 2.0;
+  try {
+    rd::validate(p);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(path + ": " + e.what());
+  }
+  return c;
+}
+
+std::invalid_argument toml_error(const std::string& origin, const toml::parse_error& e) {
+  std::ostringstream os;
+  os << origin << ":" << e.source().begin.line << ": " << e.description();
+  return std::invalid_argument(os.str());
+}
+
+SarCase load_case(const std::string& path) {
+  toml::table root;
+  try {
+    root = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw toml_error(path, e);
+  }
+  return case_from_table(root, path);
+}
+
+// ------------------------------------------------------------------------------ the scene
+
+// Rotation taking unit a onto unit b (Rodrigues).
+glm::dmat3 rotation_onto(const glm::dvec3& a, const glm::dvec3& b) {
+  const glm::dvec3 v = glm::cross(a, b);
+  const double s = glm::length(v), cth = glm::dot(a, b);
+  if (s < 1e-12)
+    return cth > 0 ? glm::dmat3(1.0) : glm::dmat3(-1.0);
+  const glm::dvec3 u = v / s;
+  const glm::dmat3 k(glm::dvec3(0, u.z, -u.y), glm::dvec3(-u.z, 0, u.x), glm::dvec3(u.y, -u.x, 0));
+  return glm::dmat3(1.0) + s * k + (1.0 - cth) * k * k;
+}
+
+bool is_trihedral(sc::TargetKind k) {
+  return k == sc::TargetKind::kTrihedralSquare || k == sc::TargetKind::kTrihedralTriangular;
+}
+
+// The platform at broadside of world point x (its along-track coordinate).
+glm::dvec3 broadside_platform(const rd::SarParams& p, const glm::dvec3& x) {
+  const glm::dvec3 t = rd::sar_track_dir(p);
+  const double s = glm::dot(x - p.start_position_m, t);
+  return p.start_position_m + s * t;
+}
+
+sc::SceneDescription build_scene(const SarCase& c, double half_extent_m) {
+  sc::SceneDescription d;
+  d.anchor.latitude_rad = c.latitude_deg * kDeg;
+  d.anchor.longitude_rad = c.longitude_deg * kDeg;
+  d.materials.push_back({"metal", {0.8f, 0.8f, 0.8f}});
+  if (c.ground_material != "none") {
+    d.materials.push_back({c.ground_material, {0.3f, 0.5f, 0.2f}});
+    sc::ObjectDesc g;
+    g.name = "ground";
+    const auto e = static_cast<float>(half_extent_m);
+    g.mesh.positions_m = {{-e, -e, 0.0f}, {e, -e, 0.0f}, {e, e, 0.0f}, {-e, e, 0.0f}};
+    g.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+    g.mesh.triangle_material = {1, 1};
+    d.objects.push_back(std::move(g));
+  }
+  for (const TargetCase& t : c.targets) {
+    sc::SceneDescription one = sc::make_target(t.spec);
+    sc::ObjectDesc o = std::move(one.objects.at(0));
+    o.name = t.name;
+    std::fill(o.mesh.triangle_material.begin(), o.mesh.triangle_material.end(), 0);
+    glm::dmat3 rot(1.0);
+    if (is_trihedral(t.spec.kind)) {
+      // Symmetry axis (1,1,1) toward the platform at broadside.
+      const glm::dvec3 to_radar =
+          glm::normalize(broadside_platform(c.p, t.position_m) - t.position_m);
+      rot = rotation_onto(glm::normalize(glm::dvec3(1.0)), to_radar);
+    } else {
+      const double a = rd::kPi / 2 - t.heading_rad;  // body +x along the heading
+      rot = glm::dmat3(glm::dvec3(std::cos(a), std::sin(a), 0),
+                       glm::dvec3(-std::sin(a), std::cos(a), 0), glm::dvec3(0, 0, 1));
+    }
+    glm::dmat4 m(rot);
+    m[3] = glm::dvec4(t.position_m, 1.0);
+    if (glm::length(t.velocity_mps) > 0.0) {
+      // LinearMotion turns the body's +x along the velocity: keep the mesh as built.
+      o.motion = sc::LinearMotion{t.position_m, t.velocity_mps};
+      // Bake the rotation into the vertices, less the yaw the motion will add.
+      const double psi = std::atan2(t.velocity_mps.y, t.velocity_mps.x);
+      const glm::dmat3 unyaw(glm::dvec3(std::cos(psi), -std::sin(psi), 0),
+                             glm::dvec3(std::sin(psi), std::cos(psi), 0), glm::dvec3(0, 0, 1));
+      for (auto& v : o.mesh.positions_m)
+        v = glm::vec3(unyaw * rot * glm::dvec3(v));
+      o.world_from_body = glm::dmat4(1.0);
+    } else {
+      o.world_from_body = m;
+    }
+    d.objects.push_back(std::move(o));
+  }
+  return d;
+}
+
+// ------------------------------------------------------------------------------ outputs
+
+void write_png(const rd::SarImage& img, const std::string& title, const std::string& path) {
+  const auto& g = img.grid;
+  // Square display pixels of the finer spacing (nearest neighbour), dB over a 50 dB range below
+  // the 99.9th percentile.
+  const double px = std::min(g.azimuth_spacing_m, g.ground_range_spacing_m);
+  const double w_m = static_cast<double>(g.cols) * g.ground_range_spacing_m;
+  const double h_m = static_cast<double>(g.rows) * g.azimuth_spacing_m;
+  double scale = px;
+  while (w_m / scale > 1600.0 || h_m / scale > 1600.0)
+    scale *= 1.25;
+  const int w = std::max(1, static_cast<int>(w_m / scale));
+  const int h = std::max(1, static_cast<int>(h_m / scale));
+  std::vector<double> db(img.pixels.size());
+  for (std::size_t i = 0; i < db.size(); ++i)
+    db[i] = db10(static_cast<double>(std::norm(img.pixels[i])));
+  std::vector<double> sorted = db;
+  std::sort(sorted.begin(), sorted.end());
+  const double top =
+      sorted[static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1))];
+  const double range = 50.0;
+  const int margin = 40;
+  Canvas cv(w + 2 * margin, h + 2 * margin + 30, Rgb{255, 255, 255});
+  for (int y = 0; y < h; ++y) {
+    const auto r =
+        std::min(g.rows - 1, static_cast<std::size_t>((y + 0.5) * scale / g.azimuth_spacing_m));
+    for (int x = 0; x < w; ++x) {
+      const auto col = std::min(
+          g.cols - 1, static_cast<std::size_t>((x + 0.5) * scale / g.ground_range_spacing_m));
+      const double f = std::clamp((db[r * g.cols + col] - (top - range)) / range, 0.0, 1.0);
+      const auto v = static_cast<std::uint8_t>(std::lround(255.0 * f));
+      cv.put(margin + x, margin + y, Rgb{v, v, v});
+    }
+  }
+  cv.text(margin, 12, title, Rgb{0, 0, 0}, 1);
+  cv.text(margin, margin + h + 8,
+          "rows: along track (flight down), columns: ground range (near left); " +
+              std::to_string(static_cast<int>(range)) + " dB grey scale",
+          Rgb{0, 0, 0}, 1);
+  // Scale bar: 1, 2 or 5 x 10^n metres, about a fifth of the width.
+  const double target = w_m / 5.0;
+  double bar = std::pow(10.0, std::floor(std::log10(target)));
+  for (double m : {5.0, 2.0, 1.0})
+    if (bar * m <= target) {
+      bar *= m;
+      break;
+    }
+  const int bar_px = static_cast<int>(bar / scale);
+  const int bx = margin + w - bar_px - 10, by = margin + h - 16;
+  cv.rect(bx - 4, by - 14, bx + bar_px + 4, by + 8, Rgb{0, 0, 0});
+  cv.rect(bx, by, bx + bar_px, by + 4, Rgb{255, 255, 255});
+  std::ostringstream label;
+  label << bar << " m";
+  cv.text(bx, by - 11, label.str(), Rgb{255, 255, 255}, 1);
+  cv.write_png(path);
+}
+
+#ifdef RADAR_EMU_HAVE_GDAL
+// Local transverse Mercator at the scene anchor: within a few km its easting/northing equal the
+// ENU x/y of the scene to millimetres (scale error x^2 / (2 R^2) < 1e-7 at 2 km).
+std::string local_wkt(const SarCase& c) {
+  OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
+  OSRSetWellKnownGeogCS(srs, "WGS84");
+  OSRSetTM(srs, c.latitude_deg, c.longitude_deg, 1.0, 0.0, 0.0);
+  OSRSetLinearUnits(srs, SRS_UL_METER, 1.0);
+  char* wkt = nullptr;
+  OSRExportToWkt(srs, &wkt);
+  std::string out = wkt != nullptr ? wkt : "";
+  CPLFree(wkt);
+  OSRDestroySpatialReference(srs);
+  return out;
+}
+
+struct GdalDataset {
+  GDALDatasetH h = nullptr;
+  ~GdalDataset() {
+    if (h != nullptr)
+      GDALClose(h);
+  }
+};
+
+void write_geotiff(const std::string& path, std::size_t rows, std::size_t cols,
+                   const std::vector<std::complex<float>>& data, const SarCase& c,
+                   const double* geotransform, const std::vector<GDAL_GCP>& gcps,
+                   const std::vector<std::pair<std::string, std::string>>& metadata) {
+  GDALAllRegister();
+  GDALDriverH drv = GDALGetDriverByName("GTiff");
+  if (drv == nullptr)
+    throw std::runtime_error(path + ": GDAL has no GTiff driver");
+  char** opts = nullptr;
+  opts = CSLSetNameValue(opts, "BIGTIFF", "IF_SAFER");
+  GdalDataset ds;
+  ds.h = GDALCreate(drv, path.c_str(), static_cast<int>(cols), static_cast<int>(rows), 1,
+                    GDT_CFloat32, opts);
+  CSLDestroy(opts);
+  if (ds.h == nullptr)
+    throw std::runtime_error(path + ": GDAL cannot create the file: " + CPLGetLastErrorMsg());
+  const std::string wkt = local_wkt(c);
+  if (geotransform != nullptr) {
+    GDALSetGeoTransform(ds.h, const_cast<double*>(geotransform));
+    GDALSetProjection(ds.h, wkt.c_str());
+  } else if (!gcps.empty()) {
+    GDALSetGCPs(ds.h, static_cast<int>(gcps.size()), gcps.data(), wkt.c_str());
+  }
+  for (const auto& [k, v] : metadata)
+    GDALSetMetadataItem(ds.h, k.c_str(), v.c_str(), nullptr);
+  GDALRasterBandH band = GDALGetRasterBand(ds.h, 1);
+  const CPLErr err =
+      GDALRasterIO(band, GF_Write, 0, 0, static_cast<int>(cols), static_cast<int>(rows),
+                   const_cast<std::complex<float>*>(data.data()), static_cast<int>(cols),
+                   static_cast<int>(rows), GDT_CFloat32, 0, 0);
+  if (err != CE_None)
+    throw std::runtime_error(path + ": GDAL write failed: " + CPLGetLastErrorMsg());
+}
+#endif
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os.precision(12);
+  os << v;
+  return os.str();
+}
+
+}  // namespace
+
+SarCase parse_sar_case(std::string_view text, const std::string& origin) {
+  toml::table root;
+  try {
+    root = toml::parse(text, std::string_view(origin));
+  } catch (const toml::parse_error& e) {
+    throw toml_error(origin, e);
+  }
+  return case_from_table(root, origin);
+}
+
+bool sar_geotiff_available() noexcept {
+#ifdef RADAR_EMU_HAVE_GDAL
+  return true;
+#else
+  return false;
+#endif
+}
+
+int run_sar_tool(const SarToolOptions& o) {
+  if (!sar_geotiff_available())
+    throw std::invalid_argument(
+        "sar: GeoTIFF output needs GDAL, and this radar-emu was built without it (install "
+        "libgdal-dev and reconfigure)");
+  const SarCase c = load_case(o.config);
+  const rd::SarParams& p = c.p;
+  std::filesystem::create_directories(o.out_dir);
+  const std::filesystem::path dir(o.out_dir);
+  const double lambda = rd::sar_wavelength_m(p);
+  const glm::dvec3 tdir = rd::sar_track_dir(p), ldir = rd::sar_look_dir(p);
+  const double gate = rd::sar_gate_m(p);
+  const double far = p.near_range_m + static_cast<double>(p.gates) * gate;
+  const double g_near = std::sqrt(p.near_range_m * p.near_range_m - c.altitude_m * c.altitude_m);
+  const double g_far = std::sqrt(far * far - c.altitude_m * c.altitude_m);
+  const double track_len = static_cast<double>(p.pulses - 1) * c.speed_mps / p.prf_hz;
+
+  // Image grid: image_width_m along track centred on the origin, the swath in ground range.
+  rd::SarImageGrid grid;
+  grid.azimuth_spacing_m = c.azimuth_spacing_m;
+  grid.ground_range_spacing_m = c.ground_range_spacing_m;
+  grid.rows = static_cast<std::size_t>(std::floor(c.image_width_m / c.azimuth_spacing_m)) + 1;
+  grid.cols = static_cast<std::size_t>(std::floor((g_far - g_near) / c.ground_range_spacing_m)) + 1;
+  grid.origin_m = -0.5 * c.image_width_m * tdir + (g_near - c.ground_centre_m) * ldir;
+
+  // Scene: ground wide enough for the whole track and swath.
+  const double half_extent = 0.5 * track_len + g_far + 100.0;
+  sc::Scene scene(build_scene(c, half_extent));
+  rd::SbrConfig cfg;
+  cfg.carrier_hz = p.carrier_hz;
+  cfg.azimuth_min_rad = -1.29 * p.azimuth_beamwidth_rad;
+  cfg.azimuth_max_rad = 1.29 * p.azimuth_beamwidth_rad;
+  cfg.elevation_min_rad = std::max(-1.29 * p.elevation_beamwidth_rad, -1.5);
+  cfg.elevation_max_rad = std::min(1.29 * p.elevation_beamwidth_rad, 1.5);
+  cfg.terrain_ray_spacing_rad = 5e-3;  // diffuse terrain comes from the clutter cells
+  cfg.target_ray_spacing_m = c.target_ray_spacing_m;
+  cfg.max_range_m = far + p.pulse_duration_s * kC;
+  cfg.max_bounces = c.max_bounces;
+  cfg.polarisation = c.pol;
+  rd::SbrTracer tracer(scene, cfg);
+
+  // --- clutter cells (setup ray casting counted as ray tracing).
+  const auto t_raw0 = Clock::now();
+  double trace_s = 0.0;
+  std::vector<rd::SarScatterer> cells;
+  std::size_t shadowed = 0;
+  if (c.clutter && c.ground_material != "none") {
+    const auto t0 = Clock::now();
+    // Cells over the image plus the beam's reach beyond it along track and a margin in range.
+    rd::TerrainCellSpec ts;
+    ts.cell_m = c.clutter_cell_m;
+    const double reach = far * std::tan(1.58 * p.azimuth_beamwidth_rad) + 2.0;
+    const double a0 = -0.5 * c.image_width_m - reach, a1 = 0.5 * c.image_width_m + reach;
+    const double r0 = g_near - c.ground_centre_m - 20.0, r1 = g_far - c.ground_centre_m + 20.0;
+    ts.origin_m = a0 * tdir + r0 * ldir;
+    ts.along = static_cast<std::size_t>((a1 - a0) / ts.cell_m) + 1;
+    ts.across = static_cast<std::size_t>((r1 - r0) / ts.cell_m) + 1;
+    ts.polarisation = c.pol;
+    ts.speckle.seed = c.speckle_seed;
+    rd::TerrainCells tc = rd::terrain_cells(scene, tracer, p, ts);
+    cells = std::move(tc.cells);
+    shadowed = tc.shadowed;
+    trace_s += seconds_since(t0);
+  }
+
+  // --- raw data: clutter cells, then the tracer's coherent returns per pulse.
+  rd::SarRaw raw = rd::make_raw(p);
+  // Under mpirun the pulses split into one contiguous block a rank (docs/cluster.md): each rank
+  // synthesises its rows exactly as one process would, rank 0 gathers them and alone forms the
+  // image and writes. The clutter cells above are computed by every rank (setup, not split).
+  mpi_work::start();
+  const mpi_work::Block block = mpi_work::my_block(p.pulses);
+  const auto t_cl = Clock::now();
+  rd::synthesise_points(p, cells, block.begin, block.end, raw);
+  const double clutter_s = seconds_since(t_cl);
+  std::vector<rd::Contribution> out(tracer.max_contributions());
+  std::vector<rd::SarEcho> echoes;
+  std::vector<glm::dvec3> dirs;
+  rd::TraceStats stats;
+  const glm::dmat3 w = rd::sar_world_from_antenna(p);
+  double echo_s = 0.0;
+  // Per pulse, gathered with the raw rows: target echoes and rays traced.
+  std::vector<std::uint64_t> echoes_per_pulse(p.pulses, 0), rays_per_pulse(p.pulses, 0);
+  // Pulses [begin, end) of the targets' echoes into the preallocated raw matrix (the clutter's
+  // synthesise_points takes the same range): a rank of a scale-out can run its share.
+  auto target_pulses = [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      const double t = rd::sar_pulse_time_s(p, i);
+      const auto t0 = Clock::now();
+      scene.set_time(t);
+      rd::RadarPose pose;
+      pose.position_m = rd::sar_platform_m(p, t);
+      pose.velocity_mps = p.velocity_mps;
+      pose.world_from_antenna = w;
+      const std::uint64_t rays_before = stats.rays;
+      const std::size_t n = tracer.trace(pose, out, stats);
+      rays_per_pulse[i] = stats.rays - rays_before;
+      const auto t1 = Clock::now();
+      trace_s += std::chrono::duration<double>(t1 - t0).count();
+      echoes.clear();
+      dirs.clear();
+      for (std::size_t k = 0; k < n; ++k) {
+        const rd::Contribution& ct = out[k];
+        if (!ct.coherent || !tracer.is_target(ct.object_id))
+          continue;
+        echoes.push_back({ct.amplitude, ct.range_m});
+        dirs.push_back(w * rd::direction_from_azel({ct.azimuth_rad, ct.elevation_rad}));
+      }
+      echoes_per_pulse[i] = echoes.size();
+      rd::add_echoes(p, echoes, dirs, std::span(raw.data).subspan(i * raw.samples, raw.samples));
+      echo_s += seconds_since(t1);
+    }
+  };
+  if (!c.targets.empty())
+    target_pulses(block.begin, block.end);
+  mpi_work::gather_blocks(std::span(raw.data), raw.samples);
+  mpi_work::gather_blocks(std::span(echoes_per_pulse));
+  mpi_work::gather_blocks(std::span(rays_per_pulse));
+  if (!mpi_work::is_root())
+    return 0;
+  std::uint64_t target_echoes = 0, rays = 0;
+  for (std::size_t i = 0; i < p.pulses; ++i) {
+    target_echoes += echoes_per_pulse[i];
+    rays += rays_per_pulse[i];
+  }
+  const double raw_s = seconds_since(t_raw0);
+
+  // --- image.
+  const auto t_img0 = Clock::now();
+  const rd::SarCompressed rc = rd::range_compress(p, raw, c.taper);
+  const double rc_s = seconds_since(t_img0);
+  const auto t_bp0 = Clock::now();
+  const rd::SarImage img = rd::backproject(p, rc, grid, {c.theta_rad, c.taper, c.upsample, 0.01});
+  const double bp_s = seconds_since(t_bp0);
+  const double image_s = seconds_since(t_img0);
+
+  // --- point targets: static trihedrals get the IRF analysis; movers their displacement.
+  nlohmann::json jt = nlohmann::json::array();
+  const double rho_r = kC / (2.0 * p.bandwidth_hz), rho_a = lambda / (2.0 * c.theta_rad);
+  for (const TargetCase& t : c.targets) {
+    nlohmann::json j;
+    j["name"] = t.name;
+    j["kind"] = std::string(sc::target_name(t.spec.kind));
+    j["position_m"] = {t.position_m.x, t.position_m.y, t.position_m.z};
+    const glm::dvec3 rel = t.position_m - grid.origin_m;
+    const double row = glm::dot(rel, tdir) / grid.azimuth_spacing_m;
+    const double col = glm::dot(rel, ldir) / grid.ground_range_spacing_m;
+    const glm::dvec3 radar = broadside_platform(p, t.position_m);
+    const double range = glm::length(radar - t.position_m);
+    const double sin_inc = glm::length(glm::dvec2(radar - t.position_m)) / range;
+    j["expected_pixel"] = {row, col};
+    if (glm::length(t.velocity_mps) > 0.0) {
+      // Raney (1971): a target with radial velocity v_r images shifted along track by
+      // -R v_r / V (v_r > 0 receding).
+      const double v_r = glm::dot(t.velocity_mps, glm::normalize(t.position_m - radar));
+      j["radial_velocity_mps"] = v_r;
+      const double shift = -range * v_r / c.speed_mps;
+      j["predicted_azimuth_shift_m"] = shift;
+      // The shift is where the mover's echo has zero Doppler: the radar sees that only when the
+      // beam reaches that place. With the Gaussian beam (radar/products/sar.hpp) the two-way
+      // power gain at azimuth angle a = |shift| / R is -8 ln2 (a / theta_az)^2 nepers, in dB
+      // 10 log10 of it; below the synthesis' own cut (-60 dB) the mover is seen only near
+      // broadside, at a Doppler 2 v_r / lambda the processing does not pass: it images (faint,
+      // defocused) near its own place, not at the shift.
+      const double a_rel = std::abs(shift) / range / p.azimuth_beamwidth_rad;
+      const double gain_db = -80.0 * std::log10(2.0) * a_rel * a_rel;  // 10 log10 e^(-8 ln2 x^2)
+      const bool in_beam = gain_db >= -60.0;
+      j["doppler_hz"] = 2.0 * v_r / lambda;
+      j["zero_doppler_two_way_gain_db"] = gain_db;
+      j["zero_doppler_in_beam"] = in_beam;
+      const double search_shift = in_beam ? shift : 0.0;
+      // Where it imaged: the brightest pixel within +-15 m along track and +-10 m in ground range
+      // of the predicted place (the zero-Doppler place when in the beam, else its own; its ground
+      // range where the platform passes its along-track place).
+      const double t_b = glm::dot(t.position_m - p.start_position_m, tdir) / c.speed_mps;
+      const glm::dvec3 at_b = t.position_m + t.velocity_mps * t_b;
+      const double col_b = glm::dot(at_b - grid.origin_m, ldir) / grid.ground_range_spacing_m;
+      const double row_p = glm::dot(at_b - grid.origin_m, tdir) / grid.azimuth_spacing_m +
+                           search_shift / grid.azimuth_spacing_m;
+      const auto span_r = static_cast<std::ptrdiff_t>(15.0 / grid.azimuth_spacing_m);
+      const auto span_c = static_cast<std::ptrdiff_t>(10.0 / grid.ground_range_spacing_m);
+      double best = -1.0;
+      std::ptrdiff_t br = -1, bc = -1;
+      for (std::ptrdiff_t r = std::llround(row_p) - span_r; r <= std::llround(row_p) + span_r; ++r)
+        for (std::ptrdiff_t cc = std::llround(col_b) - span_c; cc <= std::llround(col_b) + span_c;
+             ++cc) {
+          if (r < 0 || cc < 0 || r >= static_cast<std::ptrdiff_t>(grid.rows) ||
+              cc >= static_cast<std::ptrdiff_t>(grid.cols))
+            continue;
+          const double v = static_cast<double>(std::norm(
+              img.pixels[static_cast<std::size_t>(r) * grid.cols + static_cast<std::size_t>(cc)]));
+          if (v > best) {
+            best = v;
+            br = r;
+            bc = cc;
+          }
+        }
+      if (br >= 0) {
+        j["measured_azimuth_shift_m"] =
+            (static_cast<double>(br) - (row_p - search_shift / grid.azimuth_spacing_m)) *
+            grid.azimuth_spacing_m;
+        j["measured_ground_range_offset_m"] =
+            (static_cast<double>(bc) - col_b) * grid.ground_range_spacing_m;
+        j["peak_dbsm"] = db10(best);
+      }
+      jt.push_back(j);
+      continue;
+    }
+    // Extended targets have no impulse response to measure.
+    if (!is_trihedral(t.spec.kind) || row < 0 || col < 0 || row >= static_cast<double>(grid.rows) ||
+        col >= static_cast<double>(grid.cols)) {
+      jt.push_back(j);
+      continue;
+    }
+    rd::IrfOptions io;
+    io.chip = 96;
+    io.quadratic_phase_row_rad = rd::sar_azimuth_quadratic_phase(p, range, grid.azimuth_spacing_m);
+    try {
+      const rd::IrfResult r = rd::analyse_point_target(
+          img.pixels, grid.rows, grid.cols, static_cast<std::size_t>(std::lround(row)),
+          static_cast<std::size_t>(std::lround(col)), io);
+      const double energy = r.chip_energy * grid.azimuth_spacing_m * grid.ground_range_spacing_m /
+                            (rho_r / sin_inc * rho_a);
+      j["range_resolution_m"] = r.range.resolution_px * grid.ground_range_spacing_m * sin_inc;
+      j["azimuth_resolution_m"] = r.azimuth.resolution_px * grid.azimuth_spacing_m;
+      j["range_pslr_db"] = r.range.pslr_db;
+      j["azimuth_pslr_db"] = r.azimuth.pslr_db;
+      j["range_islr_db"] = r.range.islr_db;
+      j["azimuth_islr_db"] = r.azimuth.islr_db;
+      j["range_offset_m"] = (r.peak_col - col) * grid.ground_range_spacing_m * sin_inc;
+      j["azimuth_offset_m"] = (r.peak_row - row) * grid.azimuth_spacing_m;
+      j["peak_dbsm"] = db10(r.peak_power);
+      j["integrated_energy_dbsm"] = db10(energy);
+      j["range_cut_db"] = r.range.power_db;
+      j["azimuth_cut_db"] = r.azimuth.power_db;
+      j["cut_step_px"] = 1.0 / static_cast<double>(io.oversample);
+      j["sin_incidence"] = sin_inc;
+      if (t.spec.kind == sc::TargetKind::kTrihedralSquare)
+        j["rcs_theory_dbsm"] = db10(12.0 * rd::kPi * std::pow(t.spec.a_m, 4) / (lambda * lambda));
+      else if (t.spec.kind == sc::TargetKind::kTrihedralTriangular)
+        j["rcs_theory_dbsm"] =
+            db10(4.0 * rd::kPi * std::pow(t.spec.a_m, 4) / (3.0 * lambda * lambda));
+    } catch (const std::invalid_argument& e) {
+      j["irf_error"] = e.what();
+    }
+    jt.push_back(j);
+  }
+
+  // --- outputs.
+  std::vector<std::pair<std::string, std::string>> md{
+      {"CARRIER_HZ", fmt(p.carrier_hz)},         {"BANDWIDTH_HZ", fmt(p.bandwidth_hz)},
+      {"SAMPLE_RATE_HZ", fmt(p.sample_rate_hz)}, {"PRF_HZ", fmt(p.prf_hz)},
+      {"NEAR_RANGE_M", fmt(p.near_range_m)},     {"POLARISATION", c.pol_name}};
+#ifdef RADAR_EMU_HAVE_GDAL
+  if (!o.no_raw) {
+    // Raw data in radar geometry (pulse, fast-time sample): GCPs at the four corners and the
+    // centre, each the flat-ground point at that sample's slant range, broadside of that pulse.
+    std::vector<GDAL_GCP> gcps;
+    std::vector<std::string> ids;
+    const std::size_t h = (rd::sar_chirp_samples(p) - 1) / 2;
+    for (double fp : {0.0, 0.5, 1.0})
+      for (double fs : {0.0, 0.5, 1.0}) {
+        const double pulse = fp * static_cast<double>(p.pulses - 1);
+        const double sample = fs * static_cast<double>(raw.samples - 1);
+        const double range = p.near_range_m + (sample - static_cast<double>(h)) * gate;
+        if (range <= c.altitude_m)
+          continue;
+        const glm::dvec3 pos = rd::sar_platform_m(p, pulse / p.prf_hz);
+        const double g = std::sqrt(range * range - c.altitude_m * c.altitude_m);
+        const glm::dvec3 x = glm::dvec3(pos.x, pos.y, 0.0) + g * ldir;
+        ids.push_back(std::to_string(gcps.size() + 1));
+        GDAL_GCP gcp{};
+        gcp.dfGCPPixel = sample + 0.5;
+        gcp.dfGCPLine = pulse + 0.5;
+        gcp.dfGCPX = x.x;
+        gcp.dfGCPY = x.y;
+        gcp.dfGCPZ = 0.0;
+        gcps.push_back(gcp);
+      }
+    for (std::size_t i = 0; i < gcps.size(); ++i) {
+      gcps[i].pszId = ids[i].data();
+      gcps[i].pszInfo = const_cast<char*>("");
+    }
+    auto mdr = md;
+    mdr.emplace_back("RAW_FIRST_SAMPLE_RANGE_M",
+                     fmt(p.near_range_m - static_cast<double>(h) * gate));
+    mdr.emplace_back("PULSE_DURATION_S", fmt(p.pulse_duration_s));
+    write_geotiff((dir / "raw.tif").string(), raw.pulses, raw.samples, raw.data, c, nullptr, gcps,
+                  mdr);
+  }
+  {
+    const glm::dvec3 corner = grid.origin_m - 0.5 * grid.azimuth_spacing_m * tdir -
+                              0.5 * grid.ground_range_spacing_m * ldir;
+    const double gt[6] = {
+        corner.x, grid.ground_range_spacing_m * ldir.x, grid.azimuth_spacing_m * tdir.x,
+        corner.y, grid.ground_range_spacing_m * ldir.y, grid.azimuth_spacing_m * tdir.y};
+    auto mdi = md;
+    mdi.emplace_back("UNITS", "scattering amplitude [m]: |pixel|^2 = sigma of a point target");
+    mdi.emplace_back("INTEGRATION_ANGLE_RAD", fmt(c.theta_rad));
+    write_geotiff((dir / "image.tif").string(), grid.rows, grid.cols, img.pixels, c, gt, {}, mdi);
+  }
+#endif
+  std::ostringstream title;
+  title << "radar-emu sar: " << p.carrier_hz / 1e9 << " GHz, B " << p.bandwidth_hz / 1e6
+        << " MHz, incidence " << p.incidence_rad / kDeg << " deg, " << c.pol_name;
+  write_png(img, title.str(), (dir / "image.png").string());
+
+  // The impulse response of the first analysed trihedral: range and azimuth cuts, dB.
+  for (const auto& t : jt) {
+    if (!t.contains("range_cut_db"))
+      continue;
+    LineChart chart;
+    chart.title = "SAR impulse response, " + t["name"].get<std::string>() + " (" +
+                  (c.taper == rd::SarTaper::kNone ? "unweighted" : "Hamming") + ")";
+    chart.x_label = "offset from the peak [resolution cells c/(2B), lambda/(2 Theta)]";
+    chart.y_label = "power [dB]";
+    chart.y_min = -70.0;
+    chart.y_max = 3.0;
+    const double step = t["cut_step_px"].get<double>();
+    for (const char* axis : {"range", "azimuth"}) {
+      const auto cut = t[std::string(axis) + "_cut_db"].get<std::vector<double>>();
+      const std::size_t k =
+          static_cast<std::size_t>(std::max_element(cut.begin(), cut.end()) - cut.begin());
+      // Pixels to resolution cells: ground-range pixels through the incidence, azimuth pixels.
+      const double cell_px =
+          std::string(axis) == "range"
+              ? rho_r / t["sin_incidence"].get<double>() / grid.ground_range_spacing_m
+              : rho_a / grid.azimuth_spacing_m;
+      Series se;
+      se.label = axis;
+      for (std::size_t i = 0; i < cut.size(); ++i) {
+        const double x = (static_cast<double>(i) - static_cast<double>(k)) * step / cell_px;
+        if (std::abs(x) <= 25.0) {
+          se.x.push_back(x);
+          se.y.push_back(std::max(cut[i], -70.0));
+        }
+      }
+      chart.series.push_back(std::move(se));
+    }
+    write_line_chart_png(chart, dir / "irf.png");
+    break;
+  }
+
+  nlohmann::json j;
+  j["config"] = o.config;
+  j["radar"] = {{"carrier_hz", p.carrier_hz},
+                {"wavelength_m", lambda},
+                {"bandwidth_hz", p.bandwidth_hz},
+                {"sample_rate_hz", p.sample_rate_hz},
+                {"pulse_duration_s", p.pulse_duration_s},
+                {"prf_hz", p.prf_hz},
+                {"transmit_power_w", p.transmit_power_w},
+                {"peak_gain", p.peak_gain},
+                {"polarisation", c.pol_name}};
+  j["platform"] = {
+      {"altitude_m", c.altitude_m},
+      {"speed_mps", c.speed_mps},
+      {"heading_deg", c.heading_rad / kDeg},
+      {"look", p.look_right ? "right" : "left"},
+      {"start_position_m", {p.start_position_m.x, p.start_position_m.y, p.start_position_m.z}},
+      {"track_length_m", track_len},
+      {"pulses", p.pulses}};
+  j["antenna"] = {{"incidence_deg", p.incidence_rad / kDeg},
+                  {"azimuth_beamwidth_deg", p.azimuth_beamwidth_rad / kDeg},
+                  {"elevation_beamwidth_deg", p.elevation_beamwidth_rad / kDeg}};
+  j["processing"] = {
+      {"algorithm", "time-domain backprojection"},
+      {"gates", p.gates},
+      {"gate_m", gate},
+      {"near_range_m", p.near_range_m},
+      {"synthetic_beamwidth_deg", c.synthetic_beamwidth_rad / kDeg},
+      {"integration_angle_deg", c.theta_rad / kDeg},
+      {"taper", c.taper == rd::SarTaper::kNone ? "none" : "hamming"},
+      {"upsample", c.upsample},
+      {"theory_range_resolution_m", rd::theory_range_resolution_m(p, c.taper)},
+      {"theory_azimuth_resolution_m", rd::theory_azimuth_resolution_m(p, c.theta_rad, c.taper)},
+      {"image_rows", grid.rows},
+      {"image_cols", grid.cols},
+      {"azimuth_spacing_m", grid.azimuth_spacing_m},
+      {"ground_range_spacing_m", grid.ground_range_spacing_m}};
+  j["scene"] = {{"ground_material", c.ground_material},
+                {"clutter", c.clutter},
+                {"clutter_cells", cells.size()},
+                {"shadowed_cells", shadowed},
+                {"clutter_cell_m", c.clutter_cell_m},
+                {"speckle_seed", c.speckle_seed},
+                {"targets", c.targets.size()},
+                {"target_echoes", target_echoes},
+                {"rays", rays},
+                {"latitude_deg", c.latitude_deg},
+                {"longitude_deg", c.longitude_deg}};
+  j["timing_s"] = {{"raw", raw_s},
+                   {"raw_ray_tracing", trace_s},
+                   {"raw_clutter_synthesis", clutter_s},
+                   {"raw_target_synthesis", echo_s},
+                   {"image", image_s},
+                   {"image_range_compression", rc_s},
+                   {"image_backprojection", bp_s},
+                   {"image_ray_tracing", 0.0}};
+  j["point_targets"] = jt;
+  std::ofstream f(dir / "sar.json");
+  f << j.dump(2) << "\n";
+  if (!f)
+    throw std::runtime_error((dir / "sar.json").string() + ": cannot write");
+  if (!o.quiet) {
+    std::printf(
+        "sar: %zu pulses x %zu gates, image %zu x %zu, raw %.2f s (ray tracing %.0f %%), "
+        "image %.2f s (ray tracing 0 %%)\n",
+        p.pulses, p.gates, grid.rows, grid.cols, raw_s, raw_s > 0 ? 100.0 * trace_s / raw_s : 0.0,
+        image_s);
+    for (const auto& t : jt)
+      if (t.contains("range_resolution_m"))
+        std::printf(
+            "  %s: res %.3f / %.3f m, PSLR %.2f / %.2f dB, ISLR %.2f / %.2f dB, peak "
+            "%.2f dBsm, energy %.2f dBsm\n",
+            t["name"].get<std::string>().c_str(), t["range_resolution_m"].get<double>(),
+            t["azimuth_resolution_m"].get<double>(), t["range_pslr_db"].get<double>(),
+            t["azimuth_pslr_db"].get<double>(), t["range_islr_db"].get<double>(),
+            t["azimuth_islr_db"].get<double>(), t["peak_dbsm"].get<double>(),
+            t["integrated_energy_dbsm"].get<double>());
+    std::printf("  outputs in %s\n", o.out_dir.c_str());
+  }
+  return 0;
+}
+
+}  // namespace radar_emu::tools

@@ -1,0 +1,61 @@
+#pragma once
+// The case of `radar-emu sar` (tools/sar.hpp): its TOML parser, apart from the tool so
+// that the fuzz harness (tests/fuzz/fuzz_sar_case.cpp) and tests can call it on text.
+
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "radar/constants.hpp"
+#include "radar/em/sbr_core.hpp"
+#include "radar/products/sar.hpp"
+#include "scene/targets.hpp"
+
+namespace radar_emu::tools {
+
+/// One target of a case ([[scene.target]]).
+struct TargetCase {
+  std::string name;
+  scene::TargetSpec spec;
+  glm::dvec3 position_m{0.0};
+  glm::dvec3 velocity_mps{0.0};
+  double heading_rad = 0.0;  ///< non-trihedrals: body +x toward this heading (0 north, cw)
+};
+
+/// A `radar-emu sar` case (examples/sar_seed.toml documents every key), SI units; the fields
+/// marked derived, the spacings and the clutter cell left 0 in the file, and p.pulses,
+/// p.near_range_m, p.start_position_m and p.velocity_mps are set by parse_sar_case.
+struct SarCase {
+  radar::SarParams p;
+  double altitude_m = 2000.0;
+  double speed_mps = 100.0;
+  double heading_rad = 90.0 * (radar::kPi / 180.0);
+  double synthetic_beamwidth_rad = 0.032 * (radar::kPi / 180.0);
+  radar::SarTaper taper = radar::SarTaper::kNone;
+  std::size_t upsample = 16;
+  double image_width_m = 2000.0;
+  double azimuth_spacing_m = 0.0, ground_range_spacing_m = 0.0;  ///< 0: from the resolution
+  double theta_rad = 0.0;                                        ///< derived
+  double ground_centre_m = 0.0;                                  ///< derived
+  radar::Polarisation pol = radar::Polarisation::kVV;
+  std::string pol_name = "VV";
+  std::string ground_material = "grass";
+  bool clutter = true;
+  double clutter_cell_m = 0.0;  ///< 0: a third of the finer resolution
+  std::uint64_t speckle_seed = 20261124;
+  double target_ray_spacing_m = 0.05;
+  int max_bounces = 3;
+  double latitude_deg = 43.6, longitude_deg = 1.4;
+  std::vector<TargetCase> targets;
+};
+
+/// Parses a case from TOML text; `origin` (a file name) starts every error message. Throws
+/// std::invalid_argument (a TOML syntax error with its line, an unknown table or key, a value of
+/// the wrong type or outside its documented range, a geometry the processing cannot use: too
+/// narrow an azimuth beam for the synthetic one, a swath reaching nadir, too low a PRF, over
+/// 200000 pulses); what it returns passed radar::validate() and has every derived value set.
+[[nodiscard]] SarCase parse_sar_case(std::string_view text, const std::string& origin);
+
+}  // namespace radar_emu::tools
