@@ -113,7 +113,7 @@ NUM = rb"-?[0-9][0-9.eE+-]*"
 TEXT = {  # file name -> [(regex, replacement)], in order
     "stdout.txt": [
         (rb"wall [0-9.]+ s", rb"wall # s"),
-        (rb"(?m)^(    (?:input|scene_update|trace|sensor|output|frame) +)[0-9. ]+$", rb"\1#"),
+        (rb"(?m)^(    (?:input|scene_update|trace|sensor|output|frame)) +[0-9. ]+$", rb"\1 #"),
         (rb"[0-9]+ frames over budget", rb"# frames over budget"),
         (rb"\b(in|fill|LU|trace|image|optical|total|raw) [0-9.]+ s\b", rb"\1 # s"),
         (rb"ray tracing [0-9]+ %", rb"ray tracing # %"),
