@@ -130,7 +130,7 @@ class Table {
                                                           std::int64_t hi) const;
 
   std::shared_ptr<const ParsedToml> file_;
-  const void* node_ = nullptr;  ///< the toml::table, or null when absent
+  const void* node_ = nullptr;  ///< the parsed table (toml++), or null when absent
   std::string name_;            ///< "[radar]", "[[target]] #2", "" at the top
   std::string dotted_;          ///< "radar", "scene.target": the path of sub-tables
 };
