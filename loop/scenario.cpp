@@ -1,7 +1,5 @@
 #include "loop/scenario.hpp"
 
-#include <toml++/toml.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "config/toml_reader.hpp"
 #include "radar/materials.hpp"
 #include "scene/targets.hpp"
 #include "scene/trajectory.hpp"
@@ -21,9 +20,6 @@ namespace radar_emu::loop {
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-double from_db(double db) {
-  return std::pow(10.0, db / 10.0);
-}
 
 // The embedded default: a straight 3-degree approach to the default scene's runway (threshold at
 // the ENU origin, runway to the north), a forward-looking 94 GHz radar, 20 Hz frames.
@@ -181,153 +177,33 @@ max_level = 12              # coarsest: target rays / 64, terrain grid spacing x
 // The largest built-in [[target]] mesh (triangles): about 4 GB while made (scene/targets.hpp).
 constexpr double kMaxTargetTriangles = 20e6;
 
-class TableReader {
- public:
-  TableReader(const toml::table& root, std::string_view table, const std::string& origin,
-              std::set<std::string> allowed)
-      : origin_(origin), name_(table), allowed_(std::move(allowed)) {
-    if (table.empty()) {
-      table_ = &root;
-    } else if (const toml::node* n = root.get(table)) {
-      table_ = n->as_table();
-      if (table_ == nullptr)
-        fail("", "must be a table");
-    }
-    if (table_ == nullptr)
-      return;
-    for (const auto& [key, value] : *table_) {
-      const std::string k(key.str());
-      if (table.empty() && value.is_table())
-        continue;  // sub-tables are checked on their own
-      if (!allowed_.contains(k))
-        fail(k, "unknown key");
-    }
-  }
+using config::Range;
+using config::Table;
 
-  [[noreturn]] void fail(std::string_view key, std::string_view what) const {
-    std::ostringstream os;
-    os << origin_ << ": ";
-    if (!name_.empty())
-      os << '[' << name_ << "] ";
-    os << key << (key.empty() ? "" : ": ") << what;
-    throw std::runtime_error(os.str());
-  }
-
-  const toml::node* node(std::string_view key) const {
-    return table_ == nullptr ? nullptr : table_->get(key);
-  }
-
-  void number(std::string_view key, double& out, double lo, double hi) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    std::optional<double> v = n->value<double>();
-    if (!v)
-      fail(key, "expected a number");
-    if (!std::isfinite(*v) || *v < lo || *v > hi) {
-      std::ostringstream os;
-      os << "value " << *v << " outside [" << lo << ", " << hi << "]";
-      fail(key, os.str());
-    }
-    out = *v;
-  }
-
-  template <typename Int>
-  void integer(std::string_view key, Int& out, std::int64_t lo, std::int64_t hi) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    if (!n->is_integer())
-      fail(key, "expected an integer");
-    const std::int64_t v = *n->value<std::int64_t>();
-    if (v < lo || v > hi) {
-      std::ostringstream os;
-      os << "value " << v << " outside [" << lo << ", " << hi << "]";
-      fail(key, os.str());
-    }
-    out = static_cast<Int>(v);
-  }
-
-  void boolean(std::string_view key, bool& out) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    if (!n->is_boolean())
-      fail(key, "expected true or false");
-    out = *n->value<bool>();
-  }
-
-  void string(std::string_view key, std::string& out) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    if (!n->is_string())
-      fail(key, "expected a string");
-    out = *n->value<std::string>();
-  }
-
-  void vec3(std::string_view key, glm::dvec3& out, double limit) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    const toml::array* a = n->as_array();
-    if (a == nullptr || a->size() != 3)
-      fail(key, "expected an array of 3 numbers");
-    for (std::size_t i = 0; i < 3; ++i) {
-      std::optional<double> v = (*a)[i].value<double>();
-      if (!v || !std::isfinite(*v) || std::abs(*v) > limit) {
-        fail(key, "element " + std::to_string(i) + " is not a finite number within +-" +
-                      std::to_string(limit));
-      }
-      out[static_cast<glm::length_t>(i)] = *v;
-    }
-  }
-
-  void degrees(std::string_view key, double& out_rad, double lo_deg, double hi_deg) const {
-    double deg = out_rad / kRadPerDeg;
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    number(key, deg, lo_deg, hi_deg);
-    out_rad = deg * kRadPerDeg;
-  }
-
-  void decibels(std::string_view key, double& out_linear, double lo_db, double hi_db) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    double db = 0.0;
-    number(key, db, lo_db, hi_db);
-    out_linear = from_db(db);
-  }
-
- private:
-  const toml::table* table_ = nullptr;
-  std::string origin_;
-  std::string name_;
-  std::set<std::string> allowed_;
-};
+// [ownship] start_enu_m and friends: three numbers, each within +-limit.
+void vec3(const Table& t, std::string_view key, glm::dvec3& out, double limit) {
+  std::array<double, 3> v{};
+  if (t.vector(key, v, {-limit, limit}))
+    out = glm::dvec3(v[0], v[1], v[2]);
+}
 
 // [weather]: the condition picks which precipitation is present; its amount defaults to a
 // typical value: moderate rain 4 mm/h, medium fog 0.05 g/m^3 (visibility about 300 m; ITU-R
 // P.840-4 sec. 2 gives 0.05 g/m^3 for medium and 0.5 g/m^3 for thick fog, about 50 m).
-void apply_weather(Scenario& s, const toml::table& root, const std::string& origin) {
-  if (root.get("weather") == nullptr)
+void apply_weather(Scenario& s, const Table& root) {
+  if (!root.has("weather"))
     return;
   WeatherSpec& w = s.weather;
   w.enabled = true;
-  const TableReader t(root, "weather", origin,
-                      {"condition", "rain_rate_mmph", "fog_water_gpm3", "humidity_gpm3",
-                       "temperature_c", "pressure_hpa"});
-  t.string("condition", w.condition);
+  const Table t = root.table("weather");
+  t.refuse_unknown({"condition", "rain_rate_mmph", "fog_water_gpm3", "humidity_gpm3",
+                    "temperature_c", "pressure_hpa"});
+  t.choice("condition", w.condition, {"clear", "rain", "fog", "rain_fog"});
   const bool rain = w.condition == "rain" || w.condition == "rain_fog";
   const bool fog = w.condition == "fog" || w.condition == "rain_fog";
-  if (!rain && !fog && w.condition != "clear") {
-    t.fail("condition", "unknown condition '" + w.condition + "' (clear, rain, fog, rain_fog)");
-  }
   double rain_mmph = -1.0, fog_gpm3 = -1.0;  // < 0: not given
-  t.number("rain_rate_mmph", rain_mmph, 0.0, 300.0);
-  t.number("fog_water_gpm3", fog_gpm3, 0.0, 5.0);
+  t.number("rain_rate_mmph", rain_mmph, {0.0, 300.0});
+  t.number("fog_water_gpm3", fog_gpm3, {0.0, 5.0});
   if (rain && rain_mmph == 0.0)
     t.fail("rain_rate_mmph", "must be > 0 with condition \"" + w.condition + "\"");
   if (!rain && rain_mmph > 0.0)
@@ -338,120 +214,43 @@ void apply_weather(Scenario& s, const toml::table& root, const std::string& orig
     t.fail("fog_water_gpm3", "must be 0 with condition \"" + w.condition + "\" (or use \"fog\")");
   w.rain_mm_per_h = rain ? (rain_mmph > 0.0 ? rain_mmph : 4.0) : 0.0;
   w.fog_water_gm3 = fog ? (fog_gpm3 > 0.0 ? fog_gpm3 : 0.05) : 0.0;
-  t.number("humidity_gpm3", w.humidity_gm3, 0.0, 50.0);
+  t.number("humidity_gpm3", w.humidity_gm3, {0.0, 50.0});
   double temperature_c = w.temperature_k - 273.15;
-  t.number("temperature_c", temperature_c, -40.0, 50.0);
+  t.number("temperature_c", temperature_c, {-40.0, 50.0});
   w.temperature_k = temperature_c + 273.15;
-  t.number("pressure_hpa", w.pressure_hpa, 300.0, 1100.0);
+  t.number("pressure_hpa", w.pressure_hpa, {300.0, 1100.0});
 }
 
 // [governor] (loop/governor.hpp).
-void apply_governor(Scenario& s, const toml::table& root, const std::string& origin) {
+void apply_governor(Scenario& s, const Table& root) {
   GovernorConfig& g = s.governor;
-  const TableReader t(root, "governor", origin,
-                      {"enabled", "compute_fraction", "mode", "trace_ns_per_ray",
-                       "sensor_ns_per_cell", "sensor_ns_per_return", "max_level"});
+  const Table t = root.table("governor");
+  t.refuse_unknown({"enabled", "compute_fraction", "mode", "trace_ns_per_ray", "sensor_ns_per_cell",
+                    "sensor_ns_per_return", "max_level"});
   t.boolean("enabled", g.enabled);
-  t.number("compute_fraction", g.compute_fraction, 0.01, 1.0);
+  t.number("compute_fraction", g.compute_fraction, {0.01, 1.0});
   std::string mode;
-  t.string("mode", mode);
+  t.choice("mode", mode, {"auto", "model", "measured"});
   if (mode == "auto")
     g.mode = GovernorConfig::Mode::kAuto;
   else if (mode == "model")
     g.mode = GovernorConfig::Mode::kModel;
   else if (mode == "measured")
     g.mode = GovernorConfig::Mode::kMeasured;
-  else if (!mode.empty())
-    t.fail("mode", "unknown mode '" + mode + "' (auto, model, measured)");
-  t.number("trace_ns_per_ray", g.trace_ns_per_ray, 1e-3, 1e6);
-  t.number("sensor_ns_per_cell", g.sensor_ns_per_cell, 0.0, 1e6);
-  t.number("sensor_ns_per_return", g.sensor_ns_per_return, 0.0, 1e6);
+  t.number("trace_ns_per_ray", g.trace_ns_per_ray, {1e-3, 1e6});
+  t.number("sensor_ns_per_cell", g.sensor_ns_per_cell, {0.0, 1e6});
+  t.number("sensor_ns_per_return", g.sensor_ns_per_return, {0.0, 1e6});
   t.integer("max_level", g.max_level, 0, FidelityGovernor::kMaxLevel);
 }
 
-// [[target]] tables (docs/scene_format.md): objects added to the scene. Errors are one line,
-// "ORIGIN: [[target]] #N: what", N counted from 1 in file order.
-class TargetReader {
- public:
-  TargetReader(const toml::table& table, std::string context)
-      : table_(table), context_(std::move(context)) {}
+// [[target]] tables (docs/scene_format.md): objects added to the scene, named "[[target]] #N"
+// in messages, N counted from 1 in file order.
 
-  [[noreturn]] void fail(const std::string& what) const {
-    throw std::runtime_error(context_ + ": " + what);
-  }
-  const std::string& context() const { return context_; }
-  const toml::node* node(std::string_view key) const { return table_.get(key); }
-  bool has(std::string_view key) const { return table_.contains(key); }
-
-  static std::string show(double v) {
-    std::ostringstream os;
-    os << v;
-    return os.str();
-  }
-
-  // A finite number; `lo_open` excludes lo itself ("must be > lo").
-  bool number(std::string_view key, double& out, double lo, double hi, bool lo_open = false) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return false;
-    const std::optional<double> v = n->value<double>();
-    if (!v)
-      fail(std::string(key) + " must be a number");
-    check(key, *v, lo, hi, lo_open);
-    out = *v;
-    return true;
-  }
-
-  void check(std::string_view key, double v, double lo, double hi, bool lo_open) const {
-    if (!std::isfinite(v))
-      fail(std::string(key) + " must be a finite number (got " + show(v) + ")");
-    if (lo_open ? !(v > lo) : !(v >= lo))
-      fail(std::string(key) + " must be " + (lo_open ? "> " : ">= ") + show(lo) + " (got " +
-           show(v) + ")");
-    if (v > hi)
-      fail(std::string(key) + " must be <= " + show(hi) + " (got " + show(v) + ")");
-  }
-
-  bool boolean(std::string_view key, bool& out) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return false;
-    if (!n->is_boolean())
-      fail(std::string(key) + " must be true or false");
-    out = *n->value<bool>();
-    return true;
-  }
-
-  bool string(std::string_view key, std::string& out) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return false;
-    if (!n->is_string())
-      fail(std::string(key) + " must be a string");
-    out = *n->value<std::string>();
-    return true;
-  }
-
-  // [e, n, u] in metres, each within +-1000 km.
-  glm::dvec3 point(const toml::node& n, const std::string& what) const {
-    const toml::array* a = n.as_array();
-    if (a == nullptr || a->size() != 3)
-      fail(what + " must be an array of 3 numbers [e, n, u]");
-    glm::dvec3 p(0.0);
-    for (std::size_t i = 0; i < 3; ++i) {
-      const std::optional<double> v = (*a)[i].value<double>();
-      if (!v)
-        fail(what + " must be an array of 3 numbers [e, n, u]");
-      check(what + " element " + std::to_string(i), *v, -1e6, 1e6, false);
-      p[static_cast<glm::length_t>(i)] = *v;
-    }
-    return p;
-  }
-
- private:
-  const toml::table& table_;
-  std::string context_;
-};
+std::string show(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
 
 // Dimensions each built-in kind reads from size_m (scene/targets.hpp: a, b, c), their meaning
 // for messages, and the default size of the vehicles and aircraft (the examples of targets.hpp).
@@ -497,83 +296,63 @@ constexpr std::array<std::string_view, 18> kTargetKeys{
     "turn_radius_m", "closed",          "bank"};
 
 // The radar material catalogue decides which names exist (radar/materials.hpp).
-void check_material(const TargetReader& r, const std::string& name) {
+void check_material(const Table& r, const std::string& name) {
   try {
     const scene::Material m{name, {}};
     (void)radar::resolve_materials(std::span<const scene::Material>(&m, 1));
   } catch (const std::invalid_argument& e) {
     const std::string what = e.what();
     const std::size_t known = what.find("(known:");
-    r.fail("material: unknown radar material '" + name + "' " +
-           (known == std::string::npos ? "" : what.substr(known)));
+    r.fail("material", "unknown value \"" + name + "\" " +
+                           (known == std::string::npos ? "" : what.substr(known)));
   }
 }
 
-scene::TargetPlacement parse_target(const TargetReader& r, const toml::table& table,
-                                    std::size_t number) {
-  for (const auto& [key, value] : table) {
-    (void)value;
-    const std::string_view k = key.str();
-    if (std::find(kTargetKeys.begin(), kTargetKeys.end(), k) == kTargetKeys.end()) {
-      std::string known;
-      for (std::string_view n : kTargetKeys)
-        known += (known.empty() ? "" : ", ") + std::string(n);
-      r.fail("unknown key '" + std::string(k) + "' (known: " + known + ")");
-    }
-  }
+scene::TargetPlacement parse_target(const Table& r, std::size_t number) {
+  r.refuse_unknown(kTargetKeys);
   scene::TargetPlacement t;
-  t.context = r.context();
+  t.context = r.file() + ": " + r.name();
   t.name = "target_" + std::to_string(number);
   if (r.string("name", t.name) && t.name.empty())
-    r.fail("name must not be empty");
+    r.fail("name", "must not be empty");
 
   // What it is: a built-in target or a mesh file.
   std::string builtin, mesh_file;
   const bool has_builtin = r.string("builtin", builtin);
   const bool has_mesh = r.string("mesh_file", mesh_file);
-  if (has_builtin == has_mesh) {
-    r.fail(has_builtin ? "builtin and mesh_file are exclusive"
-                       : "needs builtin = \"KIND\" (" + scene::target_names() +
-                             ") or mesh_file = \"FILE\" (.glb, .gltf, .obj, .stl)");
+  if (has_builtin && has_mesh)
+    r.fail("mesh_file", "builtin and mesh_file exclude each other (give one)");
+  if (!has_builtin && !has_mesh) {
+    r.fail("", "needs builtin = \"KIND\" (" + scene::target_names() +
+                   ") or mesh_file = \"FILE\" (.glb, .gltf, .obj, .stl)");
   }
   if (has_builtin) {
     const std::optional<scene::TargetKind> kind = scene::target_kind_from_name(builtin);
     if (!kind)
-      r.fail("builtin: unknown target '" + builtin + "' (known: " + scene::target_names() + ")");
+      r.unknown_value("builtin", builtin, scene::target_names());
     scene::TargetSpec spec;
     spec.kind = *kind;
     const KindSize ks = kind_size(*kind);
     std::vector<double> size;
-    if (const toml::node* n = r.node("size_m")) {
-      if (const toml::array* a = n->as_array()) {
-        for (const toml::node& e : *a) {
-          const std::optional<double> v = e.value<double>();
-          if (!v)
-            r.fail("size_m must be a number or an array of numbers");
-          size.push_back(*v);
-        }
-      } else if (const std::optional<double> v = n->value<double>()) {
-        size.push_back(*v);
-      } else {
-        r.fail("size_m must be a number or an array of numbers");
-      }
+    if (std::optional<std::vector<double>> given = r.numbers("size_m")) {
+      size = std::move(*given);
       if (size.size() != ks.dims) {
-        r.fail("size_m: a " + builtin + " takes " + std::to_string(ks.dims) + " dimension" +
-               (ks.dims > 1 ? "s " : " ") + ks.meaning + " in metres, got " +
-               std::to_string(size.size()));
+        r.fail("size_m", "a " + builtin + " takes " + std::to_string(ks.dims) + " dimension" +
+                             (ks.dims > 1 ? "s " : " ") + ks.meaning + " in metres, got " +
+                             std::to_string(size.size()));
       }
       for (double v : size)
-        r.check("size_m", v, 0.0, 1e4, true);
+        r.check("size_m", v, {0.0, 1e4, true});
     } else if (ks.default_m) {
       size.assign(ks.default_m->begin(), ks.default_m->end());
     } else {
-      r.fail("size_m is required for a " + builtin + ": " + ks.meaning + " in metres");
+      r.fail("size_m", "is required for a " + builtin + ": " + ks.meaning + " in metres");
     }
     spec.a_m = size[0];
     spec.b_m = size.size() > 1 ? size[1] : 1.0;
     spec.c_m = size.size() > 2 ? size[2] : 1.0;
     t.builtin = spec;
-    r.number("facet_m", t.facet_m, 0.0, 1e4);
+    r.number("facet_m", t.facet_m, {0.0, 1e4});
     {
       // The mesh past the memory limit is refused with its estimate, before it is made (the
       // same limit as `scene target`'s default --max-triangles).
@@ -583,77 +362,72 @@ scene::TargetPlacement parse_target(const TargetReader& r, const toml::table& ta
       if (triangles > kMaxTargetTriangles) {
         std::ostringstream os;
         os.precision(3);
-        os << "facet_m = " << t.facet_m << ": a " << builtin << " would have about " << triangles
+        os << "a " << builtin << " with " << t.facet_m << " m facets would have about " << triangles
            << " triangles (about " << triangles * scene::kTargetBytesPerTriangle * 1e-9
            << " GB of memory), over the limit of " << kMaxTargetTriangles << " triangles";
-        r.fail(os.str());
+        r.fail("facet_m", os.str());
       }
     }
     for (const char* key : {"mesh_scale", "mesh_front_axis", "mesh_up_axis"}) {
       if (r.has(key))
-        r.fail(std::string(key) + " applies to mesh_file only");
+        r.fail(key, "applies to mesh_file only");
     }
   } else {
     if (mesh_file.empty())
-      r.fail("mesh_file must not be empty");
+      r.fail("mesh_file", "must not be empty");
     t.mesh_file = mesh_file;
-    r.number("mesh_scale", t.mesh_scale, 0.0, 1e6, true);
+    r.number("mesh_scale", t.mesh_scale, {0.0, 1e6, true});
     for (auto [key, out] : {std::pair{"mesh_front_axis", &t.mesh_front_axis},
                             std::pair{"mesh_up_axis", &t.mesh_up_axis}}) {
       std::string axis;
-      if (r.string(key, axis)) {
+      if (r.choice(key, axis, {"+x", "-x", "+y", "-y", "+z", "-z"}))
         *out = scene::mesh_axis_from_name(axis);
-        if (!*out)
-          r.fail(std::string(key) +
-                 ": expected \"+x\", \"-x\", \"+y\", \"-y\", \"+z\" or \"-z\", got \"" + axis +
-                 "\"");
-      }
     }
     if (t.mesh_front_axis && t.mesh_up_axis &&
         static_cast<int>(*t.mesh_front_axis) / 2 == static_cast<int>(*t.mesh_up_axis) / 2) {
-      r.fail("mesh_front_axis and mesh_up_axis must be different axes");
+      r.fail("mesh_up_axis", "must be another axis than mesh_front_axis");
     }
     for (const char* key : {"size_m", "facet_m"}) {
       if (r.has(key))
-        r.fail(std::string(key) + " applies to builtin targets only");
+        r.fail(key, "applies to builtin targets only");
     }
   }
   if (r.string("material", t.material)) {
     if (t.material.empty())
-      r.fail("material must not be empty");
+      r.fail("material", "must not be empty");
     check_material(r, t.material);
   }
 
   // Where and how it moves.
   r.boolean("on_ground", t.on_ground);
-  r.number("speed_mps", t.speed_mps, 0.0, 1000.0);
-  const toml::node* wp = r.node("waypoints_enu_m");
-  if (wp != nullptr) {
+  r.number("speed_mps", t.speed_mps, {0.0, 1000.0});
+  if (r.has("waypoints_enu_m")) {
     for (const char* key : {"position_enu_m", "heading_deg", "course_deg"}) {
       if (r.has(key)) {
-        r.fail(std::string(key) +
-               " does not go with waypoints_enu_m (the path places the "
-               "target and turns its nose along the velocity)");
+        r.fail(key,
+               "does not go with waypoints_enu_m (the path places the target and turns its nose "
+               "along the velocity)");
       }
     }
-    const toml::array* a = wp->as_array();
-    if (a == nullptr || a->size() < 2)
-      r.fail("waypoints_enu_m must be an array of at least 2 [e, n, u] points");
-    for (std::size_t i = 0; i < a->size(); ++i)
-      t.waypoints_m.push_back(r.point((*a)[i], "waypoints_enu_m[" + std::to_string(i) + "]"));
+    const std::vector<std::vector<double>> points = *r.vectors("waypoints_enu_m", 3, {-1e6, 1e6});
+    if (points.size() < 2) {
+      r.fail("waypoints_enu_m",
+             "expected at least 2 [e, n, u] points, got " + std::to_string(points.size()));
+    }
+    for (const std::vector<double>& p : points)
+      t.waypoints_m.emplace_back(p[0], p[1], p[2]);
     for (std::size_t i = 0; i + 1 < t.waypoints_m.size(); ++i) {
       const glm::dvec3 d = t.waypoints_m[i + 1] - t.waypoints_m[i];
       if (std::hypot(d.x, d.y) < 1e-6) {
-        r.fail("waypoints_enu_m[" + std::to_string(i) + "] and [" + std::to_string(i + 1) +
-               "] are at the same (e, n): waypoints must be distinct (no vertical legs)");
+        r.fail("waypoints_enu_m", "points " + std::to_string(i) + " and " + std::to_string(i + 1) +
+                                      " are at the same (e, n): waypoints must be distinct (no "
+                                      "vertical legs)");
       }
     }
-    if (!r.has("speed_mps"))
-      r.fail("speed_mps is required with waypoints_enu_m");
+    r.require("speed_mps", "with waypoints_enu_m");
     if (!(t.speed_mps > 0.0))
-      r.fail("speed_mps must be > 0 with waypoints_enu_m (got " + TargetReader::show(t.speed_mps) +
-             ")");
-    r.number("turn_radius_m", t.turn_radius_m, 0.0, 1e5);
+      r.fail("speed_mps", "must be > 0 with waypoints_enu_m (got " + show(t.speed_mps) + ")");
+    r.number("turn_radius_m", t.turn_radius_m, {0.0, 1e5});
     r.boolean("closed", t.closed);
     r.boolean("bank", t.bank);
     scene::Trajectory tr;
@@ -664,22 +438,21 @@ scene::TargetPlacement parse_target(const TargetReader& r, const toml::table& ta
     try {
       (void)scene::TrajectoryPath(tr);
     } catch (const std::invalid_argument& e) {
-      r.fail(std::string("waypoints_enu_m: ") + e.what());
+      r.fail("waypoints_enu_m", e.what());
     }
   } else {
     for (const char* key : {"turn_radius_m", "closed", "bank"}) {
       if (r.has(key))
-        r.fail(std::string(key) + " applies to waypoints_enu_m only");
+        r.fail(key, "applies to waypoints_enu_m only");
     }
-    const toml::node* pos = r.node("position_enu_m");
-    if (pos == nullptr)
-      r.fail("needs position_enu_m = [e, n, u] or waypoints_enu_m = [[e, n, u], ...]");
-    t.position_m = r.point(*pos, "position_enu_m");
+    if (!r.has("position_enu_m"))
+      r.fail("", "needs position_enu_m = [e, n, u] or waypoints_enu_m = [[e, n, u], ...]");
+    vec3(r, "position_enu_m", t.position_m, 1e6);
     double heading_deg = 0.0, course_deg = 0.0;
-    const bool has_heading = r.number("heading_deg", heading_deg, -360.0, 360.0);
-    const bool has_course = r.number("course_deg", course_deg, -360.0, 360.0);
+    const bool has_heading = r.number("heading_deg", heading_deg, {-360.0, 360.0});
+    const bool has_course = r.number("course_deg", course_deg, {-360.0, 360.0});
     if (has_course && !(t.speed_mps > 0.0))
-      r.fail("course_deg needs speed_mps > 0 (a fixed target has a heading_deg only)");
+      r.fail("course_deg", "needs speed_mps > 0 (a fixed target has a heading_deg only)");
     // A moving target faces its velocity unless both angles are given.
     t.heading_rad = (has_heading ? heading_deg : course_deg) * kRadPerDeg;
     t.course_rad = (has_course ? course_deg : heading_deg) * kRadPerDeg;
@@ -687,75 +460,46 @@ scene::TargetPlacement parse_target(const TargetReader& r, const toml::table& ta
   return t;
 }
 
-void apply_targets(Scenario& s, const toml::table& root, const std::string& origin) {
-  const toml::node* n = root.get("target");
-  if (n == nullptr)
+void apply_targets(Scenario& s, const Table& root) {
+  if (!root.has("target"))
     return;
-  const toml::array* a = n->as_array();
-  if (a != nullptr && a->empty()) {
-    s.targets.clear();
-    return;
-  }
-  if (a == nullptr || !a->is_array_of_tables()) {
-    throw std::runtime_error(origin +
-                             ": target: expected [[target]] tables (an array of tables), one "
-                             "per target");
-  }
   s.targets.clear();
   std::set<std::string> names;
-  for (std::size_t i = 0; i < a->size(); ++i) {
-    const TargetReader r(*(*a)[i].as_table(), origin + ": [[target]] #" + std::to_string(i + 1));
-    scene::TargetPlacement t = parse_target(r, *(*a)[i].as_table(), i + 1);
+  for (const Table& r : root.tables("target")) {
+    scene::TargetPlacement t = parse_target(r, s.targets.size() + 1);
     if (!names.insert(t.name).second)
-      r.fail("name '" + t.name + "' is already used by another [[target]]");
+      r.fail("name", "\"" + t.name + "\" is already used by another [[target]]");
     s.targets.push_back(std::move(t));
   }
 }
 
 void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
-  toml::table root;
-  try {
-    root = toml::parse(text, origin);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream os;
-    os << origin << ":" << e.source().begin.line << ":" << e.source().begin.column << ": "
-       << e.description();
-    throw std::runtime_error(os.str());
-  }
-  const TableReader top(root, "", origin, {"name", "target"});
-  for (const auto& [key, value] : root) {
-    if (key.str() == "target")
-      continue;  // [[target]] tables: apply_targets()
-    static const std::set<std::string> kTables{"run",    "scene",   "ownship", "input",
-                                               "output", "antenna", "radar",   "detector",
-                                               "faults", "weather", "governor"};
-    if (value.is_table() && !kTables.contains(std::string(key.str()))) {
-      top.fail(key.str(), "unknown table");
-    }
-  }
-  top.string("name", s.name);
+  const config::TomlFile toml = config::TomlFile::parse(text, origin);
+  const Table root = toml.root();
+  root.refuse_unknown({"name", "run", "scene", "ownship", "input", "output", "antenna", "radar",
+                       "detector", "faults", "weather", "governor", "target"});
+  root.string("name", s.name);
 
-  const TableReader run(root, "run", origin,
-                        {"frames", "rate_hz", "epoch_unix_s", "state_timeout_s", "stale_output"});
+  const Table run = root.table("run");
+  run.refuse_unknown({"frames", "rate_hz", "epoch_unix_s", "state_timeout_s", "stale_output"});
   run.integer("frames", s.frames, 1, 100'000'000);
-  run.number("rate_hz", s.rate_hz, 0.1, 10'000.0);
+  run.number("rate_hz", s.rate_hz, {0.1, 10'000.0});
   std::int64_t epoch_s = s.epoch_unix_ns / 1'000'000'000LL;
   run.integer("epoch_unix_s", epoch_s, 0, 4'000'000'000LL);
   s.epoch_unix_ns = epoch_s * 1'000'000'000LL;
-  run.number("state_timeout_s", s.state_timeout_s, 0.001, 3600.0);
+  run.number("state_timeout_s", s.state_timeout_s, {0.001, 3600.0});
   std::string stale_output = s.stale_output_silent ? "silent" : "flag";
-  run.string("stale_output", stale_output);
-  if (stale_output != "flag" && stale_output != "silent")
-    run.fail("stale_output", "expected \"flag\" or \"silent\", got \"" + stale_output + "\"");
+  run.choice("stale_output", stale_output, {"flag", "silent"});
   s.stale_output_silent = stale_output == "silent";
 
-  const TableReader scene(root, "scene", origin, {"builtin", "file", "seed", "corner_reflectors"});
+  const Table scene = root.table("scene");
+  scene.refuse_unknown({"builtin", "file", "seed", "corner_reflectors"});
   // One source of the scene: a table that names both would silently use the file.
-  if (scene.node("builtin") != nullptr && scene.node("file") != nullptr)
+  if (scene.has("builtin") && scene.has("file"))
     scene.fail("file", "builtin and file exclude each other (give one)");
-  if (scene.node("seed") != nullptr && scene.node("file") != nullptr)
+  if (scene.has("seed") && scene.has("file"))
     scene.fail("seed", "seeds a built-in scene, not a file");
-  scene.string("builtin", s.scene_builtin);
+  scene.choice("builtin", s.scene_builtin, {"airport", "default", "terrain"});
   std::int64_t scene_seed = static_cast<std::int64_t>(s.scene_seed & 0x7fffffffffffffffull);
   scene.integer("seed", scene_seed, 0, std::numeric_limits<std::int64_t>::max());
   s.scene_seed = static_cast<std::uint64_t>(scene_seed);
@@ -764,46 +508,39 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   scene.string("file", file);
   if (!file.empty())
     s.scene_file = file;
-  if (scene.node("corner_reflectors") != nullptr &&
-      (s.scene_builtin != "airport" || !s.scene_file.empty()))
+  if (scene.has("corner_reflectors") && (s.scene_builtin != "airport" || !s.scene_file.empty()))
     scene.fail("corner_reflectors",
                "applies to builtin = \"airport\" only (the runway scene "
                "\"default\" is a test range: it always has them)");
-  if (s.scene_file.empty() && s.scene_builtin != "default" && s.scene_builtin != "airport" &&
-      s.scene_builtin != "terrain") {
-    scene.fail("builtin", "unknown built-in scene '" + s.scene_builtin +
-                              "' (known: airport, default, terrain)");
-  }
 
-  const TableReader own(root, "ownship", origin,
-                        {"start_enu_m", "velocity_enu_mps", "pitch_deg", "roll_deg", "heading_deg",
-                         "ins_node_id", "attitude_rate_hz", "navigation_rate_hz"});
-  own.vec3("start_enu_m", s.ownship_start_enu_m, 1e6);
-  own.vec3("velocity_enu_mps", s.ownship_velocity_enu_mps, 1500.0);
-  own.degrees("pitch_deg", s.ownship_pitch_rad, -90.0, 90.0);
-  own.degrees("roll_deg", s.ownship_roll_rad, -180.0, 180.0);
-  own.degrees("heading_deg", s.ownship_heading_rad, -360.0, 360.0);
+  const Table own = root.table("ownship");
+  own.refuse_unknown({"start_enu_m", "velocity_enu_mps", "pitch_deg", "roll_deg", "heading_deg",
+                      "ins_node_id", "attitude_rate_hz", "navigation_rate_hz"});
+  vec3(own, "start_enu_m", s.ownship_start_enu_m, 1e6);
+  vec3(own, "velocity_enu_mps", s.ownship_velocity_enu_mps, 1500.0);
+  own.degrees("pitch_deg", s.ownship_pitch_rad, {-90.0, 90.0});
+  own.degrees("roll_deg", s.ownship_roll_rad, {-180.0, 180.0});
+  own.degrees("heading_deg", s.ownship_heading_rad, {-360.0, 360.0});
   own.integer("ins_node_id", s.ins_node_id, 0, 255);
-  own.number("attitude_rate_hz", s.attitude_rate_hz, 0.1, 1000.0);
-  own.number("navigation_rate_hz", s.navigation_rate_hz, 0.1, 1000.0);
+  own.number("attitude_rate_hz", s.attitude_rate_hz, {0.1, 1000.0});
+  own.number("navigation_rate_hz", s.navigation_rate_hz, {0.1, 1000.0});
 
-  const TableReader ant(
-      root, "antenna", origin,
-      {"depression_deg", "azimuth_min_deg", "azimuth_max_deg", "elevation_min_deg",
-       "elevation_max_deg", "azimuth_cell_deg", "gain_db", "pattern", "pattern_file",
-       "azimuth_beamwidth_deg", "elevation_beamwidth_deg", "monopulse", "squint_fraction",
-       "efficiency", "polarisation"});
-  ant.degrees("depression_deg", s.antenna_depression_rad, -90.0, 90.0);
-  ant.degrees("azimuth_min_deg", s.sbr.azimuth_min_rad, -89.0, 89.0);
-  ant.degrees("azimuth_max_deg", s.sbr.azimuth_max_rad, -89.0, 89.0);
-  ant.degrees("elevation_min_deg", s.sbr.elevation_min_rad, -89.0, 89.0);
-  ant.degrees("elevation_max_deg", s.sbr.elevation_max_rad, -89.0, 89.0);
-  ant.degrees("azimuth_cell_deg", s.beam_spacing_rad, 0.01, 90.0);
-  ant.degrees("azimuth_beamwidth_deg", s.azimuth_beamwidth_rad, 0.01, 60.0);
-  ant.degrees("elevation_beamwidth_deg", s.elevation_beamwidth_rad, 0.01, 60.0);
-  ant.decibels("gain_db", s.antenna_gain, 0.0, 80.0);
-  ant.number("efficiency", s.aperture_efficiency, 0.01, 1.0);
-  ant.string("pattern", s.pattern);
+  const Table ant = root.table("antenna");
+  ant.refuse_unknown({"depression_deg", "azimuth_min_deg", "azimuth_max_deg", "elevation_min_deg",
+                      "elevation_max_deg", "azimuth_cell_deg", "gain_db", "pattern", "pattern_file",
+                      "azimuth_beamwidth_deg", "elevation_beamwidth_deg", "monopulse",
+                      "squint_fraction", "efficiency", "polarisation"});
+  ant.degrees("depression_deg", s.antenna_depression_rad, {-90.0, 90.0});
+  ant.degrees("azimuth_min_deg", s.sbr.azimuth_min_rad, {-89.0, 89.0});
+  ant.degrees("azimuth_max_deg", s.sbr.azimuth_max_rad, {-89.0, 89.0});
+  ant.degrees("elevation_min_deg", s.sbr.elevation_min_rad, {-89.0, 89.0});
+  ant.degrees("elevation_max_deg", s.sbr.elevation_max_rad, {-89.0, 89.0});
+  ant.degrees("azimuth_cell_deg", s.beam_spacing_rad, {0.01, 90.0});
+  ant.degrees("azimuth_beamwidth_deg", s.azimuth_beamwidth_rad, {0.01, 60.0});
+  ant.degrees("elevation_beamwidth_deg", s.elevation_beamwidth_rad, {0.01, 60.0});
+  ant.decibels("gain_db", s.antenna_gain, {0.0, 80.0});
+  ant.number("efficiency", s.aperture_efficiency, {0.01, 1.0});
+  ant.choice("pattern", s.pattern, {"uniform", "cosine", "gaussian", "table"});
   std::string pattern_file;
   ant.string("pattern_file", pattern_file);
   if (!pattern_file.empty())
@@ -824,29 +561,27 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
       case radar::Polarisation::kVV:
         break;
     }
-    ant.string("polarisation", pol);
+    ant.choice("polarisation", pol, {"VV", "HH", "HV", "VH"});
     if (pol == "HH")
       s.sbr.polarisation = radar::Polarisation::kHH;
     else if (pol == "HV")
       s.sbr.polarisation = radar::Polarisation::kHV;
     else if (pol == "VH")
       s.sbr.polarisation = radar::Polarisation::kVH;
-    else if (pol == "VV")
-      s.sbr.polarisation = radar::Polarisation::kVV;
     else
-      ant.fail("polarisation", "expected \"VV\", \"HH\", \"HV\" or \"VH\", got \"" + pol + "\"");
+      s.sbr.polarisation = radar::Polarisation::kVV;
   }
   ant.boolean("monopulse", s.sensor.antenna.monopulse);
-  ant.number("squint_fraction", s.sensor.antenna.squint_fraction, 0.05, 0.95);
+  ant.number("squint_fraction", s.sensor.antenna.squint_fraction, {0.05, 0.95});
   radar::PatternKind kind{};
   if (!radar::parse_pattern_kind(s.pattern, kind))
-    ant.fail("pattern", "unknown pattern '" + s.pattern + "' (uniform, cosine, gaussian, table)");
+    ant.unknown_value("pattern", s.pattern, "uniform, cosine, gaussian, table");
   if (kind == radar::PatternKind::kTable && s.pattern_file.empty())
     ant.fail("pattern_file", "is required with pattern = \"table\"");
-  if (kind != radar::PatternKind::kTable && ant.node("pattern_file") != nullptr)
+  if (kind != radar::PatternKind::kTable && ant.has("pattern_file"))
     ant.fail("pattern_file",
              "is read with pattern = \"table\" only (pattern is \"" + s.pattern + "\")");
-  if (ant.node("gain_db") != nullptr && ant.node("efficiency") != nullptr)
+  if (ant.has("gain_db") && ant.has("efficiency"))
     ant.fail("efficiency", "unused when gain_db is given (give one)");
   if (!(s.sbr.azimuth_min_rad < s.sbr.azimuth_max_rad)) {
     ant.fail("azimuth_max_deg", "must be greater than azimuth_min_deg");
@@ -856,94 +591,92 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   }
 
   radar::Waveform& w = s.sensor.processing.waveform;
-  const TableReader rad(root, "radar", origin,
-                        {"waveform",
-                         "carrier_hz",
-                         "bandwidth_hz",
-                         "prf_hz",
-                         "pulses",
-                         "pulse_width_s",
-                         "sample_rate_hz",
-                         "swath_start_m",
-                         "tx_power_w",
-                         "noise_figure_db",
-                         "system_losses_db",
-                         "max_range_m",
-                         "range_window",
-                         "doppler_window",
-                         "taylor_sidelobe_db",
-                         "taylor_nbar",
-                         "max_speed_mps",
-                         "max_bounces",
-                         "terrain_ray_spacing_deg",
-                         "target_ray_spacing_m",
-                         "max_rays_per_target",
-                         "edges",
-                         "edge_turn_deg"});
+  const Table rad = root.table("radar");
+  rad.refuse_unknown({"waveform",
+                      "carrier_hz",
+                      "bandwidth_hz",
+                      "prf_hz",
+                      "pulses",
+                      "pulse_width_s",
+                      "sample_rate_hz",
+                      "swath_start_m",
+                      "tx_power_w",
+                      "noise_figure_db",
+                      "system_losses_db",
+                      "max_range_m",
+                      "range_window",
+                      "doppler_window",
+                      "taylor_sidelobe_db",
+                      "taylor_nbar",
+                      "max_speed_mps",
+                      "max_bounces",
+                      "terrain_ray_spacing_deg",
+                      "target_ray_spacing_m",
+                      "max_rays_per_target",
+                      "edges",
+                      "edge_turn_deg"});
   std::string waveform = radar::waveform_name(w.kind);
   rad.string("waveform", waveform);
   if (!radar::parse_waveform_kind(waveform, w.kind))
-    rad.fail("waveform", "unknown waveform '" + waveform + "' (pulsed_lfm, fmcw)");
-  rad.number("carrier_hz", w.carrier_hz, 1e8, 1e12);
+    rad.unknown_value("waveform", waveform, "pulsed_lfm, fmcw");
+  rad.number("carrier_hz", w.carrier_hz, {1e8, 1e12});
   s.sbr.carrier_hz = w.carrier_hz;
-  rad.number("bandwidth_hz", w.bandwidth_hz, 1e3, 1e10);
-  rad.number("prf_hz", s.prf_hz, 1.0, 1e8);
+  rad.number("bandwidth_hz", w.bandwidth_hz, {1e3, 1e10});
+  rad.number("prf_hz", s.prf_hz, {1.0, 1e8});
   rad.integer("pulses", w.pulses, 1, 65536);
-  rad.number("pulse_width_s", w.pulse_width_s, 1e-10, 1.0);
-  rad.number("sample_rate_hz", w.sample_rate_hz, 0.0, 1e11);
-  rad.number("swath_start_m", s.swath_start_m, 0.0, 1e7);
-  rad.number("tx_power_w", s.sensor.tx_power_w, 1e-6, 1e7);
-  rad.decibels("noise_figure_db", s.sensor.noise_figure, 0.0, 30.0);
-  rad.decibels("system_losses_db", s.sensor.system_losses, 0.0, 60.0);
-  rad.number("max_range_m", s.sensor.max_range_m, 1.0, 1e6);
+  rad.number("pulse_width_s", w.pulse_width_s, {1e-10, 1.0});
+  rad.number("sample_rate_hz", w.sample_rate_hz, {0.0, 1e11});
+  rad.number("swath_start_m", s.swath_start_m, {0.0, 1e7});
+  rad.number("tx_power_w", s.sensor.tx_power_w, {1e-6, 1e7});
+  rad.decibels("noise_figure_db", s.sensor.noise_figure, {0.0, 30.0});
+  rad.decibels("system_losses_db", s.sensor.system_losses, {0.0, 60.0});
+  rad.number("max_range_m", s.sensor.max_range_m, {1.0, 1e6});
   s.sbr.max_range_m = s.sensor.max_range_m;
-  rad.number("max_speed_mps", s.sensor.processing.max_speed_mps, 1.0, 1e4);
+  rad.number("max_speed_mps", s.sensor.processing.max_speed_mps, {1.0, 1e4});
   for (auto [key, spec] : {std::pair{"range_window", &s.sensor.processing.range_window},
                            std::pair{"doppler_window", &s.sensor.processing.doppler_window}}) {
     std::string name = radar::window_name(spec->kind);
     rad.string(key, name);
     const auto kind_w = radar::parse_window_kind(name);
     if (!kind_w)
-      rad.fail(key, "unknown window '" + name + "' (rectangular, hann, hamming, blackman, taylor)");
+      rad.unknown_value(key, name, "rectangular, hann, hamming, blackman, taylor");
     spec->kind = *kind_w;
-    rad.number("taylor_sidelobe_db", spec->taylor_sidelobe_db, 13.3, 120.0);
+    rad.number("taylor_sidelobe_db", spec->taylor_sidelobe_db, {13.3, 120.0});
     rad.integer("taylor_nbar", spec->taylor_nbar, 1, 63);
   }
   if (s.sensor.processing.range_window.kind != radar::WindowKind::kTaylor &&
       s.sensor.processing.doppler_window.kind != radar::WindowKind::kTaylor) {
     for (const char* key : {"taylor_sidelobe_db", "taylor_nbar"}) {
-      if (rad.node(key) != nullptr)
+      if (rad.has(key))
         rad.fail(key, "is read with a \"taylor\" range_window or doppler_window only");
     }
   }
   rad.integer("max_bounces", s.sbr.max_bounces, 1, 16);
-  rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, 1e-4, 10.0);
-  rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, 1e-4, 100.0);
+  rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, {1e-4, 10.0});
+  rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, {1e-4, 100.0});
   rad.integer("max_rays_per_target", s.sbr.max_rays_per_target, 1, 100'000'000);
   rad.boolean("edges", s.sbr.edges);
-  rad.degrees("edge_turn_deg", s.sbr.edge_min_turn_rad, 0.0, 179.0);
-  if (!s.sbr.edges && rad.node("edge_turn_deg") != nullptr)
+  rad.degrees("edge_turn_deg", s.sbr.edge_min_turn_rad, {0.0, 179.0});
+  if (!s.sbr.edges && rad.has("edge_turn_deg"))
     rad.fail("edge_turn_deg", "is read with edges = true only");
 
   radar::CfarConfig& cf = s.sensor.cfar;
-  const TableReader det(root, "detector", origin,
-                        {"cfar", "cfar_training_cells", "cfar_guard_cells",
-                         "cfar_velocity_training_cells", "cfar_velocity_guard_cells", "cfar_pfa",
-                         "os_rank", "min_snr_db", "max_detections", "noise_seed", "thermal_noise"});
+  const Table det = root.table("detector");
+  det.refuse_unknown({"cfar", "cfar_training_cells", "cfar_guard_cells",
+                      "cfar_velocity_training_cells", "cfar_velocity_guard_cells", "cfar_pfa",
+                      "os_rank", "min_snr_db", "max_detections", "noise_seed", "thermal_noise"});
   std::string cfar = cf.kind == radar::CfarKind::kCellAveraging ? "ca" : "os";
-  det.string("cfar", cfar);
-  if (cfar != "ca" && cfar != "os")
-    det.fail("cfar", "unknown CFAR '" + cfar + "' (ca, os)");
+  det.choice("cfar", cfar, {"ca", "os"});
   cf.kind = cfar == "ca" ? radar::CfarKind::kCellAveraging : radar::CfarKind::kOrderStatistic;
-  if (cf.kind == radar::CfarKind::kCellAveraging && det.node("os_rank") != nullptr)
+  if (cf.kind == radar::CfarKind::kCellAveraging && det.has("os_rank"))
     det.fail("os_rank", "is read with cfar = \"os\" only (cfar is \"ca\")");
   det.integer("cfar_training_cells", cf.range_training, 0, 1024);
   det.integer("cfar_guard_cells", cf.range_guard, 0, 1024);
   det.integer("cfar_velocity_training_cells", cf.velocity_training, 0, 1024);
   det.integer("cfar_velocity_guard_cells", cf.velocity_guard, 0, 1024);
-  det.number("cfar_pfa", cf.pfa, 1e-15, 0.5);
-  det.number("os_rank", cf.os_rank, 0.01, 1.0);
-  det.number("min_snr_db", s.sensor.min_snr_db, -50.0, 200.0);
+  det.number("cfar_pfa", cf.pfa, {1e-15, 0.5});
+  det.number("os_rank", cf.os_rank, {0.01, 1.0});
+  det.number("min_snr_db", s.sensor.min_snr_db, {-50.0, 200.0});
   det.integer("max_detections", s.sensor.max_detections, 0, 255);
   std::int64_t seed = static_cast<std::int64_t>(s.sensor.noise_seed & 0x7fffffffffffffffull);
   det.integer("noise_seed", seed, 0, std::numeric_limits<std::int64_t>::max());
@@ -952,10 +685,12 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
 
   {
     namespace canas = io::canas;
-    std::set<std::string> keys{"node_id"};
+    std::vector<std::string> keys{"node_id"};
     for (std::size_t k = 0; k < canas::kFieldCount; ++k)
-      keys.insert(std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id");
-    const TableReader in(root, "input", origin, keys);
+      keys.push_back(std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id");
+    const std::vector<std::string_view> known(keys.begin(), keys.end());
+    const Table in = root.table("input");
+    in.refuse_unknown(known);
     std::int64_t node = s.input.node_id ? *s.input.node_id : -1;
     in.integer("node_id", node, -1, 255);
     s.input.node_id = node < 0 ? std::nullopt : std::optional<std::uint8_t>(node);
@@ -968,67 +703,61 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     } catch (const std::invalid_argument& e) {
       in.fail("", e.what());
     }
-    const TableReader out(root, "output", origin, {"can_fd"});
+    const Table out = root.table("output");
+    out.refuse_unknown({"can_fd"});
     out.boolean("can_fd", s.can_fd);
   }
 
-  const TableReader faults(
-      root, "faults", origin,
-      {"malformed_every_n_frames", "seed", "drop_probability", "delay_s", "jitter_s",
-       "corrupt_probability", "corrupt_max_bits", "reorder_probability", "duplicate_probability",
-       "stale_mode", "stale_start_s", "stale_end_s", "babble_rate_hz", "babble_id",
-       "babble_start_s", "babble_end_s"});
+  const Table faults = root.table("faults");
+  faults.refuse_unknown({"malformed_every_n_frames", "seed", "drop_probability", "delay_s",
+                         "jitter_s", "corrupt_probability", "corrupt_max_bits",
+                         "reorder_probability", "duplicate_probability", "stale_mode",
+                         "stale_start_s", "stale_end_s", "babble_rate_hz", "babble_id",
+                         "babble_start_s", "babble_end_s"});
   faults.integer("malformed_every_n_frames", s.malformed_every_n_frames, 0, 1'000'000'000);
   sim_bus::FaultConfig& lf = s.link_faults;
   std::int64_t fault_seed = static_cast<std::int64_t>(lf.seed & 0x7fffffffffffffffull);
   faults.integer("seed", fault_seed, 0, std::numeric_limits<std::int64_t>::max());
   lf.seed = static_cast<std::uint64_t>(fault_seed);
-  faults.number("drop_probability", lf.drop_probability, 0.0, 1.0);
-  faults.number("delay_s", lf.delay_s, 0.0, 10.0);
-  faults.number("jitter_s", lf.jitter_s, 0.0, 10.0);
+  faults.number("drop_probability", lf.drop_probability, {0.0, 1.0});
+  faults.number("delay_s", lf.delay_s, {0.0, 10.0});
+  faults.number("jitter_s", lf.jitter_s, {0.0, 10.0});
   if (lf.jitter_s > lf.delay_s)
     faults.fail("jitter_s", "must not exceed delay_s (a frame cannot arrive before it is sent)");
-  faults.number("corrupt_probability", lf.corrupt_probability, 0.0, 1.0);
+  faults.number("corrupt_probability", lf.corrupt_probability, {0.0, 1.0});
   faults.integer("corrupt_max_bits", lf.corrupt_max_bits, 1, sim_bus::kMaxCorruptBits);
-  faults.number("reorder_probability", lf.reorder_probability, 0.0, 1.0);
-  faults.number("duplicate_probability", lf.duplicate_probability, 0.0, 1.0);
+  faults.number("reorder_probability", lf.reorder_probability, {0.0, 1.0});
+  faults.number("duplicate_probability", lf.duplicate_probability, {0.0, 1.0});
   std::string stale_mode = !s.stale_sender                               ? "none"
                            : s.stale.mode == sim_bus::StaleMode::kSilent ? "silent"
                            : s.stale.mode == sim_bus::StaleMode::kFrozen ? "frozen"
                                                                          : "frozen_value";
-  faults.string("stale_mode", stale_mode);
-  if (stale_mode == "none") {
-    s.stale_sender = false;
-  } else if (stale_mode == "silent" || stale_mode == "frozen" || stale_mode == "frozen_value") {
-    s.stale_sender = true;
+  faults.choice("stale_mode", stale_mode, {"none", "silent", "frozen", "frozen_value"});
+  s.stale_sender = stale_mode != "none";
+  if (s.stale_sender) {
     s.stale.mode = stale_mode == "silent"   ? sim_bus::StaleMode::kSilent
                    : stale_mode == "frozen" ? sim_bus::StaleMode::kFrozen
                                             : sim_bus::StaleMode::kFrozenValue;
-  } else {
-    faults.fail("stale_mode",
-                "expected \"none\", \"silent\", \"frozen\" or \"frozen_value\", "
-                "got \"" +
-                    stale_mode + "\"");
   }
-  faults.number("stale_start_s", s.stale.start_s, 0.0, 1e9);
-  faults.number("stale_end_s", s.stale.end_s, 0.0, 1e9);
+  faults.number("stale_start_s", s.stale.start_s, {0.0, 1e9});
+  faults.number("stale_end_s", s.stale.end_s, {0.0, 1e9});
   if (s.stale_sender && s.stale.end_s < s.stale.start_s)
     faults.fail("stale_end_s", "must not be before stale_start_s");
   double babble_rate_hz = s.babbling_node ? s.babble.rate_hz : 0.0;
-  faults.number("babble_rate_hz", babble_rate_hz, 0.0, 1e6);
+  faults.number("babble_rate_hz", babble_rate_hz, {0.0, 1e6});
   s.babbling_node = babble_rate_hz > 0.0;
   if (s.babbling_node)
     s.babble.rate_hz = babble_rate_hz;
   faults.integer("babble_id", s.babble.id, 0, 0x7FF);
-  faults.number("babble_start_s", s.babble.start_s, 0.0, 1e9);
+  faults.number("babble_start_s", s.babble.start_s, {0.0, 1e9});
   double babble_end_s = std::isfinite(s.babble.end_s) ? s.babble.end_s : 0.0;
-  faults.number("babble_end_s", babble_end_s, 0.0, 1e9);
+  faults.number("babble_end_s", babble_end_s, {0.0, 1e9});
   if (babble_end_s > 0.0)
     s.babble.end_s = babble_end_s;
 
-  apply_weather(s, root, origin);
-  apply_governor(s, root, origin);
-  apply_targets(s, root, origin);
+  apply_weather(s, root);
+  apply_governor(s, root);
+  apply_targets(s, root);
 }
 
 }  // namespace
@@ -1045,7 +774,7 @@ void read_pattern_csv(const std::filesystem::path& path, const std::string& orig
                       radar::PatternCut& cut) {
   std::ifstream in(path);
   if (!in)
-    throw std::runtime_error(origin + ": [antenna] pattern_file: cannot open " + path.string());
+    config::fail(origin, "[antenna]", "pattern_file", "cannot open " + path.string());
   std::string line;
   int line_no = 0;
   while (std::getline(in, line)) {
@@ -1099,18 +828,18 @@ void derive_sensor(Scenario& s, const std::string& origin) {
           "or fewer range bins (max_range_m - swath_start_m, bandwidth_hz)");
     }
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(origin + ": [radar] " + e.what());
+    config::fail(origin, "[radar]", "", e.what());
   }
   try {
     const radar::Cfar2d probe(c.cfar, static_cast<std::size_t>(w.range_bins),
                               static_cast<std::size_t>(w.pulses));
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(origin + ": [detector] " + e.what());
+    config::fail(origin, "[detector]", "", e.what());
   }
   radar::AntennaConfig& a = c.antenna;
   radar::PatternKind kind{};
   if (!radar::parse_pattern_kind(s.pattern, kind))
-    throw std::runtime_error(origin + ": [antenna] pattern: unknown '" + s.pattern + "'");
+    config::fail(origin, "[antenna]", "pattern", "unknown value \"" + s.pattern + "\"");
   a.azimuth = {};
   a.azimuth.kind = kind;
   a.azimuth.beamwidth_rad =
@@ -1143,7 +872,7 @@ void derive_sensor(Scenario& s, const std::string& origin) {
     }
     const radar::Antenna check(a);
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(origin + ": [antenna] " + e.what());
+    config::fail(origin, "[antenna]", "", e.what());
   }
 }
 
@@ -1164,7 +893,7 @@ Scenario parse_impl(std::string_view toml_text, const std::string& origin,
       t.mesh_file = base_dir / t.mesh_file;  // relative to the scenario file
     std::error_code ec;
     if (!std::filesystem::is_regular_file(t.mesh_file, ec))
-      throw std::runtime_error(t.context + ": mesh_file: cannot open " + t.mesh_file.string());
+      throw config::ConfigError(t.context + " mesh_file: cannot open " + t.mesh_file.string());
   }
   derive_sensor(s, origin);
   return s;

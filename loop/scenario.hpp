@@ -97,7 +97,8 @@ struct Scenario {
 [[nodiscard]] std::string_view default_scenario_toml() noexcept;
 
 /// Parses a scenario. `origin` names the source in error messages ("FILE" or "<default>").
-/// Throws std::runtime_error "ORIGIN: [table] key: what is wrong" for missing, mistyped or
+/// Throws std::runtime_error in the one format of config/toml_reader.hpp, "ORIGIN: [table] key:
+/// what is wrong" ("ORIGIN:LINE:COL: what" for TOML syntax), for missing, mistyped or
 /// out-of-range values; unknown keys are errors too (typos must not pass silently).
 [[nodiscard]] Scenario parse_scenario(std::string_view toml_text, const std::string& origin);
 [[nodiscard]] Scenario load_scenario(const std::filesystem::path& path);

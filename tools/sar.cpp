@@ -1,8 +1,7 @@
 #include "tools/sar.hpp"
 
-#include <toml++/toml.h>
-
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -10,9 +9,9 @@
 #include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -27,6 +26,7 @@
 #include <ogr_srs_api.h>
 #endif
 
+#include "config/toml_reader.hpp"
 #include "plot/canvas.hpp"
 #include "plot/charts.hpp"
 #include "radar/clutter/speckle.hpp"
@@ -67,233 +67,115 @@ double db10(double x) {
 
 // ------------------------------------------------------------------------------ the TOML case
 
-class Reader {
- public:
-  Reader(const toml::table& root, std::string table, std::string origin,
-         std::set<std::string> allowed)
-      : origin_(std::move(origin)), name_(std::move(table)) {
-    if (const toml::node* n = root.get(name_)) {
-      table_ = n->as_table();
-      if (table_ == nullptr)
-        fail("", "must be a table");
-    }
-    check(allowed);
-  }
-  Reader(const toml::table& t, std::string name, std::string origin, std::set<std::string> allowed,
-         bool /*element*/)
-      : table_(&t), origin_(std::move(origin)), name_(std::move(name)) {
-    check(allowed);
-  }
-  [[noreturn]] void fail(std::string_view key, std::string_view what) const {
-    std::ostringstream os;
-    os << origin_ << ": [" << name_ << "] " << key << (key.empty() ? "" : ": ") << what;
-    throw std::invalid_argument(os.str());
-  }
-  const toml::node* node(std::string_view key) const {
-    return table_ == nullptr ? nullptr : table_->get(key);
-  }
-  void number(std::string_view key, double& out, double lo, double hi, bool open_lo = false) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    const std::optional<double> v = n->value<double>();
-    if (!v)
-      fail(key, "expected a number");
-    if (!std::isfinite(*v) || *v < lo || *v > hi || (open_lo && *v == lo)) {
-      std::ostringstream os;
-      os << "value " << *v << " outside " << (open_lo ? "(" : "[") << lo << ", " << hi << "]";
-      fail(key, os.str());
-    }
-    out = *v;
-  }
-  void integer(std::string_view key, std::size_t& out, std::int64_t lo, std::int64_t hi) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    if (!n->is_integer())
-      fail(key, "expected an integer");
-    const std::int64_t v = *n->value<std::int64_t>();
-    if (v < lo || v > hi)
-      fail(key, "value " + std::to_string(v) + " outside [" + std::to_string(lo) + ", " +
-                    std::to_string(hi) + "]");
-    out = static_cast<std::size_t>(v);
-  }
-  void boolean(std::string_view key, bool& out) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    if (!n->is_boolean())
-      fail(key, "expected true or false");
-    out = *n->value<bool>();
-  }
-  void string(std::string_view key, std::string& out) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    if (!n->is_string())
-      fail(key, "expected a string");
-    out = *n->value<std::string>();
-  }
-  void vec3(std::string_view key, glm::dvec3& out, double limit) const {
-    const toml::node* n = node(key);
-    if (n == nullptr)
-      return;
-    const toml::array* a = n->as_array();
-    if (a == nullptr || a->size() != 3)
-      fail(key, "expected an array of 3 numbers");
-    for (std::size_t i = 0; i < 3; ++i) {
-      const std::optional<double> v = (*a)[i].value<double>();
-      if (!v || !std::isfinite(*v) || std::abs(*v) > limit)
-        fail(key, "element " + std::to_string(i) + " is not a finite number within +-" +
-                      std::to_string(static_cast<long long>(limit)));
-      out[static_cast<glm::length_t>(i)] = *v;
-    }
-  }
+using config::Range;
+using config::Table;
 
- private:
-  void check(const std::set<std::string>& allowed) const {
-    if (table_ == nullptr)
-      return;
-    for (const auto& [key, value] : *table_) {
-      const std::string k(key.str());
-      if (!allowed.contains(k) && !(value.is_array_of_tables() && allowed.contains(k + "[]")))
-        fail(k, "unknown key");
-    }
-  }
-  const toml::table* table_ = nullptr;
-  std::string origin_, name_;
-};
+// Three numbers, each within +-limit.
+void vec3(const Table& t, std::string_view key, glm::dvec3& out, double limit) {
+  std::array<double, 3> v{};
+  if (t.vector(key, v, {-limit, limit}))
+    out = glm::dvec3(v[0], v[1], v[2]);
+}
 
-rd::Polarisation parse_pol(const std::string& s, const Reader& r) {
+rd::Polarisation parse_pol(const std::string& s) {
   if (s == "HH")
     return rd::Polarisation::kHH;
   if (s == "HV")
     return rd::Polarisation::kHV;
   if (s == "VH")
     return rd::Polarisation::kVH;
-  if (s == "VV")
-    return rd::Polarisation::kVV;
-  r.fail("polarisation", "expected HH, HV, VH or VV");
+  return rd::Polarisation::kVV;
 }
 
-// The case from its parsed TOML; `path` names the file (or text) in every error.
-SarCase case_from_table(const toml::table& root, const std::string& path) {
-  for (const auto& [key, value] : root) {
-    const std::string k(key.str());
-    if (k != "radar" && k != "platform" && k != "antenna" && k != "processing" && k != "scene")
-      throw std::invalid_argument(path + ": unknown table or key '" + k +
-                                  "' (radar, platform, antenna, processing, scene)");
-  }
+// The case from its parsed TOML; the file's name starts every error.
+SarCase case_from_table(const Table& root) {
+  const std::string& path = root.file();
+  root.refuse_unknown({"radar", "platform", "antenna", "processing", "scene"});
   SarCase c;
   rd::SarParams& p = c.p;
-  const Reader radar(root, "radar", path,
-                     {"carrier_hz", "bandwidth_hz", "sample_rate_hz", "pulse_duration_s", "prf_hz",
-                      "transmit_power_w", "peak_gain_db", "polarisation"});
-  radar.number("carrier_hz", p.carrier_hz, 1e8, 1e12);
-  radar.number("bandwidth_hz", p.bandwidth_hz, 1e5, 1e10);
+  const Table radar = root.table("radar");
+  radar.refuse_unknown({"carrier_hz", "bandwidth_hz", "sample_rate_hz", "pulse_duration_s",
+                        "prf_hz", "transmit_power_w", "peak_gain_db", "polarisation"});
+  radar.number("carrier_hz", p.carrier_hz, {1e8, 1e12});
+  radar.number("bandwidth_hz", p.bandwidth_hz, {1e5, 1e10});
   p.sample_rate_hz = 1.2 * p.bandwidth_hz;
-  radar.number("sample_rate_hz", p.sample_rate_hz, 1e5, 2e10);
-  radar.number("pulse_duration_s", p.pulse_duration_s, 1e-8, 1e-3);
-  radar.number("prf_hz", p.prf_hz, 1.0, 1e6);
-  radar.number("transmit_power_w", p.transmit_power_w, 1e-6, 1e9);
-  double gain_db = 0.0;
-  radar.number("peak_gain_db", gain_db, -20.0, 80.0);
-  p.peak_gain = std::pow(10.0, gain_db / 10.0);
-  radar.string("polarisation", c.pol_name);
-  c.pol = parse_pol(c.pol_name, radar);
+  radar.number("sample_rate_hz", p.sample_rate_hz, {1e5, 2e10});
+  radar.number("pulse_duration_s", p.pulse_duration_s, {1e-8, 1e-3});
+  radar.number("prf_hz", p.prf_hz, {1.0, 1e6});
+  radar.number("transmit_power_w", p.transmit_power_w, {1e-6, 1e9});
+  p.peak_gain = 1.0;  // 0 dB
+  radar.decibels("peak_gain_db", p.peak_gain, {-20.0, 80.0});
+  radar.choice("polarisation", c.pol_name, {"HH", "HV", "VH", "VV"});
+  c.pol = parse_pol(c.pol_name);
 
-  const Reader plat(root, "platform", path, {"altitude_m", "speed_mps", "heading_deg", "look"});
-  plat.number("altitude_m", c.altitude_m, 10.0, 20000.0);
-  plat.number("speed_mps", c.speed_mps, 0.1, 2000.0);
-  double heading_deg = c.heading_rad / kDeg;
-  plat.number("heading_deg", heading_deg, -360.0, 360.0);
-  c.heading_rad = heading_deg * kDeg;
+  const Table plat = root.table("platform");
+  plat.refuse_unknown({"altitude_m", "speed_mps", "heading_deg", "look"});
+  plat.number("altitude_m", c.altitude_m, {10.0, 20000.0});
+  plat.number("speed_mps", c.speed_mps, {0.1, 2000.0});
+  plat.degrees("heading_deg", c.heading_rad, {-360.0, 360.0});
   std::string look = "right";
-  plat.string("look", look);
-  if (look != "right" && look != "left")
-    plat.fail("look", "expected \"right\" or \"left\"");
+  plat.choice("look", look, {"right", "left"});
   p.look_right = look == "right";
 
-  const Reader ant(root, "antenna", path,
-                   {"incidence_deg", "azimuth_beamwidth_deg", "elevation_beamwidth_deg"});
-  double inc = 63.0, az_bw = 0.12, el_bw = 13.0;
-  ant.number("incidence_deg", inc, 5.0, 85.0);
-  ant.number("azimuth_beamwidth_deg", az_bw, 1e-3, 30.0, true);
-  ant.number("elevation_beamwidth_deg", el_bw, 1e-2, 60.0, true);
-  p.incidence_rad = inc * kDeg;
-  p.azimuth_beamwidth_rad = az_bw * kDeg;
-  p.elevation_beamwidth_rad = el_bw * kDeg;
+  const Table ant = root.table("antenna");
+  ant.refuse_unknown({"incidence_deg", "azimuth_beamwidth_deg", "elevation_beamwidth_deg"});
+  p.incidence_rad = 63.0 * kDeg;
+  p.azimuth_beamwidth_rad = 0.12 * kDeg;
+  p.elevation_beamwidth_rad = 13.0 * kDeg;
+  ant.degrees("incidence_deg", p.incidence_rad, {5.0, 85.0});
+  ant.degrees("azimuth_beamwidth_deg", p.azimuth_beamwidth_rad, {1e-3, 30.0, true});
+  ant.degrees("elevation_beamwidth_deg", p.elevation_beamwidth_rad, {1e-2, 60.0, true});
 
-  const Reader proc(root, "processing", path,
-                    {"gates", "synthetic_beamwidth_deg", "taper", "upsample", "image_width_m",
-                     "azimuth_spacing_m", "ground_range_spacing_m"});
+  const Table proc = root.table("processing");
+  proc.refuse_unknown({"gates", "synthetic_beamwidth_deg", "taper", "upsample", "image_width_m",
+                       "azimuth_spacing_m", "ground_range_spacing_m"});
   proc.integer("gates", p.gates, 8, 65536);
-  double syn = c.synthetic_beamwidth_rad / kDeg;
-  proc.number("synthetic_beamwidth_deg", syn, 1e-5, 5.0, true);
-  c.synthetic_beamwidth_rad = syn * kDeg;
+  proc.degrees("synthetic_beamwidth_deg", c.synthetic_beamwidth_rad, {1e-5, 5.0, true});
   std::string taper = "none";
-  proc.string("taper", taper);
+  proc.choice("taper", taper, {"none", "hamming"});
   if (taper == "hamming")
     c.taper = rd::SarTaper::kHamming;
-  else if (taper != "none")
-    proc.fail("taper", "expected \"none\" or \"hamming\"");
   proc.integer("upsample", c.upsample, 1, 64);
-  proc.number("image_width_m", c.image_width_m, 1.0, 20000.0);
-  proc.number("azimuth_spacing_m", c.azimuth_spacing_m, 0.0, 100.0);
-  proc.number("ground_range_spacing_m", c.ground_range_spacing_m, 0.0, 100.0);
+  proc.number("image_width_m", c.image_width_m, {1.0, 20000.0});
+  proc.number("azimuth_spacing_m", c.azimuth_spacing_m, {0.0, 100.0});
+  proc.number("ground_range_spacing_m", c.ground_range_spacing_m, {0.0, 100.0});
 
-  const Reader scene(
-      root, "scene", path,
-      {"ground_material", "clutter", "clutter_cell_m", "speckle_seed", "target_ray_spacing_m",
-       "max_bounces", "latitude_deg", "longitude_deg", "target[]"});
+  const Table scene = root.table("scene");
+  scene.refuse_unknown({"ground_material", "clutter", "clutter_cell_m", "speckle_seed",
+                        "target_ray_spacing_m", "max_bounces", "latitude_deg", "longitude_deg",
+                        "target"});
   scene.string("ground_material", c.ground_material);
   if (c.ground_material != "none" && cl::find_terrain_material(c.ground_material) == nullptr)
-    scene.fail("ground_material", "unknown material (none, " + cl::terrain_material_names() + ")");
+    scene.unknown_value("ground_material", c.ground_material,
+                        "none, " + cl::terrain_material_names());
   scene.boolean("clutter", c.clutter);
-  scene.number("clutter_cell_m", c.clutter_cell_m, 0.0, 100.0);
-  std::size_t seed = c.speckle_seed;
-  scene.integer("speckle_seed", seed, 0, std::numeric_limits<std::int64_t>::max());
-  c.speckle_seed = seed;
-  scene.number("target_ray_spacing_m", c.target_ray_spacing_m, 1e-3, 10.0);
-  std::size_t bounces = 3;
-  scene.integer("max_bounces", bounces, 1, 16);
-  c.max_bounces = static_cast<int>(bounces);
-  scene.number("latitude_deg", c.latitude_deg, -89.0, 89.0);
-  scene.number("longitude_deg", c.longitude_deg, -180.0, 180.0);
-  if (const toml::node* st = root.get("scene"); st != nullptr && st->as_table() != nullptr) {
-    if (const toml::node* tn = st->as_table()->get("target")) {
-      const toml::array* arr = tn->as_array();
-      if (arr == nullptr || !arr->is_array_of_tables())
-        scene.fail("target", "expected [[scene.target]] tables");
-      std::size_t i = 0;
-      for (const toml::node& e : *arr) {
-        const std::string ctx = "scene.target " + std::to_string(i++);
-        const Reader t(
-            *e.as_table(), ctx, path,
-            {"name", "kind", "a_m", "b_m", "c_m", "position_m", "velocity_mps", "heading_deg"},
-            true);
-        TargetCase tc;
-        tc.name = "target" + std::to_string(i - 1);
-        t.string("name", tc.name);
-        std::string kind = "trihedral-square";
-        t.string("kind", kind);
-        const auto k = sc::target_kind_from_name(kind);
-        if (!k)
-          t.fail("kind", "unknown (" + sc::target_names() + ")");
-        tc.spec.kind = *k;
-        t.number("a_m", tc.spec.a_m, 1e-3, 100.0, true);
-        tc.spec.b_m = tc.spec.a_m;
-        tc.spec.c_m = tc.spec.a_m;
-        t.number("b_m", tc.spec.b_m, 1e-3, 100.0, true);
-        t.number("c_m", tc.spec.c_m, 1e-3, 100.0, true);
-        t.vec3("position_m", tc.position_m, 15000.0);
-        t.vec3("velocity_mps", tc.velocity_mps, 1000.0);
-        double hd = 0.0;
-        t.number("heading_deg", hd, -360.0, 360.0);
-        tc.heading_rad = hd * kDeg;
-        c.targets.push_back(tc);
-      }
-    }
+  scene.number("clutter_cell_m", c.clutter_cell_m, {0.0, 100.0});
+  scene.integer("speckle_seed", c.speckle_seed, 0, std::numeric_limits<std::int64_t>::max());
+  scene.number("target_ray_spacing_m", c.target_ray_spacing_m, {1e-3, 10.0});
+  scene.integer("max_bounces", c.max_bounces, 1, 16);
+  scene.number("latitude_deg", c.latitude_deg, {-89.0, 89.0});
+  scene.number("longitude_deg", c.longitude_deg, {-180.0, 180.0});
+  for (const Table& t : scene.tables("target")) {
+    t.refuse_unknown(
+        {"name", "kind", "a_m", "b_m", "c_m", "position_m", "velocity_mps", "heading_deg"});
+    TargetCase tc;
+    tc.name = "target" + std::to_string(c.targets.size());
+    t.string("name", tc.name);
+    std::string kind = "trihedral-square";
+    t.string("kind", kind);
+    const auto k = sc::target_kind_from_name(kind);
+    if (!k)
+      t.unknown_value("kind", kind, sc::target_names());
+    tc.spec.kind = *k;
+    t.number("a_m", tc.spec.a_m, {1e-3, 100.0, true});
+    tc.spec.b_m = tc.spec.a_m;
+    tc.spec.c_m = tc.spec.a_m;
+    t.number("b_m", tc.spec.b_m, {1e-3, 100.0, true});
+    t.number("c_m", tc.spec.c_m, {1e-3, 100.0, true});
+    vec3(t, "position_m", tc.position_m, 15000.0);
+    vec3(t, "velocity_mps", tc.velocity_mps, 1000.0);
+    t.degrees("heading_deg", tc.heading_rad, {-360.0, 360.0});
+    c.targets.push_back(tc);
   }
 
   // Derived geometry: the image centre at the world origin, the track beside it.
@@ -345,20 +227,13 @@ SarCase case_from_table(const toml::table& root, const std::string& path) {
   return c;
 }
 
-std::invalid_argument toml_error(const std::string& origin, const toml::parse_error& e) {
-  std::ostringstream os;
-  os << origin << ":" << e.source().begin.line << ": " << e.description();
-  return std::invalid_argument(os.str());
-}
-
+// The reader's errors (config::ConfigError) as this tool's contract has them.
 SarCase load_case(const std::string& path) {
-  toml::table root;
   try {
-    root = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    throw toml_error(path, e);
+    return case_from_table(config::TomlFile::load(path).root());
+  } catch (const config::ConfigError& e) {
+    throw std::invalid_argument(e.what());
   }
-  return case_from_table(root, path);
 }
 
 // ------------------------------------------------------------------------------ the scene
@@ -563,13 +438,11 @@ std::string fmt(double v) {
 }  // namespace
 
 SarCase parse_sar_case(std::string_view text, const std::string& origin) {
-  toml::table root;
   try {
-    root = toml::parse(text, std::string_view(origin));
-  } catch (const toml::parse_error& e) {
-    throw toml_error(origin, e);
+    return case_from_table(config::TomlFile::parse(text, origin).root());
+  } catch (const config::ConfigError& e) {
+    throw std::invalid_argument(e.what());
   }
-  return case_from_table(root, origin);
 }
 
 bool sar_geotiff_available() noexcept {

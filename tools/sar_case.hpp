@@ -51,7 +51,8 @@ struct SarCase {
   std::vector<TargetCase> targets;
 };
 
-/// Parses a case from TOML text; `origin` (a file name) starts every error message. Throws
+/// Parses a case from TOML text; `origin` (a file name) starts every error message, in the one
+/// format of config/toml_reader.hpp ("ORIGIN: [table] key: what", "ORIGIN:LINE:COL: what"). Throws
 /// std::invalid_argument (a TOML syntax error with its line, an unknown table or key, a value of
 /// the wrong type or outside its documented range, a geometry the processing cannot use: too
 /// narrow an azimuth beam for the synthetic one, a swath reaching nadir, too low a PRF, over
