@@ -19,6 +19,7 @@
 #include "loop/frame_record.hpp"
 #include "loop/governor.hpp"
 #include "loop/outputs/live_view.hpp"
+#include "loop/outputs/report.hpp"
 #include "loop/scenario.hpp"
 #include "loop/truth.hpp"
 #include "radar/em/sbr.hpp"
@@ -122,6 +123,10 @@ class ClosedLoop {
   /// writes report.json and timing.png. Throws std::runtime_error when there is no out_dir or
   /// report.json cannot be written; the streamed files' failures are counted in the report.
   void write_outputs(const RunResult& result);
+  /// The run's report (loop/outputs/report.hpp) for `result`, as finish() returned it: what
+  /// write_outputs() writes to report.json and `radar-emu run` prints. Points into this loop
+  /// and `result` (both must outlive it). Setup-side: allocates.
+  [[nodiscard]] RunReport report(const RunResult& result) const;
   /// What the streamed outputs wrote and lost (complete once write_outputs() has run).
   [[nodiscard]] OutputCounters output_counters() const;
   /// Writes the stage timeline as Chrome trace-event JSON ({"traceEvents": [...]}, "X" complete
