@@ -153,8 +153,8 @@ sim_bus::RegisterFaultConfig register_faults(const Scenario& s, bool replay) {
 }
 
 // [weather]: the one-way specific attenuation at the carrier, built once from the ITU-R
-// models (radar/propagation/path.hpp sums P.676 gases, P.838 rain and P.840 fog). The SBR
-// transmits vertical polarisation (radar/em/sbr.cpp), so rain takes P.838's tilt pi/2.
+// models (radar/propagation/path.hpp sums P.676 gases, P.838 rain and P.840 fog), rain at the
+// tilt of the scenario's polarisation (rain_tilt_rad()).
 WeatherFigures weather_figures(const Scenario& s) {
   const WeatherSpec& w = s.weather;
   WeatherFigures out;
@@ -162,18 +162,18 @@ WeatherFigures weather_figures(const Scenario& s) {
     return out;
   const double f = s.sbr.carrier_hz;
   const radar::Atmosphere air{w.pressure_hpa, w.temperature_k, w.humidity_gm3};
-  constexpr double kTiltVertical = std::numbers::pi / 2.0;
+  const double tilt_rad = rain_tilt_rad(s.sbr.polarisation);
   try {
     radar::MediumSpec medium;
     medium.name = w.condition;
     medium.atmosphere = air;
     medium.rain_mm_per_h = w.rain_mm_per_h;
     medium.liquid_water_gm3 = w.fog_water_gm3;
-    const radar::PathAttenuation path(f, kTiltVertical, std::span(&medium, 1));
+    const radar::PathAttenuation path(f, tilt_rad, std::span(&medium, 1));
     out.total_db_per_m = path.specific_db_per_m(0);
     out.gas_db_per_km = radar::gaseous_specific_attenuation(f, air).total_db_per_km();
     out.rain_db_per_km =
-        radar::rain_specific_attenuation_db_per_km(f, w.rain_mm_per_h, 0.0, kTiltVertical);
+        radar::rain_specific_attenuation_db_per_km(f, w.rain_mm_per_h, 0.0, tilt_rad);
     if (w.fog_water_gm3 > 0.0) {
       out.fog_db_per_km =
           radar::cloud_fog_specific_attenuation_db_per_km(f, w.fog_water_gm3, w.temperature_k);
@@ -282,6 +282,17 @@ struct Frame {
 };
 
 }  // namespace
+
+double rain_tilt_rad(radar::Polarisation polarisation) noexcept {
+  switch (polarisation) {
+    case radar::Polarisation::kHH:
+      return 0.0;
+    case radar::Polarisation::kVV:
+      return std::numbers::pi / 2.0;
+    default:
+      return std::numbers::pi / 4.0;  // one way H, the other V
+  }
+}
 
 scene::SceneDescription scene_description(const Scenario& s) {
   scene::SceneDescription d;

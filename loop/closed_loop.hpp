@@ -88,6 +88,11 @@ struct OwnshipInput {
   double roll_rad = 0.0;
 };
 
+/// ITU-R P.838-3's polarisation tilt for the rain loss of a radar in `polarisation` [rad]:
+/// 0 for HH (horizontal), pi/2 for VV (vertical), pi/4 for HV and VH (one way each: P.838's
+/// k and alpha then average the two). Real-time safe.
+[[nodiscard]] double rain_tilt_rad(radar::Polarisation polarisation) noexcept;
+
 /// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop
 /// builds it. Throws with context when a file cannot be loaded.
 [[nodiscard]] scene::SceneDescription scene_description(const Scenario& scenario);

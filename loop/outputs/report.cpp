@@ -190,6 +190,18 @@ void add_faults(const RunReport& p, Json& rep) {
         {"skipped", r.babble.skipped}}}};
 }
 
+// The polarisation P.838's rain loss was taken at (ClosedLoop's rain_tilt_rad()).
+const char* rain_polarisation(radar::Polarisation p) noexcept {
+  switch (p) {
+    case radar::Polarisation::kHH:
+      return "horizontal polarisation";
+    case radar::Polarisation::kVV:
+      return "vertical polarisation";
+    default:
+      return "tilt 45 deg: one way H, the other V";
+  }
+}
+
 // scene, weather.
 void add_scene_and_weather(const RunReport& p, Json& rep) {
   const Scenario& s = *p.scenario;
@@ -224,9 +236,8 @@ void add_scene_and_weather(const RunReport& p, Json& rep) {
                {"humidity_gpm3", w.humidity_gm3},
                {"temperature_c", w.temperature_k - 273.15},
                {"pressure_hpa", w.pressure_hpa},
-               {"models",
-                "ITU-R P.676-13 (gases), P.838-3 (rain, vertical polarisation), "
-                "P.840-9 (fog)"},
+               {"models", std::string("ITU-R P.676-13 (gases), P.838-3 (rain, ") +
+                              rain_polarisation(s.sbr.polarisation) + "), P.840-9 (fog)"},
                {"carrier_hz", s.sbr.carrier_hz},
                {"one_way_db_per_km",
                 {{"gases", f.gas_db_per_km},
