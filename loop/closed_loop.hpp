@@ -19,6 +19,7 @@
 #include "loop/frame_record.hpp"
 #include "loop/governor.hpp"
 #include "loop/outputs/live_view.hpp"
+#include "loop/outputs/report.hpp"
 #include "loop/scenario.hpp"
 #include "loop/truth.hpp"
 #include "radar/em/sbr.hpp"
@@ -87,6 +88,11 @@ struct OwnshipInput {
   double roll_rad = 0.0;
 };
 
+/// ITU-R P.838-3's polarisation tilt for the rain loss of a radar in `polarisation` [rad]:
+/// 0 for HH (horizontal), pi/2 for VV (vertical), pi/4 for HV and VH (one way each: P.838's
+/// k and alpha then average the two). Real-time safe.
+[[nodiscard]] double rain_tilt_rad(radar::Polarisation polarisation) noexcept;
+
 /// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop
 /// builds it. Throws with context when a file cannot be loaded.
 [[nodiscard]] scene::SceneDescription scene_description(const Scenario& scenario);
@@ -122,6 +128,10 @@ class ClosedLoop {
   /// writes report.json and timing.png. Throws std::runtime_error when there is no out_dir or
   /// report.json cannot be written; the streamed files' failures are counted in the report.
   void write_outputs(const RunResult& result);
+  /// The run's report (loop/outputs/report.hpp) for `result`, as finish() returned it: what
+  /// write_outputs() writes to report.json and `radar-emu run` prints. Points into this loop
+  /// and `result` (both must outlive it). Setup-side: allocates.
+  [[nodiscard]] RunReport report(const RunResult& result) const;
   /// What the streamed outputs wrote and lost (complete once write_outputs() has run).
   [[nodiscard]] OutputCounters output_counters() const;
   /// Writes the stage timeline as Chrome trace-event JSON ({"traceEvents": [...]}, "X" complete

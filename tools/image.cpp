@@ -61,7 +61,7 @@ double weather_db_per_m(const Scenario& s) {
   medium.rain_mm_per_h = w.rain_mm_per_h;
   medium.liquid_water_gm3 = w.fog_water_gm3;
   try {
-    const radar::PathAttenuation path(s.sbr.carrier_hz, std::numbers::pi / 2.0,
+    const radar::PathAttenuation path(s.sbr.carrier_hz, loop::rain_tilt_rad(s.sbr.polarisation),
                                       std::span(&medium, 1));
     return path.specific_db_per_m(0);
   } catch (const std::invalid_argument& e) {

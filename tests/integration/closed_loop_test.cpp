@@ -706,6 +706,45 @@ TEST(ClosedLoopWeather, FogLowersEachDetectionsSnrByTheTwoWayLoss) {
       gamma_db_per_m * 1e3, errors_db.size(), within, median);
 }
 
+TEST(ClosedLoopWeather, RainLossTakesTheScenariosPolarisation) {
+  // ITU-R P.838-3: rain attenuates horizontal polarisation more than vertical (k_H > k_V at
+  // 94 GHz). An HH radar in 16 mm/h of rain must lose k_H R^alpha_H (tilt 0) one way, not the
+  // vertical figure; a VV radar the vertical one (tilt pi/2).
+  constexpr double kRainMmph = 16.0;
+  for (const auto pol :
+       {radar_emu::radar::Polarisation::kHH, radar_emu::radar::Polarisation::kVV}) {
+    loop::Scenario s = default_scenario();
+    s.frames = 1;
+    s.sbr.polarisation = pol;
+    s.weather.enabled = true;
+    s.weather.condition = "rain";
+    s.weather.rain_mm_per_h = kRainMmph;
+    const double tilt_rad =
+        pol == radar_emu::radar::Polarisation::kHH ? 0.0 : std::numbers::pi / 2.0;
+    const double f = s.sbr.carrier_hz;
+    const double rain_db_per_km =
+        radar_emu::radar::rain_specific_attenuation_db_per_km(f, kRainMmph, 0.0, tilt_rad);
+    const radar_emu::radar::Atmosphere air{s.weather.pressure_hpa, s.weather.temperature_k,
+                                           s.weather.humidity_gm3};
+    const double gas_db_per_km =
+        radar_emu::radar::gaseous_specific_attenuation(f, air).total_db_per_km();
+    loop::ClosedLoop loop(s, {});
+    const loop::RunResult r = loop.run();
+    const loop::RunReport report = loop.report(r);
+    const double range_m = 1000.0;
+    std::printf(
+        "%s: two-way loss over %.0f m in %.0f mm/h at %.0f GHz: %.4f dB (rain %.4f dB/km)\n",
+        pol == radar_emu::radar::Polarisation::kHH ? "HH" : "VV", range_m, kRainMmph, f * 1e-9,
+        2.0 * report.weather.total_db_per_m * range_m, report.weather.rain_db_per_km);
+    EXPECT_NEAR(report.weather.rain_db_per_km, rain_db_per_km, 1e-9);
+    EXPECT_NEAR(report.weather.total_db_per_m * 1e3, gas_db_per_km + rain_db_per_km, 1e-6);
+  }
+  // And the two differ: the test tells the polarisations apart.
+  EXPECT_GT(radar_emu::radar::rain_specific_attenuation_db_per_km(94e9, kRainMmph, 0.0, 0.0),
+            radar_emu::radar::rain_specific_attenuation_db_per_km(94e9, kRainMmph, 0.0,
+                                                                  std::numbers::pi / 2.0));
+}
+
 TEST(ClosedLoop, TwoRunsWriteByteIdenticalLogs) {
   loop::Scenario s = default_scenario();
   s.frames = 40;
