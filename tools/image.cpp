@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "config/cli_checks.hpp"
+#include "config/output_paths.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
 #include "plot/charts.hpp"
