@@ -8,19 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "config/output_paths.hpp"
+
 namespace radar_emu::config {
 
-/// Throws std::invalid_argument "PATH: cannot open for writing: ..." unless PATH can be created:
-/// its directory exists, is a directory and is writable, PATH itself is not a directory, and
-/// (when `extensions` is not empty) its extension is one of them (case-insensitive, with the dot:
-/// ".png"). `option` names the option in the message.
-void check_output_file(const std::string& path, const std::string& option,
-                       const std::vector<std::string>& extensions = {});
-/// Throws std::invalid_argument "PATH: cannot create the output directory: ..." unless PATH is a
-/// writable directory or can be created (its nearest existing ancestor is a writable directory).
-void check_output_dir(const std::string& path, const std::string& option);
-
-/// CLI11 validators over the two checks above.
+/// CLI11 validators over config/output_paths.hpp's two checks.
 [[nodiscard]] CLI::Validator output_file(std::vector<std::string> extensions = {});
 [[nodiscard]] CLI::Validator output_dir();
 

@@ -1,6 +1,5 @@
 #include "tools/image.hpp"
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -14,19 +13,16 @@
 #include <string>
 #include <vector>
 
-#include "config/cli_checks.hpp"
+#include "config/output_paths.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
 #include "plot/charts.hpp"
 #include "radar/propagation/path.hpp"
 #include "scene/scene.hpp"
-#include "tools/scene.hpp"
 
 namespace radar_emu::tools {
 
 using config::check_output_dir;
-using config::in_range;
-using config::output_dir;
 using loop::body_from_antenna;
 using loop::default_scenario_toml;
 using loop::enu_from_body;
@@ -315,35 +311,6 @@ int run_image_tool(const ImageToolOptions& o) {
         dir.string().c_str());
   }
   return 0;
-}
-
-void add_image_command(CLI::App& app, ImageCommand& c) {
-  c.app = app.add_subcommand(
-      "image", "94 GHz enhanced-vision radar image of a scenario's view, with its optical preview");
-  ImageToolOptions& o = c.options;
-  c.app->add_option("scenario", o.scenario, "Scenario TOML (default: the embedded one)")
-      ->check(CLI::ExistingFile);
-  c.app->add_option("--time-s", o.time_s, "Scenario time of the ownship pose [s] (default 0)")
-      ->check(in_range(0.0, 1e6, "s"));
-  c.app->add_option("--looks", o.looks, "Uncorrelated looks averaged (default 10)")
-      ->check(CLI::Range(1, 1000));
-  c.app->add_option("--seed", c.seed_text, "Speckle seed, 0..2^64-1 (default 20261124)");
-  c.app
-      ->add_option("--optical-scale", o.optical_scale,
-                   "Optical preview pixels per radar pixel, each way (default 4)")
-      ->check(CLI::Range(1, 16));
-  c.app->add_option("--out", o.out_dir, "Output directory (default ./image)")->check(output_dir());
-  c.app->add_flag("--plot", o.plot, "Also write image.png (radar and optical side by side)");
-  c.app->add_flag("-q,--quiet", o.quiet, "No summary");
-}
-
-std::optional<int> run_image_command(const ImageCommand& c) {
-  if (c.app == nullptr || !c.app->parsed())
-    return std::nullopt;
-  ImageToolOptions o = c.options;
-  if (!c.seed_text.empty())
-    o.seed = parse_seed(c.seed_text, "--seed");
-  return run_image_tool(o);
 }
 
 }  // namespace radar_emu::tools

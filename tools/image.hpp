@@ -10,20 +10,16 @@
 // elevation_deg, range_near_m, range_far_m, intensity_dbsm, mean_dbsm), image.json (the
 // parameters, pose, weather, counts and timings) and with --plot image.png (the radar image and
 // the optical preview side by side, axes in degrees). Errors are exceptions whose message is one
-// line naming the option or file; main() prints them.
+// line naming the option or file; main() prints them. The options are a plain struct;
+// app/cmd_image.cpp reads them from the command line.
 
 #include <cstdint>
-#include <optional>
 #include <string>
 
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/products/ev_image.hpp"
 #include "scene/preview.hpp"
-
-namespace CLI {
-class App;
-}
 
 namespace radar_emu::tools {
 
@@ -61,16 +57,5 @@ struct EvImageProduct {
 
 /// Loads the scenario, computes, writes the outputs and prints a summary. Returns 0.
 int run_image_tool(const ImageToolOptions& options);
-
-/// The `image` subcommand and its option storage (must outlive parsing and stay at one address).
-struct ImageCommand {
-  CLI::App* app = nullptr;
-  ImageToolOptions options;
-  std::string seed_text;  ///< --seed as given (parsed by run_image_command: errors name it)
-};
-/// Registers `image` on the application.
-void add_image_command(CLI::App& app, ImageCommand& command);
-/// Runs it when it was parsed (its exit status); nullopt otherwise.
-[[nodiscard]] std::optional<int> run_image_command(const ImageCommand& command);
 
 }  // namespace radar_emu::tools

@@ -527,7 +527,7 @@ radar::RcsConfig rcs_config(int bounces, double rays_per_wavelength, bool edges,
     std::replace(cli.begin(), cli.end(), '-', '_');
     return cli;
   };
-  // CLI11 checks --bounces and --rays-per-wavelength on the command line already; these are
+  // The command line checks --bounces and --rays-per-wavelength already (app/); these are
   // for the library's other callers (the Python module).
   if (bounces < 1 || bounces > radar::kMaxRcsBounces) {
     throw std::invalid_argument(name("--bounces") + " must be in 1.." +

@@ -39,7 +39,7 @@ enum class Pol { kHH, kHV, kVH, kVV };
 [[nodiscard]] std::string_view pol_name(Pol p) noexcept;
 [[nodiscard]] std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept;
 
-/// How an error message names an option: the CLI's "--edge-turn-deg" or Python's
+/// How an error message names an option: the command line's "--edge-turn-deg" or Python's
 /// "edge_turn_deg" (the radar_emu module, docs/python.md).
 enum class OptionSpelling { kCli, kPython };
 

@@ -2,7 +2,6 @@
 
 #include <stb/stb_image_write.h>
 
-#include <CLI/CLI.hpp>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -14,17 +13,14 @@
 #include <stdexcept>
 #include <vector>
 
-#include "config/cli_checks.hpp"
 #include "scene/airport_gen.hpp"
 #include "scene/gltf.hpp"
+#include "scene/mesh_io.hpp"
 #include "scene/preview.hpp"
 #include "scene/scene.hpp"
 #include "scene/terrain_gen.hpp"
 
 namespace radar_emu::tools {
-
-using config::in_range;
-using config::output_file;
 
 namespace {
 
@@ -273,50 +269,15 @@ int run_scene_preview(const ScenePreviewOptions& o) {
   return 0;
 }
 
-void add_scene_commands(CLI::App& scene, SceneCommands& c) {
-  c.gen = scene.add_subcommand(
-      "gen", "Generate a scene database into glTF: terrain (scene/terrain_gen.hpp) or airport");
-  c.gen->add_option("kind", c.gen_options.kind, "terrain|airport")->required();
-  c.gen->add_option("--seed", c.gen_options.seed,
-                    "Seed of every random choice, 0..2^64-1 (default 1): same seed, same file");
-  c.gen->add_option("--out", c.gen_options.out, "Output file: .glb or .gltf")
-      ->required()
-      ->check(output_file({".glb", ".gltf"}));
-  c.gen->add_flag("-q,--quiet", c.gen_options.quiet, "No summary (warnings are still printed)");
-
-  c.info = scene.add_subcommand(
-      "info", "Polygon counts (per material, area, LOD level), extent and objects of a glTF scene");
-  c.info->add_option("file", c.info_options.file, "Scene: .glb or .gltf")->required();
-  c.info->add_flag("--json", c.info_options.json, "One JSON object instead of the table");
-
-  c.preview = scene.add_subcommand(
-      "preview", "Render an optical preview PNG of a glTF scene (sun-lit material colours)");
-  ScenePreviewOptions& p = c.preview_options;
-  c.preview->add_option("file", p.file, "Scene: .glb or .gltf")->required();
-  c.preview->add_option("--out", p.out, "Output PNG")->required()->check(output_file({".png"}));
-  c.preview->add_option(
-      "--camera", p.camera,
-      "Camera position E,N,U [m] (default: oblique overview from the south-west)");
-  c.preview->add_option("--look-at", p.look_at, "Point looked at E,N,U [m]");
-  c.preview
-      ->add_option("--fov-deg", p.fov_deg,
-                   "Vertical field of view in (0, 180) deg (default: the overview camera's 40)")
-      ->check(in_range(0.0, 180.0, "deg", true, true));
-  c.preview->add_option("--width", p.width_px, "Image width [pixels] (default 1024)")
-      ->check(CLI::Range(1, 16384));
-  c.preview->add_option("--height", p.height_px, "Image height [pixels] (default 768)")
-      ->check(CLI::Range(1, 16384));
-  c.preview->add_flag("-q,--quiet", p.quiet, "No summary (warnings are still printed)");
-}
-
-std::optional<int> run_scene_command(const SceneCommands& c) {
-  if (c.gen != nullptr && c.gen->parsed())
-    return run_scene_gen(c.gen_options);
-  if (c.info != nullptr && c.info->parsed())
-    return run_scene_info(c.info_options);
-  if (c.preview != nullptr && c.preview->parsed())
-    return run_scene_preview(c.preview_options);
-  return std::nullopt;
+std::size_t write_scene_target(const scene::TargetSpec& spec, const std::filesystem::path& out) {
+  const scene::SceneDescription desc = scene::make_target(spec);
+  const std::string ext = out.extension().string();
+  if (ext == ".glb" || ext == ".gltf") {
+    scene::write_gltf(desc, out);
+  } else {
+    scene::write_mesh_file(desc.objects[0].mesh, desc.materials, out);
+  }
+  return desc.objects[0].mesh.triangles.size();
 }
 
 }  // namespace radar_emu::tools

@@ -1,18 +1,19 @@
 #pragma once
-// `radar-emu scene gen|info|preview`: generate a scene database (scene/terrain_gen.hpp,
+// `radar-emu scene gen|info|preview|target`: generate a scene database (scene/terrain_gen.hpp,
 // scene/airport_gen.hpp) into glTF, summarise one (scene/scene_info.hpp: text or one JSON
-// object), render an optical preview PNG of one (scene/preview.hpp). Errors are exceptions
-// whose message is one line naming the option or file; main() prints them.
+// object), render an optical preview PNG of one (scene/preview.hpp), write a canonical target
+// mesh (scene/targets.hpp). The options are plain structs; app/cmd_scene*.cpp reads them from
+// the command line. Errors are exceptions whose message is one line naming the option or file;
+// main() prints them.
 
+#include <cstddef>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 
 #include "scene/scene_info.hpp"
-
-namespace CLI {
-class App;
-}
+#include "scene/targets.hpp"
 
 namespace radar_emu::tools {
 
@@ -50,6 +51,10 @@ int run_scene_gen(const SceneGenOptions& options);
 int run_scene_info(const SceneInfoOptions& options);
 /// Loads the file, renders it (scene/preview.hpp) and writes an RGB PNG. Returns 0.
 int run_scene_preview(const ScenePreviewOptions& options);
+/// Makes the canonical target `spec` (scene/targets.hpp) and writes it to `out`: glTF for a
+/// .glb / .gltf name, else the mesh format of its extension (scene/mesh_io.hpp). Returns the
+/// mesh's triangle count; throws on I/O failure.
+std::size_t write_scene_target(const scene::TargetSpec& spec, const std::filesystem::path& out);
 
 /// The JSON form of `info` (one object; keys in scene_tool.cpp's order): polygons_total (every
 /// LOD level), polygons_full_detail, polygons_by_lod_level ("none", "0", "1", ...),
@@ -60,21 +65,5 @@ int run_scene_preview(const ScenePreviewOptions& options);
 /// The table form of `info`.
 [[nodiscard]] std::string scene_info_text(const scene::SceneInfo& info, const std::string& file,
                                           std::size_t load_warnings);
-
-/// The `scene gen|info|preview` subcommands and their option storage (must outlive parsing and
-/// stay at one address once add_scene_commands() has bound to it).
-struct SceneCommands {
-  CLI::App* gen = nullptr;
-  CLI::App* info = nullptr;
-  CLI::App* preview = nullptr;
-  SceneGenOptions gen_options;
-  SceneInfoOptions info_options;
-  ScenePreviewOptions preview_options;
-};
-
-/// Registers gen, info and preview under the `scene` subcommand.
-void add_scene_commands(CLI::App& scene, SceneCommands& commands);
-/// Runs whichever of them was parsed (its exit status); nullopt when none was.
-[[nodiscard]] std::optional<int> run_scene_command(const SceneCommands& commands);
 
 }  // namespace radar_emu::tools

@@ -1,0 +1,45 @@
+#pragma once
+// Command-line pieces several subcommands share: the output paths left at their defaults, sizes
+// as text, and the target and sweep options of rcs and profile.
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+namespace radar_emu::app {
+
+/// An output file or directory left at its default: checked before any work too (a given one
+/// was checked by its validator while parsing). Throws std::invalid_argument naming the option.
+void check_default_file(const CLI::Option* opt, const std::string& path);
+void check_default_dir(const CLI::Option* opt, const std::string& path);
+
+/// `bytes` as text: "%.3g MB", "%.3g GB" or "%.3g TB".
+[[nodiscard]] std::string si_bytes(double bytes);
+
+/// rcs / profile: the sweeps are kept as text and parsed here, so errors name the option.
+struct SweepText {
+  std::string freq, freq_sweep, theta = "0", phi = "0", pol;
+};
+
+/// The options rcs and profile share, bound to their storage (which must outlive parsing).
+struct TargetArgs {
+  std::string& mesh;
+  double& scale;
+  std::vector<std::string>& materials;
+  int& bounces;
+  double& rays_per_wavelength;
+  bool& quiet;
+};
+
+/// Adds --mesh, --scale, --freq-hz, --freq-sweep-hz, --theta-deg, --phi-deg, --bounces,
+/// --rays-per-wavelength, --material and -q to `cmd`.
+void add_target_options(CLI::App& cmd, SweepText& t, const TargetArgs& a);
+
+/// --rays-per-wavelength sets the density of the ray tubes of bounces >= 2: with --bounces 1 it
+/// would be silently ignored, so it is refused.
+void check_rays(const CLI::App& cmd, int bounces);
+
+/// The frequencies of exactly one of --freq-hz and --freq-sweep-hz [Hz].
+[[nodiscard]] std::vector<double> frequencies(const SweepText& t);
+
+}  // namespace radar_emu::app
