@@ -391,8 +391,14 @@ std::string_view OutputStream::object_json(std::uint32_t id) const noexcept {
 }
 
 void OutputStream::write_frame(const FrameEntry& e) noexcept {
-  const FrameRecord& rec = e.record;
   const bool first = frames_written_ == 0;
+  write_detections(e.record, first);
+  write_truth(e.record, first);
+  write_frames_csv(e);
+  ++frames_written_;
+}
+
+void OutputStream::write_detections(const FrameRecord& rec, bool first) noexcept {
   // detections.json: one frame a line, values before ICD quantisation.
   File& d = *files_[kDetections];
   d.reserve(kLargestRecord);
@@ -458,7 +464,9 @@ void OutputStream::write_frame(const FrameEntry& e) noexcept {
   d.put("]}");
   detections_written_ += rec.detection_count;
   bscope_->add_frame(std::span<const io::icd::Detection>(scratch_detections_.data(), n_det));
+}
 
+void OutputStream::write_truth(const FrameRecord& rec, bool first) noexcept {
   // truth.json: the objects in the beam.
   File& t = *files_[kTruth];
   t.reserve(kLargestRecord);
@@ -487,7 +495,10 @@ void OutputStream::write_frame(const FrameEntry& e) noexcept {
     t.put('}');
   }
   t.put("]}");
+}
 
+void OutputStream::write_frames_csv(const FrameEntry& e) noexcept {
+  const FrameRecord& rec = e.record;
   // frames.csv: one line a frame, the stage times in ms (empty when not measured).
   File& c = *files_[kFramesCsv];
   c.reserve(1024);
@@ -521,7 +532,6 @@ void OutputStream::write_frame(const FrameEntry& e) noexcept {
   c.put(',');
   c.put_uint(rec.rays);
   c.put('\n');
-  ++frames_written_;
 }
 
 void OutputStream::write_trailers() noexcept {

@@ -114,7 +114,10 @@ class OutputStream {
   void push_bus(const io::CanFrame& frame, bool out) noexcept;
   void writer_main() noexcept;
   bool drain() noexcept;
-  void write_frame(const FrameEntry& e) noexcept;
+  void write_frame(const FrameEntry& e) noexcept;  ///< one frame into the three files below
+  void write_detections(const FrameRecord& rec, bool first) noexcept;  ///< detections.json
+  void write_truth(const FrameRecord& rec, bool first) noexcept;       ///< truth.json
+  void write_frames_csv(const FrameEntry& e) noexcept;                 ///< frames.csv
   void write_trailers() noexcept;
   [[nodiscard]] std::string_view object_json(std::uint32_t id) const noexcept;
 
