@@ -308,6 +308,138 @@ void check_material(const Table& r, const std::string& name) {
   }
 }
 
+// A built-in target: its kind, size and facet size (refused past the memory limit).
+void read_target_builtin(const Table& r, const std::string& builtin, scene::TargetPlacement& t) {
+  const std::optional<scene::TargetKind> kind = scene::target_kind_from_name(builtin);
+  if (!kind)
+    r.unknown_value("builtin", builtin, scene::target_names());
+  scene::TargetSpec spec;
+  spec.kind = *kind;
+  const KindSize ks = kind_size(*kind);
+  std::vector<double> size;
+  if (std::optional<std::vector<double>> given = r.numbers("size_m")) {
+    size = std::move(*given);
+    if (size.size() != ks.dims) {
+      r.fail("size_m", "a " + builtin + " takes " + std::to_string(ks.dims) + " dimension" +
+                           (ks.dims > 1 ? "s " : " ") + ks.meaning + " in metres, got " +
+                           std::to_string(size.size()));
+    }
+    for (double v : size)
+      r.check("size_m", v, {0.0, 1e4, true});
+  } else if (ks.default_m) {
+    size.assign(ks.default_m->begin(), ks.default_m->end());
+  } else {
+    r.fail("size_m", "is required for a " + builtin + ": " + ks.meaning + " in metres");
+  }
+  spec.a_m = size[0];
+  spec.b_m = size.size() > 1 ? size[1] : 1.0;
+  spec.c_m = size.size() > 2 ? size[2] : 1.0;
+  t.builtin = spec;
+  r.number("facet_m", t.facet_m, {0.0, 1e4});
+  {
+    // The mesh past the memory limit is refused with its estimate, before it is made (the
+    // same limit as `scene target`'s default --max-triangles).
+    scene::TargetSpec sized = spec;
+    sized.facet_m = t.facet_m;
+    const double triangles = scene::target_triangle_estimate(sized);
+    if (triangles > kMaxTargetTriangles) {
+      std::ostringstream os;
+      os.precision(3);
+      os << "a " << builtin << " with " << t.facet_m << " m facets would have about " << triangles
+         << " triangles (about " << triangles * scene::kTargetBytesPerTriangle * 1e-9
+         << " GB of memory), over the limit of " << kMaxTargetTriangles << " triangles";
+      r.fail("facet_m", os.str());
+    }
+  }
+  for (const char* key : {"mesh_scale", "mesh_front_axis", "mesh_up_axis"}) {
+    if (r.has(key))
+      r.fail(key, "applies to mesh_file only");
+  }
+}
+
+// A target from a mesh file: its scale and axes.
+void read_target_mesh(const Table& r, const std::string& mesh_file, scene::TargetPlacement& t) {
+  if (mesh_file.empty())
+    r.fail("mesh_file", "must not be empty");
+  t.mesh_file = mesh_file;
+  r.number("mesh_scale", t.mesh_scale, {0.0, 1e6, true});
+  for (auto [key, out] : {std::pair{"mesh_front_axis", &t.mesh_front_axis},
+                          std::pair{"mesh_up_axis", &t.mesh_up_axis}}) {
+    std::string axis;
+    if (r.choice(key, axis, {"+x", "-x", "+y", "-y", "+z", "-z"}))
+      *out = scene::mesh_axis_from_name(axis);
+  }
+  if (t.mesh_front_axis && t.mesh_up_axis &&
+      static_cast<int>(*t.mesh_front_axis) / 2 == static_cast<int>(*t.mesh_up_axis) / 2) {
+    r.fail("mesh_up_axis", "must be another axis than mesh_front_axis");
+  }
+  for (const char* key : {"size_m", "facet_m"}) {
+    if (r.has(key))
+      r.fail(key, "applies to builtin targets only");
+  }
+}
+
+// A target moving along waypoints at a speed.
+void read_target_path(const Table& r, scene::TargetPlacement& t) {
+  for (const char* key : {"position_enu_m", "heading_deg", "course_deg"}) {
+    if (r.has(key)) {
+      r.fail(key,
+             "does not go with waypoints_enu_m (the path places the target and turns its nose "
+             "along the velocity)");
+    }
+  }
+  const std::vector<std::vector<double>> points = *r.vectors("waypoints_enu_m", 3, {-1e6, 1e6});
+  if (points.size() < 2) {
+    r.fail("waypoints_enu_m",
+           "expected at least 2 [e, n, u] points, got " + std::to_string(points.size()));
+  }
+  for (const std::vector<double>& p : points)
+    t.waypoints_m.emplace_back(p[0], p[1], p[2]);
+  for (std::size_t i = 0; i + 1 < t.waypoints_m.size(); ++i) {
+    const glm::dvec3 d = t.waypoints_m[i + 1] - t.waypoints_m[i];
+    if (std::hypot(d.x, d.y) < 1e-6) {
+      r.fail("waypoints_enu_m", "points " + std::to_string(i) + " and " + std::to_string(i + 1) +
+                                    " are at the same (e, n): waypoints must be distinct (no "
+                                    "vertical legs)");
+    }
+  }
+  r.require("speed_mps", "with waypoints_enu_m");
+  if (!(t.speed_mps > 0.0))
+    r.fail("speed_mps", "must be > 0 with waypoints_enu_m (got " + show(t.speed_mps) + ")");
+  r.number("turn_radius_m", t.turn_radius_m, {0.0, 1e5});
+  r.boolean("closed", t.closed);
+  r.boolean("bank", t.bank);
+  scene::Trajectory tr;
+  tr.waypoints_m = t.waypoints_m;
+  tr.speed_mps = t.speed_mps;
+  tr.turn_radius_m = t.turn_radius_m;
+  tr.loop = t.closed;
+  try {
+    (void)scene::TrajectoryPath(tr);
+  } catch (const std::invalid_argument& e) {
+    r.fail("waypoints_enu_m", e.what());
+  }
+}
+
+// A target at a position, fixed or moving straight on a course.
+void read_target_fixed(const Table& r, scene::TargetPlacement& t) {
+  for (const char* key : {"turn_radius_m", "closed", "bank"}) {
+    if (r.has(key))
+      r.fail(key, "applies to waypoints_enu_m only");
+  }
+  if (!r.has("position_enu_m"))
+    r.fail("", "needs position_enu_m = [e, n, u] or waypoints_enu_m = [[e, n, u], ...]");
+  vec3(r, "position_enu_m", t.position_m, 1e6);
+  double heading_deg = 0.0, course_deg = 0.0;
+  const bool has_heading = r.number("heading_deg", heading_deg, {-360.0, 360.0});
+  const bool has_course = r.number("course_deg", course_deg, {-360.0, 360.0});
+  if (has_course && !(t.speed_mps > 0.0))
+    r.fail("course_deg", "needs speed_mps > 0 (a fixed target has a heading_deg only)");
+  // A moving target faces its velocity unless both angles are given.
+  t.heading_rad = (has_heading ? heading_deg : course_deg) * kRadPerDeg;
+  t.course_rad = (has_course ? course_deg : heading_deg) * kRadPerDeg;
+}
+
 scene::TargetPlacement parse_target(const Table& r, std::size_t number) {
   r.refuse_unknown(kTargetKeys);
   scene::TargetPlacement t;
@@ -326,72 +458,10 @@ scene::TargetPlacement parse_target(const Table& r, std::size_t number) {
     r.fail("", "needs builtin = \"KIND\" (" + scene::target_names() +
                    ") or mesh_file = \"FILE\" (.glb, .gltf, .obj, .stl)");
   }
-  if (has_builtin) {
-    const std::optional<scene::TargetKind> kind = scene::target_kind_from_name(builtin);
-    if (!kind)
-      r.unknown_value("builtin", builtin, scene::target_names());
-    scene::TargetSpec spec;
-    spec.kind = *kind;
-    const KindSize ks = kind_size(*kind);
-    std::vector<double> size;
-    if (std::optional<std::vector<double>> given = r.numbers("size_m")) {
-      size = std::move(*given);
-      if (size.size() != ks.dims) {
-        r.fail("size_m", "a " + builtin + " takes " + std::to_string(ks.dims) + " dimension" +
-                             (ks.dims > 1 ? "s " : " ") + ks.meaning + " in metres, got " +
-                             std::to_string(size.size()));
-      }
-      for (double v : size)
-        r.check("size_m", v, {0.0, 1e4, true});
-    } else if (ks.default_m) {
-      size.assign(ks.default_m->begin(), ks.default_m->end());
-    } else {
-      r.fail("size_m", "is required for a " + builtin + ": " + ks.meaning + " in metres");
-    }
-    spec.a_m = size[0];
-    spec.b_m = size.size() > 1 ? size[1] : 1.0;
-    spec.c_m = size.size() > 2 ? size[2] : 1.0;
-    t.builtin = spec;
-    r.number("facet_m", t.facet_m, {0.0, 1e4});
-    {
-      // The mesh past the memory limit is refused with its estimate, before it is made (the
-      // same limit as `scene target`'s default --max-triangles).
-      scene::TargetSpec sized = spec;
-      sized.facet_m = t.facet_m;
-      const double triangles = scene::target_triangle_estimate(sized);
-      if (triangles > kMaxTargetTriangles) {
-        std::ostringstream os;
-        os.precision(3);
-        os << "a " << builtin << " with " << t.facet_m << " m facets would have about " << triangles
-           << " triangles (about " << triangles * scene::kTargetBytesPerTriangle * 1e-9
-           << " GB of memory), over the limit of " << kMaxTargetTriangles << " triangles";
-        r.fail("facet_m", os.str());
-      }
-    }
-    for (const char* key : {"mesh_scale", "mesh_front_axis", "mesh_up_axis"}) {
-      if (r.has(key))
-        r.fail(key, "applies to mesh_file only");
-    }
-  } else {
-    if (mesh_file.empty())
-      r.fail("mesh_file", "must not be empty");
-    t.mesh_file = mesh_file;
-    r.number("mesh_scale", t.mesh_scale, {0.0, 1e6, true});
-    for (auto [key, out] : {std::pair{"mesh_front_axis", &t.mesh_front_axis},
-                            std::pair{"mesh_up_axis", &t.mesh_up_axis}}) {
-      std::string axis;
-      if (r.choice(key, axis, {"+x", "-x", "+y", "-y", "+z", "-z"}))
-        *out = scene::mesh_axis_from_name(axis);
-    }
-    if (t.mesh_front_axis && t.mesh_up_axis &&
-        static_cast<int>(*t.mesh_front_axis) / 2 == static_cast<int>(*t.mesh_up_axis) / 2) {
-      r.fail("mesh_up_axis", "must be another axis than mesh_front_axis");
-    }
-    for (const char* key : {"size_m", "facet_m"}) {
-      if (r.has(key))
-        r.fail(key, "applies to builtin targets only");
-    }
-  }
+  if (has_builtin)
+    read_target_builtin(r, builtin, t);
+  else
+    read_target_mesh(r, mesh_file, t);
   if (r.string("material", t.material)) {
     if (t.material.empty())
       r.fail("material", "must not be empty");
@@ -401,62 +471,10 @@ scene::TargetPlacement parse_target(const Table& r, std::size_t number) {
   // Where and how it moves.
   r.boolean("on_ground", t.on_ground);
   r.number("speed_mps", t.speed_mps, {0.0, 1000.0});
-  if (r.has("waypoints_enu_m")) {
-    for (const char* key : {"position_enu_m", "heading_deg", "course_deg"}) {
-      if (r.has(key)) {
-        r.fail(key,
-               "does not go with waypoints_enu_m (the path places the target and turns its nose "
-               "along the velocity)");
-      }
-    }
-    const std::vector<std::vector<double>> points = *r.vectors("waypoints_enu_m", 3, {-1e6, 1e6});
-    if (points.size() < 2) {
-      r.fail("waypoints_enu_m",
-             "expected at least 2 [e, n, u] points, got " + std::to_string(points.size()));
-    }
-    for (const std::vector<double>& p : points)
-      t.waypoints_m.emplace_back(p[0], p[1], p[2]);
-    for (std::size_t i = 0; i + 1 < t.waypoints_m.size(); ++i) {
-      const glm::dvec3 d = t.waypoints_m[i + 1] - t.waypoints_m[i];
-      if (std::hypot(d.x, d.y) < 1e-6) {
-        r.fail("waypoints_enu_m", "points " + std::to_string(i) + " and " + std::to_string(i + 1) +
-                                      " are at the same (e, n): waypoints must be distinct (no "
-                                      "vertical legs)");
-      }
-    }
-    r.require("speed_mps", "with waypoints_enu_m");
-    if (!(t.speed_mps > 0.0))
-      r.fail("speed_mps", "must be > 0 with waypoints_enu_m (got " + show(t.speed_mps) + ")");
-    r.number("turn_radius_m", t.turn_radius_m, {0.0, 1e5});
-    r.boolean("closed", t.closed);
-    r.boolean("bank", t.bank);
-    scene::Trajectory tr;
-    tr.waypoints_m = t.waypoints_m;
-    tr.speed_mps = t.speed_mps;
-    tr.turn_radius_m = t.turn_radius_m;
-    tr.loop = t.closed;
-    try {
-      (void)scene::TrajectoryPath(tr);
-    } catch (const std::invalid_argument& e) {
-      r.fail("waypoints_enu_m", e.what());
-    }
-  } else {
-    for (const char* key : {"turn_radius_m", "closed", "bank"}) {
-      if (r.has(key))
-        r.fail(key, "applies to waypoints_enu_m only");
-    }
-    if (!r.has("position_enu_m"))
-      r.fail("", "needs position_enu_m = [e, n, u] or waypoints_enu_m = [[e, n, u], ...]");
-    vec3(r, "position_enu_m", t.position_m, 1e6);
-    double heading_deg = 0.0, course_deg = 0.0;
-    const bool has_heading = r.number("heading_deg", heading_deg, {-360.0, 360.0});
-    const bool has_course = r.number("course_deg", course_deg, {-360.0, 360.0});
-    if (has_course && !(t.speed_mps > 0.0))
-      r.fail("course_deg", "needs speed_mps > 0 (a fixed target has a heading_deg only)");
-    // A moving target faces its velocity unless both angles are given.
-    t.heading_rad = (has_heading ? heading_deg : course_deg) * kRadPerDeg;
-    t.course_rad = (has_course ? course_deg : heading_deg) * kRadPerDeg;
-  }
+  if (r.has("waypoints_enu_m"))
+    read_target_path(r, t);
+  else
+    read_target_fixed(r, t);
   return t;
 }
 
@@ -473,13 +491,8 @@ void apply_targets(Scenario& s, const Table& root) {
   }
 }
 
-void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
-  const config::TomlFile toml = config::TomlFile::parse(text, origin);
-  const Table root = toml.root();
-  root.refuse_unknown({"name", "run", "scene", "ownship", "input", "output", "antenna", "radar",
-                       "detector", "faults", "weather", "governor", "target"});
-  root.string("name", s.name);
-
+// [run]: frames, rate, epoch, state freshness.
+void read_run(Scenario& s, const Table& root) {
   const Table run = root.table("run");
   run.refuse_unknown({"frames", "rate_hz", "epoch_unix_s", "state_timeout_s", "stale_output"});
   run.integer("frames", s.frames, 1, 100'000'000);
@@ -491,7 +504,10 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   std::string stale_output = s.stale_output_silent ? "silent" : "flag";
   run.choice("stale_output", stale_output, {"flag", "silent"});
   s.stale_output_silent = stale_output == "silent";
+}
 
+// [scene]: which scene database, its seed.
+void read_scene(Scenario& s, const Table& root) {
   const Table scene = root.table("scene");
   scene.refuse_unknown({"builtin", "file", "seed", "corner_reflectors"});
   // One source of the scene: a table that names both would silently use the file.
@@ -512,7 +528,10 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     scene.fail("corner_reflectors",
                "applies to builtin = \"airport\" only (the runway scene "
                "\"default\" is a test range: it always has them)");
+}
 
+// [ownship]: the scripted start state and the INS rates.
+void read_ownship(Scenario& s, const Table& root) {
   const Table own = root.table("ownship");
   own.refuse_unknown({"start_enu_m", "velocity_enu_mps", "pitch_deg", "roll_deg", "heading_deg",
                       "ins_node_id", "attitude_rate_hz", "navigation_rate_hz"});
@@ -524,7 +543,10 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   own.integer("ins_node_id", s.ins_node_id, 0, 255);
   own.number("attitude_rate_hz", s.attitude_rate_hz, {0.1, 1000.0});
   own.number("navigation_rate_hz", s.navigation_rate_hz, {0.1, 1000.0});
+}
 
+// [antenna]: the scan, the pattern, the gain and the polarisation.
+void read_antenna(Scenario& s, const Table& root) {
   const Table ant = root.table("antenna");
   ant.refuse_unknown({"depression_deg", "azimuth_min_deg", "azimuth_max_deg", "elevation_min_deg",
                       "elevation_max_deg", "azimuth_cell_deg", "gain_db", "pattern", "pattern_file",
@@ -589,7 +611,10 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   if (!(s.sbr.elevation_min_rad < s.sbr.elevation_max_rad)) {
     ant.fail("elevation_max_deg", "must be greater than elevation_min_deg");
   }
+}
 
+// [radar]: waveform, receiver, windows and the tracer's fidelity.
+void read_radar(Scenario& s, const Table& root) {
   radar::Waveform& w = s.sensor.processing.waveform;
   const Table rad = root.table("radar");
   rad.refuse_unknown({"waveform",
@@ -659,7 +684,10 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   rad.degrees("edge_turn_deg", s.sbr.edge_min_turn_rad, {0.0, 179.0});
   if (!s.sbr.edges && rad.has("edge_turn_deg"))
     rad.fail("edge_turn_deg", "is read with edges = true only");
+}
 
+// [detector]: CFAR and the detection list.
+void read_detector(Scenario& s, const Table& root) {
   radar::CfarConfig& cf = s.sensor.cfar;
   const Table det = root.table("detector");
   det.refuse_unknown({"cfar", "cfar_training_cells", "cfar_guard_cells",
@@ -682,32 +710,36 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   det.integer("noise_seed", seed, 0, std::numeric_limits<std::int64_t>::max());
   s.sensor.noise_seed = static_cast<std::uint64_t>(seed);
   det.boolean("thermal_noise", s.sensor.thermal_noise);
+}
 
-  {
-    namespace canas = io::canas;
-    std::vector<std::string> keys{"node_id"};
-    for (std::size_t k = 0; k < canas::kFieldCount; ++k)
-      keys.push_back(std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id");
-    const std::vector<std::string_view> known(keys.begin(), keys.end());
-    const Table in = root.table("input");
-    in.refuse_unknown(known);
-    std::int64_t node = s.input.node_id ? *s.input.node_id : -1;
-    in.integer("node_id", node, -1, 255);
-    s.input.node_id = node < 0 ? std::nullopt : std::optional<std::uint8_t>(node);
-    for (std::size_t k = 0; k < canas::kFieldCount; ++k) {
-      const std::string key = std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id";
-      in.integer(key, s.input.fields[k].can_id, 0, 2047);
-    }
-    try {
-      canas::validate(s.input);
-    } catch (const std::invalid_argument& e) {
-      in.fail("", e.what());
-    }
-    const Table out = root.table("output");
-    out.refuse_unknown({"can_fd"});
-    out.boolean("can_fd", s.can_fd);
+// [input] (CANaerospace identifiers of the ownship fields) and [output].
+void read_input_output(Scenario& s, const Table& root) {
+  namespace canas = io::canas;
+  std::vector<std::string> keys{"node_id"};
+  for (std::size_t k = 0; k < canas::kFieldCount; ++k)
+    keys.push_back(std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id");
+  const std::vector<std::string_view> known(keys.begin(), keys.end());
+  const Table in = root.table("input");
+  in.refuse_unknown(known);
+  std::int64_t node = s.input.node_id ? *s.input.node_id : -1;
+  in.integer("node_id", node, -1, 255);
+  s.input.node_id = node < 0 ? std::nullopt : std::optional<std::uint8_t>(node);
+  for (std::size_t k = 0; k < canas::kFieldCount; ++k) {
+    const std::string key = std::string(canas::field_name(static_cast<canas::Field>(k))) + "_id";
+    in.integer(key, s.input.fields[k].can_id, 0, 2047);
   }
+  try {
+    canas::validate(s.input);
+  } catch (const std::invalid_argument& e) {
+    in.fail("", e.what());
+  }
+  const Table out = root.table("output");
+  out.refuse_unknown({"can_fd"});
+  out.boolean("can_fd", s.can_fd);
+}
 
+// [faults]: the software bus's fault injection.
+void read_faults(Scenario& s, const Table& root) {
   const Table faults = root.table("faults");
   faults.refuse_unknown({"malformed_every_n_frames", "seed", "drop_probability", "delay_s",
                          "jitter_s", "corrupt_probability", "corrupt_max_bits",
@@ -754,7 +786,23 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
   faults.number("babble_end_s", babble_end_s, {0.0, 1e9});
   if (babble_end_s > 0.0)
     s.babble.end_s = babble_end_s;
+}
 
+void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
+  const config::TomlFile toml = config::TomlFile::parse(text, origin);
+  const Table root = toml.root();
+  root.refuse_unknown({"name", "run", "scene", "ownship", "input", "output", "antenna", "radar",
+                       "detector", "faults", "weather", "governor", "target"});
+  root.string("name", s.name);
+
+  read_run(s, root);
+  read_scene(s, root);
+  read_ownship(s, root);
+  read_antenna(s, root);
+  read_radar(s, root);
+  read_detector(s, root);
+  read_input_output(s, root);
+  read_faults(s, root);
   apply_weather(s, root);
   apply_governor(s, root);
   apply_targets(s, root);
