@@ -651,18 +651,15 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
     }
     if (bounce == 0 && terrain && !hit_target && !mat.conductor) {
       // Diffuse clutter: sigma = sigma0(theta_i) * footprint area, footprint = dA_perp /
-      // cos(theta_i) with dA_perp = L^2 dOmega. Terrain-catalogue materials take sigma0 of the
-      // antenna's channel from their setup-time table (radar/clutter/terrain.hpp); the others
-      // are constant gamma, sigma0 = gamma cos(theta_i), so sigma = gamma dA_perp
-      // (Richards 2010, sec. 5.3), the same in every channel (the placeholder has none).
+      // cos(theta_i) with dA_perp = L^2 dOmega; sigma0 of the antenna's channel from the
+      // material's setup-time table (radar/clutter/terrain.hpp; every non-conductor has a row).
       const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, -d);
       const double d_omega = glm::length(glm::cross(u, v));
       const int row = sigma0_row_[hit.material_id];
       const double sigma_m2 =
-          row >= 0 ? static_cast<double>(sigma0_.lookup(static_cast<std::size_t>(row),
-                                                        sigma0_channel(c.polarisation), cos_i)) *
-                         path_m * path_m * d_omega / cos_i
-                   : mat.gamma * path_m * path_m * d_omega;
+          static_cast<double>(sigma0_.lookup(static_cast<std::size_t>(row),
+                                             sigma0_channel(c.polarisation), cos_i)) *
+          path_m * path_m * d_omega / cos_i;
       Contribution& out = slot[count++];
       out.amplitude = {std::sqrt(sigma_m2), 0.0};
       out.range_m = path_m;

@@ -45,8 +45,6 @@
 //     cull spares the long, grazing upward queries of rays reflected off the ground.
 //   - Every return is labelled with its path's owner (Contribution::object_id), whichever
 //     surface the path last met: radar -> target -> ground -> radar is the target's echo.
-//   - A surface with no specular model (radar::surface_model() nullopt, e.g. the placeholder
-//     "soil") ends the ray.
 
 #include <complex>
 #include <cstddef>
