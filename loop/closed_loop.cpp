@@ -22,7 +22,7 @@
 #include "loop/outputs/output_stream.hpp"
 #include "loop/outputs/run_plots.hpp"
 #include "loop/ownship.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 #include "radar/propagation/itu.hpp"
 #include "radar/propagation/path.hpp"
 #include "scene/airport_gen.hpp"
@@ -183,15 +183,11 @@ scene::SceneDescription scene_description(const Scenario& s) {
     for (std::size_t k = 0; k < used.size(); ++k) {
       if (!used[k])
         continue;
-      try {
-        (void)radar::resolve_materials(std::span<const scene::Material>(&d.materials[k], 1));
-      } catch (const std::invalid_argument& e) {
-        const std::string what = e.what();
-        const std::size_t known = what.find("(known:");
-        throw std::runtime_error(s.targets[i - first_target].context + ": mesh_file material '" +
-                                 d.materials[k].name + "' is not a radar material " +
-                                 (known == std::string::npos ? "" : what.substr(known)) +
-                                 "; set material = \"NAME\" in the table");
+      if (!radar::is_surface_material(d.materials[k].name)) {
+        throw std::runtime_error(
+            s.targets[i - first_target].context + ": mesh_file material '" + d.materials[k].name +
+            "' is not a radar material (known: " + radar::surface_material_names() +
+            "); set material = \"NAME\" in the table");
       }
     }
   }
@@ -248,15 +244,9 @@ struct ClosedLoop::Impl {
     setup_weather(s);
     // Ground truth covers the objects with a conducting material (the tracer's targets); pure
     // terrain (ground, pavement, grass) is left out of truth.json.
-    const std::vector<radar::RadarMaterial> mats = radar::resolve_materials(scene.materials());
-    const auto& desc = scene.description();
-    for (std::size_t i = 0; i < desc.objects.size(); ++i) {
-      for (std::uint16_t k : desc.objects[i].mesh.triangle_material) {
-        if (k < mats.size() && mats[k].conductor) {
-          truth_objects.push_back(static_cast<std::uint32_t>(i));
-          break;
-        }
-      }
+    for (std::size_t i = 0; i < scene.description().objects.size(); ++i) {
+      if (tracer.is_target(static_cast<std::uint32_t>(i)))
+        truth_objects.push_back(static_cast<std::uint32_t>(i));
     }
     truth_capacity = std::min<std::size_t>(
         static_cast<std::size_t>(recorded_frames) * truth_objects.size(), kTruthEntriesMax);

@@ -11,13 +11,12 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
-#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "radar/clutter/terrain.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 #include "scene/scene.hpp"
 #include "scene/targets.hpp"
 
@@ -337,10 +336,10 @@ std::vector<rd::Contribution> trace_flat_ground(const std::string& material, std
 constexpr double kFlatDaz = 0.2 / 20, kFlatDel = 0.3 / 30;
 }  // namespace
 
-TEST(Sbr, ThePlaceholderSoilIsRefusedAndSteelAndAluminiumAreTheConductor) {
+TEST(Sbr, ThePlaceholderSoilIsRefused) {
   // Issue 2's placeholder table (constant gamma) is gone: "soil" is no longer a material (the
-  // catalogue's soils are soil_dry and soil_wet, named in the message); "steel" and "aluminium"
-  // stay other names of the catalogue's conductor "metal".
+  // catalogue's soils are soil_dry and soil_wet, named in the message; tests/radar/
+  // surfaces_test.cpp checks the rest of the resolver).
   std::size_t n = 0;
   try {
     (void)trace_flat_ground("soil", n);
@@ -350,13 +349,6 @@ TEST(Sbr, ThePlaceholderSoilIsRefusedAndSteelAndAluminiumAreTheConductor) {
     EXPECT_NE(what.find("'soil' is unknown"), std::string::npos) << what;
     EXPECT_NE(what.find("soil_dry"), std::string::npos) << what;
     EXPECT_NE(what.find("soil_wet"), std::string::npos) << what;
-  }
-  const std::vector<sc::Material> metals{{"metal", {}}, {"steel", {}}, {"aluminium", {}}};
-  for (const rd::RadarMaterial& m : rd::resolve_materials(metals)) {
-    EXPECT_TRUE(m.conductor) << m.name;
-    const std::optional<rd::SurfaceModel> s = rd::surface_model(m.name, 10e9);
-    ASSERT_TRUE(s.has_value()) << m.name;
-    EXPECT_EQ(s->kind, rd::SurfaceModel::Kind::kPec) << m.name;
   }
 }
 
