@@ -24,7 +24,7 @@
 #include "loop/ownship.hpp"
 #include "loop/ownship_source.hpp"
 #include "loop/peers.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 #include "radar/propagation/itu.hpp"
 #include "radar/propagation/path.hpp"
 #include "scene/airport_gen.hpp"
@@ -220,17 +220,12 @@ std::unique_ptr<LiveView> open_live_view(const Scenario& s, const RunOptions& o,
 
 // Ground truth covers the objects with a conducting material (the tracer's targets); pure
 // terrain (ground, pavement, grass) is left out of truth.json.
-std::vector<std::uint32_t> truth_objects(const scene::Scene& scene) {
-  const std::vector<radar::RadarMaterial> mats = radar::resolve_materials(scene.materials());
-  const auto& desc = scene.description();
+std::vector<std::uint32_t> truth_objects(const scene::Scene& scene,
+                                         const radar::SbrTracer& tracer) {
   std::vector<std::uint32_t> ids;
-  for (std::size_t i = 0; i < desc.objects.size(); ++i) {
-    for (std::uint16_t k : desc.objects[i].mesh.triangle_material) {
-      if (k < mats.size() && mats[k].conductor) {
-        ids.push_back(static_cast<std::uint32_t>(i));
-        break;
-      }
-    }
+  for (std::size_t i = 0; i < scene.description().objects.size(); ++i) {
+    if (tracer.is_target(static_cast<std::uint32_t>(i)))
+      ids.push_back(static_cast<std::uint32_t>(i));
   }
   return ids;
 }
@@ -322,15 +317,11 @@ scene::SceneDescription scene_description(const Scenario& s) {
     for (std::size_t k = 0; k < used.size(); ++k) {
       if (!used[k])
         continue;
-      try {
-        (void)radar::resolve_materials(std::span<const scene::Material>(&d.materials[k], 1));
-      } catch (const std::invalid_argument& e) {
-        const std::string what = e.what();
-        const std::size_t known = what.find("(known:");
-        throw std::runtime_error(s.targets[i - first_target].context + ": mesh_file material '" +
-                                 d.materials[k].name + "' is not a radar material " +
-                                 (known == std::string::npos ? "" : what.substr(known)) +
-                                 "; set material = \"NAME\" in the table");
+      if (!radar::is_surface_material(d.materials[k].name)) {
+        throw std::runtime_error(
+            s.targets[i - first_target].context + ": mesh_file material '" + d.materials[k].name +
+            "' is not a radar material (known: " + radar::surface_material_names() +
+            "); set material = \"NAME\" in the table");
       }
     }
   }
@@ -357,7 +348,7 @@ struct ClosedLoop::Impl {
     if (!o.modbus_server.empty())
       bus.open_table_server(o.modbus_server, s.sensor.max_detections);
     tracer.weather = weather_figures(s);
-    scene.truth_objects = truth_objects(scene.scene);
+    scene.truth_objects = truth_objects(scene.scene, tracer.tracer);
     scene.frame_truth.resize(scene.truth_objects.size());
     if (!o.out_dir.empty())
       outputs.stream = open_output_stream(scenario, o, scene.scene, scene.truth_objects);

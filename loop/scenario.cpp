@@ -11,7 +11,7 @@
 #include <stdexcept>
 
 #include "config/toml_reader.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 #include "scene/targets.hpp"
 #include "scene/trajectory.hpp"
 
@@ -295,16 +295,11 @@ constexpr std::array<std::string_view, 18> kTargetKeys{
     "on_ground",     "heading_deg",     "course_deg",   "speed_mps", "waypoints_enu_m",
     "turn_radius_m", "closed",          "bank"};
 
-// The radar material catalogue decides which names exist (radar/materials.hpp).
+// The radar material resolver decides which names exist (radar/em/surfaces.hpp).
 void check_material(const Table& r, const std::string& name) {
-  try {
-    const scene::Material m{name, {}};
-    (void)radar::resolve_materials(std::span<const scene::Material>(&m, 1));
-  } catch (const std::invalid_argument& e) {
-    const std::string what = e.what();
-    const std::size_t known = what.find("(known:");
-    r.fail("material", "unknown value \"" + name + "\" " +
-                           (known == std::string::npos ? "" : what.substr(known)));
+  if (!radar::is_surface_material(name)) {
+    r.fail("material",
+           "unknown value \"" + name + "\" (known: " + radar::surface_material_names() + ")");
   }
 }
 

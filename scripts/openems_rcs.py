@@ -6,7 +6,7 @@ table was made; tests/integration/check_openems_plate.py compares radar-emu rcs 
 Two set-ups share one FDTD routine (run_case):
   sphere  PEC sphere, radius 50 mm, ka = 1..5 from one Gaussian-pulse run, against the Mie series
           computed here (mie_pec_backscatter: numpy/scipy spherical Bessel functions, independent
-          of radar-emu's radar/em/mie.*): the check of the set-up (excitation normalisation,
+          of radar-emu's radar/reference/mie.*): the check of the set-up (excitation normalisation,
           NF2FF, units).
   plate   PEC zero-thickness square plate, 100 mm a side (3.0, 3.33 and 4.0 wavelengths at 9, 10
           and 12 GHz), in the x-y plane (z = 0), edges along x and y, centred on the origin.

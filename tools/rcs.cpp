@@ -15,7 +15,7 @@
 #include "plot/charts.hpp"
 #include "radar/constants.hpp"
 #include "radar/em/mom.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 #include "radar/products/fluctuation.hpp"
 #include "radar/products/range_profile.hpp"
 #include "scene/gltf.hpp"
@@ -403,20 +403,17 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
     throw std::invalid_argument(mesh_path + ": unknown mesh format '" + ext +
                                 "' (expected .glb, .gltf, .obj or .stl)");
   }
-  // Material definitions from the command line.
-  struct Def {
-    std::string name;
-    radar::SurfaceModel model;
-    bool used = false;
-  };
-  std::vector<Def> defs;
+  // Material definitions from the command line: overrides of the one resolver
+  // (radar/em/surfaces.hpp). The tool sweeps frequencies, so it resolves without a carrier: the
+  // catalogue gives only its frequency-independent conductors, the rest needs a definition.
+  std::vector<radar::SurfaceOverride> defs;
   for (const std::string& text : material_definitions) {
     const std::size_t eq = text.find('=');
     if (eq == std::string::npos || eq == 0) {
       throw std::invalid_argument("--material '" + text +
                                   "': expected NAME=EPS_REAL,EPS_LOSS[,THICKNESS_M]");
     }
-    Def d;
+    radar::SurfaceOverride d;
     d.name = text.substr(0, eq);
     const auto v = split(std::string_view(text).substr(eq + 1), ',');
     if (v.size() != 2 && v.size() != 3) {
@@ -439,29 +436,18 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
     }
     defs.push_back(d);
   }
-  for (const scene::Material& m : t.description.materials) {
-    auto def =
-        std::find_if(defs.begin(), defs.end(), [&](const Def& d) { return d.name == m.name; });
-    if (def != defs.end()) {
-      def->used = true;
-      t.surfaces.push_back(def->model);
-      continue;
-    }
-    // The shared material mapping (radar/materials.hpp); the tool sweeps frequencies, so it
-    // takes only the frequency-independent conductors from it and asks for a definition of the
-    // rest.
-    const std::optional<radar::SurfaceModel> known = radar::surface_model(m.name, 1e9);
-    if (known && known->kind == radar::SurfaceModel::Kind::kPec) {
-      t.surfaces.push_back(*known);
-      continue;
-    }
-    throw std::invalid_argument(mesh_path + ": material '" + m.name +
-                                "' is not a conductor of the catalogue (metal, steel, "
-                                "aluminium); define it with --material " +
-                                m.name + "=EPS_REAL,EPS_LOSS[,THICKNESS_M]");
+  try {
+    const radar::SurfaceSet resolved =
+        radar::resolve_surfaces(t.description.materials, {std::nullopt, {}, defs});
+    for (const radar::Surface& s : resolved.surfaces)
+      t.surfaces.push_back(s.specular);
+  } catch (const radar::UnresolvedMaterial& e) {
+    throw std::invalid_argument(mesh_path + ": " + e.what() + "; define it with --material " +
+                                e.name() + "=EPS_REAL,EPS_LOSS[,THICKNESS_M]");
   }
-  for (const Def& d : defs) {
-    if (!d.used)
+  for (const radar::SurfaceOverride& d : defs) {
+    if (std::none_of(t.description.materials.begin(), t.description.materials.end(),
+                     [&](const scene::Material& m) { return m.name == d.name; }))
       t.warnings.push_back("--material " + d.name + ": the mesh has no material of that name");
   }
   return t;

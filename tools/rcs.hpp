@@ -26,7 +26,8 @@ struct LoadedTarget {
 };
 
 /// Loads a glTF, OBJ or STL mesh (by extension; `scale` converts file units to metres) and maps
-/// its materials: catalogue conductors (metal, steel, aluminium) are PEC; others need a
+/// its materials through radar::resolve_surfaces() (no carrier; the definitions are its
+/// overrides): catalogue conductors (metal, steel, aluminium) are PEC; others need a
 /// definition "NAME=EPS_REAL,EPS_LOSS" (dielectric half-space, eps = EPS_REAL - j EPS_LOSS) or
 /// "NAME=EPS_REAL,EPS_LOSS,THICKNESS_M" (that layer on a PEC). Throws std::runtime_error or
 /// std::invalid_argument with the file, material and what is expected.

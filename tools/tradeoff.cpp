@@ -25,11 +25,11 @@
 #include "plot/charts.hpp"
 #include "radar/clutter/surface.hpp"
 #include "radar/constants.hpp"
-#include "radar/em/mie.hpp"
 #include "radar/em/mom.hpp"
 #include "radar/em/rcs.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/products/range_profile.hpp"
+#include "radar/reference/mie.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "radar/sensor/waveform.hpp"
 #include "scene/scene.hpp"
@@ -295,8 +295,8 @@ void profile_case(Vehicle& v, bool quick, const Log& log, std::vector<Row>& rows
 
 // Case 4a: the sphere. PO through the facet integrator (max_bounces 1) against the PO closed
 // form sigma/(pi a^2) = 1 - sin(2ka)/(ka) + sin^2(ka)/(ka)^2 (Knott, Shaeffer & Tuley 2004,
-// sec. 5.5; radar/em/mie.hpp) and the exact Mie series (Ruck et al. 1970, sec. 3.2). Radius 0.1
-// m; facets lambda/8 (lambda/16 below ka 10), at least 96 around, as tests/radar/rcs_test.cpp.
+// sec. 5.5; radar/reference/mie.hpp) and the exact Mie series (Ruck et al. 1970, sec. 3.2). Radius
+// 0.1 m; facets lambda/8 (lambda/16 below ka 10), at least 96 around, as tests/radar/rcs_test.cpp.
 // Up to ka 5 (3 in the quick run) the method of moments (radar/em/mom.hpp, EFIE) on the same
 // kind of sphere, facets lambda / 12 and at least 32 around, is run beside it: exact up to the mesh
 // where PO is not, at the cost of a matrix fill and factorisation.

@@ -42,20 +42,6 @@ glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
 
 }  // namespace
 
-clutter::Sigma0Table::Pol sigma0_channel(Polarisation p) noexcept {
-  switch (p) {
-    case Polarisation::kHH:
-      return clutter::Sigma0Table::kHH;
-    case Polarisation::kHV:
-      return clutter::Sigma0Table::kHV;
-    case Polarisation::kVH:
-      return clutter::Sigma0Table::kVH;
-    case Polarisation::kVV:
-      break;
-  }
-  return clutter::Sigma0Table::kVV;
-}
-
 AzEl azel_from_direction(const glm::dvec3& d) noexcept {
   return {std::atan2(d.y, d.x), std::atan2(-d.z, std::hypot(d.x, d.y))};
 }
@@ -66,7 +52,7 @@ glm::dvec3 direction_from_azel(const AzEl& a) noexcept {
 }
 
 SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
-    : scene_(&scene), config_(config), materials_(resolve_materials(scene.materials())) {
+    : scene_(&scene), config_(config) {
   const SbrConfig& c = config;
   require(std::isfinite(c.carrier_hz) && c.carrier_hz > 0, "carrier_hz", "must be > 0");
   require(c.azimuth_min_rad < c.azimuth_max_rad && c.azimuth_min_rad > -kPi / 2 &&
@@ -86,37 +72,15 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
       std::ceil((c.elevation_max_rad - c.elevation_min_rad) / c.terrain_ray_spacing_rad - 1e-9));
   require(n_az_ * n_el_ <= 50'000'000, "terrain_ray_spacing_rad", "gives more than 5e7 rays");
 
-  // Terrain-catalogue materials: their sigma0 tables at the carrier (setup only).
-  {
-    std::vector<clutter::SurfaceSpec> specs;
-    sigma0_row_.assign(materials_.size(), -1);
-    for (std::size_t i = 0; i < materials_.size(); ++i) {
-      if (!materials_[i].terrain_catalogue)
-        continue;
-      const clutter::TerrainMaterial* t = clutter::find_terrain_material(materials_[i].name);
-      sigma0_row_[i] = static_cast<int>(specs.size());
-      specs.push_back(clutter::resolve_surface(*t, c.carrier_hz));
-    }
-    if (!specs.empty())
-      sigma0_ = clutter::Sigma0Table(specs, clutter::Sigma0Model::kTotal, c.carrier_hz);
-  }
-
-  // Specular models at the carrier: the one material mapping shared with the RCS tool.
-  surfaces_.assign(materials_.size(), SurfaceModel{});
-  has_surface_.assign(materials_.size(), 0);
-  for (std::size_t i = 0; i < materials_.size(); ++i) {
-    if (const auto m = surface_model(scene.materials()[i].name, c.carrier_hz)) {
-      surfaces_[i] = *m;
-      has_surface_[i] = 1;
-    }
-  }
+  // Each scene material at the carrier, once: specular model, sigma0 row, conductor flag.
+  surfaces_ = resolve_surfaces(scene.materials(), {c.carrier_hz, c.polarisation, {}});
 
   const auto& desc = scene.description();
   is_target_.assign(desc.objects.size(), 0);
   bundled_.assign(desc.objects.size(), 0);
   for (std::size_t i = 0; i < desc.objects.size(); ++i) {
     for (std::uint16_t m : desc.objects[i].mesh.triangle_material) {
-      if (materials_[m].conductor) {
+      if (surfaces_.surfaces[m].conductor) {
         is_target_[i] = 1;
         break;
       }
@@ -161,7 +125,7 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
         tris[t] = {glm::dvec3(mesh.positions_m[tri.x]), glm::dvec3(mesh.positions_m[tri.y]),
                    glm::dvec3(mesh.positions_m[tri.z])};
         const std::uint16_t m = mesh.triangle_material[t];
-        pec[t] = has_surface_[m] && surfaces_[m].kind == SurfaceModel::Kind::kPec ? 1 : 0;
+        pec[t] = surfaces_.surfaces[m].specular.kind == SurfaceModel::Kind::kPec ? 1 : 0;
       }
       EdgeCensus census;
       const std::vector<WedgeEdge> found = find_wedge_edges(
@@ -265,8 +229,6 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   const glm::uvec3 tri = mesh.triangles[t];
   const std::uint16_t material = mesh.triangle_material[t];
   const auto dark = static_cast<std::uint8_t>(FacetLight::kDark);
-  if (!has_surface_[material])
-    return dark;  // no specular model: its rays end without radiating
   const glm::dmat4& xf = frame_world_from_body_[id];
   auto world = [&](unsigned i) { return glm::dvec3(xf * glm::dvec4(mesh.positions_m[i], 1.0)); };
   const glm::dvec3 v0 = world(tri.x), v1 = world(tri.y), v2 = world(tri.z);
@@ -338,7 +300,7 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
     if (integral == std::complex<double>(0.0, 0.0))
       return dark;  // no lit sub-triangle
   }
-  const SurfaceModel& sm = surfaces_[material];
+  const SurfaceModel& sm = surfaces_.surfaces[material].specular;
   const bool pec = sm.kind == SurfaceModel::Kind::kPec;
   const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
   const glm::dvec3 boresight = pose.world_from_antenna[0], up = -pose.world_from_antenna[2];
@@ -634,7 +596,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       met_target = true;
       path_owner = hit.object_id;
     }
-    const RadarMaterial& mat = materials_[hit.material_id];
+    const Surface& surface = surfaces_.surfaces[hit.material_id];
     const glm::dvec3 v_obj = scene_->objects()[hit.object_id].velocity_mps;
     hit.position_m =
         extend_path(bounce == 0, hit.t_m, last_hit, d, hit.position_m, hit.normal, path_m);
@@ -649,20 +611,14 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       ++stats.grazing_skipped;
       return;
     }
-    if (bounce == 0 && terrain && !hit_target && !mat.conductor) {
+    if (bounce == 0 && terrain && !hit_target && !surface.conductor) {
       // Diffuse clutter: sigma = sigma0(theta_i) * footprint area, footprint = dA_perp /
-      // cos(theta_i) with dA_perp = L^2 dOmega. Terrain-catalogue materials take sigma0 of the
-      // antenna's channel from their setup-time table (radar/clutter/terrain.hpp); the others
-      // are constant gamma, sigma0 = gamma cos(theta_i), so sigma = gamma dA_perp
-      // (Richards 2010, sec. 5.3), the same in every channel (the placeholder has none).
+      // cos(theta_i) with dA_perp = L^2 dOmega; sigma0 of the antenna's channel from the
+      // material's setup-time table (radar/clutter/terrain.hpp; every non-conductor has a row).
       const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, -d);
       const double d_omega = glm::length(glm::cross(u, v));
-      const int row = sigma0_row_[hit.material_id];
-      const double sigma_m2 =
-          row >= 0 ? static_cast<double>(sigma0_.lookup(static_cast<std::size_t>(row),
-                                                        sigma0_channel(c.polarisation), cos_i)) *
-                         path_m * path_m * d_omega / cos_i
-                   : mat.gamma * path_m * path_m * d_omega;
+      const double sigma_m2 = static_cast<double>(surfaces_.sigma0(hit.material_id, cos_i)) *
+                              path_m * path_m * d_omega / cos_i;
       Contribution& out = slot[count++];
       out.amplitude = {std::sqrt(sigma_m2), 0.0};
       out.range_m = path_m;
@@ -675,11 +631,9 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       out.bounces = 1;
       out.coherent = false;
     }
-    if (!has_surface_[hit.material_id])
-      return;  // no specular model: the ray ends (header)
     if (terrain && !met_target && frame.unbundled_in_range.empty())
       return;  // no target without a bundle within range: this terrain path can radiate nothing
-    const SurfaceModel& sm = surfaces_[hit.material_id];
+    const SurfaceModel& sm = surface.specular;
     const bool pec = sm.kind == SurfaceModel::Kind::kPec;
     const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
     const double off = surface_offset_m(hit.position_m);

@@ -7,9 +7,9 @@
 // that has met a target the tube's footprint radiates back to the radar through the
 // physical-optics integral, in the antenna's polarisation channel. The field, reflection and PO
 // machinery is the SBR core shared with the offline RCS engine (radar/em/sbr_core.hpp); materials
-// resolve to its SurfaceModel through radar::surface_model() (radar/materials.hpp). Diffuse
-// terrain returns sigma0 x footprint at a terrain ray's first hit (the clutter model).
-// Pure computation: no I/O, clocks or threads of its own.
+// are resolved once at setup, at the carrier, by radar::resolve_surfaces() (radar/em/surfaces.hpp).
+// Diffuse terrain returns sigma0 x footprint at a terrain ray's first hit (the clutter model). Pure
+// computation: no I/O, clocks or threads of its own.
 //
 // Ownership (each path is counted once, by one grid):
 //   - A path's owner is the first target (object with a conducting triangle) it meets. Rays of a
@@ -45,8 +45,6 @@
 //     cull spares the long, grazing upward queries of rays reflected off the ground.
 //   - Every return is labelled with its path's owner (Contribution::object_id), whichever
 //     surface the path last met: radar -> target -> ground -> radar is the target's echo.
-//   - A surface with no specular model (radar::surface_model() nullopt, e.g. the placeholder
-//     "soil") ends the ray.
 
 #include <complex>
 #include <cstddef>
@@ -58,7 +56,7 @@
 #include "radar/clutter/terrain.hpp"
 #include "radar/em/edges.hpp"
 #include "radar/em/sbr_core.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 #include "scene/scene.hpp"
 
 namespace radar_emu::radar {
@@ -191,13 +189,11 @@ struct TraceStats {
   std::uint64_t edges_double = 0;    ///< double-diffraction contributions (edge_order 2)
 };
 
-/// The terrain sigma0 table's channel of a polarisation (radar/clutter/terrain.hpp).
-[[nodiscard]] clutter::Sigma0Table::Pol sigma0_channel(Polarisation p) noexcept;
-
 class SbrTracer {
  public:
   /// Setup: validates the configuration (throws std::invalid_argument with the field name) and
-  /// resolves scene materials to radar materials.
+  /// resolves the scene's materials at the carrier (resolve_surfaces(), in the antenna's
+  /// channel; throws its UnresolvedMaterial for an unknown name).
   SbrTracer(const scene::Scene& scene, const SbrConfig& config);
 
   /// Upper bound on the contributions one trace() can produce for this scene and config (size
@@ -219,6 +215,8 @@ class SbrTracer {
                                std::span<std::size_t> rays_per_object = {}) const noexcept;
 
   [[nodiscard]] const SbrConfig& config() const noexcept { return config_; }
+  /// The scene's materials as this tracer resolved them (at its carrier, in its channel).
+  [[nodiscard]] const SurfaceSet& surfaces() const noexcept { return surfaces_; }
   /// Whether scene object `id` is a target (has a conducting triangle: it gets a ray bundle).
   [[nodiscard]] bool is_target(std::uint32_t id) const noexcept {
     return id < is_target_.size() && is_target_[id] != 0;
@@ -227,14 +225,9 @@ class SbrTracer {
  private:
   const scene::Scene* scene_;
   SbrConfig config_;
-  std::vector<RadarMaterial> materials_;
-  /// Specular model per scene material at the carrier; has_surface_[i] == 0: none (ray ends).
-  std::vector<SurfaceModel> surfaces_;
-  std::vector<std::uint8_t> has_surface_;
-  /// sigma0 of the terrain-catalogue materials at the carrier (issue 4's models, model "total":
-  /// surface + volume), built once here; row per scene material in sigma0_row_ (-1: none).
-  clutter::Sigma0Table sigma0_;
-  std::vector<int> sigma0_row_;
+  /// Per scene material at the carrier: specular model, sigma0 row (issue 4's models, "total":
+  /// surface + volume), conductor flag; resolved once here.
+  SurfaceSet surfaces_;
   struct Bundle {
     std::uint32_t object_id = 0;
     double spacing_m = 0;  ///< the configured (or knob) spacing at the target, before coarsening

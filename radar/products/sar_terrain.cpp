@@ -2,12 +2,13 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <stdexcept>
 
 #include "radar/clutter/terrain.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 
 namespace radar_emu::radar {
 
@@ -19,21 +20,14 @@ TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, c
     throw std::invalid_argument("sar terrain: cell size must be > 0");
   if (spec.along * spec.across > 200'000'000ull)
     throw std::invalid_argument("sar terrain: more than 2e8 cells; make the cells larger");
-  // sigma0 tables of the scene's terrain-catalogue materials (as the frame tracer builds them).
-  const std::vector<RadarMaterial> materials = resolve_materials(scene.materials());
-  std::vector<int> row(materials.size(), -1);
-  std::vector<clutter::SurfaceSpec> specs;
-  for (std::size_t i = 0; i < materials.size(); ++i) {
-    if (!materials[i].terrain_catalogue)
-      continue;
-    row[i] = static_cast<int>(specs.size());
-    specs.push_back(
-        clutter::resolve_surface(*clutter::find_terrain_material(materials[i].name), p.carrier_hz));
-  }
+  // sigma0 of the scene's materials: the tracer's, resolved once at its carrier.
+  if (tracer.config().carrier_hz != p.carrier_hz)
+    throw std::invalid_argument("sar terrain: the tracer's carrier differs from the SAR carrier");
+  const SurfaceSet& surfaces = tracer.surfaces();
   TerrainCells out;
-  if (specs.empty())
+  if (std::none_of(surfaces.surfaces.begin(), surfaces.surfaces.end(),
+                   [](const Surface& s) { return s.sigma0_row >= 0; }))
     return out;
-  const clutter::Sigma0Table table(specs, clutter::Sigma0Model::kTotal, p.carrier_hz);
   const clutter::Sigma0Table::Pol pol = sigma0_channel(spec.polarisation);
   const glm::dvec3 track = sar_track_dir(p), look = sar_look_dir(p);
 
@@ -51,7 +45,8 @@ TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, c
       const scene::Ray down{{xy.x, xy.y, xy.z + 5000.0}, {0.0, 0.0, -1.0}, 0.0, 10000.0};
       scene::Hit hit;
       if (!scene.intersect(down, hit) || tracer.is_target(hit.object_id) ||
-          hit.material_id >= row.size() || row[hit.material_id] < 0) {
+          hit.material_id >= surfaces.surfaces.size() ||
+          surfaces.surfaces[hit.material_id].sigma0_row < 0) {
         ++line.empty;
         continue;
       }
@@ -69,8 +64,8 @@ TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, c
         ++line.shadowed;
         continue;
       }
-      const double s0 = static_cast<double>(
-          table.lookup(static_cast<std::size_t>(row[hit.material_id]), pol, cos_inc));
+      const double s0 = static_cast<double>(surfaces.sigma0_table.lookup(
+          static_cast<std::size_t>(surfaces.surfaces[hit.material_id].sigma0_row), pol, cos_inc));
       const clutter::SpeckleSample s = clutter::speckle_sample(spec.speckle, index);
       const double area = spec.cell_m * spec.cell_m / std::max(n.z, 1e-3);
       line.cells.push_back(

@@ -37,7 +37,9 @@ struct TerrainCells {
   std::size_t empty = 0;     ///< no terrain under the cell (a target, or nothing)
 };
 
-/// `tracer` tells targets from terrain and gives each scene material's sigma0 (its table).
+/// `tracer` tells targets from terrain and gives each scene material's sigma0 (its resolved
+/// surfaces, radar/em/surfaces.hpp; read in `spec.polarisation`'s channel). Throws
+/// std::invalid_argument when the tracer's carrier is not `p.carrier_hz`.
 [[nodiscard]] TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer,
                                          const SarParams& p, const TerrainCellSpec& spec);
 

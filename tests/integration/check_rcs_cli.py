@@ -131,7 +131,7 @@ check("ka = 2.1" in r.stderr and "physical optics" in r.stderr and "--method mom
 # The method of moments on the same kind of sphere (radar-emu's own latitude-longitude mesh,
 # welded and solved by the EFIE) against the Mie series: -33.48 dBsm for a = 10 mm at 10 GHz
 # (ka = 2.0958; computed once with scipy.special's spherical Bessel functions, independent of
-# radar/em/mie.cpp). Measured -33.67 dBsm on 960 triangles of about lambda / 15.
+# radar/reference/mie.cpp). Measured -33.67 dBsm on 960 triangles of about lambda / 15.
 small = os.path.join(work, "sphere_mom.obj")
 run("scene", "target", "sphere", "--a-m", "0.01", "--facet-m", "0.002", "--out", small)
 mom_csv = os.path.join(work, "sphere_mom.csv")

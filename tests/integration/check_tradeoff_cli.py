@@ -48,7 +48,7 @@ def sel(case, metric=None, knob=None):
             and (knob is None or r["knob"] == knob)]
 
 
-# Sphere: the closed form computed here, independently of radar/em/mie.cpp.
+# Sphere: the closed form computed here, independently of radar/reference/mie.cpp.
 def po_closed_db(ka):
     return 10 * math.log10(1 - math.sin(2 * ka) / ka + math.sin(ka) ** 2 / ka ** 2)
 

@@ -1,6 +1,6 @@
 // The PEC sphere: our Mie series against its published limits and values, the PO closed form
 // against its real-valued formula, and where PO fails against Mie (physics.md).
-#include "radar/em/mie.hpp"
+#include "radar/reference/mie.hpp"
 
 #include <gtest/gtest.h>
 

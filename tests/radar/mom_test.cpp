@@ -9,7 +9,7 @@
 #include <map>
 
 #include "radar/constants.hpp"
-#include "radar/em/mie.hpp"
+#include "radar/reference/mie.hpp"
 
 namespace radar_emu::radar {
 namespace {

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "radar/constants.hpp"
-#include "radar/em/mie.hpp"
 #include "radar/products/range_profile.hpp"
+#include "radar/reference/mie.hpp"
 #include "scene/targets.hpp"
 
 namespace radar_emu::radar {

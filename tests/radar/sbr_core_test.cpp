@@ -26,7 +26,7 @@
 #include "radar/clutter/terrain.hpp"
 #include "radar/em/rcs.hpp"
 #include "radar/em/sbr.hpp"
-#include "radar/materials.hpp"
+#include "radar/em/surfaces.hpp"
 #include "scene/scene.hpp"
 #include "scene/targets.hpp"
 
@@ -449,8 +449,10 @@ TEST(SbrGround, LawOfReflectionAndFresnelMagnitudeAtEveryDielectricBounce) {
   const std::complex<double> eps =
       radar_emu::radar::clutter::permittivity(*rd::clutter::find_terrain_material("asphalt"), kF);
   std::vector<rd::SurfaceModel> surfaces;
-  for (const sc::Material& m : scene.materials())
-    surfaces.push_back(*rd::surface_model(m.name, kF));
+  const rd::SurfaceSet set =
+      rd::resolve_surfaces(scene.materials(), {kF, rd::Polarisation::kVV, {}});
+  for (const rd::Surface& s : set.surfaces)
+    surfaces.push_back(s.specular);
   ASSERT_EQ(surfaces[1].kind, rd::SurfaceModel::Kind::kDielectric);
   EXPECT_EQ(surfaces[1].relative_permittivity, eps);
   rd::RcsConfig config;

@@ -118,7 +118,7 @@ TEST(Airport, RunwayTilesItsAreaWithAsphaltAndTheIcaoMarkings) {
 TEST(Airport, MaterialsObjectsAndTriangleCounts) {
   const sc::SceneDescription d = sc::generate_airport({});
   // Only names of the clutter catalogue (radar/clutter/terrain.cpp) that the radar's material
-  // table (radar/materials.cpp) also knows.
+  // resolver (radar/em/surfaces.cpp) also knows.
   const std::set<std::string> allowed{"asphalt", "concrete", "grass", "metal"};
   std::map<std::string, std::size_t> triangles_per_material;
   std::size_t total = 0, metal_objects = 0;

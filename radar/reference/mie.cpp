@@ -1,4 +1,4 @@
-#include "radar/em/mie.hpp"
+#include "radar/reference/mie.hpp"
 
 #include <cmath>
 #include <stdexcept>

@@ -3,6 +3,8 @@
 // closed form, both as complex backscatter amplitudes A [m] with sigma = |A|^2, phase referred
 // to the sphere's centre, exp(+j w t) (the convention of radar/em/rcs.hpp).
 // Pure computation; throw std::invalid_argument for non-positive or non-finite arguments.
+// A reference solution (radar/reference/): the engines never call it; the tests and the
+// tradeoff tool compare them against it.
 
 #include <complex>
 
