@@ -89,37 +89,48 @@ VertexWeld weld_impl(std::span<const Vec> positions, std::span<const glm::uvec3>
     else
       sets.join(it->second, i);
   }
-  // Then the distinct positions within the tolerance, on a grid of cells twice the tolerance:
-  // any two points within it lie in neighbouring cells, however the division rounds.
+  // Then the distinct positions within the tolerance of each other, on a grid of cells 8
+  // tolerances wide (a cell's points chained through `next`): a point looks in its own cell and,
+  // along each axis where it lies within the tolerance of a cell face (a margin covers the
+  // division's rounding), in the neighbour beyond it. Mesh vertices are mostly far more than
+  // the tolerance apart, so most points look in one cell only.
   if (w.tolerance_m > 0.0 && distinct.size() > 1) {
-    const double cell_m = 2.0 * w.tolerance_m;
-    std::unordered_map<std::array<std::int64_t, 3>, std::vector<std::uint32_t>,
-                       TripleHash<std::int64_t>>
-        grid;
-    grid.reserve(distinct.size());
+    const double cell_m = 8.0 * w.tolerance_m;
+    const double near = 1.0 / 8.0 + 1e-6;  // the tolerance in cells, with a margin
+    std::unordered_map<std::array<std::int64_t, 3>, std::uint32_t, TripleHash<std::int64_t>> head;
+    head.reserve(distinct.size());
+    std::vector<std::uint32_t> next(n, kNoIndex);
     for (const std::uint32_t i : distinct) {
       const glm::dvec3 p(positions[i]);
-      const glm::dvec3 q = glm::floor((p - lo) / cell_m);
+      const glm::dvec3 q = (p - lo) / cell_m, f = glm::floor(q);
       // A vertex far outside the used ones (an unused stray) keeps to exact equality.
-      if (!(std::abs(q.x) < 1e15 && std::abs(q.y) < 1e15 && std::abs(q.z) < 1e15))
+      if (!(std::abs(f.x) < 1e15 && std::abs(f.y) < 1e15 && std::abs(f.z) < 1e15))
         continue;
-      const std::array<std::int64_t, 3> c{static_cast<std::int64_t>(q.x),
-                                          static_cast<std::int64_t>(q.y),
-                                          static_cast<std::int64_t>(q.z)};
-      for (std::int64_t dx = -1; dx <= 1; ++dx) {
-        for (std::int64_t dy = -1; dy <= 1; ++dy) {
-          for (std::int64_t dz = -1; dz <= 1; ++dz) {
-            const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
-            if (it == grid.end())
-              continue;
-            for (const std::uint32_t j : it->second) {
+      const std::array<std::int64_t, 3> c{static_cast<std::int64_t>(f.x),
+                                          static_cast<std::int64_t>(f.y),
+                                          static_cast<std::int64_t>(f.z)};
+      std::array<std::array<std::int64_t, 2>, 3> range{};  // per axis: first and last offset
+      for (int k = 0; k < 3; ++k) {
+        const double frac = q[k] - f[k];
+        range[static_cast<std::size_t>(k)] = {frac < near ? -1 : 0, frac > 1.0 - near ? 1 : 0};
+      }
+      for (std::int64_t dx = range[0][0]; dx <= range[0][1]; ++dx) {
+        for (std::int64_t dy = range[1][0]; dy <= range[1][1]; ++dy) {
+          for (std::int64_t dz = range[2][0]; dz <= range[2][1]; ++dz) {
+            const auto it = head.find({c[0] + dx, c[1] + dy, c[2] + dz});
+            for (std::uint32_t j = it == head.end() ? kNoIndex : it->second; j != kNoIndex;
+                 j = next[j]) {
               if (glm::length(glm::dvec3(positions[j]) - p) <= w.tolerance_m)
                 sets.join(i, j);
             }
           }
         }
       }
-      grid[c].push_back(i);
+      const auto [it, fresh] = head.try_emplace(c, i);
+      if (!fresh) {
+        next[i] = it->second;
+        it->second = i;
+      }
     }
   }
   w.welded.resize(n);
@@ -186,10 +197,39 @@ MeshTopology build_impl(std::span<const Vec> positions, VertexWeld weld,
           {(static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b), t, c, a < b});
     }
   }
-  std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
-    return std::tie(x.key, x.triangle, x.corner) < std::tie(y.key, y.triangle, y.corner);
-  });
+  // Entries arrive in (triangle, corner) order; a counting sort by the lower vertex keeps that
+  // order, then each vertex's few entries are sorted by the higher one, stably.
+  {
+    std::vector<std::uint32_t> start(m.weld.size() + 1, 0);
+    for (const Entry& e : entries)
+      ++start[(e.key >> 32) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<Entry> sorted(entries.size());
+    for (const Entry& e : entries)
+      sorted[start[e.key >> 32]++] = e;
+    entries.swap(sorted);
+    // start[v] is now the end of vertex v's run (the beginning of v + 1's).
+    std::uint32_t begin = 0;
+    for (std::size_t v = 0; v < m.weld.size(); ++v) {
+      const std::uint32_t end = start[v];
+      if (end - begin > 32) {  // a high-valence vertex (a fan's centre)
+        std::stable_sort(entries.begin() + begin, entries.begin() + end,
+                         [](const Entry& x, const Entry& y) { return x.key < y.key; });
+        begin = end;
+        continue;
+      }
+      for (std::uint32_t a = begin + 1; a < end; ++a) {  // insertion sort: stable, no buffer
+        const Entry e = entries[a];
+        std::uint32_t b = a;
+        for (; b > begin && entries[b - 1].key > e.key; --b)
+          entries[b] = entries[b - 1];
+        entries[b] = e;
+      }
+      begin = end;
+    }
+  }
   m.half_edges.resize(entries.size());
+  m.edges.reserve(entries.size() / 2 + 1);
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const Entry& e = entries[i];
     if (i == 0 || e.key != entries[i - 1].key) {
