@@ -56,6 +56,8 @@ bool finite(const glm::dvec3& p) noexcept {
 template <class Vec>
 VertexWeld weld_impl(std::span<const Vec> positions, std::span<const glm::uvec3> triangles) {
   const std::size_t n = positions.size();
+  if (n >= kNoIndex)
+    throw std::invalid_argument("mesh topology: too many vertices");
   VertexWeld w;
   // The extent of the finite vertices the triangles use.
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
@@ -103,8 +105,9 @@ VertexWeld weld_impl(std::span<const Vec> positions, std::span<const glm::uvec3>
     for (const std::uint32_t i : distinct) {
       const glm::dvec3 p(positions[i]);
       const glm::dvec3 q = (p - lo) / cell_m, f = glm::floor(q);
-      // A vertex far outside the used ones (an unused stray) keeps to exact equality.
-      if (!(std::abs(f.x) < 1e15 && std::abs(f.y) < 1e15 && std::abs(f.z) < 1e15))
+      // A vertex 800 extents or more outside the used ones (an unused stray) keeps to exact
+      // equality: within 1e9 cells the division rounds by less than the margin.
+      if (!(std::abs(f.x) < 1e9 && std::abs(f.y) < 1e9 && std::abs(f.z) < 1e9))
         continue;
       const std::array<std::int64_t, 3> c{static_cast<std::int64_t>(f.x),
                                           static_cast<std::int64_t>(f.y),

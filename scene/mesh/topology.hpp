@@ -57,7 +57,8 @@ struct VertexWeld {
 };
 
 /// Welds `positions_m` [m]; the extent is that of the vertices `triangles` use (an index out of
-/// range is ignored). Every vertex is welded, used or not.
+/// range is ignored). Every vertex is welded, used or not (one 800 extents or more outside the
+/// used ones by exact position only). Throws std::invalid_argument beyond 2^32 - 1 vertices.
 [[nodiscard]] VertexWeld weld_vertices(std::span<const glm::vec3> positions_m,
                                        std::span<const glm::uvec3> triangles);
 [[nodiscard]] VertexWeld weld_vertices(std::span<const glm::dvec3> positions_m,
