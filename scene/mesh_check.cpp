@@ -1,10 +1,10 @@
 #include "scene/mesh_check.hpp"
 
 #include <algorithm>
-#include <array>
-#include <limits>
 #include <map>
 #include <stdexcept>
+
+#include "scene/mesh/topology.hpp"
 
 namespace radar_emu::scene {
 
@@ -22,47 +22,21 @@ bool is_degenerate(const Mesh& m, std::size_t t) noexcept {
 MeshCheck check_mesh(const Mesh& m) {
   MeshCheck r;
   r.triangles = m.triangles.size();
-  // Weld vertices that coincide to 1e-7 of the mesh's extent (exporters and generators reach
-  // the same corner by different float arithmetic; a point straddling a cell boundary of this
-  // quantisation stays unwelded, which can only over-report boundary edges).
-  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-  for (const glm::vec3& p : m.positions_m) {
-    lo = glm::min(lo, glm::dvec3(p));
-    hi = glm::max(hi, glm::dvec3(p));
-  }
-  const double quantum = std::max(1e-7 * glm::length(hi - lo), 1e-30);
-  std::map<std::array<long long, 3>, std::uint32_t> ids;
-  std::vector<std::uint32_t> welded(m.positions_m.size());
-  for (std::size_t i = 0; i < m.positions_m.size(); ++i) {
-    const glm::dvec3 q = glm::round((glm::dvec3(m.positions_m[i]) - lo) / quantum);
-    // q is within 0 .. 1e7 for finite positions; a non-finite one (a loader's bug) must not
-    // reach the integer conversion (undefined behaviour): it gets a key of its own.
-    const auto to_key = [](double x) {
-      return x >= 0.0 && x <= 1e15 ? static_cast<long long>(x) : -1;
-    };
-    const std::array<long long, 3> key{to_key(q.x), to_key(q.y), to_key(q.z)};
-    welded[i] = ids.emplace(key, static_cast<std::uint32_t>(ids.size())).first->second;
-  }
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edges;
+  std::vector<std::uint8_t> skip(m.triangles.size(), 0);
   for (std::size_t t = 0; t < m.triangles.size(); ++t) {
     if (is_degenerate(m, t)) {
       r.degenerate.push_back(t);
-      continue;
-    }
-    const glm::uvec3 tri = m.triangles[t];
-    const std::array<std::uint32_t, 3> v{welded[tri.x], welded[tri.y], welded[tri.z]};
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = v[static_cast<std::size_t>(k)],
-                          b = v[static_cast<std::size_t>((k + 1) % 3)];
-      ++edges[{std::min(a, b), std::max(a, b)}];
+      skip[t] = 1;
     }
   }
+  // Vertices welded and edges counted by the one rule (scene/mesh/topology.hpp).
+  const MeshTopology topo = build_topology(m.positions_m, m.triangles, skip);
+  r.non_manifold_edges = topo.non_manifold_edges;
+  r.inconsistent_edges = topo.inconsistent_edges;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> boundary;
-  for (const auto& [e, count] : edges) {
-    if (count == 1)
-      boundary.push_back(e);
-    else if (count > 2)
-      ++r.non_manifold_edges;
+  for (const MeshEdge& e : topo.edges) {
+    if (e.boundary())
+      boundary.emplace_back(e.v0, e.v1);
   }
   r.boundary_edges = boundary.size();
   // T-junctions: a surface tessellated differently on two sides of a seam is closed even though
@@ -70,9 +44,10 @@ MeshCheck check_mesh(const Mesh& m) {
   // Split every boundary edge at the boundary vertices lying on it and pair the pieces; only
   // pieces left alone are real boundary. Quadratic in the boundary: skipped beyond 5000 edges.
   if (!boundary.empty() && boundary.size() <= 5000) {
-    std::vector<glm::dvec3> pos(ids.size());
-    for (std::size_t i = 0; i < m.positions_m.size(); ++i)
-      pos[welded[i]] = glm::dvec3(m.positions_m[i]);
+    std::vector<glm::dvec3> pos(topo.weld.size());
+    for (std::size_t v = 0; v < pos.size(); ++v)
+      pos[v] = glm::dvec3(m.positions_m[topo.weld.first_input[v]]);
+    const double tolerance_m = topo.weld.tolerance_m;
     std::vector<std::uint32_t> candidates;
     for (const auto& [a, b] : boundary) {
       candidates.push_back(a);
@@ -93,7 +68,7 @@ MeshCheck check_mesh(const Mesh& m) {
         if (t <= 1e-9 || t >= 1.0 - 1e-9)
           continue;
         const glm::dvec3 off = pos[v] - (pa + t * ab);
-        if (glm::dot(off, off) <= 16.0 * quantum * quantum)  // on the edge to float precision
+        if (glm::dot(off, off) <= 16.0 * tolerance_m * tolerance_m)  // on the edge, to the weld
           on_edge.emplace_back(t, v);
       }
       std::sort(on_edge.begin(), on_edge.end());
@@ -152,6 +127,11 @@ std::vector<std::string> clean_loaded_mesh(Mesh& m, const std::string& source,
   if (c.non_manifold_edges > 0) {
     warnings.push_back(source + ": " + std::to_string(c.non_manifold_edges) +
                        " non-manifold edges (shared by more than two triangles)");
+  }
+  if (c.inconsistent_edges > 0) {
+    warnings.push_back(source + ": " + std::to_string(c.inconsistent_edges) +
+                       " edges between triangles wound inconsistently (a part with one is taken "
+                       "as open)");
   }
   return warnings;
 }

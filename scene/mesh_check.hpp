@@ -1,7 +1,7 @@
 #pragma once
 // Mesh sanity at load: degenerate triangles (reported with file, triangle and line, then
-// dropped) and open or non-manifold surfaces (a warning: the RCS engine's shadowing and
-// two-sided facets assume closed bodies or deliberate sheets). Setup only.
+// dropped) and open, non-manifold or inconsistently wound surfaces (a warning: the RCS engine's
+// shadowing and two-sided facets assume closed bodies or deliberate sheets). Setup only.
 
 #include <cstddef>
 #include <span>
@@ -15,13 +15,16 @@ namespace radar_emu::scene {
 struct MeshCheck {
   std::size_t triangles = 0;
   std::vector<std::size_t> degenerate;  ///< indices of degenerate triangles, ascending
-  /// Edges used by exactly one triangle / by more than two, after welding vertices at identical
-  /// positions (STL and many OBJ exports repeat vertices per triangle). Boundary edges that a
-  /// T-junction closes (one side of a seam split finer than the other) are not counted.
+  /// Edges used by exactly one triangle / by more than two / by two running it the same way,
+  /// among the non-degenerate triangles, vertices welded by the one rule of
+  /// scene/mesh/topology.hpp (STL and many OBJ exports repeat vertices per triangle). Boundary
+  /// edges that a T-junction closes (one side of a seam split finer than the other) are not
+  /// counted.
   std::size_t boundary_edges = 0;
   std::size_t non_manifold_edges = 0;
+  std::size_t inconsistent_edges = 0;
   [[nodiscard]] bool closed() const noexcept {
-    return boundary_edges == 0 && non_manifold_edges == 0;
+    return boundary_edges == 0 && non_manifold_edges == 0 && inconsistent_edges == 0;
   }
 };
 
@@ -33,7 +36,8 @@ struct MeshCheck {
 /// Drops the degenerate triangles of a freshly loaded mesh and returns the warnings, each
 /// starting with `source` (the file, or "file: node NAME"): one per degenerate triangle (its
 /// index in the file's triangle order and, when `lines` has an entry for it other than 0, its
-/// line) up to 10, then "... and N more"; one for an open mesh and one for non-manifold edges.
+/// line) up to 10, then "... and N more"; one for an open mesh, one for non-manifold edges and
+/// one for inconsistently wound edges.
 /// Throws std::runtime_error "SOURCE: every triangle is degenerate" when nothing is left.
 [[nodiscard]] std::vector<std::string> clean_loaded_mesh(Mesh& mesh, const std::string& source,
                                                          std::span<const std::size_t> lines = {});

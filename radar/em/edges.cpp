@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <stdexcept>
 #include <tuple>
 
 #include "radar/constants.hpp"
@@ -109,36 +110,19 @@ WedgeCoefficients wedge_coefficients(double alpha_rad, double phi_rad, double ph
 }
 
 std::vector<WedgeEdge> find_wedge_edges(std::span<const std::array<glm::dvec3, 3>> tris,
+                                        const scene::MeshTopology& topology,
                                         std::span<const std::int8_t> outward,
                                         std::span<const std::uint8_t> pec, double min_turn_rad,
                                         EdgeCensus& census) {
-  // Weld vertices by exact position.
-  using Key = std::tuple<double, double, double>;
-  std::map<Key, std::uint32_t> ids;
-  auto id_of = [&](const glm::dvec3& p) {
-    const auto [it, inserted] =
-        ids.emplace(Key{p.x, p.y, p.z}, static_cast<std::uint32_t>(ids.size()));
-    return it->second;
-  };
-  struct Use {
-    std::uint32_t tri;
-    int corner;    // the edge runs from corner to corner + 1 (mod 3)
-    bool forward;  // wound from the lower vertex id to the higher
-  };
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<Use>> uses;
-  for (std::uint32_t t = 0; t < tris.size(); ++t) {
-    std::array<std::uint32_t, 3> v{id_of(tris[t][0]), id_of(tris[t][1]), id_of(tris[t][2])};
-    for (int c = 0; c < 3; ++c) {
-      const std::uint32_t a = v[static_cast<std::size_t>(c)],
-                          b = v[static_cast<std::size_t>((c + 1) % 3)];
-      if (a == b)
-        continue;
-      uses[{std::min(a, b), std::max(a, b)}].push_back({t, c, a < b});
-    }
-  }
+  if (topology.use.size() != tris.size() || outward.size() != tris.size() ||
+      pec.size() != tris.size())
+    throw std::invalid_argument(
+        "find_wedge_edges: one topology triangle, winding and PEC flag "
+        "per triangle are needed");
   std::vector<WedgeEdge> out;
-  for (const auto& [key, u] : uses) {
-    const auto& t0 = tris[u[0].tri];
+  for (const scene::MeshEdge& edge : topology.edges) {
+    const std::span<const scene::HalfEdge> u = topology.uses(edge);
+    const auto& t0 = tris[u[0].triangle];
     const glm::dvec3 a = t0[static_cast<std::size_t>(u[0].corner)];
     const glm::dvec3 b = t0[static_cast<std::size_t>((u[0].corner + 1) % 3)];
     const glm::dvec3 third0 = t0[static_cast<std::size_t>((u[0].corner + 2) % 3)];
@@ -156,7 +140,7 @@ std::vector<WedgeEdge> find_wedge_edges(std::span<const std::array<glm::dvec3, 3
       continue;
     }
     if (u.size() == 1) {  // boundary of an open sheet: a half-plane
-      if (!pec[u[0].tri]) {
+      if (!pec[u[0].triangle]) {
         ++census.unsupported;
         continue;
       }
@@ -166,14 +150,14 @@ std::vector<WedgeEdge> find_wedge_edges(std::span<const std::array<glm::dvec3, 3
       out.push_back(e);
       continue;
     }
-    const auto& t1 = tris[u[1].tri];
-    if (u[0].forward == u[1].forward || !pec[u[0].tri] || !pec[u[1].tri]) {
+    const auto& t1 = tris[u[1].triangle];
+    if (edge.inconsistent() || !pec[u[0].triangle] || !pec[u[1].triangle]) {
       ++census.unsupported;  // inconsistent winding (no free-space side known), or non-PEC
       continue;
     }
     const glm::dvec3 third1 = t1[static_cast<std::size_t>((u[1].corner + 2) % 3)];
     const glm::dvec3 x1 = normal_part(third1 - a, e.t);
-    const std::int8_t o = outward[u[0].tri];
+    const std::int8_t o = outward[u[0].triangle];
     e.y0 = o < 0 ? -n0 : n0;
     double alpha = wrap_2pi(std::atan2(glm::dot(x1, e.y0), glm::dot(x1, e.x0)));
     if (o == 0 && alpha < kPi) {  // open part: take the convex side

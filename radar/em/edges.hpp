@@ -51,6 +51,8 @@
 #include <span>
 #include <vector>
 
+#include "scene/mesh/topology.hpp"
+
 namespace radar_emu::radar {
 
 /// A diffracting wedge edge of the mesh, in world coordinates.
@@ -71,14 +73,18 @@ struct EdgeCensus {
   std::uint64_t unsupported = 0;  ///< shared by > 2 facets, inconsistent winding, non-PEC
 };
 
-/// Finds the diffracting edges of a triangle mesh (world coordinates; vertices welded by exact
-/// position). `outward[i]` is +1/-1/0 as sbr_core.hpp's closed_part_winding (times mirroring):
-/// for closed parts the free space is on the outward side; for an edge of an open part the
-/// convex side (alpha > pi) is taken. `pec[i]`: only PEC faces diffract here. An edge shared by
-/// two facets is kept when its exterior angle departs from pi by more than min_turn_rad.
+/// Finds the diffracting edges of a triangle mesh `tris` (world coordinates) among the edges of
+/// `topology`, its topology (scene/mesh/topology.hpp: triangle i of the one is triangle i of the
+/// other; vertices welded by the one rule; the edge list's order is the output's). `outward[i]`
+/// is +1/-1/0 as scene::closed_part_winding (times mirroring): for closed parts the free space
+/// is on the outward side; for an edge of an open part the convex side (alpha > pi) is taken.
+/// `pec[i]`: only PEC faces diffract here. An edge of one triangle is an open sheet's boundary
+/// (a half-plane); an edge shared by two facets is kept when its exterior angle departs from pi
+/// by more than min_turn_rad. Throws std::invalid_argument when the sizes disagree.
 [[nodiscard]] std::vector<WedgeEdge> find_wedge_edges(
-    std::span<const std::array<glm::dvec3, 3>> tris, std::span<const std::int8_t> outward,
-    std::span<const std::uint8_t> pec, double min_turn_rad, EdgeCensus& census);
+    std::span<const std::array<glm::dvec3, 3>> tris, const scene::MeshTopology& topology,
+    std::span<const std::int8_t> outward, std::span<const std::uint8_t> pec, double min_turn_rad,
+    EdgeCensus& census);
 
 /// Which diffraction coefficient to use (the engine uses kFringe; the others are for tests: the
 /// PO end-point currents of a flat plate's edges reproduce its exact facet PO in a principal

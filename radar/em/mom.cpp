@@ -7,14 +7,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <map>
 #include <new>
 #include <numeric>
 #include <stdexcept>
-#include <unordered_map>
 #include <utility>
 
 #include "radar/constants.hpp"
+#include "scene/mesh/topology.hpp"
 
 // LAPACK (OpenBLAS's build, Debian libopenblas-dev): LU factorisation and solve.
 extern "C" {
@@ -163,7 +162,7 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
     throw std::invalid_argument("MoM: the CFIE weight alpha must be in (0, 1)");
   // World-frame triangles, every material PEC.
   std::vector<glm::dvec3> raw;
-  std::vector<std::array<std::uint32_t, 3>> tris;
+  std::vector<glm::uvec3> tris;
   for (const scene::ObjectDesc& o : description.objects) {
     if (o.motion || o.trajectory)
       throw std::invalid_argument("MoM: object '" + o.name +
@@ -191,56 +190,30 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
       if (tri.x >= o.mesh.positions_m.size() || tri.y >= o.mesh.positions_m.size() ||
           tri.z >= o.mesh.positions_m.size())
         throw std::invalid_argument("MoM: object '" + o.name + "' has a vertex index out of range");
-      tris.push_back({base + tri.x, base + tri.y, base + tri.z});
+      tris.emplace_back(base + tri.x, base + tri.y, base + tri.z);
     }
   }
   if (tris.empty())
     throw std::invalid_argument("MoM: the target has no triangle");
 
-  // Weld coincident vertices (meshes often repeat them per face): a grid of cells of the
-  // tolerance, each vertex looked up in its cell's neighbourhood.
+  // Weld coincident vertices (meshes often repeat them per face) by the one rule of
+  // scene/mesh/topology.hpp; each welded vertex sits at its first input vertex.
   glm::dvec3 lo(1e300), hi(-1e300);
   for (const glm::dvec3& p : raw)
     lo = glm::min(lo, p), hi = glm::max(hi, p);
   centre_m_ = 0.5 * (lo + hi);
   const double extent = std::max(glm::length(hi - lo), 1e-12);
-  const double tol = 1e-7 * extent;
-  std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
-  const auto cell = [&](const glm::dvec3& p, int dx, int dy, int dz) {
-    const auto q = [&](double x, int d) {
-      return static_cast<std::uint64_t>(static_cast<std::int64_t>(std::floor(x / tol)) + d) &
-             0x1FFFFF;
-    };
-    const glm::dvec3 r = p - lo;
-    return (q(r.x, dx) << 42) | (q(r.y, dy) << 21) | q(r.z, dz);
-  };
-  std::vector<std::uint32_t> welded(raw.size());
-  for (std::size_t i = 0; i < raw.size(); ++i) {
-    std::int64_t found = -1;
-    for (int dx = -1; dx <= 1 && found < 0; ++dx)
-      for (int dy = -1; dy <= 1 && found < 0; ++dy)
-        for (int dz = -1; dz <= 1 && found < 0; ++dz) {
-          const auto it = grid.find(cell(raw[i], dx, dy, dz));
-          if (it == grid.end())
-            continue;
-          for (std::uint32_t j : it->second)
-            if (glm::length(vertices_m_[j] + centre_m_ - raw[i]) <= tol) {
-              found = j;
-              break;
-            }
-        }
-    if (found < 0) {
-      found = static_cast<std::int64_t>(vertices_m_.size());
-      vertices_m_.push_back(raw[i] - centre_m_);
-      grid[cell(raw[i], 0, 0, 0)].push_back(static_cast<std::uint32_t>(found));
-    }
-    welded[i] = static_cast<std::uint32_t>(found);
-  }
+  scene::VertexWeld weld = scene::weld_vertices(raw, tris);
+  vertices_m_.reserve(weld.size());
+  for (const std::uint32_t i : weld.first_input)
+    vertices_m_.push_back(raw[i] - centre_m_);
   info_.vertices = vertices_m_.size();
 
   // Triangles with area; zero-area ones (after welding) are skipped and counted.
-  for (const auto& t0 : tris) {
-    const std::array<std::uint32_t, 3> t = {welded[t0[0]], welded[t0[1]], welded[t0[2]]};
+  std::vector<glm::uvec3> kept;
+  for (const glm::uvec3& t0 : tris) {
+    const std::array<std::uint32_t, 3> t = {weld.welded[t0.x], weld.welded[t0.y],
+                                            weld.welded[t0.z]};
     const glm::dvec3 a = vertices_m_[t[0]], b = vertices_m_[t[1]], c = vertices_m_[t[2]];
     const glm::dvec3 n = glm::cross(b - a, c - a);
     const double len = glm::length(n);
@@ -251,96 +224,55 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
     Triangle tri;
     tri.v = t;
     triangles_.push_back(tri);
+    kept.push_back(t0);
   }
   if (triangles_.empty())
     throw std::invalid_argument("MoM: every triangle of the target is degenerate");
 
-  // Edges: (low vertex, high vertex) -> the triangles and local indices that have it.
-  struct EdgeUse {
-    std::uint32_t triangle;
-    bool forward;  // the triangle runs low -> high along it
-  };
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<EdgeUse>> edges;
-  for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
-    for (std::size_t i = 0; i < 3; ++i) {
-      const std::uint32_t a = triangles_[t].v[i], b = triangles_[t].v[(i + 1) % 3];
-      edges[{std::min(a, b), std::max(a, b)}].push_back({t, a < b});
-    }
-  }
+  // Edges, their triangles and the connected surfaces (triangle i of the topology is
+  // triangles_[i]).
+  const scene::MeshTopology topo = scene::build_topology(raw, std::move(weld), kept);
   const auto where = [&](std::uint32_t v) {
     const glm::dvec3 p = vertices_m_[v] + centre_m_;
     char buf[96];
     std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g) m", p.x, p.y, p.z);
     return std::string(buf);
   };
+  for (const scene::MeshEdge& e : topo.edges) {
+    if (e.non_manifold())
+      throw std::invalid_argument("MoM: the edge from " + where(e.v0) + " to " + where(e.v1) +
+                                  " is shared by " + std::to_string(e.count) +
+                                  " triangles; RWG functions need at most two (no junctions)");
+  }
+  info_.boundary_edges = topo.boundary_edges;
   // Orient every connected surface consistently (breadth first across shared edges), then
   // closed ones outward (positive signed volume).
-  std::vector<std::vector<std::pair<std::uint32_t, const std::vector<EdgeUse>*>>> nbrs(
-      triangles_.size());
-  for (const auto& [key, uses] : edges) {
-    if (uses.size() > 2)
-      throw std::invalid_argument("MoM: the edge from " + where(key.first) + " to " +
-                                  where(key.second) + " is shared by " +
-                                  std::to_string(uses.size()) +
-                                  " triangles; RWG functions need at most two (no junctions)");
-    if (uses.size() == 2) {
-      nbrs[uses[0].triangle].push_back({uses[1].triangle, &uses});
-      nbrs[uses[1].triangle].push_back({uses[0].triangle, &uses});
-    } else {
-      ++info_.boundary_edges;
-    }
-  }
-  std::vector<std::int32_t> component(triangles_.size(), -1);
-  std::vector<std::uint8_t> flip(triangles_.size(), 0);
-  std::vector<std::uint8_t> comp_closed;
-  for (std::uint32_t seed = 0; seed < triangles_.size(); ++seed) {
-    if (component[seed] >= 0)
-      continue;
-    const auto id = static_cast<std::int32_t>(comp_closed.size());
-    comp_closed.push_back(1);
-    std::vector<std::uint32_t> queue{seed};
-    component[seed] = id;
-    for (std::size_t qi = 0; qi < queue.size(); ++qi) {
-      const std::uint32_t t = queue[qi];
-      for (const auto& [u, uses] : nbrs[t]) {
-        const EdgeUse& mine = (*uses)[0].triangle == t ? (*uses)[0] : (*uses)[1];
-        const EdgeUse& theirs = (*uses)[0].triangle == t ? (*uses)[1] : (*uses)[0];
-        // Consistent winding runs a shared edge in opposite directions.
-        const bool same_dir = (mine.forward != (flip[t] != 0)) == (theirs.forward);
-        const std::uint8_t want = same_dir ? 1 : 0;  // flip of u relative to none
-        if (component[u] < 0) {
-          component[u] = id;
-          flip[u] = want;
-          queue.push_back(u);
-        } else if (flip[u] != want) {
-          throw std::invalid_argument("MoM: the surface through " + where(triangles_[t].v[0]) +
-                                      " cannot be oriented (a Moebius-like strip)");
-        }
-      }
-    }
-  }
-  for (const auto& [key, uses] : edges)
-    if (uses.size() == 1)
-      comp_closed[static_cast<std::size_t>(component[uses[0].triangle])] = 0;
-  std::vector<double> volume(comp_closed.size(), 0.0);
+  const scene::Orientation orientation = scene::orient_parts(topo);
+  if (orientation.conflict != scene::kNoIndex)
+    throw std::invalid_argument("MoM: the surface through " +
+                                where(triangles_[orientation.conflict].v[0]) +
+                                " cannot be oriented (a Moebius-like strip)");
+  std::vector<double> volume(topo.parts.size(), 0.0);
   for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
-    if (flip[t])
+    if (orientation.flip[t])
       std::swap(triangles_[t].v[1], triangles_[t].v[2]);
     const auto& v = triangles_[t].v;
-    volume[static_cast<std::size_t>(component[t])] +=
+    volume[topo.triangle_part[t]] +=
         glm::dot(vertices_m_[v[0]], glm::cross(vertices_m_[v[1]], vertices_m_[v[2]])) / 6.0;
   }
-  info_.components = comp_closed.size();
-  for (std::size_t c = 0; c < comp_closed.size(); ++c) {
-    info_.closed_components += comp_closed[c];
-    if (comp_closed[c] && volume[c] < 0.0)
+  // Closed: no boundary edge (non-manifold ones were refused, mis-wound ones turned above).
+  const auto closed = [&](std::size_t c) { return topo.parts[c].boundary_edges == 0; };
+  info_.components = topo.parts.size();
+  for (std::size_t c = 0; c < topo.parts.size(); ++c) {
+    info_.closed_components += closed(c) ? 1u : 0u;
+    if (closed(c) && volume[c] < 0.0)
       ++info_.flipped_components;
   }
   for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
-    const auto c = static_cast<std::size_t>(component[t]);
-    if (comp_closed[c] && volume[c] < 0.0)
+    const std::size_t c = topo.triangle_part[t];
+    if (closed(c) && volume[c] < 0.0)
       std::swap(triangles_[t].v[1], triangles_[t].v[2]);
-    triangles_[t].closed = comp_closed[c] != 0;
+    triangles_[t].closed = closed(c);
   }
 
   // Geometry of every triangle.
@@ -360,19 +292,20 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
   }
   // RWG functions on interior edges (Rao, Wilton & Glisson 1982, eq. 1): f = l / (2 A+) (r - p+)
   // on T+, l / (2 A-) (p- - r) on T-; T+ is the first triangle listed with the edge.
-  for (const auto& [key, uses] : edges) {
-    const double len = glm::length(vertices_m_[key.first] - vertices_m_[key.second]);
+  for (const scene::MeshEdge& e : topo.edges) {
+    const double len = glm::length(vertices_m_[e.v0] - vertices_m_[e.v1]);
     edge_sum += len;
     ++edge_count;
     info_.max_edge_m = std::max(info_.max_edge_m, len);
-    if (uses.size() != 2)
+    if (e.count != 2)
       continue;
     const auto n = static_cast<std::int64_t>(unknowns_++);
+    const auto uses = topo.uses(e);
     for (std::size_t s = 0; s < 2; ++s) {
       Triangle& t = triangles_[uses[s].triangle];
       // The local index of the vertex opposite the edge, after any flip above.
       std::uint8_t local = 0;
-      while (t.v[local] == key.first || t.v[local] == key.second)
+      while (t.v[local] == e.v0 || t.v[local] == e.v1)
         ++local;
       t.basis[local] = n;
       t.coefficient[local] = (s == 0 ? 1.0 : -1.0) * len / (2.0 * t.area_m2);
@@ -403,9 +336,15 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
   colour_.assign(triangles_.size(), 0);
   for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
     std::uint8_t used = 0;
-    for (const auto& [u, uses] : nbrs[t])
+    for (const std::uint32_t ei : topo.triangle_edges[t]) {
+      const scene::MeshEdge& e = topo.edges[ei];
+      if (e.count != 2)
+        continue;
+      const auto uses = topo.uses(e);
+      const std::uint32_t u = uses[0].triangle == t ? uses[1].triangle : uses[0].triangle;
       if (u < t)
         used |= static_cast<std::uint8_t>(1u << colour_[u]);
+    }
     std::uint8_t c = 0;
     while (used & (1u << c))
       ++c;

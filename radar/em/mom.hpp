@@ -71,7 +71,7 @@ struct MomConfig {
 struct MomMeshInfo {
   std::size_t triangles = 0;
   std::size_t degenerate_skipped = 0;  ///< zero-area triangles left out
-  std::size_t vertices = 0;            ///< after welding coincident ones
+  std::size_t vertices = 0;            ///< after welding (scene/mesh/topology.hpp)
   std::size_t unknowns = 0;            ///< RWG functions: interior edges
   std::size_t boundary_edges = 0;      ///< edges of open sheets (no current across them)
   std::size_t components = 0;          ///< connected surfaces

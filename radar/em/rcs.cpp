@@ -13,6 +13,7 @@
 
 #include "radar/constants.hpp"
 #include "radar/em/facet_po.hpp"
+#include "scene/mesh/topology.hpp"
 
 namespace radar_emu::radar {
 
@@ -90,7 +91,8 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
-    const std::vector<std::int8_t> closed = closed_part_winding(mesh.positions_m, mesh.triangles);
+    const std::vector<std::int8_t> closed =
+        scene::closed_part_winding(scene::build_topology(mesh.positions_m, mesh.triangles));
     const std::int8_t mirrored = glm::determinant(glm::dmat3(m)) < 0.0 ? -1 : 1;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3 tri = mesh.triangles[t];
@@ -141,7 +143,10 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       outward[i] = facets_[i].outward;
       pec[i] = surfaces_[facets_[i].surface].kind == SurfaceModel::Kind::kPec ? 1 : 0;
     }
-    edges_ = find_wedge_edges(tris, outward, pec, config_.edge_min_turn_rad, census_);
+    // Edges over the facets of all objects together, in the world frame (objects that meet at
+    // coincident vertices share their edges there); closed parts above are per object.
+    edges_ = find_wedge_edges(tris, scene::build_topology(tris), outward, pec,
+                              config_.edge_min_turn_rad, census_);
     if (config_.edge_order >= 2)
       pairs_ = find_edge_pairs(edges_, tris, epsilon_m_);
     // Reflecting planes: the PEC facets grouped by plane (normal to 1e-6, offset to 100 ray
@@ -286,7 +291,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             ++n_edge;
             continue;
           }
-          // The inside of a closed part is never lit (sbr_core.hpp, closed_part_winding).
+          // The inside of a closed part is never lit (sbr_core.hpp, closed parts).
           const bool inside = f.outward != 0 && f.outward * glm::dot(f.normal, r_t) <= 0.0;
           const FacetLight l = !shadowing ? FacetLight::kLit
                                : inside

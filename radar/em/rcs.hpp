@@ -206,7 +206,7 @@ class RcsEngine {
     double area_m2;
     std::uint16_t surface;
     /// +1: `normal` points out of the closed part the facet belongs to, -1: into it, 0: open
-    /// part (sbr_core.hpp, closed_part_winding).
+    /// part (sbr_core.hpp, closed parts).
     std::int8_t outward;
   };
   const scene::Scene* scene_;

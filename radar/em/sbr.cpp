@@ -11,6 +11,7 @@
 
 #include "radar/constants.hpp"
 #include "radar/em/facet_po.hpp"
+#include "scene/mesh/topology.hpp"
 
 namespace radar_emu::radar {
 
@@ -95,12 +96,25 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     facet_first_[i + 1] =
         facet_first_[i] + (is_target_[i] ? desc.objects[i].mesh.triangles.size() : 0);
   }
+  // Each target's triangles (body frame, in double) and their one topology (scene/mesh/
+  // topology.hpp), built from the triangles as a soup: its edges then come in the order the
+  // triangles first reach their vertices. Closed parts and edges both come from it.
+  std::vector<std::vector<std::array<glm::dvec3, 3>>> target_tris(desc.objects.size());
+  std::vector<scene::MeshTopology> topology(desc.objects.size());
   facet_outward_.assign(facet_first_.back(), 0);
   for (std::size_t i = 0; i < desc.objects.size(); ++i) {
     if (!is_target_[i])
       continue;
     const scene::Mesh& mesh = desc.objects[i].mesh;
-    const std::vector<std::int8_t> closed = closed_part_winding(mesh.positions_m, mesh.triangles);
+    std::vector<std::array<glm::dvec3, 3>>& tris = target_tris[i];
+    tris.resize(mesh.triangles.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const glm::uvec3 tri = mesh.triangles[t];
+      tris[t] = {glm::dvec3(mesh.positions_m[tri.x]), glm::dvec3(mesh.positions_m[tri.y]),
+                 glm::dvec3(mesh.positions_m[tri.z])};
+    }
+    topology[i] = scene::build_topology(tris);
+    const std::vector<std::int8_t> closed = scene::closed_part_winding(topology[i]);
     std::copy(closed.begin(), closed.end(),
               facet_outward_.begin() + static_cast<std::ptrdiff_t>(facet_first_[i]));
   }
@@ -118,18 +132,16 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
         continue;
       const scene::Mesh& mesh = desc.objects[i].mesh;
       const std::size_t nt = mesh.triangles.size();
-      std::vector<std::array<glm::dvec3, 3>> tris(nt);
+      const std::vector<std::array<glm::dvec3, 3>>& tris = target_tris[i];
       std::vector<std::uint8_t> pec(nt);
       for (std::size_t t = 0; t < nt; ++t) {
-        const glm::uvec3 tri = mesh.triangles[t];
-        tris[t] = {glm::dvec3(mesh.positions_m[tri.x]), glm::dvec3(mesh.positions_m[tri.y]),
-                   glm::dvec3(mesh.positions_m[tri.z])};
         const std::uint16_t m = mesh.triangle_material[t];
         pec[t] = surfaces_.surfaces[m].specular.kind == SurfaceModel::Kind::kPec ? 1 : 0;
       }
       EdgeCensus census;
       const std::vector<WedgeEdge> found = find_wedge_edges(
-          tris, std::span<const std::int8_t>(facet_outward_).subspan(facet_first_[i], nt), pec,
+          tris, topology[i],
+          std::span<const std::int8_t>(facet_outward_).subspan(facet_first_[i], nt), pec,
           c.edge_min_turn_rad, census);
       edges_body_.insert(edges_body_.end(), found.begin(), found.end());
       edge_first_[i + 1] = edges_body_.size();
@@ -244,7 +256,7 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   const glm::dvec3 s = to_radar / range_m, d = -s;
   glm::dvec3 n = nn / twice_area;
   double cos_i = glm::dot(n, s);
-  // The inside of a closed part is never lit (sbr_core.hpp, closed_part_winding); a mirroring
+  // The inside of a closed part is never lit (sbr_core.hpp, closed parts); a mirroring
   // placement turns the winding over.
   const int outward =
       facet_outward_[facet_first_[id] + t] * (glm::determinant(glm::dmat3(xf)) < 0.0 ? -1 : 1);

@@ -261,7 +261,7 @@ class SbrTracer {
   static constexpr std::uint8_t kLightByRays = 255;  ///< near field or out of view: the rays'
   std::vector<std::size_t> facet_first_;
   /// Per facet: +1 / -1 when its wound normal points out of / into its closed part, 0: open part
-  /// (sbr_core.hpp, closed_part_winding; body frame).
+  /// (sbr_core.hpp, closed parts; body frame).
   std::vector<std::int8_t> facet_outward_;
   std::vector<std::uint8_t> facet_light_;
   std::vector<Contribution> facet_out_;

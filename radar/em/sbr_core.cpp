@@ -2,9 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
-#include <numeric>
-#include <unordered_map>
 
 #include "radar/constants.hpp"
 #include "radar/em/facet_po.hpp"
@@ -105,93 +102,6 @@ int facet_subdivisions(double longest_edge_m, double resolution_m) noexcept {
   if (!(m < kMaxFacetSubdivisions))  // also NaN
     return kMaxFacetSubdivisions;
   return std::max(1, static_cast<int>(m));
-}
-
-std::vector<std::int8_t> closed_part_winding(std::span<const glm::vec3> positions,
-                                             std::span<const glm::uvec3> triangles) {
-  const std::size_t nt = triangles.size();
-  std::vector<std::int8_t> out(nt, 0);
-  // Weld vertices by exact position (meshes often repeat a vertex per face).
-  auto key = [&](unsigned i) {
-    const glm::vec3 p = positions[i] + glm::vec3(0.0f);  // -0 -> +0: equal positions, equal keys
-    std::uint32_t b[3];
-    std::memcpy(b, &p, sizeof b);
-    return (static_cast<std::uint64_t>(b[0]) * 0x9E3779B97F4A7C15ull) ^
-           (static_cast<std::uint64_t>(b[1]) * 0xC2B2AE3D27D4EB4Full) ^
-           (static_cast<std::uint64_t>(b[2]) * 0x165667B19E3779F9ull);
-  };
-  std::unordered_multimap<std::uint64_t, std::uint32_t> by_key;
-  std::vector<std::uint32_t> weld(positions.size());
-  for (std::uint32_t i = 0; i < positions.size(); ++i) {
-    std::uint32_t id = i;
-    const auto range = by_key.equal_range(key(i));
-    for (auto it = range.first; it != range.second; ++it) {
-      if (positions[it->second] == positions[i]) {
-        id = weld[it->second];
-        break;
-      }
-    }
-    weld[i] = id;
-    if (id == i)
-      by_key.emplace(key(i), i);
-  }
-  // Parts: union-find over triangles sharing an (undirected) edge; an edge is closed when it is
-  // met exactly twice, in opposite directions.
-  std::vector<std::uint32_t> parent(nt);
-  std::iota(parent.begin(), parent.end(), 0u);
-  auto find = [&](std::uint32_t x) {
-    while (parent[x] != x)
-      x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  struct EdgeUse {
-    std::uint32_t triangle;
-    int forward = 0, backward = 0;
-  };
-  std::unordered_map<std::uint64_t, EdgeUse> edges;
-  edges.reserve(3 * nt);
-  std::vector<std::uint8_t> open(nt, 0);
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    const std::uint32_t v[3] = {weld[triangles[t].x], weld[triangles[t].y], weld[triangles[t].z]};
-    if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) {
-      open[t] = 1;
-      continue;
-    }
-    for (int e = 0; e < 3; ++e) {
-      const std::uint32_t a = v[e], b = v[(e + 1) % 3];
-      const std::uint64_t k = (static_cast<std::uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-      auto [it, fresh] = edges.try_emplace(k, EdgeUse{t});
-      (a < b ? it->second.forward : it->second.backward) += 1;
-      if (!fresh) {
-        const std::uint32_t ra = find(it->second.triangle), rb = find(t);
-        parent[ra] = rb;
-      }
-    }
-  }
-  // A part is open if any of its triangles is degenerate or any of its edges is not closed.
-  std::vector<std::uint8_t> part_open(nt, 0);
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    if (open[t])
-      part_open[find(t)] = 1;
-  }
-  for (const auto& [k, use] : edges) {
-    if (use.forward != 1 || use.backward != 1)
-      part_open[find(use.triangle)] = 1;
-  }
-  // Orientation of each closed part: the sign of its volume, sum of v0 . (v1 x v2) / 6 (the
-  // divergence theorem over the part's triangles, counter-clockwise seen from outside).
-  std::vector<double> volume(nt, 0.0);
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    const glm::dvec3 a(positions[triangles[t].x]), b(positions[triangles[t].y]),
-        c(positions[triangles[t].z]);
-    volume[find(t)] += glm::dot(a, glm::cross(b, c));
-  }
-  for (std::uint32_t t = 0; t < nt; ++t) {
-    const std::uint32_t r = find(t);
-    if (!part_open[r] && volume[r] != 0.0)
-      out[t] = volume[r] > 0.0 ? 1 : -1;
-  }
-  return out;
 }
 
 bool facet_in_far_field(double rho_m, double range_m, double k) noexcept {

@@ -199,16 +199,11 @@ inline constexpr double kFacetSampleInset = 1e-2;
                                                                   const glm::dvec3& lit_normal,
                                                                   double offset_m) noexcept;
 
-/// Closed parts of a mesh (setup; allocates). For each triangle: +1 when it belongs to a closed,
-/// consistently wound part wound outward (positive signed volume), -1 when wound inward, 0 when
-/// its part is open (a boundary edge, an edge shared by more than two triangles, inconsistent
-/// winding, a degenerate triangle) or encloses no volume. Parts are the sets of triangles joined
-/// by shared edges, vertices welded by exact position. The inside of a closed part is never lit
-/// from outside, so a facet of a closed part whose outward side faces away from the source is
-/// dark at bounce 1 without a visibility sample: the seven samples would all be blocked by the
-/// part itself; both engines take this shortcut.
-[[nodiscard]] std::vector<std::int8_t> closed_part_winding(std::span<const glm::vec3> positions,
-                                                           std::span<const glm::uvec3> triangles);
+/// Closed parts (scene::closed_part_winding over the mesh's one topology, scene/mesh/
+/// topology.hpp: +1 on a closed, consistently wound part wound outward, -1 inward, 0 open). The
+/// inside of a closed part is never lit from outside, so a facet of a closed part whose outward
+/// side faces away from the source is dark at bounce 1 without a visibility sample: the seven
+/// samples would all be blocked by the part itself; both engines take this shortcut.
 
 /// The bounce-1 lighting rule: `blocked(origin)` tells whether the path from `origin` toward the
 /// source is obstructed. All samples clear: kLit; all blocked: kDark; otherwise kPartial (stops

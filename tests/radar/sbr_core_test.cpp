@@ -27,6 +27,8 @@
 #include "radar/em/rcs.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/em/surfaces.hpp"
+#include "scene/mesh/topology.hpp"
+#include "scene/mesh_check.hpp"
 #include "scene/scene.hpp"
 #include "scene/targets.hpp"
 
@@ -333,11 +335,13 @@ TEST(SbrLoopVsRcs, VehicleMatchesTheRcsEngineInTheFarField) {
 }
 
 TEST(SbrCore, ClosedPartsAndTheirWinding) {
-  // closed_part_winding: every triangle of the box (its faces' vertices repeated per face, welded
-  // by position) is on a closed, outward-wound part; the box wound the other way is inward;
-  // sheets (plate, dihedral) and a box with one triangle missing are open.
+  // The closed parts both engines take (scene::closed_part_winding over the one topology):
+  // every triangle of the box (its faces' vertices repeated per face, welded) is on a closed,
+  // outward-wound part; the box wound the other way is inward; sheets (plate, dihedral) and a
+  // box with one triangle missing are open.
   auto winding = [](const sc::SceneDescription& d) {
-    return rd::closed_part_winding(d.objects[0].mesh.positions_m, d.objects[0].mesh.triangles);
+    return sc::closed_part_winding(
+        sc::build_topology(d.objects[0].mesh.positions_m, d.objects[0].mesh.triangles));
   };
   auto count = [](const std::vector<std::int8_t>& w, int v) {
     return static_cast<std::size_t>(std::count(w.begin(), w.end(), static_cast<std::int8_t>(v)));
@@ -365,6 +369,39 @@ TEST(SbrCore, ClosedPartsAndTheirWinding) {
             << " triangles on closed outward-wound parts\n";
   EXPECT_GT(count(wv, 1), wv.size() / 4);
   EXPECT_EQ(count(wv, -1), 0u);
+}
+
+TEST(SbrCore, ClosedPartsAgreeWithTheMeshCheckOnNearCoincidentVertices) {
+  // The generated sphere's seam (phi = 2 pi lands about 1e-17 m off phi = 0) and south pole (one
+  // point per longitude) are cracks far under float resolution. The mesh check welded them and
+  // called the sphere closed; the tracer welded exact positions only and found all 960 triangles
+  // on open parts, so the bounce-1 shortcut for closed parts never applied. One weld rule now:
+  // closed for both.
+  auto winding = [](const sc::Mesh& m) {
+    return sc::closed_part_winding(sc::build_topology(m.positions_m, m.triangles));
+  };
+  auto count = [](const std::vector<std::int8_t>& w, int v) {
+    return static_cast<std::size_t>(std::count(w.begin(), w.end(), static_cast<std::int8_t>(v)));
+  };
+  const sc::Mesh sphere =
+      sc::make_target({sc::TargetKind::kSphere, 0.1, 1.0, 1.0, 0.0}).objects[0].mesh;
+  EXPECT_TRUE(sc::check_mesh(sphere).closed());
+  const auto ws = winding(sphere);
+  EXPECT_EQ(count(ws, 1), ws.size());
+  // A box with a corner at the origin reached twice, 1e-9 m apart (3e-9 of its extent): the
+  // check called it closed, the tracer open. 1e-3 m apart: open for both.
+  for (const double gap_m : {1e-9, 1e-3}) {
+    sc::Mesh box = sc::make_target({sc::TargetKind::kBox, 0.3, 0.2, 0.1, 0.0}).objects[0].mesh;
+    const glm::vec3 corner = box.positions_m[box.triangles[0].x];
+    for (glm::vec3& p : box.positions_m)
+      p -= corner;  // exact: each coordinate is corner's or its opposite's
+    box.positions_m.push_back(glm::vec3(static_cast<float>(gap_m), 0.0f, 0.0f));
+    box.triangles[0].x = static_cast<unsigned>(box.positions_m.size() - 1);
+    const bool welded = gap_m < 1e-6;
+    EXPECT_EQ(sc::check_mesh(box).closed(), welded) << gap_m;
+    const auto wb = winding(box);
+    EXPECT_EQ(count(wb, welded ? 1 : 0), wb.size()) << gap_m;
+  }
 }
 
 namespace {

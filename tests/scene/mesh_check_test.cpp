@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -86,6 +88,63 @@ TEST(MeshCheck, TJunctionsCloseASeamTessellatedDifferentlyOnEachSide) {
   EXPECT_TRUE(
       sc::check_mesh(sc::make_target({sc::TargetKind::kVehicle, 7, 3.5, 2.5, 0}).objects[0].mesh)
           .closed());
+}
+
+TEST(MeshCheck, WeldsByDistanceNotByGridCell) {
+  // The cube [0, 1]^3 as a soup whose corner at the origin sits at x = h, half a weld tolerance
+  // (1e-7 of the extent, scene/mesh/topology.hpp) from x = 0, one copy of it a float step
+  // (7e-15 m) nearer. The check used to round positions to cells of the tolerance, which split
+  // this pair across a cell boundary: 4 boundary edges reported on a closed box. The one weld
+  // rule is a distance and welds it.
+  const double tolerance = 1e-7 * std::sqrt(3.0);
+  // h: the least float at or above half the tolerance; h_minus the float below it.
+  float h = static_cast<float>(0.5 * tolerance);
+  while (static_cast<double>(h) < 0.5 * tolerance)
+    h = std::nextafter(h, 1.0f);
+  while (static_cast<double>(std::nextafter(h, 0.0f)) >= 0.5 * tolerance)
+    h = std::nextafter(h, 0.0f);
+  const float h_minus = std::nextafter(h, 0.0f);
+  ASSERT_LT(static_cast<double>(h - h_minus), 1e-12);
+  const std::array<glm::vec3, 8> corner{
+      {{h, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}, {0, 0, 1}, {1, 0, 1}, {0, 1, 1}, {1, 1, 1}}};
+  const std::array<std::array<unsigned, 4>, 6> faces{
+      {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}};
+  sc::Mesh m;
+  bool moved = false;
+  for (const auto& f : faces) {
+    for (const std::array<unsigned, 3> tri :
+         {std::array<unsigned, 3>{f[0], f[1], f[2]}, std::array<unsigned, 3>{f[0], f[2], f[3]}}) {
+      const auto base = static_cast<unsigned>(m.positions_m.size());
+      for (unsigned c : tri) {
+        glm::vec3 p = corner[c];
+        if (c == 0 && !moved) {
+          p.x = h_minus;
+          moved = true;
+        }
+        m.positions_m.push_back(p);
+      }
+      m.triangles.push_back({base, base + 1, base + 2});
+      m.triangle_material.push_back(0);
+    }
+  }
+  const sc::MeshCheck c = sc::check_mesh(m);
+  EXPECT_EQ(c.boundary_edges, 0u);
+  EXPECT_TRUE(c.closed());
+}
+
+TEST(MeshCheck, InconsistentWindingIsNotClosedAsForTheTracer) {
+  // A box with one triangle wound the wrong way: every edge has two triangles, but three of them
+  // run it the same way. The tracer's closed parts (sbr_core.hpp) take such a part as open; the
+  // check used to call it closed. Now it counts and reports the edges.
+  sc::Mesh box = sc::make_target({sc::TargetKind::kBox, 1, 2, 3, 0}).objects[0].mesh;
+  std::swap(box.triangles[3].y, box.triangles[3].z);
+  const sc::MeshCheck c = sc::check_mesh(box);
+  EXPECT_EQ(c.boundary_edges, 0u);
+  EXPECT_EQ(c.inconsistent_edges, 3u);
+  EXPECT_FALSE(c.closed());
+  const std::vector<std::string> w = sc::clean_loaded_mesh(box, "box.obj");
+  EXPECT_TRUE(any_contains(w, "box.obj: 3 edges between triangles wound inconsistently"))
+      << (w.empty() ? "" : w[0]);
 }
 
 TEST(MeshCheck, ObjDegenerateTriangleIsReportedWithFileTriangleAndLineThenDropped) {
