@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace re = radar_emu::emulator;
+namespace plot = radar_emu::plot;
 
 namespace {
 
@@ -30,8 +30,8 @@ void expect_values(const std::vector<double>& got, const std::vector<double>& wa
     EXPECT_NEAR(got[i], want[i], 1e-9 * std::max(1.0, std::abs(want[i]))) << "tick " << i;
 }
 
-re::LineChart two_series_chart() {
-  re::LineChart c;
+plot::LineChart two_series_chart() {
+  plot::LineChart c;
   c.title = "two series";
   c.x_label = "frequency [GHz]";
   c.y_label = "RCS [dBsm]";
@@ -43,27 +43,27 @@ re::LineChart two_series_chart() {
 
 TEST(Charts, LinearTicksAreOneTwoFiveSteps) {
   // 0..10 in about 6 intervals: step 2 (10 / 6 = 1.67 -> the next of 1, 2, 5 is 2).
-  expect_values(re::nice_ticks(0.0, 10.0), {0, 2, 4, 6, 8, 10});
+  expect_values(plot::nice_ticks(0.0, 10.0), {0, 2, 4, 6, 8, 10});
   // -43..3: raw step 7.7 -> 10; ticks at multiples of 10 inside.
-  expect_values(re::nice_ticks(-43.0, 3.0), {-40, -30, -20, -10, 0});
+  expect_values(plot::nice_ticks(-43.0, 3.0), {-40, -30, -20, -10, 0});
   // 0.013..0.047: raw 0.0057 -> 0.01.
-  expect_values(re::nice_ticks(0.013, 0.047), {0.02, 0.03, 0.04});
-  const re::AxisTicks t = re::axis_ticks(-1.0, 1.0, false);
+  expect_values(plot::nice_ticks(0.013, 0.047), {0.02, 0.03, 0.04});
+  const plot::AxisTicks t = plot::axis_ticks(-1.0, 1.0, false);
   expect_values(t.major, {-1.0, -0.5, 0.0, 0.5, 1.0});  // raw 2/6 = 0.33 -> step 0.5
 }
 
 TEST(Charts, LinearTickLabelsHaveTheStepsPrecision) {
-  const re::AxisTicks t = re::axis_ticks(0.0, 0.5, false, 5);  // step 0.1
+  const plot::AxisTicks t = plot::axis_ticks(0.0, 0.5, false, 5);  // step 0.1
   ASSERT_EQ(t.labels.size(), 6u);
   EXPECT_EQ(t.labels[0], "0");
   EXPECT_EQ(t.labels[1], "0.1");
   EXPECT_EQ(t.labels[5], "0.5");
-  const re::AxisTicks z = re::axis_ticks(-3.0, 3.0, false);  // no "-0" at zero
+  const plot::AxisTicks z = plot::axis_ticks(-3.0, 3.0, false);  // no "-0" at zero
   EXPECT_NE(std::find(z.labels.begin(), z.labels.end(), "0"), z.labels.end());
 }
 
 TEST(Charts, LogAxisHasDecadesAndMinorTicks) {
-  const re::AxisTicks t = re::axis_ticks(1e-3, 1e2, true);
+  const plot::AxisTicks t = plot::axis_ticks(1e-3, 1e2, true);
   expect_values(t.major, {1e-3, 1e-2, 1e-1, 1, 10, 100});
   EXPECT_EQ(t.labels, (std::vector<std::string>{"0.001", "0.01", "0.1", "1", "10", "100"}));
   // 2..9 in each of the five decades.
@@ -71,21 +71,21 @@ TEST(Charts, LogAxisHasDecadesAndMinorTicks) {
   EXPECT_NEAR(t.minor.front(), 2e-3, 1e-15);
   EXPECT_NEAR(t.minor.back(), 90.0, 1e-9);
   // Far from 1: labelled 10^k.
-  const re::AxisTicks far = re::axis_ticks(1e-9, 1e-3, true);
+  const plot::AxisTicks far = plot::axis_ticks(1e-9, 1e-3, true);
   EXPECT_EQ(far.labels.front(), "10^-9");
   EXPECT_EQ(far.labels.back(), "10^-3");
   EXPECT_EQ(far.major.size(), 7u);
   // Fewer than three decade ticks: 2 and 5 labelled as well, the rest minor.
-  const re::AxisTicks few = re::axis_ticks(1.0, 50.0, true);
+  const plot::AxisTicks few = plot::axis_ticks(1.0, 50.0, true);
   expect_values(few.major, {1, 2, 5, 10, 20, 50});
   expect_values(few.minor, {3, 4, 6, 7, 8, 9, 30, 40});
 }
 
 TEST(Charts, LegendIsOutsideTheData) {
-  re::LineChart c = two_series_chart();
-  const re::ChartLayout L = re::line_chart_layout(c);
+  plot::LineChart c = two_series_chart();
+  const plot::ChartLayout L = plot::line_chart_layout(c);
   ASSERT_EQ(L.legend.size(), 2u);
-  for (const re::PixelRect& r : L.legend) {
+  for (const plot::PixelRect& r : L.legend) {
     EXPECT_FALSE(r.overlaps(L.plot)) << "legend box at " << r.x0 << "," << r.y0;
     EXPECT_GE(r.x0, 0);
     EXPECT_LT(r.x1, L.width);
@@ -97,9 +97,9 @@ TEST(Charts, LegendIsOutsideTheData) {
                         {0, 1},
                         {double(k), double(k + 1)}});
   c.height = 900;
-  const re::ChartLayout B = re::line_chart_layout(c);
+  const plot::ChartLayout B = plot::line_chart_layout(c);
   ASSERT_EQ(B.legend.size(), 14u);
-  for (const re::PixelRect& r : B.legend) {
+  for (const plot::PixelRect& r : B.legend) {
     EXPECT_FALSE(r.overlaps(B.plot));
     EXPECT_GT(r.y0, B.plot.y1);
     EXPECT_LT(r.x1, B.width);
@@ -112,34 +112,34 @@ TEST(Charts, LegendIsOutsideTheData) {
 }
 
 TEST(Charts, LongTitleIsWrappedNotClipped) {
-  re::LineChart c = two_series_chart();
+  plot::LineChart c = two_series_chart();
   std::string title;
   for (int i = 0; title.size() < 230; ++i)
     title += "word" + std::to_string(i) + " ";
   title.pop_back();
   c.title = title;
-  const re::ChartLayout L = re::line_chart_layout(c);
+  const plot::ChartLayout L = plot::line_chart_layout(c);
   ASSERT_GE(L.title.size(), 2u);
   std::string joined;
-  for (const re::TextLine& t : L.title) {
+  for (const plot::TextLine& t : L.title) {
     EXPECT_GE(t.x, 0);
-    EXPECT_LE(t.x + re::Canvas::text_width(t.text, t.scale), L.width) << t.text;
-    EXPECT_LT(t.y + re::Canvas::text_height(t.scale), L.plot.y0) << "title over the plot";
+    EXPECT_LE(t.x + plot::Canvas::text_width(t.text, t.scale), L.width) << t.text;
+    EXPECT_LT(t.y + plot::Canvas::text_height(t.scale), L.plot.y0) << "title over the plot";
     joined += (joined.empty() ? "" : " ") + t.text;
   }
   EXPECT_EQ(joined, title);  // every character drawn
   // One unbroken word wider than the picture is cut, not lost.
-  const std::vector<std::string> cut = re::wrap_text(std::string(300, 'x'), 400, 2);
+  const std::vector<std::string> cut = plot::wrap_text(std::string(300, 'x'), 400, 2);
   std::size_t n = 0;
   for (const auto& s : cut) {
-    EXPECT_LE(re::Canvas::text_width(s, 2), 400);
+    EXPECT_LE(plot::Canvas::text_width(s, 2), 400);
     n += s.size();
   }
   EXPECT_EQ(n, 300u);
 }
 
 TEST(Charts, ImageInMetresHasEqualScales) {
-  re::Heatmap m;
+  plot::Heatmap m;
   m.title = "ISAR";
   m.x_label = "range [m]";
   m.y_label = "cross-range [m]";
@@ -150,7 +150,7 @@ TEST(Charts, ImageInMetresHasEqualScales) {
   for (int j = 0; j < 50; ++j)
     m.y.push_back(-2.5 + 0.1 * (j + 0.5));
   m.values.assign(m.x.size() * m.y.size(), 0.0);
-  const re::HeatmapLayout L = re::heatmap_layout(m);
+  const plot::HeatmapLayout L = plot::heatmap_layout(m);
   EXPECT_TRUE(L.equal_aspect);
   EXPECT_NEAR(L.x1 - L.x0, 10.0, 1e-9);
   EXPECT_NEAR(L.y1 - L.y0, 5.0, 1e-9);
@@ -161,13 +161,13 @@ TEST(Charts, ImageInMetresHasEqualScales) {
   EXPECT_FALSE(L.colour_bar.overlaps(L.image));
   // Different units: the image fills the space.
   m.y_label = "Doppler [Hz]";
-  const re::HeatmapLayout F = re::heatmap_layout(m);
+  const plot::HeatmapLayout F = plot::heatmap_layout(m);
   EXPECT_FALSE(F.equal_aspect);
   EXPECT_GT(F.image.height(), L.image.height());
 }
 
 TEST(Charts, PixelColoursReadBackThroughTheColourBar) {
-  re::Heatmap m;
+  plot::Heatmap m;
   m.title = "ramp";
   m.x_label = "x [m]";
   m.y_label = "y [s]";
@@ -187,11 +187,11 @@ TEST(Charts, PixelColoursReadBackThroughTheColourBar) {
   }
   const std::filesystem::path png =
       std::filesystem::temp_directory_path() / "radar_emu_charts_test_ramp.png";
-  re::write_heatmap_png(m, png);
+  plot::write_heatmap_png(m, png);
   int w = 0, h = 0, ch = 0;
   unsigned char* px = stbi_load(png.c_str(), &w, &h, &ch, 3);
   ASSERT_NE(px, nullptr);
-  const re::HeatmapLayout L = re::heatmap_layout(m);
+  const plot::HeatmapLayout L = plot::heatmap_layout(m);
   ASSERT_EQ(w, L.width);
   ASSERT_EQ(h, L.height);
   auto at = [&](int x, int y) {
@@ -228,15 +228,15 @@ TEST(Charts, PixelColoursReadBackThroughTheColourBar) {
 TEST(Charts, LineIsDrawnWhereTheAxesSay) {
   // y from 0 to 4 fills the plot's height: a horizontal line at y = 2 is drawn half-way down,
   // in the first series' colour.
-  re::LineChart c;
+  plot::LineChart c;
   c.x_label = "x [m]";
   c.y_label = "y [m]";
   c.y_min = 0.0;
   c.y_max = 4.0;
   c.series = {{"", {0.0, 3.0}, {2.0, 2.0}}};
-  const re::ChartLayout L = re::line_chart_layout(c);
+  const plot::ChartLayout L = plot::line_chart_layout(c);
   EXPECT_TRUE(L.legend.empty());
-  const re::Canvas canvas = re::render_line_chart(c);
+  const plot::Canvas canvas = plot::render_line_chart(c);
   const int row = static_cast<int>(std::lround(L.fy(2.0)));
   EXPECT_NEAR(row, 0.5 * (L.plot.y0 + L.plot.y1), 1.0);
   expect_values(L.y_ticks.major, {0, 1, 2, 3, 4});
@@ -249,34 +249,34 @@ TEST(Charts, LineIsDrawnWhereTheAxesSay) {
 }
 
 TEST(Charts, BadInputIsAClearError) {
-  re::LineChart c;
+  plot::LineChart c;
   c.series = {{"neg", {1, 2}, {-1, -2}}};
   c.log_y = true;
-  EXPECT_THROW((void)re::render_line_chart(c), std::invalid_argument);
-  re::Heatmap m;
+  EXPECT_THROW((void)plot::render_line_chart(c), std::invalid_argument);
+  plot::Heatmap m;
   m.x = {0, 1};
   m.y = {0};
   m.values = {1, 2};
   m.value_range = 0.0;
-  EXPECT_THROW((void)re::render_heatmap(m), std::invalid_argument);
+  EXPECT_THROW((void)plot::render_heatmap(m), std::invalid_argument);
   m.value_range = 10.0;
   m.x = {1, 0};
-  EXPECT_THROW((void)re::render_heatmap(m), std::invalid_argument);
+  EXPECT_THROW((void)plot::render_heatmap(m), std::invalid_argument);
 }
 
 TEST(Charts, PictureCellsKeepTheirColoursAndHaveNoColourBar) {
   // A 2 x 2 picture (rows ascending in y): each quarter of the image shows its RGB triplet.
-  re::Heatmap m;
+  plot::Heatmap m;
   m.x_label = "azimuth [deg]";
   m.y_label = "elevation [deg]";
   m.x = {0.0, 1.0};
   m.y = {0.0, 1.0};
   m.rgb = {255, 0, 0, 0, 255, 0, 0, 0, 255, 250, 250, 10};
-  const re::HeatmapLayout L = re::heatmap_layout(m);
+  const plot::HeatmapLayout L = plot::heatmap_layout(m);
   EXPECT_EQ(L.colour_bar.width(), 0);
   EXPECT_TRUE(L.equal_aspect);
   EXPECT_NEAR(L.image.width(), L.image.height(), 1.0);
-  const re::Canvas c = re::render_heatmap(m);
+  const plot::Canvas c = plot::render_heatmap(m);
   for (std::size_t j = 0; j < 2; ++j) {
     for (std::size_t i = 0; i < 2; ++i) {
       const std::uint8_t* p = c.data() + pixel_index(L.px(m.x[i]), L.py(m.y[j]), c.width());
@@ -287,5 +287,5 @@ TEST(Charts, PictureCellsKeepTheirColoursAndHaveNoColourBar) {
     }
   }
   m.rgb.pop_back();
-  EXPECT_THROW((void)re::render_heatmap(m), std::invalid_argument);
+  EXPECT_THROW((void)plot::render_heatmap(m), std::invalid_argument);
 }
