@@ -16,6 +16,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "io/modbus.hpp"
 #include "io/modbus_map.hpp"
 #include "loop/bus_backends.hpp"
@@ -45,7 +46,6 @@ namespace radar_emu::loop {
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr std::uint8_t kFaultyNodeId = 99;
 // Spans a frame puts on the --trace-events timeline: input, scene_update, trace, sensor, output,
 // frame.
@@ -120,15 +120,15 @@ sim_bus::Trajectory ownship_trajectory(const Scenario& s, const scene::wgs84::En
 io::icd::Detection to_icd(const radar::Detection& d) noexcept {
   io::icd::Detection o;
   o.range_m = d.range_m;
-  o.azimuth_deg = d.azimuth_rad * kDegPerRad;
-  o.elevation_deg = d.elevation_rad * kDegPerRad;
+  o.azimuth_deg = common::degrees(d.azimuth_rad);
+  o.elevation_deg = common::degrees(d.elevation_rad);
   o.radial_velocity_mps = d.radial_velocity_mps;
   o.snr_db = 10.0 * std::log10(d.snr);
   o.rcs_dbsm = 10.0 * std::log10(d.rcs_m2);
   // Carried by the CAN FD lists only (docs/icd/detections.md).
   o.range_std_m = d.range_std_m;
-  o.azimuth_std_deg = d.azimuth_std_rad * kDegPerRad;
-  o.elevation_std_deg = d.elevation_std_rad * kDegPerRad;
+  o.azimuth_std_deg = common::degrees(d.azimuth_std_rad);
+  o.elevation_std_deg = common::degrees(d.elevation_std_rad);
   o.radial_velocity_std_mps = d.velocity_std_mps;
   o.range_ambiguous = d.range_ambiguous;
   o.velocity_ambiguous = d.velocity_ambiguous;
@@ -1240,8 +1240,8 @@ void ClosedLoop::write_outputs(const RunResult& r) {
       {"velocity_bin_mps", m.sensor.doppler_cell_mps()},
       {"unambiguous_velocity_mps", m.sensor.unambiguous_velocity_mps()},
       {"beams", m.sensor.antenna().beams()},
-      {"sum_beamwidth_az_deg", m.sensor.antenna().sum_beamwidth_az_rad() * kDegPerRad},
-      {"sum_beamwidth_el_deg", m.sensor.antenna().sum_beamwidth_el_rad() * kDegPerRad},
+      {"sum_beamwidth_az_deg", common::degrees(m.sensor.antenna().sum_beamwidth_az_rad())},
+      {"sum_beamwidth_el_deg", common::degrees(m.sensor.antenna().sum_beamwidth_el_rad())},
       {"antenna_gain_db", 10.0 * std::log10(s.sensor.antenna.peak_gain)},
       {"processing_gain_db", 10.0 * std::log10(m.sensor.processor().processing_gain())},
       {"cfar", s.sensor.cfar.kind == radar::CfarKind::kCellAveraging ? "ca" : "os"},

@@ -7,11 +7,11 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
-#include <numbers>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "radar/materials.hpp"
 #include "scene/targets.hpp"
 #include "scene/trajectory.hpp"
@@ -20,7 +20,6 @@ namespace radar_emu::loop {
 
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 double from_db(double db) {
   return std::pow(10.0, db / 10.0);
 }
@@ -284,12 +283,12 @@ class TableReader {
   }
 
   void degrees(std::string_view key, double& out_rad, double lo_deg, double hi_deg) const {
-    double deg = out_rad / kRadPerDeg;
+    double deg = out_rad / common::kRadPerDeg;
     const toml::node* n = node(key);
     if (n == nullptr)
       return;
     number(key, deg, lo_deg, hi_deg);
-    out_rad = deg * kRadPerDeg;
+    out_rad = common::radians(deg);
   }
 
   void decibels(std::string_view key, double& out_linear, double lo_db, double hi_db) const {
@@ -681,8 +680,8 @@ scene::TargetPlacement parse_target(const TargetReader& r, const toml::table& ta
     if (has_course && !(t.speed_mps > 0.0))
       r.fail("course_deg needs speed_mps > 0 (a fixed target has a heading_deg only)");
     // A moving target faces its velocity unless both angles are given.
-    t.heading_rad = (has_heading ? heading_deg : course_deg) * kRadPerDeg;
-    t.course_rad = (has_course ? course_deg : heading_deg) * kRadPerDeg;
+    t.heading_rad = common::radians(has_heading ? heading_deg : course_deg);
+    t.course_rad = common::radians(has_course ? course_deg : heading_deg);
   }
   return t;
 }
@@ -1062,7 +1061,7 @@ void read_pattern_csv(const std::filesystem::path& path, const std::string& orig
       throw std::runtime_error(path.string() + ":" + std::to_string(line_no) +
                                ": expected 'angle_deg,gain_db'");
     }
-    cut.table_angle_rad.push_back(angle * kRadPerDeg);
+    cut.table_angle_rad.push_back(common::radians(angle));
     cut.table_gain_db.push_back(gain);
   }
 }

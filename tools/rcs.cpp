@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "config/cli_args.hpp"
 #include "plot/charts.hpp"
 #include "radar/constants.hpp"
@@ -38,8 +39,6 @@ using plot::write_line_chart_png;
 using config::parse_sweep;
 
 namespace {
-
-constexpr double kDegToRad = radar::kPi / 180.0;
 
 std::filesystem::path sibling(const std::string& path, const std::string& suffix) {
   std::filesystem::path p(path);
@@ -185,7 +184,7 @@ void print_target(const LoadedTarget& t, const radar::RcsEngine& e, bool quiet) 
       "deg; %llu smoother edges left to PO, %llu not modelled: concave, non-PEC, shared by > 2 "
       "facets or inconsistently wound)\n",
       e.edges().size(), static_cast<unsigned long long>(c.half_planes),
-      static_cast<unsigned long long>(c.wedges), e.config().edge_min_turn_rad / kDegToRad,
+      static_cast<unsigned long long>(c.wedges), e.config().edge_min_turn_rad / common::kRadPerDeg,
       static_cast<unsigned long long>(c.smooth), static_cast<unsigned long long>(c.unsupported));
   if (e.config().edge_order >= 2)
     std::printf(
@@ -342,10 +341,10 @@ double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, 
   std::vector<radar::Direction> tx(nt * np), rx(nt * np);
   for (std::size_t it = 0; it < nt; ++it) {
     for (std::size_t ip = 0; ip < np; ++ip) {
-      tx[it * np + ip] = {o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
-      rx[it * np + ip] =
-          bistatic ? radar::Direction{bistatic->first * kDegToRad, bistatic->second * kDegToRad}
-                   : tx[it * np + ip];
+      tx[it * np + ip] = {common::radians(o.theta_deg[it]), common::radians(o.phi_deg[ip])};
+      rx[it * np + ip] = bistatic ? radar::Direction{common::radians(bistatic->first),
+                                                     common::radians(bistatic->second)}
+                                  : tx[it * np + ip];
     }
   }
   std::vector<radar::ScatteringMatrix> one(nt * np);
@@ -541,7 +540,7 @@ radar::RcsConfig rcs_config(int bounces, double rays_per_wavelength, bool edges,
   c.max_bounces = bounces;
   c.rays_per_wavelength = rays_per_wavelength;
   c.edges = edges;
-  c.edge_min_turn_rad = edge_turn_deg * kDegToRad;
+  c.edge_min_turn_rad = common::radians(edge_turn_deg);
   return c;
 }
 
@@ -560,10 +559,11 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
   radar::RcsStats mine_total;
   for (std::size_t d = mine.begin; d < mine.end; ++d) {
     const std::size_t it = d / np, ip = d % np;
-    const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
-    const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
-                                                                bistatic_deg->second * kDegToRad}
-                                             : tx;
+    const radar::Direction tx{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
+    const radar::Direction rx = bistatic_deg
+                                    ? radar::Direction{common::radians(bistatic_deg->first),
+                                                       common::radians(bistatic_deg->second)}
+                                    : tx;
     radar::RcsStats one;
     engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
     per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
@@ -591,7 +591,7 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
   radar::RcsStats mine_total;
   for (std::size_t a = mine.begin; a < mine.end; ++a) {
     const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
-    const radar::Direction dir{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
+    const radar::Direction dir{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
     const std::uint64_t before = mine_total.edges_used;
     engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), mine_total);
     edges_used[a] = mine_total.edges_used - before;
@@ -870,7 +870,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
     const std::size_t n_swept = sweep_theta ? nt : np, n_fixed = sweep_theta ? np : nt;
     std::vector<double> angles(n_swept), sigma(n_swept);
     for (std::size_t i = 0; i < n_swept; ++i)
-      angles[i] = (sweep_theta ? o.theta_deg[i] : o.phi_deg[i]) * kDegToRad;
+      angles[i] = common::radians(sweep_theta ? o.theta_deg[i] : o.phi_deg[i]);
     for (std::size_t j = 0; j < n_fixed; ++j) {
       for (std::size_t k = 0; k < nf; ++k) {
         std::vector<std::vector<radar::FluctuationStats>> per_pol;
@@ -880,7 +880,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
             sigma[i] = std::norm(component(s[(it * np + ip) * nf + k], p));
           }
           per_pol.push_back(
-              radar::sliding_window_stats(angles, sigma, 0.5 * o.window_deg * kDegToRad));
+              radar::sliding_window_stats(angles, sigma, common::radians(0.5 * o.window_deg)));
         }
         for (std::size_t i = 0; i < n_swept; ++i) {
           const std::size_t it = sweep_theta ? i : j, ip = sweep_theta ? j : i;
@@ -983,7 +983,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
   if (na > 1) {
     const double a0 = nt > 1 ? o.theta_deg.front() : o.phi_deg.front();
     const double a1 = nt > 1 ? o.theta_deg.back() : o.phi_deg.back();
-    const double step_rad = std::abs(a1 - a0) / static_cast<double>(na - 1) * kDegToRad;
+    const double step_rad = common::radians(std::abs(a1 - a0) / static_cast<double>(na - 1));
     const double f_c = 0.5 * (o.freqs_hz.front() + o.freqs_hz.back());
     const double cross_window_m = radar::kSpeedOfLight_mps / f_c / (2.0 * step_rad);
     if (cross_window_m < extent_m) {
@@ -1049,7 +1049,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
   if (na > 1) {
     std::vector<double> angles(na);
     for (std::size_t a = 0; a < na; ++a)
-      angles[a] = (nt > 1 ? o.theta_deg[a] : o.phi_deg[a]) * kDegToRad;
+      angles[a] = common::radians(nt > 1 ? o.theta_deg[a] : o.phi_deg[a]);
     double step = (angles.back() - angles.front()) / static_cast<double>(na - 1);
     std::vector<std::complex<double>> ordered = samples;
     if (step < 0.0) {  // descending sweep: image it in ascending angle

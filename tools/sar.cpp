@@ -27,6 +27,7 @@
 #include <ogr_srs_api.h>
 #endif
 
+#include "common/units.hpp"
 #include "plot/canvas.hpp"
 #include "plot/charts.hpp"
 #include "radar/clutter/speckle.hpp"
@@ -55,7 +56,6 @@ namespace sc = radar_emu::scene;
 namespace cl = radar_emu::radar::clutter;
 using Clock = std::chrono::steady_clock;
 
-constexpr double kDeg = rd::kPi / 180.0;
 constexpr double kC = rd::kSpeedOfLight_mps;
 
 double seconds_since(Clock::time_point t0) {
@@ -205,9 +205,9 @@ SarCase case_from_table(const toml::table& root, const std::string& path) {
   const Reader plat(root, "platform", path, {"altitude_m", "speed_mps", "heading_deg", "look"});
   plat.number("altitude_m", c.altitude_m, 10.0, 20000.0);
   plat.number("speed_mps", c.speed_mps, 0.1, 2000.0);
-  double heading_deg = c.heading_rad / kDeg;
+  double heading_deg = c.heading_rad / common::kRadPerDeg;
   plat.number("heading_deg", heading_deg, -360.0, 360.0);
-  c.heading_rad = heading_deg * kDeg;
+  c.heading_rad = common::radians(heading_deg);
   std::string look = "right";
   plat.string("look", look);
   if (look != "right" && look != "left")
@@ -220,17 +220,17 @@ SarCase case_from_table(const toml::table& root, const std::string& path) {
   ant.number("incidence_deg", inc, 5.0, 85.0);
   ant.number("azimuth_beamwidth_deg", az_bw, 1e-3, 30.0, true);
   ant.number("elevation_beamwidth_deg", el_bw, 1e-2, 60.0, true);
-  p.incidence_rad = inc * kDeg;
-  p.azimuth_beamwidth_rad = az_bw * kDeg;
-  p.elevation_beamwidth_rad = el_bw * kDeg;
+  p.incidence_rad = common::radians(inc);
+  p.azimuth_beamwidth_rad = common::radians(az_bw);
+  p.elevation_beamwidth_rad = common::radians(el_bw);
 
   const Reader proc(root, "processing", path,
                     {"gates", "synthetic_beamwidth_deg", "taper", "upsample", "image_width_m",
                      "azimuth_spacing_m", "ground_range_spacing_m"});
   proc.integer("gates", p.gates, 8, 65536);
-  double syn = c.synthetic_beamwidth_rad / kDeg;
+  double syn = c.synthetic_beamwidth_rad / common::kRadPerDeg;
   proc.number("synthetic_beamwidth_deg", syn, 1e-5, 5.0, true);
-  c.synthetic_beamwidth_rad = syn * kDeg;
+  c.synthetic_beamwidth_rad = common::radians(syn);
   std::string taper = "none";
   proc.string("taper", taper);
   if (taper == "hamming")
@@ -290,7 +290,7 @@ SarCase case_from_table(const toml::table& root, const std::string& path) {
         t.vec3("velocity_mps", tc.velocity_mps, 1000.0);
         double hd = 0.0;
         t.number("heading_deg", hd, -360.0, 360.0);
-        tc.heading_rad = hd * kDeg;
+        tc.heading_rad = common::radians(hd);
         c.targets.push_back(tc);
       }
     }
@@ -304,7 +304,7 @@ SarCase case_from_table(const toml::table& root, const std::string& path) {
   if (c.theta_rad > p.azimuth_beamwidth_rad)
     throw std::invalid_argument(
         path + ": [processing] synthetic_beamwidth_deg: the processed aperture (" +
-        std::to_string(c.theta_rad / kDeg) +
+        std::to_string(c.theta_rad / common::kRadPerDeg) +
         " deg) is wider than the antenna's azimuth beamwidth; widen the beam or the synthetic "
         "beamwidth");
   const double gate = kC / (2.0 * p.sample_rate_hz);
@@ -387,8 +387,8 @@ glm::dvec3 broadside_platform(const rd::SarParams& p, const glm::dvec3& x) {
 
 sc::SceneDescription build_scene(const SarCase& c, double half_extent_m) {
   sc::SceneDescription d;
-  d.anchor.latitude_rad = c.latitude_deg * kDeg;
-  d.anchor.longitude_rad = c.longitude_deg * kDeg;
+  d.anchor.latitude_rad = common::radians(c.latitude_deg);
+  d.anchor.longitude_rad = common::radians(c.longitude_deg);
   d.materials.push_back({"metal", {0.8f, 0.8f, 0.8f}});
   if (c.ground_material != "none") {
     d.materials.push_back({c.ground_material, {0.3f, 0.5f, 0.2f}});
@@ -884,7 +884,7 @@ int run_sar_tool(const SarToolOptions& o) {
 #endif
   std::ostringstream title;
   title << "radar-emu sar: " << p.carrier_hz / 1e9 << " GHz, B " << p.bandwidth_hz / 1e6
-        << " MHz, incidence " << p.incidence_rad / kDeg << " deg, " << c.pol_name;
+        << " MHz, incidence " << p.incidence_rad / common::kRadPerDeg << " deg, " << c.pol_name;
   write_png(img, title.str(), (dir / "image.png").string());
 
   // The impulse response of the first analysed trihedral: range and azimuth cuts, dB.
@@ -937,21 +937,21 @@ int run_sar_tool(const SarToolOptions& o) {
   j["platform"] = {
       {"altitude_m", c.altitude_m},
       {"speed_mps", c.speed_mps},
-      {"heading_deg", c.heading_rad / kDeg},
+      {"heading_deg", c.heading_rad / common::kRadPerDeg},
       {"look", p.look_right ? "right" : "left"},
       {"start_position_m", {p.start_position_m.x, p.start_position_m.y, p.start_position_m.z}},
       {"track_length_m", track_len},
       {"pulses", p.pulses}};
-  j["antenna"] = {{"incidence_deg", p.incidence_rad / kDeg},
-                  {"azimuth_beamwidth_deg", p.azimuth_beamwidth_rad / kDeg},
-                  {"elevation_beamwidth_deg", p.elevation_beamwidth_rad / kDeg}};
+  j["antenna"] = {{"incidence_deg", p.incidence_rad / common::kRadPerDeg},
+                  {"azimuth_beamwidth_deg", p.azimuth_beamwidth_rad / common::kRadPerDeg},
+                  {"elevation_beamwidth_deg", p.elevation_beamwidth_rad / common::kRadPerDeg}};
   j["processing"] = {
       {"algorithm", "time-domain backprojection"},
       {"gates", p.gates},
       {"gate_m", gate},
       {"near_range_m", p.near_range_m},
-      {"synthetic_beamwidth_deg", c.synthetic_beamwidth_rad / kDeg},
-      {"integration_angle_deg", c.theta_rad / kDeg},
+      {"synthetic_beamwidth_deg", c.synthetic_beamwidth_rad / common::kRadPerDeg},
+      {"integration_angle_deg", c.theta_rad / common::kRadPerDeg},
       {"taper", c.taper == rd::SarTaper::kNone ? "none" : "hamming"},
       {"upsample", c.upsample},
       {"theory_range_resolution_m", rd::theory_range_resolution_m(p, c.taper)},

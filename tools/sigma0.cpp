@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "plot/charts.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "radar/constants.hpp"
@@ -131,12 +132,12 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
   };
   std::vector<Row> rows;
   const std::vector<double> scatter = bistatic ? o.theta_s_deg : std::vector<double>{0.0};
-  const double deg = radar::kPi / 180.0;
   std::uint32_t seen = 0;
   for (double t : o.theta_deg) {
     for (double ts : scatter) {
-      const cl::Geometry g = bistatic ? cl::Geometry{t * deg, ts * deg, o.phi_s_deg * deg}
-                                      : cl::Geometry::backscatter(t * deg);
+      const cl::Geometry g = bistatic ? cl::Geometry{common::radians(t), common::radians(ts),
+                                                     common::radians(o.phi_s_deg)}
+                                      : cl::Geometry::backscatter(common::radians(t));
       Row r{t, ts, cl::evaluate_sigma0(spec, model, o.freq_hz, g)};
       rows.push_back(r);
     }
