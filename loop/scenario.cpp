@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/polarisation.hpp"
 #include "common/units.hpp"
 #include "radar/materials.hpp"
 #include "scene/targets.hpp"
@@ -809,31 +810,13 @@ void apply_toml(Scenario& s, std::string_view text, const std::string& origin) {
     s.pattern_file = pattern_file;
   {
     // Receive first, as the RCS tool: "HV" = receive H, transmit V (radar/em/sbr.hpp).
-    std::string pol = "VV";
-    switch (s.sbr.polarisation) {
-      case radar::Polarisation::kHH:
-        pol = "HH";
-        break;
-      case radar::Polarisation::kHV:
-        pol = "HV";
-        break;
-      case radar::Polarisation::kVH:
-        pol = "VH";
-        break;
-      case radar::Polarisation::kVV:
-        break;
-    }
+    std::string pol(common::polarisation_name(s.sbr.polarisation));
     ant.string("polarisation", pol);
-    if (pol == "HH")
-      s.sbr.polarisation = radar::Polarisation::kHH;
-    else if (pol == "HV")
-      s.sbr.polarisation = radar::Polarisation::kHV;
-    else if (pol == "VH")
-      s.sbr.polarisation = radar::Polarisation::kVH;
-    else if (pol == "VV")
-      s.sbr.polarisation = radar::Polarisation::kVV;
-    else
-      ant.fail("polarisation", "expected \"VV\", \"HH\", \"HV\" or \"VH\", got \"" + pol + "\"");
+    try {
+      s.sbr.polarisation = common::parse_polarisation(pol);
+    } catch (const std::invalid_argument& e) {
+      ant.fail("polarisation", e.what());
+    }
   }
   ant.boolean("monopulse", s.sensor.antenna.monopulse);
   ant.number("squint_fraction", s.sensor.antenna.squint_fraction, 0.05, 0.95);

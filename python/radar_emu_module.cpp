@@ -188,7 +188,7 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
   const std::vector<double> freqs = sweep(freq_hz, "freq_hz");
   const std::vector<double> theta = sweep(theta_deg, "theta_deg");
   const std::vector<double> phi = sweep(phi_deg, "phi_deg");
-  const std::vector<tools::Pol> pols = tools::parse_pols(pol);
+  const std::vector<common::Polarisation> pols = tools::parse_pols(pol);
   for (double f : freqs) {
     if (!(f > 0.0))
       throw std::invalid_argument("frequencies must be > 0 Hz");
@@ -210,8 +210,8 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
   }
   Table table;
   table.col("freq_hz", 'd').col("theta_deg", 'd').col("phi_deg", 'd');
-  for (tools::Pol p : pols) {
-    const std::string n(tools::pol_name(p));
+  for (common::Polarisation p : pols) {
+    const std::string n(common::polarisation_name(p));
     table.col("rcs_" + n + "_dbsm", 'd').col("re_" + n, 'd').col("im_" + n, 'd');
   }
   table.col("facets_lit", 'Q').col("facets_partial", 'Q').col("tubes_cut_off", 'Q');
@@ -227,7 +227,7 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
         table.set(out, row, c++, freqs[k]);
         table.set(out, row, c++, theta[it]);
         table.set(out, row, c++, phi[ip]);
-        for (tools::Pol p : pols) {
+        for (common::Polarisation p : pols) {
           const std::complex<double> a = tools::component(m, p);
           table.set(out, row, c++, radar::dbsm(a));
           table.set(out, row, c++, a.real());
@@ -254,7 +254,7 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
   const std::vector<double> freqs = sweep(freq_hz, "freq_hz");
   const std::vector<double> theta = sweep(theta_deg, "theta_deg");
   const std::vector<double> phi = sweep(phi_deg, "phi_deg");
-  const std::vector<tools::Pol> pols = tools::parse_pols(pol);
+  const std::vector<common::Polarisation> pols = tools::parse_pols(pol);
   if (pols.size() != 1)
     throw std::invalid_argument("pol: a profile takes one polarisation");
   const std::size_t nf = freqs.size();

@@ -25,6 +25,8 @@
 
 namespace radar_emu::tools {
 
+using common::Polarisation;
+
 using config::parse_number;
 using config::split;
 using plot::Canvas;
@@ -466,52 +468,30 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
   return t;
 }
 
-std::vector<Pol> parse_pols(std::string_view text) {
-  std::vector<Pol> out;
+std::vector<Polarisation> parse_pols(std::string_view text) {
+  std::vector<Polarisation> out;
   for (std::string_view p : split(text, ',')) {
-    std::string u(p);
-    std::transform(u.begin(), u.end(), u.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-    Pol pol;
-    if (u == "HH")
-      pol = Pol::kHH;
-    else if (u == "HV")
-      pol = Pol::kHV;
-    else if (u == "VH")
-      pol = Pol::kVH;
-    else if (u == "VV")
-      pol = Pol::kVV;
-    else
-      throw std::invalid_argument("--pol: '" + std::string(p) + "' is not one of HH, HV, VH, VV");
+    Polarisation pol;
+    try {
+      pol = common::parse_polarisation(p);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("--pol: " + std::string(e.what()));
+    }
     if (std::find(out.begin(), out.end(), pol) == out.end())
       out.push_back(pol);
   }
   return out;
 }
 
-std::string_view pol_name(Pol p) noexcept {
+std::complex<double> component(const radar::ScatteringMatrix& s, Polarisation p) noexcept {
   switch (p) {
-    case Pol::kHH:
-      return "HH";
-    case Pol::kHV:
-      return "HV";
-    case Pol::kVH:
-      return "VH";
-    case Pol::kVV:
-      return "VV";
-  }
-  return "?";
-}
-
-std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept {
-  switch (p) {
-    case Pol::kHH:
+    case Polarisation::kHH:
       return s.hh;
-    case Pol::kHV:
+    case Polarisation::kHV:
       return s.hv;
-    case Pol::kVH:
+    case Polarisation::kVH:
       return s.vh;
-    case Pol::kVV:
+    case Polarisation::kVV:
       return s.vv;
   }
   return {};
@@ -625,9 +605,9 @@ void write_rcs_chart(const RcsToolOptions& o, const std::vector<radar::Scatterin
                   o.theta_deg[0], o.phi_deg[0]);
   }
   chart.title = title;
-  for (Pol p : o.pols) {
+  for (Polarisation p : o.pols) {
     Series ser;
-    ser.label = std::string(pol_name(p));
+    ser.label = std::string(common::polarisation_name(p));
     if (sweep_theta || sweep_phi) {
       const std::size_t n = sweep_theta ? nt : np;
       for (std::size_t i = 0; i < n; ++i) {
@@ -711,13 +691,13 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
       slice_axis < 0 ? 1 : values[static_cast<std::size_t>(slice_axis)]->size();
   double peak = -400.0;
   for (const radar::ScatteringMatrix& m : s) {
-    for (Pol p : o.pols)
+    for (Polarisation p : o.pols)
       peak = std::max(peak, radar::dbsm(component(m, p)));
   }
   std::vector<Canvas> panels;
   std::size_t skipped = 0;
   for (std::size_t sl = 0; sl < n_slices; ++sl) {
-    for (Pol p : o.pols) {
+    for (Polarisation p : o.pols) {
       if (panels.size() == kMaxPanels) {
         ++skipped;
         continue;
@@ -733,7 +713,7 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
                       (*values[ua])[a == slice_axis ? sl : 0], units[ua]);
         fixed += buf;
       }
-      m.title = name + ": RCS " + std::string(pol_name(p)) + fixed +
+      m.title = name + ": RCS " + std::string(common::polarisation_name(p)) + fixed +
                 (o.bistatic_theta_deg ? " (bistatic)" : "");
       m.x_label = labels[static_cast<std::size_t>(ax)];
       m.y_label = labels[static_cast<std::size_t>(ay)];
@@ -825,8 +805,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
   {
     File f(open_or_throw(o.out_csv));
     std::fprintf(f.get(), "freq_hz,theta_deg,phi_deg");
-    for (Pol p : o.pols) {
-      const std::string n(pol_name(p));
+    for (Polarisation p : o.pols) {
+      const std::string n(common::polarisation_name(p));
       std::fprintf(f.get(), ",rcs_%s_dbsm,re_%s,im_%s", n.c_str(), n.c_str(), n.c_str());
     }
     // edges: 1 when edge diffraction was on; edges_used: the edge terms of that direction.
@@ -837,7 +817,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
         for (std::size_t k = 0; k < nf; ++k) {
           const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
           std::fprintf(f.get(), "%.10g,%.10g,%.10g", o.freqs_hz[k], o.theta_deg[it], o.phi_deg[ip]);
-          for (Pol p : o.pols) {
+          for (Polarisation p : o.pols) {
             const std::complex<double> a = component(m, p);
             std::fprintf(f.get(), ",%.6f,%.9e,%.9e", radar::dbsm(a), a.real(), a.imag());
           }
@@ -861,8 +841,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
     stats_path = o.stats_csv.empty() ? sibling(o.out_csv, "_stats.csv").string() : o.stats_csv;
     File f(open_or_throw(stats_path));
     std::fprintf(f.get(), "freq_hz,theta_deg,phi_deg");
-    for (Pol p : o.pols) {
-      const std::string n(pol_name(p));
+    for (Polarisation p : o.pols) {
+      const std::string n(common::polarisation_name(p));
       std::fprintf(f.get(), ",mean_%s_dbsm,median_%s_dbsm,p10_%s_dbsm,p90_%s_dbsm,std_%s_db",
                    n.c_str(), n.c_str(), n.c_str(), n.c_str(), n.c_str());
     }
@@ -874,7 +854,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
     for (std::size_t j = 0; j < n_fixed; ++j) {
       for (std::size_t k = 0; k < nf; ++k) {
         std::vector<std::vector<radar::FluctuationStats>> per_pol;
-        for (Pol p : o.pols) {
+        for (Polarisation p : o.pols) {
           for (std::size_t i = 0; i < n_swept; ++i) {
             const std::size_t it = sweep_theta ? i : j, ip = sweep_theta ? j : i;
             sigma[i] = std::norm(component(s[(it * np + ip) * nf + k], p));
@@ -1026,13 +1006,13 @@ int run_profile_tool(const ProfileToolOptions& o) {
     char title[200];
     std::snprintf(title, sizeof title,
                   "%s: %s range profile, %.4g-%.4g GHz, %s window, resolution %.3g m", name.c_str(),
-                  std::string(pol_name(o.pol)).c_str(), o.freqs_hz.front() / 1e9,
+                  std::string(common::polarisation_name(o.pol)).c_str(), o.freqs_hz.front() / 1e9,
                   o.freqs_hz.back() / 1e9, o.window.c_str(), centre.resolution_m);
     chart.title = title;
     chart.x_label = "range from the target origin [m], + away from the radar";
     chart.y_label = "|profile| [dBsm]";
     Series ser;
-    ser.label = std::string(pol_name(o.pol));
+    ser.label = std::string(common::polarisation_name(o.pol));
     double peak = -400.0;
     for (std::size_t i = 0; i < centre.range_m.size(); ++i) {
       ser.x.push_back(centre.range_m[i]);
@@ -1084,7 +1064,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
       Heatmap m;
       char title[200];
       std::snprintf(title, sizeof title, "%s: ISAR (%s), resolution %.3g m x %.3g m", name.c_str(),
-                    std::string(pol_name(o.pol)).c_str(), img.range_resolution_m,
+                    std::string(common::polarisation_name(o.pol)).c_str(), img.range_resolution_m,
                     img.cross_range_resolution_m);
       m.title = title;
       m.x_label = "range [m]";

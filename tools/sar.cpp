@@ -27,6 +27,7 @@
 #include <ogr_srs_api.h>
 #endif
 
+#include "common/polarisation.hpp"
 #include "common/units.hpp"
 #include "plot/canvas.hpp"
 #include "plot/charts.hpp"
@@ -164,18 +165,6 @@ class Reader {
   std::string origin_, name_;
 };
 
-rd::Polarisation parse_pol(const std::string& s, const Reader& r) {
-  if (s == "HH")
-    return rd::Polarisation::kHH;
-  if (s == "HV")
-    return rd::Polarisation::kHV;
-  if (s == "VH")
-    return rd::Polarisation::kVH;
-  if (s == "VV")
-    return rd::Polarisation::kVV;
-  r.fail("polarisation", "expected HH, HV, VH or VV");
-}
-
 // The case from its parsed TOML; `path` names the file (or text) in every error.
 SarCase case_from_table(const toml::table& root, const std::string& path) {
   for (const auto& [key, value] : root) {
@@ -200,7 +189,12 @@ SarCase case_from_table(const toml::table& root, const std::string& path) {
   radar.number("peak_gain_db", gain_db, -20.0, 80.0);
   p.peak_gain = std::pow(10.0, gain_db / 10.0);
   radar.string("polarisation", c.pol_name);
-  c.pol = parse_pol(c.pol_name, radar);
+  try {
+    c.pol = common::parse_polarisation(c.pol_name);
+  } catch (const std::invalid_argument& e) {
+    radar.fail("polarisation", e.what());
+  }
+  c.pol_name = common::polarisation_name(c.pol);
 
   const Reader plat(root, "platform", path, {"altitude_m", "speed_mps", "heading_deg", "look"});
   plat.number("altitude_m", c.altitude_m, 10.0, 20000.0);

@@ -114,6 +114,12 @@ TEST(Scenario, AntennaPolarisationKey) {
             radar_emu::radar::Polarisation::kVH);
   EXPECT_NE(error_of("[antenna]\npolarisation = \"RHC\"\n").find("[antenna] polarisation"),
             std::string::npos);
+  // Either case, as --pol (common/polarisation.hpp), and its refusal.
+  EXPECT_EQ(loop::parse_scenario("[antenna]\npolarisation = \"vh\"\n", "p.toml").sbr.polarisation,
+            radar_emu::radar::Polarisation::kVH);
+  EXPECT_NE(error_of("[antenna]\npolarisation = \"RHC\"\n")
+                .find("polarisation: 'RHC' is not one of HH, HV, VH, VV"),
+            std::string::npos);
 }
 
 TEST(Scenario, UserFileOverridesOnlyWhatItNames) {
