@@ -123,8 +123,8 @@ io::icd::Detection to_icd(const radar::Detection& d) noexcept {
   o.azimuth_deg = common::degrees(d.azimuth_rad);
   o.elevation_deg = common::degrees(d.elevation_rad);
   o.radial_velocity_mps = d.radial_velocity_mps;
-  o.snr_db = 10.0 * std::log10(d.snr);
-  o.rcs_dbsm = 10.0 * std::log10(d.rcs_m2);
+  o.snr_db = common::db_from_power(d.snr);
+  o.rcs_dbsm = common::db_from_power(d.rcs_m2);
   // Carried by the CAN FD lists only (docs/icd/detections.md).
   o.range_std_m = d.range_std_m;
   o.azimuth_std_deg = common::degrees(d.azimuth_std_rad);
@@ -1242,8 +1242,8 @@ void ClosedLoop::write_outputs(const RunResult& r) {
       {"beams", m.sensor.antenna().beams()},
       {"sum_beamwidth_az_deg", common::degrees(m.sensor.antenna().sum_beamwidth_az_rad())},
       {"sum_beamwidth_el_deg", common::degrees(m.sensor.antenna().sum_beamwidth_el_rad())},
-      {"antenna_gain_db", 10.0 * std::log10(s.sensor.antenna.peak_gain)},
-      {"processing_gain_db", 10.0 * std::log10(m.sensor.processor().processing_gain())},
+      {"antenna_gain_db", common::db_from_power(s.sensor.antenna.peak_gain)},
+      {"processing_gain_db", common::db_from_power(m.sensor.processor().processing_gain())},
       {"cfar", s.sensor.cfar.kind == radar::CfarKind::kCellAveraging ? "ca" : "os"},
       {"cfar_training_cells", m.sensor.cfar_training_cells()},
       {"noise_seed", s.sensor.noise_seed},

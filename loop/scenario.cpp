@@ -21,10 +21,6 @@ namespace radar_emu::loop {
 
 namespace {
 
-double from_db(double db) {
-  return std::pow(10.0, db / 10.0);
-}
-
 // The embedded default: a straight 3-degree approach to the default scene's runway (threshold at
 // the ENU origin, runway to the north), a forward-looking 94 GHz radar, 20 Hz frames.
 constexpr std::string_view kDefaultScenario =
@@ -298,7 +294,7 @@ class TableReader {
       return;
     double db = 0.0;
     number(key, db, lo_db, hi_db);
-    out_linear = from_db(db);
+    out_linear = common::power_from_db(db);
   }
 
  private:

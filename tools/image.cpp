@@ -88,7 +88,7 @@ double ground_height_below(const scene::Scene& scene, const radar::SbrTracer& tr
 }
 
 double db(double v) {
-  return v > 0.0 ? 10.0 * std::log10(v) : -400.0;
+  return v > 0.0 ? common::db_from_power(v) : -400.0;
 }
 
 // The radar image (grey, dB over 40 dB below the 99.5th percentile, like the seed's figure 5)

@@ -69,7 +69,7 @@ void close_or_throw(File& f, const std::string& path) {
 }
 
 double db_of_power(double p) {
-  return p > 0.0 ? 10.0 * std::log10(p) : -400.0;
+  return p > 0.0 ? common::db_from_power(p) : -400.0;
 }
 
 // Prints "\r  label i/n" to stderr at most every 0.5 s, and a newline at the end.

@@ -63,7 +63,7 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 double db10(double x) {
-  return 10.0 * std::log10(std::max(x, 1e-300));
+  return common::db_from_power(std::max(x, 1e-300));
 }
 
 // ------------------------------------------------------------------------------ the TOML case
@@ -187,7 +187,7 @@ SarCase case_from_table(const toml::table& root, const std::string& path) {
   radar.number("transmit_power_w", p.transmit_power_w, 1e-6, 1e9);
   double gain_db = 0.0;
   radar.number("peak_gain_db", gain_db, -20.0, 80.0);
-  p.peak_gain = std::pow(10.0, gain_db / 10.0);
+  p.peak_gain = common::power_from_db(gain_db);
   radar.string("polarisation", c.pol_name);
   try {
     c.pol = common::parse_polarisation(c.pol_name);

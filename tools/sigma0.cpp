@@ -45,7 +45,7 @@ double sigma_of(const cl::Sigma0& s, Polarisation p) {
 constexpr double kFloorDb = -300.0;  // written for "no power" (the model gives none)
 
 double to_db(double linear) {
-  return linear > 0.0 ? std::max(10.0 * std::log10(linear), kFloorDb) : kFloorDb;
+  return linear > 0.0 ? std::max(common::db_from_power(linear), kFloorDb) : kFloorDb;
 }
 
 cl::SurfaceSpec custom_surface(const Sigma0ToolOptions& o) {

@@ -61,7 +61,7 @@ double ms_since(Clock::time_point t0) {
 }
 
 double db10(double linear) {
-  return 10.0 * std::log10(std::max(linear, 1e-40));
+  return common::db_from_power(std::max(linear, 1e-40));
 }
 
 // ---------------------------------------------------------------------------------------------
