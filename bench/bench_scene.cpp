@@ -18,17 +18,17 @@
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "scene/gltf.hpp"
 #include "scene/scene.hpp"
 #include "scene/terrain_gen.hpp"
 #include "scene/trajectory.hpp"
 
+namespace common = radar_emu::common;
 namespace sc = radar_emu::scene;
 namespace fs = std::filesystem;
 
 namespace {
-
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // Resident-set figures of this process from /proc/self/status [bytes]: VmHWM (peak) or VmRSS.
 double status_bytes(const char* key) {
@@ -173,17 +173,18 @@ struct Database {
   sc::ViewVolume view;
   Database() {
     view.position_m = {0.0, -4000.0, 300.0};
-    const double dep = 3.0 * kDeg;
+    const double dep = common::radians(3.0);
     const glm::dvec3 x(0.0, std::cos(dep), -std::sin(dep));  // boresight north, 3 deg down
     const glm::dvec3 y(1.0, 0.0, 0.0);                       // right = east
     view.world_from_antenna = glm::dmat3(x, y, glm::cross(x, y));
-    view.azimuth_min_rad = -15.0 * kDeg;
-    view.azimuth_max_rad = 15.0 * kDeg;
-    view.elevation_min_rad = -5.0 * kDeg;
-    view.elevation_max_rad = 5.0 * kDeg;
+    view.azimuth_min_rad = common::radians(-15.0);
+    view.azimuth_max_rad = common::radians(15.0);
+    view.elevation_min_rad = common::radians(-5.0);
+    view.elevation_max_rad = common::radians(5.0);
     view.max_range_m = 6000.0;
     view.range_cell_m = 3.0;
-    view.angular_cell_rad = 0.15 * kDeg * 10.0;  // beam 1.5 deg: coarser levels from ~800 m
+    view.angular_cell_rad =
+        common::radians(0.15) * 10.0;  // beam 1.5 deg: coarser levels from ~800 m
   }
 };
 

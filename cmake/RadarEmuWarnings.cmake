@@ -30,14 +30,15 @@ endif()
 
 # radar_emu_module(NAME <name> SOURCES ... [PUBLIC_DEPS ...] [PRIVATE_DEPS ...])
 # Declares the library radar_emu_<name> (alias radar_emu::<name>) with the project root as
-# include directory, so headers read "#include \"<folder>/<file>.hpp\"".
+# include directory, so headers read "#include \"<folder>/<file>.hpp\"". Every module links
+# radar_emu::common (common/, header-only) PUBLIC.
 function(radar_emu_module)
   cmake_parse_arguments(M "" "NAME" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
   add_library(radar_emu_${M_NAME} STATIC ${M_SOURCES})
   add_library(radar_emu::${M_NAME} ALIAS radar_emu_${M_NAME})
   target_include_directories(radar_emu_${M_NAME} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(radar_emu_${M_NAME}
-    PUBLIC ${M_PUBLIC_DEPS} radar_emu_sanitizers
+    PUBLIC radar_emu_common ${M_PUBLIC_DEPS} radar_emu_sanitizers
     PRIVATE ${M_PRIVATE_DEPS} radar_emu_warnings)
   set_target_properties(radar_emu_${M_NAME} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()

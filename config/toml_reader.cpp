@@ -7,6 +7,8 @@
 #include <numbers>
 #include <sstream>
 
+#include "common/units.hpp"
+
 namespace radar_emu::config {
 
 struct ParsedToml {
@@ -15,8 +17,6 @@ struct ParsedToml {
 };
 
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 std::string show(double v) {
   std::ostringstream os;
@@ -277,7 +277,7 @@ bool Table::degrees(std::string_view key, double& out_rad, Range range_deg) cons
   double deg = 0.0;
   if (!number(key, deg, range_deg))
     return false;
-  out_rad = deg * kRadPerDeg;
+  out_rad = common::radians(deg);
   return true;
 }
 
@@ -285,7 +285,7 @@ bool Table::decibels(std::string_view key, double& out_linear, Range range_db) c
   double db = 0.0;
   if (!number(key, db, range_db))
     return false;
-  out_linear = std::pow(10.0, db / 10.0);
+  out_linear = common::power_from_db(db);
   return true;
 }
 

@@ -6,11 +6,11 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/units.hpp"
+
 namespace radar_emu::io::canas {
 
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 // Header bytes (spec sec. 4.1).
 constexpr std::size_t kNodeIdByte = 0;
@@ -92,7 +92,7 @@ FieldCheck si_from_bus_units(Field field, double value, double& si) noexcept {
   const Limits lim = limits_of(field);
   if (value < lim.lo || value > lim.hi)
     return FieldCheck::kOutOfRange;
-  double v = is_angle(field) ? value * kRadPerDeg : value;
+  double v = is_angle(field) ? common::radians(value) : value;
   if (field == Field::kTrueHeading) {
     v = std::fmod(v, 2.0 * std::numbers::pi);
     if (v < 0.0)

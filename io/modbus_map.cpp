@@ -3,13 +3,12 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <numbers>
+
+#include "common/units.hpp"
 
 namespace radar_emu::io::modbus {
 
 namespace {
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // Rounds half away from zero and range-checks against [lo, hi] (as doubles, exactly
 // representable for 16- and 32-bit integers).
@@ -338,7 +337,7 @@ bool NavEncoder::encode(const NavState& state, std::uint16_t status, std::uint32
   for (const FieldSlot& slot : kSlots) {
     const std::size_t at = layout_.*slot.offset;
     const double si = state.*slot.value;
-    const double value = slot.angle ? si * kDegPerRad : si;
+    const double value = slot.angle ? common::degrees(si) : si;
     if (floats && slot.lat_lon) {
       (void)put_f64(out, at, value, config_.order);
     } else if (floats) {

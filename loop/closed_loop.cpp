@@ -14,6 +14,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "io/modbus.hpp"
 #include "io/modbus_map.hpp"
 #include "loop/accounting.hpp"
@@ -40,8 +41,6 @@
 namespace radar_emu::loop {
 
 namespace {
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // Output paths, checked before any other setup (the scene can take seconds to build): the
 // output directory is created, the trace-event file created empty. Throws with the path.
@@ -77,15 +76,15 @@ struct OutputPaths {
 io::icd::Detection to_icd(const radar::Detection& d) noexcept {
   io::icd::Detection o;
   o.range_m = d.range_m;
-  o.azimuth_deg = d.azimuth_rad * kDegPerRad;
-  o.elevation_deg = d.elevation_rad * kDegPerRad;
+  o.azimuth_deg = common::degrees(d.azimuth_rad);
+  o.elevation_deg = common::degrees(d.elevation_rad);
   o.radial_velocity_mps = d.radial_velocity_mps;
   o.snr_db = 10.0 * std::log10(d.snr);
   o.rcs_dbsm = 10.0 * std::log10(d.rcs_m2);
   // Carried by the CAN FD lists only (docs/icd/detections.md).
   o.range_std_m = d.range_std_m;
-  o.azimuth_std_deg = d.azimuth_std_rad * kDegPerRad;
-  o.elevation_std_deg = d.elevation_std_rad * kDegPerRad;
+  o.azimuth_std_deg = common::degrees(d.azimuth_std_rad);
+  o.elevation_std_deg = common::degrees(d.elevation_std_rad);
   o.radial_velocity_std_mps = d.velocity_std_mps;
   o.range_ambiguous = d.range_ambiguous;
   o.velocity_ambiguous = d.velocity_ambiguous;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/units.hpp"
+
 namespace radar_emu::loop {
 
 // Measured with `build/app/radar-emu tradeoff --cases frame` (series governor_level: mean
@@ -26,7 +28,7 @@ void require(bool ok, const char* field, const char* rule) {
 }
 
 double db10(double x) noexcept {
-  return 10.0 * std::log10(std::max(x, 1e-300));
+  return common::db_from_power(std::max(x, 1e-300));
 }
 
 }  // namespace

@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/polarisation.hpp"
+#include "common/units.hpp"
 #include "config/toml_reader.hpp"
 #include "radar/em/surfaces.hpp"
 #include "scene/targets.hpp"
@@ -18,8 +20,6 @@
 namespace radar_emu::loop {
 
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 // The embedded default: a straight 3-degree approach to the default scene's runway (threshold at
 // the ENU origin, runway to the north), a forward-looking 94 GHz radar, 20 Hz frames.
@@ -431,8 +431,8 @@ void read_target_fixed(const Table& r, scene::TargetPlacement& t) {
   if (has_course && !(t.speed_mps > 0.0))
     r.fail("course_deg", "needs speed_mps > 0 (a fixed target has a heading_deg only)");
   // A moving target faces its velocity unless both angles are given.
-  t.heading_rad = (has_heading ? heading_deg : course_deg) * kRadPerDeg;
-  t.course_rad = (has_course ? course_deg : heading_deg) * kRadPerDeg;
+  t.heading_rad = common::radians(has_heading ? heading_deg : course_deg);
+  t.course_rad = common::radians(has_course ? course_deg : heading_deg);
 }
 
 scene::TargetPlacement parse_target(const Table& r, std::size_t number) {
@@ -564,29 +564,14 @@ void read_antenna(Scenario& s, const Table& root) {
     s.pattern_file = pattern_file;
   {
     // Receive first, as the RCS tool: "HV" = receive H, transmit V (radar/em/sbr.hpp).
-    std::string pol = "VV";
-    switch (s.sbr.polarisation) {
-      case radar::Polarisation::kHH:
-        pol = "HH";
-        break;
-      case radar::Polarisation::kHV:
-        pol = "HV";
-        break;
-      case radar::Polarisation::kVH:
-        pol = "VH";
-        break;
-      case radar::Polarisation::kVV:
-        break;
+    // The one polarisation parser (common/polarisation.hpp): either case, as --pol.
+    std::string pol(common::polarisation_name(s.sbr.polarisation));
+    ant.string("polarisation", pol);
+    try {
+      s.sbr.polarisation = common::parse_polarisation(pol);
+    } catch (const std::invalid_argument& e) {
+      ant.fail("polarisation", e.what());
     }
-    ant.choice("polarisation", pol, {"VV", "HH", "HV", "VH"});
-    if (pol == "HH")
-      s.sbr.polarisation = radar::Polarisation::kHH;
-    else if (pol == "HV")
-      s.sbr.polarisation = radar::Polarisation::kHV;
-    else if (pol == "VH")
-      s.sbr.polarisation = radar::Polarisation::kVH;
-    else
-      s.sbr.polarisation = radar::Polarisation::kVV;
   }
   ant.boolean("monopulse", s.sensor.antenna.monopulse);
   ant.number("squint_fraction", s.sensor.antenna.squint_fraction, {0.05, 0.95});
@@ -834,7 +819,7 @@ void read_pattern_csv(const std::filesystem::path& path, const std::string& orig
       throw std::runtime_error(path.string() + ":" + std::to_string(line_no) +
                                ": expected 'angle_deg,gain_db'");
     }
-    cut.table_angle_rad.push_back(angle * kRadPerDeg);
+    cut.table_angle_rad.push_back(common::radians(angle));
     cut.table_gain_db.push_back(gain);
   }
 }

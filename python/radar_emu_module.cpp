@@ -21,7 +21,6 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
-#include <numbers>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -30,6 +29,7 @@
 #include <variant>
 #include <vector>
 
+#include "common/units.hpp"
 #include "config/cli_args.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/scenario.hpp"
@@ -48,6 +48,7 @@
 #include "tools/sigma0.hpp"
 
 namespace py = pybind11;
+namespace common = radar_emu::common;
 namespace config = radar_emu::config;
 namespace loop = radar_emu::loop;
 namespace tools = radar_emu::tools;
@@ -55,12 +56,6 @@ namespace radar = radar_emu::radar;
 namespace sc = radar_emu::scene;
 
 namespace {
-
-// The CLI's angle conversions (rcs_tool.cpp: kPi / 180; scenario.cpp: std::numbers::pi / 180;
-// closed_loop.cpp: 180 / std::numbers::pi), so that values match it bit for bit.
-constexpr double kDegToRad = radar::kPi / 180.0;
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // ---- NumPy structured arrays ----------------------------------------------------------------
 
@@ -193,7 +188,7 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
   const std::vector<double> freqs = sweep(freq_hz, "freq_hz");
   const std::vector<double> theta = sweep(theta_deg, "theta_deg");
   const std::vector<double> phi = sweep(phi_deg, "phi_deg");
-  const std::vector<tools::Pol> pols = tools::parse_pols(pol);
+  const std::vector<common::Polarisation> pols = tools::parse_pols(pol);
   for (double f : freqs) {
     if (!(f > 0.0))
       throw std::invalid_argument("frequencies must be > 0 Hz");
@@ -215,8 +210,8 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
   }
   Table table;
   table.col("freq_hz", 'd').col("theta_deg", 'd').col("phi_deg", 'd');
-  for (tools::Pol p : pols) {
-    const std::string n(tools::pol_name(p));
+  for (common::Polarisation p : pols) {
+    const std::string n(common::polarisation_name(p));
     table.col("rcs_" + n + "_dbsm", 'd').col("re_" + n, 'd').col("im_" + n, 'd');
   }
   table.col("facets_lit", 'Q').col("facets_partial", 'Q').col("tubes_cut_off", 'Q');
@@ -232,7 +227,7 @@ py::array rcs_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg& th
         table.set(out, row, c++, freqs[k]);
         table.set(out, row, c++, theta[it]);
         table.set(out, row, c++, phi[ip]);
-        for (tools::Pol p : pols) {
+        for (common::Polarisation p : pols) {
           const std::complex<double> a = tools::component(m, p);
           table.set(out, row, c++, radar::dbsm(a));
           table.set(out, row, c++, a.real());
@@ -259,7 +254,7 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
   const std::vector<double> freqs = sweep(freq_hz, "freq_hz");
   const std::vector<double> theta = sweep(theta_deg, "theta_deg");
   const std::vector<double> phi = sweep(phi_deg, "phi_deg");
-  const std::vector<tools::Pol> pols = tools::parse_pols(pol);
+  const std::vector<common::Polarisation> pols = tools::parse_pols(pol);
   if (pols.size() != 1)
     throw std::invalid_argument("pol: a profile takes one polarisation");
   const std::size_t nf = freqs.size();
@@ -298,7 +293,7 @@ py::dict profile_sweep(const Target& t, const SweepArg& freq_hz, const SweepArg&
     if (na > 1) {
       std::vector<double> angles(na);
       for (std::size_t a = 0; a < na; ++a)
-        angles[a] = (nt > 1 ? theta[a] : phi[a]) * kDegToRad;
+        angles[a] = common::radians(nt > 1 ? theta[a] : phi[a]);
       double step = (angles.back() - angles.front()) / static_cast<double>(na - 1);
       std::vector<std::complex<double>> ordered = samples;
       if (step < 0.0) {  // descending sweep: imaged in ascending angle, as the tool does
@@ -675,9 +670,9 @@ class Loop {
     loop::OwnshipInput in;
     in.position_enu_m = vec3(d, "position_enu_m");
     in.velocity_enu_mps = vec3(d, "velocity_enu_mps");
-    in.heading_rad = number(d, "heading_deg") * kRadPerDeg;
-    in.pitch_rad = number(d, "pitch_deg") * kRadPerDeg;
-    in.roll_rad = number(d, "roll_deg") * kRadPerDeg;
+    in.heading_rad = common::radians(number(d, "heading_deg"));
+    in.pitch_rad = common::radians(number(d, "pitch_deg"));
+    in.roll_rad = common::radians(number(d, "roll_deg"));
     for (double x : {in.position_enu_m.x, in.position_enu_m.y, in.position_enu_m.z,
                      in.velocity_enu_mps.x, in.velocity_enu_mps.y, in.velocity_enu_mps.z,
                      in.heading_rad, in.pitch_rad, in.roll_rad}) {
@@ -732,8 +727,8 @@ class Loop {
       const loop::ObjectTruth& o = f.truth[i];
       tt.set(truth, i, 0, o.object_id);
       tt.set(truth, i, 1, o.range_m);
-      tt.set(truth, i, 2, o.azimuth_rad * kDegPerRad);
-      tt.set(truth, i, 3, o.elevation_rad * kDegPerRad);
+      tt.set(truth, i, 2, common::degrees(o.azimuth_rad));
+      tt.set(truth, i, 3, common::degrees(o.elevation_rad));
       tt.set(truth, i, 4, o.radial_velocity_mps);
     }
     d["truth"] = truth;
@@ -789,8 +784,8 @@ PYBIND11_MODULE(radar_emu, m) {
           mats.append(mat.name);
         out["materials"] = mats;
         out["anchor_deg_m"] =
-            py::make_tuple(d.anchor.latitude_rad * kDegPerRad, d.anchor.longitude_rad * kDegPerRad,
-                           d.anchor.height_m);
+            py::make_tuple(common::degrees(d.anchor.latitude_rad),
+                           common::degrees(d.anchor.longitude_rad), d.anchor.height_m);
         return out;
       },
       py::arg("scenario") = py::none(), py::kw_only(), py::arg("toml") = py::none(),

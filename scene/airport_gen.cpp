@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "scene/default_scene.hpp"
 #include "scene/scene_builders.hpp"
 #include "scene/targets.hpp"
@@ -23,7 +24,6 @@ using L = DefaultSceneLayout;
 
 constexpr std::uint16_t kGrass = 0, kAsphalt = 1, kConcrete = 2, kMetal = 3;
 constexpr double kPaveZ_m = L::kRunwayHeight_m;  // every pavement, 5 cm over the grass
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // SplitMix64 (Steele, Lea & Flood, "Fast splittable pseudorandom number generators", OOPSLA
 // 2014): the same sequence on every platform, unlike <random>'s distributions.
@@ -190,7 +190,8 @@ SceneDescription generate_airport(const AirportSpec& spec) {
                  {"asphalt", {0.2f, 0.2f, 0.22f}},
                  {"concrete", {0.72f, 0.72f, 0.7f}},
                  {"metal", {0.75f, 0.75f, 0.8f}}};
-  d.anchor = {L::kAnchorLatitude_deg * kDeg, L::kAnchorLongitude_deg * kDeg, L::kAnchorHeight_m};
+  d.anchor = {common::radians(L::kAnchorLatitude_deg), common::radians(L::kAnchorLongitude_deg),
+              L::kAnchorHeight_m};
 
   ObjectDesc ground = object("ground");
   const auto gw = static_cast<float>(L::kGroundHalfWidth_m);
@@ -287,7 +288,7 @@ SceneDescription generate_airport(const AirportSpec& spec) {
                         1010.0 + 80.0 * gate + rng.uniform(-1.0, 1.0), 0.0);
     ObjectDesc aircraft = object("transport_" + std::to_string(i + 1));
     aircraft.mesh = target_mesh(TargetKind::kTransportAircraft, kLength_m, kSpan_m, kHeight_m);
-    aircraft.world_from_body = placement(at, rng.uniform(-2.0, 2.0) * kDeg);
+    aircraft.world_from_body = placement(at, common::radians(rng.uniform(-2.0, 2.0)));
     d.objects.push_back(std::move(aircraft));
   }
   if (spec.service_vehicles) {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "common/units.hpp"
 #include "scene/scene_builders.hpp"
 
 namespace radar_emu::scene {
@@ -153,8 +154,8 @@ SceneDescription default_scene() {
   d.materials = {{"grass", {0.25f, 0.45f, 0.15f}},
                  {"asphalt", {0.2f, 0.2f, 0.22f}},
                  {"metal", {0.75f, 0.75f, 0.8f}}};
-  const double deg = std::numbers::pi / 180.0;
-  d.anchor = {L::kAnchorLatitude_deg * deg, L::kAnchorLongitude_deg * deg, L::kAnchorHeight_m};
+  d.anchor = {common::radians(L::kAnchorLatitude_deg), common::radians(L::kAnchorLongitude_deg),
+              L::kAnchorHeight_m};
 
   ObjectDesc ground{"ground", {}, glm::dmat4(1.0), std::nullopt};
   const auto gw = static_cast<float>(L::kGroundHalfWidth_m);

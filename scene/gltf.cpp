@@ -12,12 +12,12 @@
 #include <initializer_list>
 #include <limits>
 #include <map>
-#include <numbers>
 #include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 
+#include "common/units.hpp"
 #include "scene/mesh_check.hpp"
 #include "scene/trajectory.hpp"
 
@@ -30,7 +30,6 @@ namespace radar_emu::scene {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr int kMaxNodeDepth = 256;
 
 [[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
@@ -737,7 +736,7 @@ SceneDescription load_gltf(const std::filesystem::path& path, std::vector<std::s
                   "scene extras radar_emu.anchor_deg_m")) {
       if (std::abs(anchor.x) > 90.0)
         fail(path, "scene extras radar_emu.anchor_deg_m: latitude beyond +-90 deg");
-      desc.anchor = {anchor.x * kDeg, anchor.y * kDeg, anchor.z};
+      desc.anchor = {common::radians(anchor.x), common::radians(anchor.y), anchor.z};
     }
   }
   if (desc.objects.empty())
@@ -907,8 +906,9 @@ void write_gltf(const SceneDescription& d, const std::filesystem::path& path) {
     scene.nodes.push_back(static_cast<int>(model.nodes.size() - 1));
   }
   tinygltf::Value::Object anchor;
-  anchor["anchor_deg_m"] = number_array(
-      {d.anchor.latitude_rad / kDeg, d.anchor.longitude_rad / kDeg, d.anchor.height_m});
+  anchor["anchor_deg_m"] =
+      number_array({d.anchor.latitude_rad / common::kRadPerDeg,
+                    d.anchor.longitude_rad / common::kRadPerDeg, d.anchor.height_m});
   tinygltf::Value::Object se;
   se["radar_emu"] = tinygltf::Value(std::move(anchor));
   scene.extras = tinygltf::Value(std::move(se));

@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/units.hpp"
+
 namespace radar_emu::scene {
 
 namespace {
@@ -172,18 +174,17 @@ PreviewCamera default_preview_camera(const Scene& scene, int width_px, int heigh
     lo = all_lo;
     hi = all_hi;
   }
-  const double deg = std::numbers::pi / 180.0;
   PreviewCamera cam;
   cam.width_px = width_px;
   cam.height_px = height_px;
-  cam.vertical_fov_rad = 40.0 * deg;
+  cam.vertical_fov_rad = common::radians(40.0);
   cam.look_at_m = 0.5 * (lo + hi);
   const double radius = std::max(0.5 * glm::length(hi - lo), 1.0);
   // The narrower of the two fields of view must hold the sphere.
   const double tan_half = std::tan(0.5 * cam.vertical_fov_rad) *
                           std::min(1.0, static_cast<double>(width_px) / height_px);
   const double distance = radius / std::sin(std::atan(tan_half));
-  const double elevation = 35.0 * deg;
+  const double elevation = common::radians(35.0);
   const glm::dvec3 from_target(-std::cos(elevation) * std::sqrt(0.5),
                                -std::cos(elevation) * std::sqrt(0.5), std::sin(elevation));
   cam.position_m = cam.look_at_m + distance * from_target;

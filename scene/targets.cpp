@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/units.hpp"
+
 namespace radar_emu::scene {
 
 namespace {
@@ -565,7 +567,7 @@ void make_helicopter(Mesh& m, double a, double b, double c, double f) {
 //             y +-(0.1b +- 0.01b); struts x -0.04a +- 0.006a, y +-0.1b +- 0.004a,
 //             z [0.05c, z_f - 0.55R]
 void make_transport_aircraft(Mesh& m, double a, double b, double c, double f) {
-  const double pi = std::numbers::pi, deg = pi / 180.0;
+  const double pi = std::numbers::pi;
   const double radius = 0.053 * a, zf = 0.3 * c;
   const int nf = around(radius, 32, f);
   auto circle = [&](double s) { return ngon(nf, s * radius, s * radius, -pi / 2); };
@@ -576,10 +578,10 @@ void make_transport_aircraft(Mesh& m, double a, double b, double c, double f) {
        place(circle(0.35), {-0.43 * a, 0, zf + 0.5 * radius}, kY, kZ)},
       glm::dvec3(0.5 * a, 0, zf - 0.3 * radius), glm::dvec3(-0.5 * a, 0, zf + 0.55 * radius), f);
   const glm::dvec3 wing_le(0.12 * a, 0, zf - 0.55 * radius);
-  const double sweep = 27 * deg, dihedral = 5 * deg;
+  const double sweep = common::radians(27), dihedral = common::radians(5);
   add_surface(m, wing_le, kY, kZ, kZ, 0.5 * b, 0.19 * a, 0.12, 0.24, sweep, dihedral, true, f);
   add_surface(m, {-0.355 * a, 0, zf + 0.35 * radius}, kY, kZ, kZ, 0.17 * b, 0.1 * a, 0.10, 0.33,
-              std::atan2(0.085 * a, 0.17 * b), 6 * deg, true, f);
+              std::atan2(0.085 * a, 0.17 * b), common::radians(6), true, f);
   const double fin_z = zf + 0.4 * radius;
   const double fin_sweep = std::atan2(0.49 * a - 0.3 * a - 0.35 * 0.17 * a, c - fin_z);
   add_surface(m, {-0.3 * a, 0, fin_z}, kZ, kY, kZ, c - fin_z, 0.17 * a, 0.10, 0.35, fin_sweep, 0.0,

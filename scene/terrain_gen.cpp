@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <numbers>
 #include <numeric>
 #include <optional>
 #include <random>
@@ -15,11 +14,13 @@
 #include <utility>
 #include <vector>
 
+#include "common/units.hpp"
+
 namespace radar_emu::scene {
 namespace {
 
 using Layout = TerrainLayout;
-constexpr double kPi = std::numbers::pi;
+using common::kPi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kHalfEast_m = Layout::kCentralEast_m / 2.0;
 constexpr double kHalfNorth_m = Layout::kCentralNorth_m / 2.0;
@@ -491,9 +492,8 @@ class Builder {
       const mat::Def& d = mat::kDefs[k];
       out_.materials.push_back({d.name, glm::vec3(d.r, d.g, d.b)});
     }
-    constexpr double kDeg = kPi / 180.0;
-    out_.anchor = {Layout::kAnchorLatitude_deg * kDeg, Layout::kAnchorLongitude_deg * kDeg,
-                   Layout::kAnchorHeight_m};
+    out_.anchor = {common::radians(Layout::kAnchorLatitude_deg),
+                   common::radians(Layout::kAnchorLongitude_deg), Layout::kAnchorHeight_m};
     make_relief();
     make_river();
     make_roads();

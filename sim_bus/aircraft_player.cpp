@@ -6,10 +6,11 @@
 #include <string>
 #include <utility>
 
+#include "common/units.hpp"
+
 namespace radar_emu::sim_bus {
 
 namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 double lerp(double a, double b, double f) {
   return a + (b - a) * f;
@@ -108,9 +109,9 @@ void AircraftStatePlayer::publish_attitude(double t_s, io::CanEndpoint& bus) noe
     f.timestamp_ns = stamp;
     send(bus, f);
   };
-  put(id_of(Field::kPitch), s.pitch_rad * kDegPerRad);
-  put(id_of(Field::kRoll), s.roll_rad * kDegPerRad);
-  put(id_of(Field::kTrueHeading), s.true_heading_rad * kDegPerRad);
+  put(id_of(Field::kPitch), common::degrees(s.pitch_rad));
+  put(id_of(Field::kRoll), common::degrees(s.roll_rad));
+  put(id_of(Field::kTrueHeading), common::degrees(s.true_heading_rad));
 }
 
 void AircraftStatePlayer::publish_navigation(double t_s, io::CanEndpoint& bus) noexcept {
@@ -132,8 +133,8 @@ void AircraftStatePlayer::publish_navigation(double t_s, io::CanEndpoint& bus) n
     f.timestamp_ns = stamp;
     send(bus, f);
   };
-  put_double(id_of(Field::kLatitude), s.latitude_rad * kDegPerRad);
-  put_double(id_of(Field::kLongitude), s.longitude_rad * kDegPerRad);
+  put_double(id_of(Field::kLatitude), common::degrees(s.latitude_rad));
+  put_double(id_of(Field::kLongitude), common::degrees(s.longitude_rad));
   put_float(id_of(Field::kHeight), s.height_m);
   put_float(id_of(Field::kVelEast), s.vel_east_mps);
   put_float(id_of(Field::kVelNorth), s.vel_north_mps);

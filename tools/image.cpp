@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "config/output_paths.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
@@ -37,8 +38,6 @@ using plot::join_panels;
 using plot::render_heatmap;
 
 namespace {
-
-constexpr double kDeg = 180.0 / std::numbers::pi;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -85,7 +84,7 @@ double ground_height_below(const scene::Scene& scene, const radar::SbrTracer& tr
 }
 
 double db(double v) {
-  return v > 0.0 ? 10.0 * std::log10(v) : -400.0;
+  return v > 0.0 ? common::db_from_power(v) : -400.0;
 }
 
 // The radar image (grey, dB over 40 dB below the 99.5th percentile, like the seed's figure 5)
@@ -102,8 +101,8 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
       sorted.empty() ? 0.0 : db(static_cast<double>(sorted[(sorted.size() - 1) * 995 / 1000]));
   constexpr double kRangeDb = 40.0;
   const radar::EvImageConfig& g = p.config;
-  const double az0 = g.azimuth_min_rad * kDeg, el1 = g.elevation_max_rad * kDeg;
-  const double px_deg = g.pixel_rad * kDeg;
+  const double az0 = common::degrees(g.azimuth_min_rad), el1 = common::degrees(g.elevation_max_rad);
+  const double px_deg = common::degrees(g.pixel_rad);
   const auto rows = static_cast<std::size_t>(im.rows), cols = static_cast<std::size_t>(im.columns);
   // Cell centres, elevation ascending (row 0 of the image is the top).
   auto grid = [&](Heatmap& m, std::size_t nx, std::size_t ny, double step) {
@@ -244,8 +243,8 @@ int run_image_tool(const ImageToolOptions& o) {
         const std::size_t i = static_cast<std::size_t>(r * im.columns + col);
         const double* e = im.range_edges_m.data() + static_cast<std::size_t>(col * (im.rows + 1));
         std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.2f,%.2f,%.3f,%.3f\n", r, col,
-                      radar::ev_column_azimuth_rad(g, col) * kDeg,
-                      radar::ev_row_elevation_rad(g, r) * kDeg, e[r + 1], e[r],
+                      common::degrees(radar::ev_column_azimuth_rad(g, col)),
+                      common::degrees(radar::ev_row_elevation_rad(g, r)), e[r + 1], e[r],
                       db(static_cast<double>(im.intensity_m2[i])),
                       db(static_cast<double>(im.mean_m2[i])));
         f << line;
@@ -261,9 +260,9 @@ int run_image_tool(const ImageToolOptions& o) {
   j["carrier_hz"] = s.sbr.carrier_hz;
   j["ownship_enu_m"] = {p.pose.position_m.x, p.pose.position_m.y, p.pose.position_m.z};
   j["ground_height_m"] = g.ground_height_m;
-  j["grid"] = {{"azimuth_min_deg", g.azimuth_min_rad * kDeg},
-               {"elevation_max_deg", g.elevation_max_rad * kDeg},
-               {"pixel_deg", g.pixel_rad * kDeg},
+  j["grid"] = {{"azimuth_min_deg", common::degrees(g.azimuth_min_rad)},
+               {"elevation_max_deg", common::degrees(g.elevation_max_rad)},
+               {"pixel_deg", common::degrees(g.pixel_rad)},
                {"columns", im.columns},
                {"rows", im.rows},
                {"row_mapping",
@@ -303,10 +302,11 @@ int run_image_tool(const ImageToolOptions& o) {
         "%.1f) m, weather %s (%.3g dB/km one way)\n"
         "%zu returns (%llu used), %llu rays; trace %.2f s, image %.2f s, optical %.2f s, total "
         "%.2f s\nwrote %s\n",
-        im.columns, im.rows, g.pixel_rad * kDeg, g.looks, static_cast<unsigned long long>(g.seed),
-        p.pose.position_m.x, p.pose.position_m.y, p.pose.position_m.z,
-        s.weather.enabled ? s.weather.condition.c_str() : "none", p.weather_one_way_db_per_m * 1e3,
-        p.contributions, static_cast<unsigned long long>(im.contributions_used),
+        im.columns, im.rows, common::degrees(g.pixel_rad), g.looks,
+        static_cast<unsigned long long>(g.seed), p.pose.position_m.x, p.pose.position_m.y,
+        p.pose.position_m.z, s.weather.enabled ? s.weather.condition.c_str() : "none",
+        p.weather_one_way_db_per_m * 1e3, p.contributions,
+        static_cast<unsigned long long>(im.contributions_used),
         static_cast<unsigned long long>(p.trace.rays), p.trace_s, p.form_s, p.optical_s, p.total_s,
         dir.string().c_str());
   }

@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "config/cli_args.hpp"
 #include "plot/charts.hpp"
 #include "radar/constants.hpp"
@@ -23,6 +24,8 @@
 #include "tools/mpi_work.hpp"
 
 namespace radar_emu::tools {
+
+using common::Polarisation;
 
 using config::parse_number;
 using config::split;
@@ -38,8 +41,6 @@ using plot::write_line_chart_png;
 using config::parse_sweep;
 
 namespace {
-
-constexpr double kDegToRad = radar::kPi / 180.0;
 
 std::filesystem::path sibling(const std::string& path, const std::string& suffix) {
   std::filesystem::path p(path);
@@ -68,7 +69,7 @@ void close_or_throw(File& f, const std::string& path) {
 }
 
 double db_of_power(double p) {
-  return p > 0.0 ? 10.0 * std::log10(p) : -400.0;
+  return p > 0.0 ? common::db_from_power(p) : -400.0;
 }
 
 // Prints "\r  label i/n" to stderr at most every 0.5 s, and a newline at the end.
@@ -185,7 +186,7 @@ void print_target(const LoadedTarget& t, const radar::RcsEngine& e, bool quiet) 
       "deg; %llu smoother edges left to PO, %llu not modelled: concave, non-PEC, shared by > 2 "
       "facets or inconsistently wound)\n",
       e.edges().size(), static_cast<unsigned long long>(c.half_planes),
-      static_cast<unsigned long long>(c.wedges), e.config().edge_min_turn_rad / kDegToRad,
+      static_cast<unsigned long long>(c.wedges), e.config().edge_min_turn_rad / common::kRadPerDeg,
       static_cast<unsigned long long>(c.smooth), static_cast<unsigned long long>(c.unsupported));
   if (e.config().edge_order >= 2)
     std::printf(
@@ -342,10 +343,10 @@ double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, 
   std::vector<radar::Direction> tx(nt * np), rx(nt * np);
   for (std::size_t it = 0; it < nt; ++it) {
     for (std::size_t ip = 0; ip < np; ++ip) {
-      tx[it * np + ip] = {o.theta_deg[it] * kDegToRad, o.phi_deg[ip] * kDegToRad};
-      rx[it * np + ip] =
-          bistatic ? radar::Direction{bistatic->first * kDegToRad, bistatic->second * kDegToRad}
-                   : tx[it * np + ip];
+      tx[it * np + ip] = {common::radians(o.theta_deg[it]), common::radians(o.phi_deg[ip])};
+      rx[it * np + ip] = bistatic ? radar::Direction{common::radians(bistatic->first),
+                                                     common::radians(bistatic->second)}
+                                  : tx[it * np + ip];
     }
   }
   std::vector<radar::ScatteringMatrix> one(nt * np);
@@ -453,52 +454,30 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
   return t;
 }
 
-std::vector<Pol> parse_pols(std::string_view text) {
-  std::vector<Pol> out;
+std::vector<Polarisation> parse_pols(std::string_view text) {
+  std::vector<Polarisation> out;
   for (std::string_view p : split(text, ',')) {
-    std::string u(p);
-    std::transform(u.begin(), u.end(), u.begin(),
-                   [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-    Pol pol;
-    if (u == "HH")
-      pol = Pol::kHH;
-    else if (u == "HV")
-      pol = Pol::kHV;
-    else if (u == "VH")
-      pol = Pol::kVH;
-    else if (u == "VV")
-      pol = Pol::kVV;
-    else
-      throw std::invalid_argument("--pol: '" + std::string(p) + "' is not one of HH, HV, VH, VV");
+    Polarisation pol;
+    try {
+      pol = common::parse_polarisation(p);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument("--pol: " + std::string(e.what()));
+    }
     if (std::find(out.begin(), out.end(), pol) == out.end())
       out.push_back(pol);
   }
   return out;
 }
 
-std::string_view pol_name(Pol p) noexcept {
+std::complex<double> component(const radar::ScatteringMatrix& s, Polarisation p) noexcept {
   switch (p) {
-    case Pol::kHH:
-      return "HH";
-    case Pol::kHV:
-      return "HV";
-    case Pol::kVH:
-      return "VH";
-    case Pol::kVV:
-      return "VV";
-  }
-  return "?";
-}
-
-std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept {
-  switch (p) {
-    case Pol::kHH:
+    case Polarisation::kHH:
       return s.hh;
-    case Pol::kHV:
+    case Polarisation::kHV:
       return s.hv;
-    case Pol::kVH:
+    case Polarisation::kVH:
       return s.vh;
-    case Pol::kVV:
+    case Polarisation::kVV:
       return s.vv;
   }
   return {};
@@ -527,7 +506,7 @@ radar::RcsConfig rcs_config(int bounces, double rays_per_wavelength, bool edges,
   c.max_bounces = bounces;
   c.rays_per_wavelength = rays_per_wavelength;
   c.edges = edges;
-  c.edge_min_turn_rad = edge_turn_deg * kDegToRad;
+  c.edge_min_turn_rad = common::radians(edge_turn_deg);
   return c;
 }
 
@@ -546,10 +525,11 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
   radar::RcsStats mine_total;
   for (std::size_t d = mine.begin; d < mine.end; ++d) {
     const std::size_t it = d / np, ip = d % np;
-    const radar::Direction tx{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
-    const radar::Direction rx = bistatic_deg ? radar::Direction{bistatic_deg->first * kDegToRad,
-                                                                bistatic_deg->second * kDegToRad}
-                                             : tx;
+    const radar::Direction tx{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
+    const radar::Direction rx = bistatic_deg
+                                    ? radar::Direction{common::radians(bistatic_deg->first),
+                                                       common::radians(bistatic_deg->second)}
+                                    : tx;
     radar::RcsStats one;
     engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
     per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
@@ -577,7 +557,7 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
   radar::RcsStats mine_total;
   for (std::size_t a = mine.begin; a < mine.end; ++a) {
     const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
-    const radar::Direction dir{theta_deg[it] * kDegToRad, phi_deg[ip] * kDegToRad};
+    const radar::Direction dir{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
     const std::uint64_t before = mine_total.edges_used;
     engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), mine_total);
     edges_used[a] = mine_total.edges_used - before;
@@ -611,9 +591,9 @@ void write_rcs_chart(const RcsToolOptions& o, const std::vector<radar::Scatterin
                   o.theta_deg[0], o.phi_deg[0]);
   }
   chart.title = title;
-  for (Pol p : o.pols) {
+  for (Polarisation p : o.pols) {
     Series ser;
-    ser.label = std::string(pol_name(p));
+    ser.label = std::string(common::polarisation_name(p));
     if (sweep_theta || sweep_phi) {
       const std::size_t n = sweep_theta ? nt : np;
       for (std::size_t i = 0; i < n; ++i) {
@@ -697,13 +677,13 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
       slice_axis < 0 ? 1 : values[static_cast<std::size_t>(slice_axis)]->size();
   double peak = -400.0;
   for (const radar::ScatteringMatrix& m : s) {
-    for (Pol p : o.pols)
+    for (Polarisation p : o.pols)
       peak = std::max(peak, radar::dbsm(component(m, p)));
   }
   std::vector<Canvas> panels;
   std::size_t skipped = 0;
   for (std::size_t sl = 0; sl < n_slices; ++sl) {
-    for (Pol p : o.pols) {
+    for (Polarisation p : o.pols) {
       if (panels.size() == kMaxPanels) {
         ++skipped;
         continue;
@@ -719,7 +699,7 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
                       (*values[ua])[a == slice_axis ? sl : 0], units[ua]);
         fixed += buf;
       }
-      m.title = name + ": RCS " + std::string(pol_name(p)) + fixed +
+      m.title = name + ": RCS " + std::string(common::polarisation_name(p)) + fixed +
                 (o.bistatic_theta_deg ? " (bistatic)" : "");
       m.x_label = labels[static_cast<std::size_t>(ax)];
       m.y_label = labels[static_cast<std::size_t>(ay)];
@@ -811,8 +791,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
   {
     File f(open_or_throw(o.out_csv));
     std::fprintf(f.get(), "freq_hz,theta_deg,phi_deg");
-    for (Pol p : o.pols) {
-      const std::string n(pol_name(p));
+    for (Polarisation p : o.pols) {
+      const std::string n(common::polarisation_name(p));
       std::fprintf(f.get(), ",rcs_%s_dbsm,re_%s,im_%s", n.c_str(), n.c_str(), n.c_str());
     }
     // edges: 1 when edge diffraction was on; edges_used: the edge terms of that direction.
@@ -823,7 +803,7 @@ int run_rcs_tool(const RcsToolOptions& o) {
         for (std::size_t k = 0; k < nf; ++k) {
           const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
           std::fprintf(f.get(), "%.10g,%.10g,%.10g", o.freqs_hz[k], o.theta_deg[it], o.phi_deg[ip]);
-          for (Pol p : o.pols) {
+          for (Polarisation p : o.pols) {
             const std::complex<double> a = component(m, p);
             std::fprintf(f.get(), ",%.6f,%.9e,%.9e", radar::dbsm(a), a.real(), a.imag());
           }
@@ -847,8 +827,8 @@ int run_rcs_tool(const RcsToolOptions& o) {
     stats_path = o.stats_csv.empty() ? sibling(o.out_csv, "_stats.csv").string() : o.stats_csv;
     File f(open_or_throw(stats_path));
     std::fprintf(f.get(), "freq_hz,theta_deg,phi_deg");
-    for (Pol p : o.pols) {
-      const std::string n(pol_name(p));
+    for (Polarisation p : o.pols) {
+      const std::string n(common::polarisation_name(p));
       std::fprintf(f.get(), ",mean_%s_dbsm,median_%s_dbsm,p10_%s_dbsm,p90_%s_dbsm,std_%s_db",
                    n.c_str(), n.c_str(), n.c_str(), n.c_str(), n.c_str());
     }
@@ -856,17 +836,17 @@ int run_rcs_tool(const RcsToolOptions& o) {
     const std::size_t n_swept = sweep_theta ? nt : np, n_fixed = sweep_theta ? np : nt;
     std::vector<double> angles(n_swept), sigma(n_swept);
     for (std::size_t i = 0; i < n_swept; ++i)
-      angles[i] = (sweep_theta ? o.theta_deg[i] : o.phi_deg[i]) * kDegToRad;
+      angles[i] = common::radians(sweep_theta ? o.theta_deg[i] : o.phi_deg[i]);
     for (std::size_t j = 0; j < n_fixed; ++j) {
       for (std::size_t k = 0; k < nf; ++k) {
         std::vector<std::vector<radar::FluctuationStats>> per_pol;
-        for (Pol p : o.pols) {
+        for (Polarisation p : o.pols) {
           for (std::size_t i = 0; i < n_swept; ++i) {
             const std::size_t it = sweep_theta ? i : j, ip = sweep_theta ? j : i;
             sigma[i] = std::norm(component(s[(it * np + ip) * nf + k], p));
           }
           per_pol.push_back(
-              radar::sliding_window_stats(angles, sigma, 0.5 * o.window_deg * kDegToRad));
+              radar::sliding_window_stats(angles, sigma, common::radians(0.5 * o.window_deg)));
         }
         for (std::size_t i = 0; i < n_swept; ++i) {
           const std::size_t it = sweep_theta ? i : j, ip = sweep_theta ? j : i;
@@ -969,7 +949,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
   if (na > 1) {
     const double a0 = nt > 1 ? o.theta_deg.front() : o.phi_deg.front();
     const double a1 = nt > 1 ? o.theta_deg.back() : o.phi_deg.back();
-    const double step_rad = std::abs(a1 - a0) / static_cast<double>(na - 1) * kDegToRad;
+    const double step_rad = common::radians(std::abs(a1 - a0) / static_cast<double>(na - 1));
     const double f_c = 0.5 * (o.freqs_hz.front() + o.freqs_hz.back());
     const double cross_window_m = radar::kSpeedOfLight_mps / f_c / (2.0 * step_rad);
     if (cross_window_m < extent_m) {
@@ -1012,13 +992,13 @@ int run_profile_tool(const ProfileToolOptions& o) {
     char title[200];
     std::snprintf(title, sizeof title,
                   "%s: %s range profile, %.4g-%.4g GHz, %s window, resolution %.3g m", name.c_str(),
-                  std::string(pol_name(o.pol)).c_str(), o.freqs_hz.front() / 1e9,
+                  std::string(common::polarisation_name(o.pol)).c_str(), o.freqs_hz.front() / 1e9,
                   o.freqs_hz.back() / 1e9, o.window.c_str(), centre.resolution_m);
     chart.title = title;
     chart.x_label = "range from the target origin [m], + away from the radar";
     chart.y_label = "|profile| [dBsm]";
     Series ser;
-    ser.label = std::string(pol_name(o.pol));
+    ser.label = std::string(common::polarisation_name(o.pol));
     double peak = -400.0;
     for (std::size_t i = 0; i < centre.range_m.size(); ++i) {
       ser.x.push_back(centre.range_m[i]);
@@ -1035,7 +1015,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
   if (na > 1) {
     std::vector<double> angles(na);
     for (std::size_t a = 0; a < na; ++a)
-      angles[a] = (nt > 1 ? o.theta_deg[a] : o.phi_deg[a]) * kDegToRad;
+      angles[a] = common::radians(nt > 1 ? o.theta_deg[a] : o.phi_deg[a]);
     double step = (angles.back() - angles.front()) / static_cast<double>(na - 1);
     std::vector<std::complex<double>> ordered = samples;
     if (step < 0.0) {  // descending sweep: image it in ascending angle
@@ -1070,7 +1050,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
       Heatmap m;
       char title[200];
       std::snprintf(title, sizeof title, "%s: ISAR (%s), resolution %.3g m x %.3g m", name.c_str(),
-                    std::string(pol_name(o.pol)).c_str(), img.range_resolution_m,
+                    std::string(common::polarisation_name(o.pol)).c_str(), img.range_resolution_m,
                     img.cross_range_resolution_m);
       m.title = title;
       m.x_label = "range [m]";

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/polarisation.hpp"
 #include "radar/em/mom.hpp"
 #include "radar/em/rcs.hpp"
 #include "scene/scene.hpp"
@@ -34,11 +35,11 @@ struct LoadedTarget {
 [[nodiscard]] LoadedTarget load_target(const std::string& mesh_path, double scale,
                                        const std::vector<std::string>& material_definitions);
 
-enum class Pol { kHH, kHV, kVH, kVV };
-/// "HH,VV" -> {kHH, kVV}; receive letter first. Throws std::invalid_argument.
-[[nodiscard]] std::vector<Pol> parse_pols(std::string_view text);
-[[nodiscard]] std::string_view pol_name(Pol p) noexcept;
-[[nodiscard]] std::complex<double> component(const radar::ScatteringMatrix& s, Pol p) noexcept;
+/// "HH,VV" -> {kHH, kVV}; receive letter first, either case (common/polarisation.hpp), repeats
+/// dropped. Throws std::invalid_argument "--pol: 'X' is not one of HH, HV, VH, VV".
+[[nodiscard]] std::vector<common::Polarisation> parse_pols(std::string_view text);
+[[nodiscard]] std::complex<double> component(const radar::ScatteringMatrix& s,
+                                             common::Polarisation p) noexcept;
 
 /// How an error message names an option: the command line's "--edge-turn-deg" or Python's
 /// "edge_turn_deg" (the radar_emu module, docs/python.md).
@@ -86,7 +87,7 @@ struct RcsToolOptions {
   std::vector<std::string> materials;
   std::vector<double> freqs_hz;
   std::vector<double> theta_deg{0.0}, phi_deg{0.0};
-  std::vector<Pol> pols{Pol::kHH, Pol::kVV};
+  std::vector<common::Polarisation> pols{common::Polarisation::kHH, common::Polarisation::kVV};
   int bounces = 3;
   double rays_per_wavelength = 4.0;
   bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off
@@ -118,7 +119,7 @@ struct ProfileToolOptions {
   std::vector<std::string> materials;
   std::vector<double> freqs_hz;                      ///< uniformly spaced, >= 2
   std::vector<double> theta_deg{0.0}, phi_deg{0.0};  ///< several in one of them: ISAR
-  Pol pol = Pol::kVV;
+  common::Polarisation pol = common::Polarisation::kVV;
   int bounces = 3;
   double rays_per_wavelength = 4.0;
   bool edges = true;            ///< edge diffraction (radar/em/edges.hpp); --no-edges turns it off

@@ -26,6 +26,8 @@
 #include <ogr_srs_api.h>
 #endif
 
+#include "common/polarisation.hpp"
+#include "common/units.hpp"
 #include "config/toml_reader.hpp"
 #include "plot/canvas.hpp"
 #include "plot/charts.hpp"
@@ -55,14 +57,13 @@ namespace sc = radar_emu::scene;
 namespace cl = radar_emu::radar::clutter;
 using Clock = std::chrono::steady_clock;
 
-constexpr double kDeg = rd::kPi / 180.0;
 constexpr double kC = rd::kSpeedOfLight_mps;
 
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 double db10(double x) {
-  return 10.0 * std::log10(std::max(x, 1e-300));
+  return common::db_from_power(std::max(x, 1e-300));
 }
 
 // ------------------------------------------------------------------------------ the TOML case
@@ -75,16 +76,6 @@ void vec3(const Table& t, std::string_view key, glm::dvec3& out, double limit) {
   std::array<double, 3> v{};
   if (t.vector(key, v, {-limit, limit}))
     out = glm::dvec3(v[0], v[1], v[2]);
-}
-
-rd::Polarisation parse_pol(const std::string& s) {
-  if (s == "HH")
-    return rd::Polarisation::kHH;
-  if (s == "HV")
-    return rd::Polarisation::kHV;
-  if (s == "VH")
-    return rd::Polarisation::kVH;
-  return rd::Polarisation::kVV;
 }
 
 // The case from its parsed TOML; the file's name starts every error.
@@ -105,8 +96,13 @@ SarCase case_from_table(const Table& root) {
   radar.number("transmit_power_w", p.transmit_power_w, {1e-6, 1e9});
   p.peak_gain = 1.0;  // 0 dB
   radar.decibels("peak_gain_db", p.peak_gain, {-20.0, 80.0});
-  radar.choice("polarisation", c.pol_name, {"HH", "HV", "VH", "VV"});
-  c.pol = parse_pol(c.pol_name);
+  radar.string("polarisation", c.pol_name);
+  try {
+    c.pol = common::parse_polarisation(c.pol_name);
+  } catch (const std::invalid_argument& e) {
+    radar.fail("polarisation", e.what());
+  }
+  c.pol_name = common::polarisation_name(c.pol);
 
   const Table plat = root.table("platform");
   plat.refuse_unknown({"altitude_m", "speed_mps", "heading_deg", "look"});
@@ -119,9 +115,9 @@ SarCase case_from_table(const Table& root) {
 
   const Table ant = root.table("antenna");
   ant.refuse_unknown({"incidence_deg", "azimuth_beamwidth_deg", "elevation_beamwidth_deg"});
-  p.incidence_rad = 63.0 * kDeg;
-  p.azimuth_beamwidth_rad = 0.12 * kDeg;
-  p.elevation_beamwidth_rad = 13.0 * kDeg;
+  p.incidence_rad = common::radians(63.0);
+  p.azimuth_beamwidth_rad = common::radians(0.12);
+  p.elevation_beamwidth_rad = common::radians(13.0);
   ant.degrees("incidence_deg", p.incidence_rad, {5.0, 85.0});
   ant.degrees("azimuth_beamwidth_deg", p.azimuth_beamwidth_rad, {1e-3, 30.0, true});
   ant.degrees("elevation_beamwidth_deg", p.elevation_beamwidth_rad, {1e-2, 60.0, true});
@@ -186,7 +182,7 @@ SarCase case_from_table(const Table& root) {
   if (c.theta_rad > p.azimuth_beamwidth_rad)
     throw std::invalid_argument(
         path + ": [processing] synthetic_beamwidth_deg: the processed aperture (" +
-        std::to_string(c.theta_rad / kDeg) +
+        std::to_string(c.theta_rad / common::kRadPerDeg) +
         " deg) is wider than the antenna's azimuth beamwidth; widen the beam or the synthetic "
         "beamwidth");
   const double gate = kC / (2.0 * p.sample_rate_hz);
@@ -262,8 +258,8 @@ glm::dvec3 broadside_platform(const rd::SarParams& p, const glm::dvec3& x) {
 
 sc::SceneDescription build_scene(const SarCase& c, double half_extent_m) {
   sc::SceneDescription d;
-  d.anchor.latitude_rad = c.latitude_deg * kDeg;
-  d.anchor.longitude_rad = c.longitude_deg * kDeg;
+  d.anchor.latitude_rad = common::radians(c.latitude_deg);
+  d.anchor.longitude_rad = common::radians(c.longitude_deg);
   d.materials.push_back({"metal", {0.8f, 0.8f, 0.8f}});
   if (c.ground_material != "none") {
     d.materials.push_back({c.ground_material, {0.3f, 0.5f, 0.2f}});
@@ -757,7 +753,7 @@ int run_sar_tool(const SarToolOptions& o) {
 #endif
   std::ostringstream title;
   title << "radar-emu sar: " << p.carrier_hz / 1e9 << " GHz, B " << p.bandwidth_hz / 1e6
-        << " MHz, incidence " << p.incidence_rad / kDeg << " deg, " << c.pol_name;
+        << " MHz, incidence " << p.incidence_rad / common::kRadPerDeg << " deg, " << c.pol_name;
   write_png(img, title.str(), (dir / "image.png").string());
 
   // The impulse response of the first analysed trihedral: range and azimuth cuts, dB.
@@ -810,21 +806,21 @@ int run_sar_tool(const SarToolOptions& o) {
   j["platform"] = {
       {"altitude_m", c.altitude_m},
       {"speed_mps", c.speed_mps},
-      {"heading_deg", c.heading_rad / kDeg},
+      {"heading_deg", c.heading_rad / common::kRadPerDeg},
       {"look", p.look_right ? "right" : "left"},
       {"start_position_m", {p.start_position_m.x, p.start_position_m.y, p.start_position_m.z}},
       {"track_length_m", track_len},
       {"pulses", p.pulses}};
-  j["antenna"] = {{"incidence_deg", p.incidence_rad / kDeg},
-                  {"azimuth_beamwidth_deg", p.azimuth_beamwidth_rad / kDeg},
-                  {"elevation_beamwidth_deg", p.elevation_beamwidth_rad / kDeg}};
+  j["antenna"] = {{"incidence_deg", p.incidence_rad / common::kRadPerDeg},
+                  {"azimuth_beamwidth_deg", p.azimuth_beamwidth_rad / common::kRadPerDeg},
+                  {"elevation_beamwidth_deg", p.elevation_beamwidth_rad / common::kRadPerDeg}};
   j["processing"] = {
       {"algorithm", "time-domain backprojection"},
       {"gates", p.gates},
       {"gate_m", gate},
       {"near_range_m", p.near_range_m},
-      {"synthetic_beamwidth_deg", c.synthetic_beamwidth_rad / kDeg},
-      {"integration_angle_deg", c.theta_rad / kDeg},
+      {"synthetic_beamwidth_deg", c.synthetic_beamwidth_rad / common::kRadPerDeg},
+      {"integration_angle_deg", c.theta_rad / common::kRadPerDeg},
       {"taper", c.taper == rd::SarTaper::kNone ? "none" : "hamming"},
       {"upsample", c.upsample},
       {"theory_range_resolution_m", rd::theory_range_resolution_m(p, c.taper)},

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "common/units.hpp"
 #include "radar/constants.hpp"
 #include "radar/em/sbr_core.hpp"
 #include "radar/products/sar.hpp"
@@ -31,8 +32,8 @@ struct SarCase {
   radar::SarParams p;
   double altitude_m = 2000.0;
   double speed_mps = 100.0;
-  double heading_rad = 90.0 * (radar::kPi / 180.0);
-  double synthetic_beamwidth_rad = 0.032 * (radar::kPi / 180.0);
+  double heading_rad = common::radians(90.0);
+  double synthetic_beamwidth_rad = common::radians(0.032);
   radar::SarTaper taper = radar::SarTaper::kNone;
   std::size_t upsample = 16;
   double image_width_m = 2000.0;

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/units.hpp"
 #include "scene/airport_gen.hpp"
 #include "scene/gltf.hpp"
 #include "scene/mesh_io.hpp"
@@ -23,8 +24,6 @@
 namespace radar_emu::tools {
 
 namespace {
-
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -163,8 +162,8 @@ std::string scene_info_json(const scene::SceneInfo& info, const std::string& fil
   j["vertices"] = info.vertices;
   j["extent_m"] = {{"min", {info.extent_min_m.x, info.extent_min_m.y, info.extent_min_m.z}},
                    {"max", {info.extent_max_m.x, info.extent_max_m.y, info.extent_max_m.z}}};
-  j["anchor_deg_m"] = {info.anchor.latitude_rad / kDeg, info.anchor.longitude_rad / kDeg,
-                       info.anchor.height_m};
+  j["anchor_deg_m"] = {info.anchor.latitude_rad / common::kRadPerDeg,
+                       info.anchor.longitude_rad / common::kRadPerDeg, info.anchor.height_m};
   j["load_warnings"] = load_warnings;
   return j.dump(2) + "\n";
 }
@@ -175,8 +174,8 @@ std::string scene_info_text(const scene::SceneInfo& info, const std::string& fil
   char line[256];
   s << "scene " << file << "\n";
   std::snprintf(line, sizeof line, "  anchor            %.6f deg N, %.6f deg E, %.1f m\n",
-                info.anchor.latitude_rad / kDeg, info.anchor.longitude_rad / kDeg,
-                info.anchor.height_m);
+                info.anchor.latitude_rad / common::kRadPerDeg,
+                info.anchor.longitude_rad / common::kRadPerDeg, info.anchor.height_m);
   s << line;
   std::snprintf(line, sizeof line,
                 "  extent [m]        E %.1f .. %.1f, N %.1f .. %.1f, U %.1f .. %.1f\n",
@@ -252,7 +251,7 @@ int run_scene_preview(const ScenePreviewOptions& o) {
   if (look_at)
     cam.look_at_m = *look_at;
   if (o.fov_deg)
-    cam.vertical_fov_rad = *o.fov_deg * kDeg;
+    cam.vertical_fov_rad = common::radians(*o.fov_deg);
   const scene::PreviewImage img = scene::render_preview(scene, cam);
   if (stbi_write_png(o.out.c_str(), img.width_px, img.height_px, 3, img.rgb.data(),
                      img.width_px * 3) == 0) {
@@ -264,7 +263,7 @@ int run_scene_preview(const ScenePreviewOptions& o) {
         "%.1f deg vertical field, %.2f s\n",
         o.out.c_str(), img.width_px, img.height_px, o.file.c_str(), cam.position_m.x,
         cam.position_m.y, cam.position_m.z, cam.look_at_m.x, cam.look_at_m.y, cam.look_at_m.z,
-        cam.vertical_fov_rad / kDeg, seconds_since(t0));
+        cam.vertical_fov_rad / common::kRadPerDeg, seconds_since(t0));
   }
   return 0;
 }

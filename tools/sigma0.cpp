@@ -5,12 +5,15 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "plot/charts.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "radar/constants.hpp"
 #include "tools/rcs.hpp"
 
 namespace radar_emu::tools {
+
+using common::Polarisation;
 
 using plot::Canvas;
 using plot::Heatmap;
@@ -25,15 +28,15 @@ namespace {
 
 namespace cl = radar::clutter;
 
-double sigma_of(const cl::Sigma0& s, Pol p) {
+double sigma_of(const cl::Sigma0& s, Polarisation p) {
   switch (p) {
-    case Pol::kHH:
+    case Polarisation::kHH:
       return s.hh;
-    case Pol::kVV:
+    case Polarisation::kVV:
       return s.vv;
-    case Pol::kHV:
+    case Polarisation::kHV:
       return s.hv;
-    case Pol::kVH:
+    case Polarisation::kVH:
       return s.vh;
   }
   return 0.0;
@@ -42,7 +45,7 @@ double sigma_of(const cl::Sigma0& s, Pol p) {
 constexpr double kFloorDb = -300.0;  // written for "no power" (the model gives none)
 
 double to_db(double linear) {
-  return linear > 0.0 ? std::max(10.0 * std::log10(linear), kFloorDb) : kFloorDb;
+  return linear > 0.0 ? std::max(common::db_from_power(linear), kFloorDb) : kFloorDb;
 }
 
 cl::SurfaceSpec custom_surface(const Sigma0ToolOptions& o) {
@@ -74,7 +77,7 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
   if (!(o.freq_hz > 0.0) || !std::isfinite(o.freq_hz))
     throw std::invalid_argument("--freq-hz must be a finite frequency > 0");
   const cl::Sigma0Model model = cl::parse_sigma0_model(o.model);
-  const std::vector<Pol> pols = parse_pols(o.pols);
+  const std::vector<Polarisation> pols = parse_pols(o.pols);
   for (double t : o.theta_deg)
     if (!(t >= 0.0 && t < 90.0))
       throw std::invalid_argument("--theta-deg: incidence angles must be in [0, 90) deg");
@@ -131,19 +134,19 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
   };
   std::vector<Row> rows;
   const std::vector<double> scatter = bistatic ? o.theta_s_deg : std::vector<double>{0.0};
-  const double deg = radar::kPi / 180.0;
   std::uint32_t seen = 0;
   for (double t : o.theta_deg) {
     for (double ts : scatter) {
-      const cl::Geometry g = bistatic ? cl::Geometry{t * deg, ts * deg, o.phi_s_deg * deg}
-                                      : cl::Geometry::backscatter(t * deg);
+      const cl::Geometry g = bistatic ? cl::Geometry{common::radians(t), common::radians(ts),
+                                                     common::radians(o.phi_s_deg)}
+                                      : cl::Geometry::backscatter(common::radians(t));
       Row r{t, ts, cl::evaluate_sigma0(spec, model, o.freq_hz, g)};
       rows.push_back(r);
     }
   }
   bool cross_asked = false;
-  for (Pol p : pols)
-    cross_asked |= p == Pol::kHV || p == Pol::kVH;
+  for (Polarisation p : pols)
+    cross_asked |= p == Polarisation::kHV || p == Polarisation::kVH;
   auto row_valid = [&](const Row& r) {
     std::uint32_t f = r.s.invalid;
     if (!cross_asked)
@@ -157,14 +160,14 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
   std::fprintf(f, "theta_deg");
   if (bistatic)
     std::fprintf(f, ",theta_s_deg,phi_s_deg");
-  for (Pol p : pols)
-    std::fprintf(f, ",sigma0_%s_db", std::string(pol_name(p)).c_str());
+  for (Polarisation p : pols)
+    std::fprintf(f, ",sigma0_%s_db", std::string(common::polarisation_name(p)).c_str());
   std::fprintf(f, ",valid\n");
   for (const Row& r : rows) {
     std::fprintf(f, "%.6g", r.theta);
     if (bistatic)
       std::fprintf(f, ",%.6g,%.6g", r.theta_s, o.phi_s_deg);
-    for (Pol p : pols)
+    for (Polarisation p : pols)
       std::fprintf(f, ",%.4f", to_db(sigma_of(r.s.incoherent, p)));
     const std::uint32_t flags = row_valid(r);
     seen |= flags;
@@ -185,13 +188,13 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
         std::adjacent_find(ts.begin(), ts.end()) != ts.end())
       throw std::invalid_argument("--plot: the map needs distinct incidence and scattering angles");
     std::vector<Canvas> panels;
-    for (Pol p : pols) {
+    for (Polarisation p : pols) {
       Heatmap m;
       char title[200];
       std::snprintf(title, sizeof title,
                     "sigma0 %s of %s, %s model, %.4g GHz, phi_s %g deg (grey: outside validity)",
-                    std::string(pol_name(p)).c_str(), what.c_str(), cl::to_string(model),
-                    o.freq_hz * 1e-9, o.phi_s_deg);
+                    std::string(common::polarisation_name(p)).c_str(), what.c_str(),
+                    cl::to_string(model), o.freq_hz * 1e-9, o.phi_s_deg);
       m.title = title;
       m.x_label = "scattering angle theta_s [deg]";
       m.y_label = "incidence angle theta_i [deg]";
@@ -230,17 +233,18 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     const double theta0 = rows.front().theta;
     // In backscatter HV = VH (reciprocity): one curve, labelled HV=VH, instead of two on top of
     // each other.
-    const bool has_hv = std::find(pols.begin(), pols.end(), Pol::kHV) != pols.end();
-    const bool has_vh = std::find(pols.begin(), pols.end(), Pol::kVH) != pols.end();
+    const bool has_hv = std::find(pols.begin(), pols.end(), Polarisation::kHV) != pols.end();
+    const bool has_vh = std::find(pols.begin(), pols.end(), Polarisation::kVH) != pols.end();
     const bool reciprocal = !bistatic && std::all_of(rows.begin(), rows.end(), [](const Row& r) {
       return r.s.incoherent.hv == r.s.incoherent.vh;
     });
     std::size_t colour_index = 0;
-    for (Pol p : pols) {
-      if (p == Pol::kVH && has_hv && reciprocal)
+    for (Polarisation p : pols) {
+      if (p == Polarisation::kVH && has_hv && reciprocal)
         continue;
-      const std::string name =
-          p == Pol::kHV && reciprocal && has_vh ? "HV=VH" : std::string(pol_name(p));
+      const std::string name = p == Polarisation::kHV && reciprocal && has_vh
+                                   ? "HV=VH"
+                                   : std::string(common::polarisation_name(p));
       Series inside, outside;
       inside.label = name;
       outside.label = name + " (invalid)";

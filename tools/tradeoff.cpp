@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/units.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
@@ -53,7 +54,6 @@ namespace {
 
 using radar::kPi;
 using radar::kSpeedOfLight_mps;
-constexpr double kDeg = kPi / 180.0;
 using Clock = std::chrono::steady_clock;
 
 double ms_since(Clock::time_point t0) {
@@ -61,7 +61,7 @@ double ms_since(Clock::time_point t0) {
 }
 
 double db10(double linear) {
-  return 10.0 * std::log10(std::max(linear, 1e-40));
+  return common::db_from_power(std::max(linear, 1e-40));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -227,7 +227,7 @@ void vehicle_case(Vehicle& v, bool quick, const Log& log, std::vector<Row>& rows
   const int n = quick ? 5 : 21;
   const double phi0 = quick ? 25.0 : 20.0, dphi = quick ? 2.5 : 1.0;
   for (int i = 0; i < n; ++i)
-    dirs.push_back({theta * kDeg, (phi0 + i * dphi) * kDeg});
+    dirs.push_back({common::radians(theta), common::radians(phi0 + i * dphi)});
   const std::vector<double> freqs{10e9};
   log("vehicle: %zu-facet vehicle, 10 GHz VV, theta %g deg, phi %g-%g deg (%d aspects)\n",
       v.scene.triangle_count(), theta, phi0, phi0 + (n - 1) * dphi, n);
@@ -259,7 +259,7 @@ void profile_case(Vehicle& v, bool quick, const Log& log, std::vector<Row>& rows
   std::vector<double> freqs;
   for (std::size_t i = 0; i < grid.count; ++i)
     freqs.push_back(grid.start_hz + static_cast<double>(i) * grid.step_hz);
-  const std::vector<radar::Direction> dirs{{80.0 * kDeg, 30.0 * kDeg}};
+  const std::vector<radar::Direction> dirs{{common::radians(80.0), common::radians(30.0)}};
   log("profile: vehicle at theta 80 deg, phi 30 deg, %zu frequencies 9.5-%.4g GHz, VV, Hann\n",
       grid.count, freqs.back() * 1e-9);
   auto run = [&](const radar::RcsConfig& c) {
@@ -322,7 +322,8 @@ void sphere_case(bool quick, const Log& log, std::vector<Row>& rows, std::vector
     radar::RcsConfig c;
     c.max_bounces = 1;  // convex: no multi-bounce path
     const double f = k * kSpeedOfLight_mps / (2.0 * kPi);
-    const Sweep s = rcs_sweep(scene, pec_surfaces(d), c, {{37.0 * kDeg, 11.0 * kDeg}}, {f});
+    const Sweep s =
+        rcs_sweep(scene, pec_surfaces(d), c, {{common::radians(37.0), common::radians(11.0)}}, {f});
     const double faceted = db10(std::norm(s.vv[0]));
     const double po = db10(radar::po_sphere_rcs_m2(a, k));
     const double mie = db10(radar::mie_sphere_rcs_m2(a, k));
@@ -349,7 +350,7 @@ void sphere_case(bool quick, const Log& log, std::vector<Row>& rows, std::vector
           {scene::TargetKind::kSphere, a, 1.0, 1.0, std::min(lambda / 12.0, 2.0 * kPi * a / 32.0)});
       radar::MomSolver mom(md, pec_surfaces(md));
       mom.factor(f);
-      const radar::Direction dir{37.0 * kDeg, 11.0 * kDeg};
+      const radar::Direction dir{common::radians(37.0), common::radians(11.0)};
       radar::ScatteringMatrix sm;
       mom.scatter({&dir, 1}, {&dir, 1}, {&sm, 1});
       const double ms =
@@ -391,7 +392,7 @@ void grazing_case(bool quick, const Log& log, std::vector<Row>& rows,
   for (double alpha : incidences) {
     // Face normals at +-45 deg from +z in the x-z plane: a radar at theta in that plane meets
     // one face at theta + 45 deg (scene/targets.hpp).
-    const std::vector<radar::Direction> dir{{(alpha - 45.0) * kDeg, 0.0}};
+    const std::vector<radar::Direction> dir{{common::radians(alpha - 45.0), 0.0}};
     radar::RcsConfig c1;
     c1.max_bounces = 1;
     const Sweep single = rcs_sweep(scene, surfaces, c1, dir, freqs);
@@ -453,7 +454,7 @@ struct IemCurves {
 void iem_case(bool quick, const Log& log, std::vector<Row>& rows, const IemSurface& surf,
               IemCurves& curves) {
   namespace cl = radar::clutter;
-  const double f = 10e9, k = 2.0 * kPi * f / kSpeedOfLight_mps, theta = 40.0 * kDeg;
+  const double f = 10e9, k = 2.0 * kPi * f / kSpeedOfLight_mps, theta = common::radians(40.0);
   const int n = quick ? 10 : 25;
   log("iem: sigma0 VV at 10 GHz, 40 deg, eps 15-j3, %s, ks 0.1-5 (%d points)\n", surf.tag.c_str(),
       n);
@@ -636,7 +637,7 @@ MatchStats match(const std::vector<radar::Detection>& ref, const std::vector<rad
     used_ref[p.i] = used_d[p.j] = true;
     ++m.matched;
     m.range_m += std::abs(ref[p.i].range_m - d[p.j].range_m);
-    m.azimuth_deg += std::abs(ref[p.i].azimuth_rad - d[p.j].azimuth_rad) / kDeg;
+    m.azimuth_deg += std::abs(ref[p.i].azimuth_rad - d[p.j].azimuth_rad) / common::kRadPerDeg;
     m.snr_db += std::abs(db10(ref[p.i].snr) - db10(d[p.j].snr));
   }
   if (m.matched > 0) {
@@ -682,7 +683,7 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
       bench.scenario().name.c_str());
   const FrameResult ref = bench.run(ref_setting);
   const double range_gate_m = 2.0 * bench.range_cell_m();
-  const double az_gate_rad = 0.5 * kDeg;
+  const double az_gate_rad = common::radians(0.5);
   char ref_text[256];
   std::snprintf(ref_text, sizeof ref_text,
                 "target %g m; terrain %g mrad; %d bounces; %d pulses; %zu rays a target max; "
@@ -693,7 +694,7 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
       "gates %.2f m, %.2f deg\n",
       ref_text, static_cast<unsigned long long>(ref.rays),
       static_cast<unsigned long long>(ref.coarsened), ref.trace_ms, ref.sensor_ms, range_gate_m,
-      az_gate_rad / kDeg);
+      az_gate_rad / common::kRadPerDeg);
   for (const FrameKnob& k : knobs) {
     for (std::size_t i = 0; i < k.values.size(); ++i) {
       const bool is_ref = i + 1 == k.values.size();

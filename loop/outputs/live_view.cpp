@@ -5,18 +5,16 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <stdexcept>
 #include <thread>
 
+#include "common/units.hpp"
 #include "loop/frame_record.hpp"
 #include "loop/scenario.hpp"
 
 namespace radar_emu::loop {
 
 namespace {
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 std::string json_string(std::string_view s) {
   std::string o = "\"";
@@ -88,8 +86,8 @@ LiveView::LiveView(LiveViewConfig config)
   const Scenario& s = *config_.scenario;
   budget_ms_ = 1e3 / s.rate_hz;
   // The B-scope's axes, as detections.png (loop/outputs/run_plots.cpp BScope).
-  azimuth_min_deg_ = s.sbr.azimuth_min_rad * kDegPerRad;
-  azimuth_max_deg_ = s.sbr.azimuth_max_rad * kDegPerRad;
+  azimuth_min_deg_ = common::degrees(s.sbr.azimuth_min_rad);
+  azimuth_max_deg_ = common::degrees(s.sbr.azimuth_max_rad);
   range_max_m_ = s.sensor.max_range_m;
   scenario_json_ = json_string(s.name);
   for (const std::string& n : config_.object_names)
@@ -206,7 +204,7 @@ void LiveView::format(const Snapshot& s, bool ended, std::string& o) const {
   if (s.ownship_valid) {
     const glm::dvec3& p = s.ownship_enu_m;
     const glm::dvec3& v = s.velocity_enu_mps;
-    double track_deg = std::atan2(v.x, v.y) * kDegPerRad;  // from north toward east
+    double track_deg = common::degrees(std::atan2(v.x, v.y));  // from north toward east
     if (track_deg < 0.0)
       track_deg += 360.0;
     o += ",\"east_m\":";
@@ -261,7 +259,7 @@ void LiveView::format(const Snapshot& s, bool ended, std::string& o) const {
     o += "\"object\":";
     o += t.object_id < object_json_.size() ? object_json_[t.object_id] : std::string("null");
     o += ",\"azimuth_deg\":";
-    number(o, t.azimuth_rad * kDegPerRad, 4);
+    number(o, common::degrees(t.azimuth_rad), 4);
     o += ",\"range_m\":";
     number(o, t.range_m, 2);
     o += '}';

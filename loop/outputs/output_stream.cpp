@@ -10,11 +10,11 @@
 #include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <stdexcept>
 #include <string_view>
 #include <system_error>
 
+#include "common/units.hpp"
 #include "io/candump.hpp"
 #include "loop/outputs/run_plots.hpp"
 
@@ -22,7 +22,6 @@ namespace radar_emu::loop {
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 constexpr std::size_t kFileBuffer = 1u << 20;  // 1 MiB a file
 // A typical frame of detections.json fits (64 detections of about 500 characters): it then
 // goes to the file in one write. Larger ones are split (File::put flushes when full).
@@ -487,9 +486,9 @@ void OutputStream::write_truth(const FrameRecord& rec, bool first) noexcept {
     t.put(",\"range_m\":");
     t.put_double(o.range_m);
     t.put(",\"azimuth_deg\":");
-    t.put_double(o.azimuth_rad * kDegPerRad);
+    t.put_double(common::degrees(o.azimuth_rad));
     t.put(",\"elevation_deg\":");
-    t.put_double(o.elevation_rad * kDegPerRad);
+    t.put_double(common::degrees(o.elevation_rad));
     t.put(",\"radial_velocity_mps\":");
     t.put_double(o.radial_velocity_mps);
     t.put('}');

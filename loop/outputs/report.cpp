@@ -9,6 +9,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "timing/profiler.hpp"
 
@@ -18,8 +19,6 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 using ull = unsigned long long;
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // ---- report.json, one block of keys at a time (in the file's order) ----
 
@@ -328,10 +327,10 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                    {"velocity_bin_mps", f.velocity_bin_mps},
                    {"unambiguous_velocity_mps", f.unambiguous_velocity_mps},
                    {"beams", f.beams},
-                   {"sum_beamwidth_az_deg", f.sum_beamwidth_az_rad * kDegPerRad},
-                   {"sum_beamwidth_el_deg", f.sum_beamwidth_el_rad * kDegPerRad},
-                   {"antenna_gain_db", 10.0 * std::log10(s.sensor.antenna.peak_gain)},
-                   {"processing_gain_db", 10.0 * std::log10(f.processing_gain)},
+                   {"sum_beamwidth_az_deg", common::degrees(f.sum_beamwidth_az_rad)},
+                   {"sum_beamwidth_el_deg", common::degrees(f.sum_beamwidth_el_rad)},
+                   {"antenna_gain_db", common::db_from_power(s.sensor.antenna.peak_gain)},
+                   {"processing_gain_db", common::db_from_power(f.processing_gain)},
                    {"cfar", s.sensor.cfar.kind == radar::CfarKind::kCellAveraging ? "ca" : "os"},
                    {"cfar_training_cells", f.cfar_training_cells},
                    {"noise_seed", s.sensor.noise_seed},

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <numbers>
 #include <stdexcept>
 #include <vector>
 
+#include "common/units.hpp"
 #include "plot/canvas.hpp"
 #include "plot/charts.hpp"
 
@@ -51,10 +51,9 @@ const Rgb kBScopeBackground{16, 20, 28}, kBScopeGrid{55, 62, 78}, kBScopeInk{210
 BScope::BScope(const Scenario& s, std::uint64_t frames_planned)
     : canvas_(BScopeLayout::kWidth, BScopeLayout::kHeight, kBScopeBackground),
       colour_scale_(1.0 / std::max(1.0, static_cast<double>(frames_planned) - 1.0)) {
-  constexpr double kDeg = 180.0 / std::numbers::pi;
   BScopeLayout& L = layout_;
-  L.azimuth_min_deg = s.sbr.azimuth_min_rad * kDeg;
-  L.azimuth_max_deg = s.sbr.azimuth_max_rad * kDeg;
+  L.azimuth_min_deg = common::degrees(s.sbr.azimuth_min_rad);
+  L.azimuth_max_deg = common::degrees(s.sbr.azimuth_max_rad);
   L.range_max_m = s.sensor.max_range_m;
   Canvas& c = canvas_;
   char label[64];

@@ -5,15 +5,6 @@
 
 namespace radar_emu::radar {
 
-double sinc(double x) noexcept {
-  // Taylor branch: 1 - x^2/6 + x^4/120 has a truncation error under x^6/5040 < 2e-22 here.
-  if (std::abs(x) < 1e-3) {
-    const double x2 = x * x;
-    return 1.0 - x2 / 6.0 + x2 * x2 / 120.0;
-  }
-  return std::sin(x) / x;
-}
-
 namespace {
 
 // f[x, y] for f = exp(j x): (e^{jx} - e^{jy}) / (x - y) = j e^{j(x+y)/2} sinc((x-y)/2).

@@ -25,13 +25,15 @@
 #include <complex>
 #include <glm/glm.hpp>
 
+#include "common/sinc.hpp"
+
 namespace radar_emu::radar {
 
 /// Phase spread under which the series branch is used [rad].
 inline constexpr double kSeriesSpreadRad = 1.0;
 
-/// sin(x) / x, exact at 0.
-[[nodiscard]] double sinc(double x) noexcept;
+/// sin(x) / x, exact at 0 (common/sinc.hpp).
+using common::sinc;
 
 /// Second divided difference f[a0, a1, a2] of f(x) = exp(j x) at three real points [rad].
 [[nodiscard]] std::complex<double> exp_divided_difference2(double a0, double a1,

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "common/units.hpp"
 #include "radar/constants.hpp"
 #include "radar/em/facet_po.hpp"
 #include "scene/mesh/topology.hpp"
@@ -55,7 +56,7 @@ glm::dvec3 phi_hat(const Direction& d) noexcept {
 
 double dbsm(std::complex<double> a) noexcept {
   const double s = std::norm(a);
-  return s > 0.0 ? 10.0 * std::log10(s) : -400.0;
+  return s > 0.0 ? common::db_from_power(s) : -400.0;
 }
 
 RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfaces,

@@ -25,6 +25,8 @@
 #include <span>
 #include <vector>
 
+#include "common/polarisation.hpp"
+
 namespace radar_emu::radar {
 
 /// How a surface reflects.
@@ -63,7 +65,7 @@ struct ReflectionCoefficients {
                                                              double wavenumber_rad_per_m) noexcept;
 
 /// Polarisation channel, receive first ("HV" = receive H, transmit V), as in the RCS engine.
-enum class Polarisation : std::uint8_t { kHH, kHV, kVH, kVV };
+using common::Polarisation;
 
 /// A complex 3-vector (a field) as real and imaginary parts (GLM's functions need arithmetic
 /// types).

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/units.hpp"
+
 namespace radar_emu::radar {
 
 namespace {
@@ -31,13 +33,13 @@ FluctuationStats fluctuation_stats(std::span<const double> rcs_m2) {
                                   " is not a finite, non-negative RCS");
     }
     sum += s;
-    sum_db += 10.0 * std::log10(std::max(s, 1e-30));
+    sum_db += common::db_from_power(std::max(s, 1e-30));
   }
   const double n = static_cast<double>(sorted.size());
   const double mean_db = sum_db / n;
   double var_db = 0.0;
   for (double s : sorted) {
-    const double d = 10.0 * std::log10(std::max(s, 1e-30)) - mean_db;
+    const double d = common::db_from_power(std::max(s, 1e-30)) - mean_db;
     var_db += d * d;
   }
   std::sort(sorted.begin(), sorted.end());

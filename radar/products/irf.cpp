@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/units.hpp"
 #include "radar/constants.hpp"
 
 namespace radar_emu::radar {
@@ -20,7 +21,7 @@ void require(bool ok, const std::string& what) {
 }
 
 double db10(double x) {
-  return 10.0 * std::log10(std::max(x, 1e-300));
+  return common::db_from_power(std::max(x, 1e-300));
 }
 
 // -3 dB crossing between samples a (above half) and b (below), linear in power: offset from a.

@@ -13,6 +13,7 @@
 #include <string>
 #include <string_view>
 
+#include "common/units.hpp"
 #include "radar/constants.hpp"
 #include "radar/products/sar.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
@@ -34,7 +35,6 @@ bool finite3(const glm::dvec3& v, double limit) {
 
 int sar_case(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  constexpr double kDeg = radar::kPi / 180.0;
   try {
     const tools::SarCase c = tools::parse_sar_case(text, "fuzz.toml");
     const radar::SarParams& p = c.p;
@@ -47,12 +47,14 @@ int sar_case(const std::uint8_t* data, std::size_t size) {
     FUZZ_CHECK(in(p.peak_gain, 1e-2 * (1 - 1e-12), 1e8 * (1 + 1e-12)));
     FUZZ_CHECK(in(c.altitude_m, 10.0, 20000.0));
     FUZZ_CHECK(in(c.speed_mps, 0.1, 2000.0));
-    FUZZ_CHECK(in(c.heading_rad, -360.0 * kDeg, 360.0 * kDeg));
-    FUZZ_CHECK(in(p.incidence_rad, 5.0 * kDeg, 85.0 * kDeg));
-    FUZZ_CHECK(p.azimuth_beamwidth_rad > 0.0 && p.azimuth_beamwidth_rad <= 30.0 * kDeg);
-    FUZZ_CHECK(p.elevation_beamwidth_rad > 0.0 && p.elevation_beamwidth_rad <= 60.0 * kDeg);
+    FUZZ_CHECK(in(c.heading_rad, common::radians(-360.0), common::radians(360.0)));
+    FUZZ_CHECK(in(p.incidence_rad, common::radians(5.0), common::radians(85.0)));
+    FUZZ_CHECK(p.azimuth_beamwidth_rad > 0.0 && p.azimuth_beamwidth_rad <= common::radians(30.0));
+    FUZZ_CHECK(p.elevation_beamwidth_rad > 0.0 &&
+               p.elevation_beamwidth_rad <= common::radians(60.0));
     FUZZ_CHECK(p.gates >= 8 && p.gates <= 65536);
-    FUZZ_CHECK(c.synthetic_beamwidth_rad > 0.0 && c.synthetic_beamwidth_rad <= 5.0 * kDeg);
+    FUZZ_CHECK(c.synthetic_beamwidth_rad > 0.0 &&
+               c.synthetic_beamwidth_rad <= common::radians(5.0));
     FUZZ_CHECK(c.upsample >= 1 && c.upsample <= 64);
     FUZZ_CHECK(in(c.image_width_m, 1.0, 20000.0));
     FUZZ_CHECK(c.azimuth_spacing_m > 0.0 && in(c.azimuth_spacing_m, 0.0, 1e6));
@@ -75,7 +77,7 @@ int sar_case(const std::uint8_t* data, std::size_t size) {
       FUZZ_CHECK(in(t.spec.b_m, 0.0, 100.0) && t.spec.b_m > 0.0);
       FUZZ_CHECK(in(t.spec.c_m, 0.0, 100.0) && t.spec.c_m > 0.0);
       FUZZ_CHECK(finite3(t.position_m, 15000.0) && finite3(t.velocity_mps, 1000.0));
-      FUZZ_CHECK(in(t.heading_rad, -360.0 * kDeg, 360.0 * kDeg));
+      FUZZ_CHECK(in(t.heading_rad, common::radians(-360.0), common::radians(360.0)));
     }
     radar::validate(p);  // a throw here names no origin: the check below fails
   } catch (const std::invalid_argument& e) {

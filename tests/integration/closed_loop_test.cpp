@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "io/candump.hpp"
 #include "io/detection_icd.hpp"
 #include "loop/outputs/run_plots.hpp"
@@ -36,7 +37,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kC_mps = 299792458.0;
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 fs::path temp_dir(const std::string& name) {
   // One directory per process: CTest runs each test of a suite as its own process, in parallel,
@@ -309,7 +310,7 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
     for (std::uint32_t i = 0; i < rec.detection_count; ++i) {
       const auto& d = result_->detections[rec.first_detection + i];
       const long rc = cells.range_cell(d.range_m);
-      const long ac = cells.az_cell(d.azimuth_deg * kDeg);
+      const long ac = cells.az_cell(common::radians(d.azimuth_deg));
       const long dc = cells.doppler_cell(d.radial_velocity_mps);
       bool matched = false;
       for (std::size_t k = 0; k < objects.size(); ++k) {
@@ -330,7 +331,7 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
                   << d.range_m << " m, az " << d.azimuth_deg << " deg, vr " << d.radial_velocity_mps
                   << " m/s, SNR " << d.snr_db << " dB\n";
       }
-      EXPECT_LE(std::abs(d.azimuth_deg * kDeg), s.sbr.azimuth_max_rad + 1e-9);
+      EXPECT_LE(std::abs(common::radians(d.azimuth_deg)), s.sbr.azimuth_max_rad + 1e-9);
     }
     for (std::size_t k = 0; k < objects.size(); ++k) {
       if (!in_beam[k])
@@ -344,8 +345,8 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
       EXPECT_TRUE(detected[k]) << "frame " << rec.header.frame_counter << " t=" << t
                                << " s: " << objects[k].name << " inside the beam at range "
                                << windows[k].range_min_m << ".." << windows[k].range_max_m
-                               << " m, az " << windows[k].az_min_rad / kDeg << ".."
-                               << windows[k].az_max_rad / kDeg << " deg, vr "
+                               << " m, az " << windows[k].az_min_rad / common::kRadPerDeg << ".."
+                               << windows[k].az_max_rad / common::kRadPerDeg << " deg, vr "
                                << windows[k].vr_min_mps << " m/s was not detected";
     }
     ++frames_checked;
@@ -588,8 +589,8 @@ TEST_F(ClosedLoopDefault, TruthOfTheMovingVehicleIsItsClosedFormGeometry) {
       ASSERT_NE(found, nullptr) << "t=" << rec.time_s << ": vehicle in the beam but not in truth";
       // Tolerances: the antenna attitude and velocity come over CANaerospace as floats.
       EXPECT_NEAR(found->at("range_m").get<double>(), range, 1e-3);
-      EXPECT_NEAR(found->at("azimuth_deg").get<double>(), az / kDeg, 1e-4);
-      EXPECT_NEAR(found->at("elevation_deg").get<double>(), el / kDeg, 1e-4);
+      EXPECT_NEAR(found->at("azimuth_deg").get<double>(), az / common::kRadPerDeg, 1e-4);
+      EXPECT_NEAR(found->at("elevation_deg").get<double>(), el / common::kRadPerDeg, 1e-4);
       EXPECT_NEAR(found->at("radial_velocity_mps").get<double>(), vr, 1e-3);
       ++checked;
     }

@@ -14,11 +14,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "loop/scenario.hpp"
 #include "tools/image.hpp"
 
@@ -27,7 +27,7 @@ namespace tools = radar_emu::tools;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 constexpr double kTimeS = 52.0;  // ownship at (0, -360, 39.2) m
 constexpr int kScale = 4;        // optical pixels per radar pixel
 
@@ -182,7 +182,8 @@ TEST_F(EvImageScenario, RunwayEdgesAndThresholdRegisterWithTheOpticalPreview) {
   const auto& opt = p.optical;
   ASSERT_EQ(opt.width_px, im.columns * kScale);
   ASSERT_EQ(opt.height_px, im.rows * kScale);
-  const double az0 = p.config.azimuth_min_rad / kDeg, px = p.config.pixel_rad / kDeg;
+  const double az0 = p.config.azimuth_min_rad / common::kRadPerDeg,
+               px = p.config.pixel_rad / common::kRadPerDeg;
   auto col_of = [&](double az_deg) { return static_cast<int>(std::lround((az_deg - az0) / px)); };
   auto mean_db = [&](int r, int c) {
     return db(im.mean_m2[static_cast<std::size_t>(r * im.columns + c)]);

@@ -10,6 +10,7 @@
 #include "tools/rcs.hpp"
 
 namespace config = radar_emu::config;
+using radar_emu::common::Polarisation;
 namespace tools = radar_emu::tools;
 
 namespace {
@@ -34,10 +35,16 @@ TEST(RcsTool, ParseSweep) {
 
 TEST(RcsTool, ParsePols) {
   EXPECT_EQ(tools::parse_pols("hh,VV,hv"),
-            (std::vector<tools::Pol>{tools::Pol::kHH, tools::Pol::kVV, tools::Pol::kHV}));
-  EXPECT_EQ(tools::parse_pols("VV,VV"), (std::vector<tools::Pol>{tools::Pol::kVV}));
+            (std::vector<Polarisation>{Polarisation::kHH, Polarisation::kVV, Polarisation::kHV}));
+  EXPECT_EQ(tools::parse_pols("VV,VV"), (std::vector<Polarisation>{Polarisation::kVV}));
   EXPECT_THROW((void)tools::parse_pols("HH,"), std::invalid_argument);
   EXPECT_THROW((void)tools::parse_pols("XX"), std::invalid_argument);
+  try {
+    (void)tools::parse_pols("HH,xv");
+    ADD_FAILURE() << "xv accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "--pol: 'xv' is not one of HH, HV, VH, VV");
+  }
 }
 
 TEST(RcsTool, MaterialDefinitions) {

@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/units.hpp"
 #include "loop/closed_loop.hpp"
 #include "tools/sar_case.hpp"
 
@@ -31,7 +32,7 @@ std::string error_of(const std::string& text) {
   }
   return "";
 }
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 }  // namespace
 
 TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
@@ -43,13 +44,13 @@ TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
   EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, s.sensor.processing.waveform.carrier_hz);
   // Edge diffraction on in the loop, wedges turning by more than 30 deg; no corner reflectors.
   EXPECT_TRUE(s.sbr.edges);
-  EXPECT_NEAR(s.sbr.edge_min_turn_rad, 30.0 * kDeg, 1e-12);
+  EXPECT_NEAR(s.sbr.edge_min_turn_rad, common::radians(30.0), 1e-12);
   EXPECT_FALSE(s.scene_corner_reflectors);
   EXPECT_NEAR(s.sensor.noise_figure, std::pow(10.0, 0.5), 1e-12);  // 5 dB
-  EXPECT_NEAR(s.antenna_depression_rad, 5.0 * kDeg, 1e-15);
+  EXPECT_NEAR(s.antenna_depression_rad, common::radians(5.0), 1e-15);
   // 16 beams of 1 deg across -8..8 deg; PRI from the PRF; the range gate from 1500 m.
   ASSERT_EQ(s.sensor.antenna.beam_azimuth_rad.size(), 16u);
-  EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), -7.5 * kDeg, 1e-12);
+  EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), common::radians(-7.5), 1e-12);
   EXPECT_NEAR(s.sensor.processing.waveform.pri_s, 50e-6, 1e-15);
   EXPECT_NEAR(s.sensor.processing.waveform.swath_start_m, 1500.0, 1e-9);
   EXPECT_EQ(s.sensor.processing.waveform.range_bins, 1502);  // ceil(4500 / 2.9979) = ceil(1501.04)
@@ -113,6 +114,12 @@ TEST(Scenario, AntennaPolarisationKey) {
   EXPECT_EQ(loop::parse_scenario("[antenna]\npolarisation = \"VH\"\n", "p.toml").sbr.polarisation,
             radar_emu::radar::Polarisation::kVH);
   EXPECT_NE(error_of("[antenna]\npolarisation = \"RHC\"\n").find("[antenna] polarisation"),
+            std::string::npos);
+  // Either case, as --pol (common/polarisation.hpp), and its refusal.
+  EXPECT_EQ(loop::parse_scenario("[antenna]\npolarisation = \"vh\"\n", "p.toml").sbr.polarisation,
+            radar_emu::radar::Polarisation::kVH);
+  EXPECT_NE(error_of("[antenna]\npolarisation = \"RHC\"\n")
+                .find("polarisation: 'RHC' is not one of HH, HV, VH, VV"),
             std::string::npos);
 }
 
@@ -186,7 +193,7 @@ TEST(Scenario, TabulatedAntennaPatternFromCsvBesideTheScenario) {
   }
   const loop::Scenario s = loop::load_scenario(dir / "s.toml");
   ASSERT_EQ(s.sensor.antenna.azimuth.table_angle_rad.size(), 5u);
-  EXPECT_NEAR(s.sensor.antenna.azimuth.table_angle_rad[1], -kDeg, 1e-15);
+  EXPECT_NEAR(s.sensor.antenna.azimuth.table_angle_rad[1], -common::kRadPerDeg, 1e-15);
   EXPECT_DOUBLE_EQ(s.sensor.antenna.azimuth.table_gain_db[1], -3.0);
   {
     std::ofstream csv(dir / "az.csv");
@@ -209,9 +216,9 @@ TEST(Scenario, TheSeedsEnhancedVisionRadarExampleLoads) {
   const loop::Scenario s =
       loop::load_scenario(std::filesystem::path(root) / "examples" / "ev_radar_94ghz.toml");
   ASSERT_EQ(s.sensor.antenna.beam_azimuth_rad.size(), 200u);
-  EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), (-15.0 + 0.075) * kDeg, 1e-12);
-  EXPECT_NEAR(s.sensor.antenna.azimuth.beamwidth_rad, 0.15 * kDeg, 1e-15);
-  EXPECT_NEAR(s.sensor.antenna.elevation.beamwidth_rad, 10.0 * kDeg, 1e-15);
+  EXPECT_NEAR(s.sensor.antenna.beam_azimuth_rad.front(), common::radians(-15.0 + 0.075), 1e-12);
+  EXPECT_NEAR(s.sensor.antenna.azimuth.beamwidth_rad, common::radians(0.15), 1e-15);
+  EXPECT_NEAR(s.sensor.antenna.elevation.beamwidth_rad, common::radians(10.0), 1e-15);
   EXPECT_FALSE(s.sensor.antenna.monopulse);
   // The scan fits the frame: 200 beams x 8 pulses x 50 us = 80 ms of radar time at 10 Hz.
   EXPECT_LE(200.0 * s.sensor.processing.waveform.pulses * s.sensor.processing.waveform.pri_s,
@@ -365,7 +372,7 @@ heading_deg = 90
   EXPECT_EQ(c.builtin->c_m, 1.5);
   EXPECT_EQ(c.speed_mps, 5.0);
   EXPECT_EQ(c.course_rad, 0.0);
-  EXPECT_NEAR(c.heading_rad, 270.0 * kDeg, 1e-15);
+  EXPECT_NEAR(c.heading_rad, common::radians(270.0), 1e-15);
   const sc::TargetPlacement& d = s.targets[3];
   ASSERT_EQ(d.waypoints_m.size(), 3u);
   EXPECT_EQ(d.waypoints_m[2], glm::dvec3(500, 500, 60));
@@ -588,7 +595,7 @@ TEST(ScenarioTargets, TheExamplesLoad) {
   EXPECT_EQ(d.objects[3].trajectory->turn_radius_m, 20.0);
   // "yellow paint" is metal by its radar_material extras.
   EXPECT_EQ(d.materials[d.objects[2].mesh.triangle_material[0]].name, "metal");
-  EXPECT_NEAR(d.anchor.latitude_rad, 43.6 * kDeg, 1e-12);
+  EXPECT_NEAR(d.anchor.latitude_rad, common::radians(43.6), 1e-12);
   EXPECT_EQ(d.objects[4].name, "parked_a320");
   EXPECT_EQ(d.objects[5].name, "westbound_jeep");
   ASSERT_TRUE(d.objects[5].motion.has_value());

@@ -11,9 +11,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <numbers>
 #include <string>
 
+#include "common/units.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/scenario.hpp"
 #include "tests/alloc_counter.hpp"
@@ -24,7 +24,7 @@ namespace fs = std::filesystem;
 namespace {
 
 constexpr double kC_mps = 299792458.0;
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 // Two metal spheres of 1.5 m radius (finely faceted, 5 cm facets, so that a facet faces the
 // radar from any direction) on the default scene's flat grass (z = 0), about 2.5 km ahead of the
@@ -139,7 +139,8 @@ TEST(TargetsInTheLoop, SpheresFromTheScenarioAreDetectedWhereTheyAreUnderTheirNa
         if (d.at("object") != b.name)
           continue;
         EXPECT_NEAR(d.at("range_m").get<double>(), range_m, range_cell_m) << b.name << " t " << t;
-        EXPECT_NEAR(d.at("azimuth_deg").get<double>() * kDeg, az, s.beam_spacing_rad) << b.name;
+        EXPECT_NEAR(common::radians(d.at("azimuth_deg").get<double>()), az, s.beam_spacing_rad)
+            << b.name;
         EXPECT_NEAR(d.at("radial_velocity_mps").get<double>(), fold(vr), doppler_cell_mps)
             << b.name;
         found = true;

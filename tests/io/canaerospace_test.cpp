@@ -17,11 +17,13 @@
 #include <string>
 #include <utility>
 
+#include "common/units.hpp"
+
 namespace io = radar_emu::io;
 namespace canas = radar_emu::io::canas;
 
 namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 io::CanFrame raw(std::uint32_t id, std::initializer_list<std::uint8_t> bytes) {
   io::CanFrame f;
@@ -45,7 +47,7 @@ TEST(CanaerospaceByHand, FloatPitch) {
   EXPECT_EQ(std::memcmp(f.data.data(), expected.data.data(), 8), 0);
   canas::Decoder d;
   EXPECT_EQ(d.decode(expected, 123), canas::DecodeStatus::kAccepted);
-  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kPitch].value, 2.5 * kDeg);
+  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kPitch].value, common::radians(2.5));
   EXPECT_EQ(d.state()[canas::Field::kPitch].updated_ns, 123);
 }
 
@@ -76,7 +78,7 @@ TEST(CanaerospaceByHand, DoubleLatitudePair) {
   EXPECT_EQ(d.decode(high, 10), canas::DecodeStatus::kPendingDoubleLow);
   EXPECT_FALSE(d.state()[canas::Field::kLatitude].received);
   EXPECT_EQ(d.decode(low, 20), canas::DecodeStatus::kAccepted);
-  EXPECT_EQ(d.state()[canas::Field::kLatitude].value, 48.1234567 * kDeg);  // bit exact
+  EXPECT_EQ(d.state()[canas::Field::kLatitude].value, common::radians(48.1234567));  // bit exact
   EXPECT_EQ(d.counters().message_code_gaps, 0u);
 }
 
@@ -85,7 +87,7 @@ TEST(CanaerospaceByHand, LongLatitudeInTenMillionthsOfDegree) {
   const io::CanFrame f = raw(0x40C, {0x01, 0x03, 0x00, 0x00, 0x1C, 0xAF, 0x0E, 0x87});
   canas::Decoder d;
   EXPECT_EQ(d.decode(f, 0), canas::DecodeStatus::kAccepted);
-  EXPECT_NEAR(d.state()[canas::Field::kLatitude].value, 48.1234567 * kDeg, 1e-15);
+  EXPECT_NEAR(d.state()[canas::Field::kLatitude].value, common::radians(48.1234567), 1e-15);
   // LONG on pitch is not a documented encoding: unsupported.
   const io::CanFrame p = raw(0x137, {0x01, 0x03, 0x00, 0x00, 0x00, 0x00, 0x00, 0x01});
   EXPECT_EQ(d.decode(p, 0), canas::DecodeStatus::kUnsupportedDataType);
@@ -112,11 +114,12 @@ TEST(Canaerospace, RoundTripEveryFieldAtFixedSeed) {
     for (const Case& c : cases) {
       const double v = std::uniform_real_distribution<double>(c.lo, c.hi)(rng);
       const std::uint16_t id = canas::can_id_of(c.field);
-      const double si = c.angle ? v * kDeg : v;
+      const double si = c.angle ? common::radians(v) : v;
       // FLOAT: exact for the float nearest to v.
       ASSERT_EQ(d.decode(canas::encode_float(id, 1, code, static_cast<float>(v)), 1),
                 canas::DecodeStatus::kAccepted);
-      const double as_float = static_cast<double>(static_cast<float>(v)) * (c.angle ? kDeg : 1.0);
+      const double as_float =
+          static_cast<double>(static_cast<float>(v)) * (c.angle ? common::kRadPerDeg : 1.0);
       ASSERT_EQ(d.state()[c.field].value, as_float) << i;
       // DOUBLE pair: bit exact.
       const auto [h, l] = canas::encode_double(id, 1, static_cast<std::uint8_t>(code + 1), v);
@@ -207,7 +210,7 @@ TEST(Canaerospace, DoubleHighFollowedByAnotherTypeIsUnpaired) {
   EXPECT_EQ(d.decode(canas::encode_float(canas::id::kGpsLatitude, 1, 1, 11.0f), 0),
             canas::DecodeStatus::kAccepted);
   EXPECT_EQ(d.counters().unpaired_double, 1u);
-  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kLatitude].value, 11.0 * kDeg);
+  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kLatitude].value, common::radians(11.0));
 }
 
 TEST(Canaerospace, MessageCodeGapsAreCountedAndWrapIsNot) {
@@ -369,7 +372,7 @@ TEST(CanaerospaceConfig, RemappedIdentifiers) {
   // INS latitude 1049 = 0x419, FLOAT 2.5 deg (0x40200000, see FloatPitch).
   EXPECT_EQ(d.decode(raw(0x419, {0x01, 0x02, 0x00, 0x00, 0x40, 0x20, 0x00, 0x00}), 5),
             canas::DecodeStatus::kAccepted);
-  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kLatitude].value, 2.5 * kDeg);
+  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kLatitude].value, common::radians(2.5));
   // The old identifiers are now ignored, not errors.
   EXPECT_EQ(d.decode(canas::encode_float(1036, 1, 0, 3.0f), 6), canas::DecodeStatus::kIgnoredId);
   EXPECT_EQ(d.decode(canas::encode_float(1133, 1, 0, 3.0f), 6), canas::DecodeStatus::kIgnoredId);
@@ -382,7 +385,7 @@ TEST(CanaerospaceConfig, RemappedIdentifiers) {
   const auto [h, l] = canas::encode_double(1850, 1, 0, -122.25);
   EXPECT_EQ(d.decode(h, 8), canas::DecodeStatus::kPendingDoubleLow);
   EXPECT_EQ(d.decode(l, 9), canas::DecodeStatus::kAccepted);
-  EXPECT_EQ(d.state()[canas::Field::kLongitude].value, -122.25 * kDeg);
+  EXPECT_EQ(d.state()[canas::Field::kLongitude].value, common::radians(-122.25));
   EXPECT_EQ(d.counters().ignored_id, 2u);
   EXPECT_EQ(d.counters().rejected(), 0u);
 }
@@ -424,7 +427,7 @@ TEST(CanaerospaceConfig, NodeFilterCountsOtherNodesNotErrors) {
             canas::DecodeStatus::kOtherNode);
   EXPECT_EQ(d.decode(raw(0x138, {0x07, 0x02, 0x00, 0x00, 0x40, 0x20, 0x00, 0x00}), 1),
             canas::DecodeStatus::kOtherNode);
-  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kRoll].value, 1.0 * kDeg);
+  EXPECT_DOUBLE_EQ(d.state()[canas::Field::kRoll].value, common::radians(1.0));
   EXPECT_EQ(d.state()[canas::Field::kRoll].updated_ns, 0);
   EXPECT_EQ(d.decode(canas::encode_float(canas::id::kRollAngle, 5, 11, 3.0f), 2),
             canas::DecodeStatus::kAccepted);

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "io/canaerospace.hpp"
 #include "io/candump.hpp"
 #include "io/detection_icd.hpp"
@@ -41,7 +42,7 @@ namespace {
 constexpr std::uint64_t kSeed = 0x6ADD'0006;
 constexpr std::size_t kFrames = 1'000'000;
 constexpr std::size_t kCandumpLines = 100'000;
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+using radar_emu::common::kRadPerDeg;
 
 // The consumed identifiers and their valid ranges in bus units, from
 // docs/icd/canaerospace_input.md (written independently of the decoder's table).

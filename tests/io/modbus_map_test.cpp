@@ -14,15 +14,17 @@
 #include <random>
 #include <vector>
 
+#include "common/units.hpp"
+
 namespace {
 
 using namespace radar_emu::io;
 using namespace radar_emu::io::modbus;
+namespace common = radar_emu::common;
 using canas::Field;
 using R2 = std::array<std::uint16_t, 2>;
 using R4 = std::array<std::uint16_t, 4>;
 
-constexpr double kRad = std::numbers::pi / 180.0;
 constexpr std::uint32_t kSeed = 20240601;
 
 // ---- Value codecs ---------------------------------------------------------------------------
@@ -192,12 +194,12 @@ std::vector<std::uint16_t> hand_image_float_abcd() {
 }
 
 void expect_hand_state(const canas::OwnshipState& s) {
-  EXPECT_DOUBLE_EQ(s[Field::kLatitude].value, 45.0 * kRad);
-  EXPECT_DOUBLE_EQ(s[Field::kLongitude].value, -0.5 * kRad);
+  EXPECT_DOUBLE_EQ(s[Field::kLatitude].value, common::radians(45.0));
+  EXPECT_DOUBLE_EQ(s[Field::kLongitude].value, common::radians(-0.5));
   EXPECT_DOUBLE_EQ(s[Field::kHeight].value, 100.0);
-  EXPECT_DOUBLE_EQ(s[Field::kTrueHeading].value, 270.0 * kRad);
-  EXPECT_DOUBLE_EQ(s[Field::kPitch].value, 2.5 * kRad);
-  EXPECT_DOUBLE_EQ(s[Field::kRoll].value, -10.0 * kRad);
+  EXPECT_DOUBLE_EQ(s[Field::kTrueHeading].value, common::radians(270.0));
+  EXPECT_DOUBLE_EQ(s[Field::kPitch].value, common::radians(2.5));
+  EXPECT_DOUBLE_EQ(s[Field::kRoll].value, common::radians(-10.0));
   EXPECT_DOUBLE_EQ(s[Field::kVelEast].value, 50.0);
   EXPECT_DOUBLE_EQ(s[Field::kVelNorth].value, -25.0);
   EXPECT_DOUBLE_EQ(s[Field::kVelUp].value, 1.0);
@@ -240,11 +242,11 @@ TEST(ModbusNavMap, DecodesAHandBuiltScaledImage) {
   NavDecoder dec({.encoding = NavMapConfig::Encoding::kScaledInt});
   ASSERT_EQ(dec.decode(img, 7), NavDecodeStatus::kAccepted);
   const auto& s = dec.state();
-  EXPECT_NEAR(s[Field::kLatitude].value, 47.1234567 * kRad, 1e-15);
-  EXPECT_NEAR(s[Field::kLongitude].value, -122.4194155 * kRad, 1e-15);
+  EXPECT_NEAR(s[Field::kLatitude].value, common::radians(47.1234567), 1e-15);
+  EXPECT_NEAR(s[Field::kLongitude].value, common::radians(-122.4194155), 1e-15);
   EXPECT_NEAR(s[Field::kHeight].value, 1234.567, 1e-9);
   EXPECT_NEAR(s[Field::kTrueHeading].value, std::numbers::pi / 2, 1e-15);
-  EXPECT_NEAR(s[Field::kPitch].value, -2.5 * kRad, 1e-15);
+  EXPECT_NEAR(s[Field::kPitch].value, common::radians(-2.5), 1e-15);
   EXPECT_NEAR(s[Field::kRoll].value, 0.0, 1e-15);
   EXPECT_NEAR(s[Field::kVelEast].value, 12.5, 1e-12);
   EXPECT_NEAR(s[Field::kVelNorth].value, -1.5, 1e-12);
@@ -255,12 +257,12 @@ TEST(ModbusNavMap, DecodesAHandBuiltScaledImage) {
 TEST(ModbusNavMap, EncoderWritesTheHandBuiltImage) {
   NavEncoder enc;
   NavState st;
-  st.latitude_rad = 45.0 * kRad;
-  st.longitude_rad = -0.5 * kRad;
+  st.latitude_rad = common::radians(45.0);
+  st.longitude_rad = common::radians(-0.5);
   st.height_m = 100.0;
-  st.true_heading_rad = 270.0 * kRad;
-  st.pitch_rad = 2.5 * kRad;
-  st.roll_rad = -10.0 * kRad;
+  st.true_heading_rad = common::radians(270.0);
+  st.pitch_rad = common::radians(2.5);
+  st.roll_rad = common::radians(-10.0);
   st.vel_east_mps = 50.0;
   st.vel_north_mps = -25.0;
   st.vel_up_mps = 1.0;
@@ -285,15 +287,22 @@ TEST(ModbusNavMap, RandomRoundTripsEveryEncodingAndOrder) {
       NavDecoder dec(cfg);
       std::vector<std::uint16_t> img(nav_register_count(cfg));
       for (int i = 0; i < 500; ++i) {
-        NavState st{lat(rng) * kRad, lon(rng) * kRad, h(rng),   hdg(rng) * kRad, att(rng) * kRad,
-                    att(rng) * kRad, vel(rng),        vel(rng), vel(rng)};
+        NavState st{common::radians(lat(rng)),
+                    common::radians(lon(rng)),
+                    h(rng),
+                    common::radians(hdg(rng)),
+                    common::radians(att(rng)),
+                    common::radians(att(rng)),
+                    vel(rng),
+                    vel(rng),
+                    vel(rng)};
         ASSERT_TRUE(enc.encode(st, nav_status::kAllValid, static_cast<std::uint32_t>(i), img));
         ASSERT_EQ(dec.decode(img, i), NavDecodeStatus::kAccepted);
         const auto& s = dec.state();
         const bool f = enc_kind == NavMapConfig::Encoding::kFloat32;
         // Float: lat/lon are float64 (rounding ~1e-14 deg); float32 fields lose at most half
         // an ulp, 2^-24 relative. Scaled: half a step of each scale.
-        const double ll_tol = f ? 1e-12 * kRad : 0.5e-7 * kRad * (1 + 1e-6);
+        const double ll_tol = f ? common::radians(1e-12) : common::radians(0.5e-7) * (1 + 1e-6);
         EXPECT_NEAR(s[Field::kLatitude].value, st.latitude_rad, ll_tol);
         EXPECT_NEAR(s[Field::kLongitude].value, st.longitude_rad, ll_tol);
         auto tol = [&](double v, double step) {
@@ -301,9 +310,9 @@ TEST(ModbusNavMap, RandomRoundTripsEveryEncodingAndOrder) {
         };
         EXPECT_NEAR(s[Field::kHeight].value, st.height_m, tol(st.height_m, 1e-3));
         EXPECT_NEAR(s[Field::kTrueHeading].value, st.true_heading_rad,
-                    tol(st.true_heading_rad, 1e-6 * kRad));
-        EXPECT_NEAR(s[Field::kPitch].value, st.pitch_rad, tol(st.pitch_rad, 1e-6 * kRad));
-        EXPECT_NEAR(s[Field::kRoll].value, st.roll_rad, tol(st.roll_rad, 1e-6 * kRad));
+                    tol(st.true_heading_rad, common::radians(1e-6)));
+        EXPECT_NEAR(s[Field::kPitch].value, st.pitch_rad, tol(st.pitch_rad, common::radians(1e-6)));
+        EXPECT_NEAR(s[Field::kRoll].value, st.roll_rad, tol(st.roll_rad, common::radians(1e-6)));
         EXPECT_NEAR(s[Field::kVelEast].value, st.vel_east_mps, tol(st.vel_east_mps, 1e-4));
         EXPECT_NEAR(s[Field::kVelNorth].value, st.vel_north_mps, tol(st.vel_north_mps, 1e-4));
         EXPECT_NEAR(s[Field::kVelUp].value, st.vel_up_mps, tol(st.vel_up_mps, 1e-4));
@@ -406,8 +415,8 @@ TEST(ModbusNavMap, HeadingWrapsAndScaledNoDataIsNaN) {
   NavDecoder dec(cfg);
   std::vector<std::uint16_t> img(22);
   NavState st;
-  st.true_heading_rad = -90.0 * kRad;  // -> 270 deg
-  st.height_m = std::nan("");          // -> kScaledI32NoData
+  st.true_heading_rad = common::radians(-90.0);  // -> 270 deg
+  st.height_m = std::nan("");                    // -> kScaledI32NoData
   ASSERT_TRUE(enc.encode(st, nav_status::kAllValid, 0, img));
   EXPECT_EQ(img[8], 0x8000);
   EXPECT_EQ(img[9], 0x0000);

@@ -18,9 +18,9 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
-#include <numbers>
 #include <thread>
 
+#include "common/units.hpp"
 #include "io/modbus.hpp"
 #include "io/modbus_map.hpp"
 #include "sim_bus/nav_register_player.hpp"
@@ -29,7 +29,6 @@ namespace {
 
 using namespace radar_emu;
 
-constexpr double kRad = std::numbers::pi / 180.0;
 constexpr double kWgs84A_m = 6378137.0;               // semi-major axis (TR8350.2 table 3.1)
 constexpr double kWgs84F = 1.0 / 298.257223563;       // flattening
 constexpr double kWgs84E2 = kWgs84F * (2 - kWgs84F);  // first eccentricity squared
@@ -66,18 +65,18 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   try {
-    const double lat0 = lat_deg * kRad;
+    const double lat0 = common::radians(lat_deg);
     const double s2 = std::sin(lat0) * std::sin(lat0);
     const double m_m = kWgs84A_m * (1 - kWgs84E2) / std::pow(1 - kWgs84E2 * s2, 1.5);
     const double n_m = kWgs84A_m / std::sqrt(1 - kWgs84E2 * s2);
     sim_bus::AircraftState a;
     a.time_s = 0.0;
     a.latitude_rad = lat0;
-    a.longitude_rad = lon_deg * kRad;
+    a.longitude_rad = common::radians(lon_deg);
     a.height_m = height_m;
-    a.true_heading_rad = heading_deg * kRad;
-    a.pitch_rad = pitch_deg * kRad;
-    a.roll_rad = roll_deg * kRad;
+    a.true_heading_rad = common::radians(heading_deg);
+    a.pitch_rad = common::radians(pitch_deg);
+    a.roll_rad = common::radians(roll_deg);
     a.vel_east_mps = ve;
     a.vel_north_mps = vn;
     a.vel_up_mps = vu;

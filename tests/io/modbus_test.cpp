@@ -19,12 +19,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <mutex>
-#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "common/units.hpp"
 #include "io/modbus_map.hpp"
 #include "sim_bus/loopback_registers.hpp"
 #include "sim_bus/nav_register_player.hpp"
@@ -36,9 +36,8 @@ namespace {
 
 using namespace radar_emu::io;
 using namespace radar_emu::io::modbus;
+namespace common = radar_emu::common;
 using radar_emu::io::canas::Field;
-
-constexpr double kRad = std::numbers::pi / 180.0;
 
 // Polls `done` every 2 ms until it holds or `timeout_s` passes.
 template <typename F>
@@ -301,12 +300,12 @@ TEST(ModbusTcp, SetupErrorsAreOneLine) {
 radar_emu::sim_bus::Trajectory straight_line() {
   radar_emu::sim_bus::AircraftState a, b;
   a.time_s = 0.0;
-  a.latitude_rad = 51.47 * kRad;
-  a.longitude_rad = -0.46 * kRad;
+  a.latitude_rad = common::radians(51.47);
+  a.longitude_rad = common::radians(-0.46);
   a.height_m = 300.0;
-  a.pitch_rad = -3.0 * kRad;
-  a.roll_rad = 1.0 * kRad;
-  a.true_heading_rad = 90.0 * kRad;
+  a.pitch_rad = common::radians(-3.0);
+  a.roll_rad = common::radians(1.0);
+  a.true_heading_rad = common::radians(90.0);
   a.vel_east_mps = 70.0;
   a.vel_up_mps = -3.5;
   b = a;

@@ -7,14 +7,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
 #include <vector>
+
+#include "common/units.hpp"
 
 namespace radar = radar_emu::radar;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 // A level antenna at height h looking north: antenna x (boresight) = north, y (right) = east,
 // z (down) = -up.
@@ -28,11 +29,11 @@ radar::RadarPose level_pose(double height_m) {
 // The seed's 30 x 10 deg field of 0.15 deg pixels (ev_radar_94ghz.toml), looking down.
 radar::EvImageConfig seed_grid() {
   radar::EvImageConfig c;
-  c.azimuth_min_rad = -15.0 * kDeg;
-  c.azimuth_max_rad = 15.0 * kDeg;
-  c.elevation_min_rad = -12.0 * kDeg;
-  c.elevation_max_rad = -2.0 * kDeg;
-  c.pixel_rad = 0.15 * kDeg;
+  c.azimuth_min_rad = common::radians(-15.0);
+  c.azimuth_max_rad = common::radians(15.0);
+  c.elevation_min_rad = common::radians(-12.0);
+  c.elevation_max_rad = common::radians(-2.0);
+  c.pixel_rad = common::radians(0.15);
   return c;
 }
 
@@ -74,8 +75,8 @@ double cv(const std::vector<float>& v) {
 
 TEST(EvImage, TheSeedsFieldIs200By66SquarePixels) {
   radar::EvImageConfig c = seed_grid();
-  c.elevation_min_rad = -5.0 * kDeg;
-  c.elevation_max_rad = 5.0 * kDeg;
+  c.elevation_min_rad = common::radians(-5.0);
+  c.elevation_max_rad = common::radians(5.0);
   EXPECT_EQ(radar::ev_image_columns(c), 200);
   EXPECT_EQ(radar::ev_image_rows(c), 66);  // 10 / 0.15 = 66.7: whole pixels from the top edge
   c.pixel_rad = 0.0;
@@ -128,9 +129,9 @@ TEST(EvImage, ReturnsOutsideTheFieldAreCountedNotPlaced) {
   const radar::EvImageConfig c = seed_grid();
   std::vector<radar::Contribution> q(3);
   q[0].range_m = 500.0;
-  q[0].azimuth_rad = 20.0 * kDeg;  // right of the field
-  q[1].range_m = 100.0;            // nearer than 12 deg of depression at 50 m (240 m)
-  q[2].range_m = 5000.0;           // beyond 2 deg (1433 m)
+  q[0].azimuth_rad = common::radians(20.0);  // right of the field
+  q[1].range_m = 100.0;                      // nearer than 12 deg of depression at 50 m (240 m)
+  q[2].range_m = 5000.0;                     // beyond 2 deg (1433 m)
   const radar::EvImage im = radar::form_ev_image(q, level_pose(50.0), c);
   EXPECT_EQ(im.outside_columns, 1u);
   EXPECT_EQ(im.nearer_than_field, 1u);

@@ -23,6 +23,7 @@
 #include <numbers>
 #include <vector>
 
+#include "common/polarisation.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "radar/em/rcs.hpp"
 #include "radar/em/sbr.hpp"
@@ -137,19 +138,7 @@ double fresnel_par(std::complex<double> eps, double theta) {
   return std::abs((eps * c - r) / (eps * c + r));
 }
 
-const char* pol_name(rd::Polarisation p) {
-  switch (p) {
-    case rd::Polarisation::kHH:
-      return "HH";
-    case rd::Polarisation::kHV:
-      return "HV";
-    case rd::Polarisation::kVH:
-      return "VH";
-    case rd::Polarisation::kVV:
-      break;
-  }
-  return "VV";
-}
+using radar_emu::common::polarisation_name;
 }  // namespace
 
 TEST(SbrLoopVsRcs, PlateAndDihedralMatchTheRcsEngine) {
@@ -196,14 +185,16 @@ TEST(SbrLoopVsRcs, PlateAndDihedralMatchTheRcsEngine) {
       const std::complex<double> ref = in_tracer_channel(s, pose, c.dir, pol);
       const double d_db = db(std::norm(loop)) - db(std::norm(ref));
       const double d_deg = std::arg(loop / ref) * 180.0 / kPi;
-      std::cout << sc::target_name(c.spec.kind) << " " << pol_name(pol) << ": loop "
+      std::cout << sc::target_name(c.spec.kind) << " " << polarisation_name(pol) << ": loop "
                 << db(std::norm(loop)) << " dBsm, RCS engine " << db(std::norm(ref))
                 << " dBsm, difference " << d_db << " dB, " << d_deg << " deg\n";
       worst_db = std::max(worst_db, std::abs(d_db));
       worst_deg = std::max(worst_deg, std::abs(d_deg));
-      EXPECT_LT(std::abs(d_db), 0.05) << sc::target_name(c.spec.kind) << " " << pol_name(pol);
+      EXPECT_LT(std::abs(d_db), 0.05)
+          << sc::target_name(c.spec.kind) << " " << polarisation_name(pol);
       // Same phase too (same reference point; the residual is the spherical-wave curvature).
-      EXPECT_LT(std::abs(d_deg), 3.0) << sc::target_name(c.spec.kind) << " " << pol_name(pol);
+      EXPECT_LT(std::abs(d_deg), 3.0)
+          << sc::target_name(c.spec.kind) << " " << polarisation_name(pol);
     }
   }
   std::cout << "worst |loop - RCS|: " << worst_db << " dB, " << worst_deg << " deg\n";
@@ -245,11 +236,11 @@ TEST(SbrLoopVsRcs, EdgeDiffractionOfAPlateMatchesTheRcsEngine) {
       const double d_db = db(std::norm(loop)) - db(std::norm(ref));
       const double edge_db = db(std::norm(loop)) - db(std::norm(po));
       std::cout << "plate toward (" << dir_v.x << ", " << dir_v.y << ", " << dir_v.z << ") "
-                << pol_name(pol) << ": loop " << db(std::norm(loop)) << " dBsm (" << st.edges_used
-                << " edges; PO alone " << db(std::norm(po)) << "), RCS engine "
+                << polarisation_name(pol) << ": loop " << db(std::norm(loop)) << " dBsm ("
+                << st.edges_used << " edges; PO alone " << db(std::norm(po)) << "), RCS engine "
                 << db(std::norm(ref)) << " dBsm, difference " << d_db << " dB\n";
       EXPECT_EQ(st.edges_used, rs.edges_used) << "the same edges radiate in both engines";
-      EXPECT_LT(std::abs(d_db), 0.05) << pol_name(pol);
+      EXPECT_LT(std::abs(d_db), 0.05) << polarisation_name(pol);
       worst_db = std::max(worst_db, std::abs(d_db));
       largest_edge_effect_db = std::max(largest_edge_effect_db, std::abs(edge_db));
     }
@@ -316,7 +307,7 @@ TEST(SbrLoopVsRcs, VehicleMatchesTheRcsEngineInTheFarField) {
       rd::TraceStats ts;
       at[i] = referred_sum(trace(tracer, pose, {}, &ts), ranges[i]);
       ref = in_tracer_channel(s, pose, dir, pol);
-      std::cout << "  " << pol_name(pol) << " at " << ranges[i] / 1e3 << " km: loop "
+      std::cout << "  " << polarisation_name(pol) << " at " << ranges[i] / 1e3 << " km: loop "
                 << db(std::norm(at[i])) << " dBsm (" << ts.lit_facets << " lit, "
                 << ts.partial_facets << " partly lit facets, " << ts.rays << " rays), "
                 << db(std::norm(at[i])) - db(std::norm(ref)) << " dB from the RCS engine\n";
@@ -324,13 +315,14 @@ TEST(SbrLoopVsRcs, VehicleMatchesTheRcsEngineInTheFarField) {
     const std::complex<double> far = 2.0 * at[1] - at[0];
     const double d_db = db(std::norm(far)) - db(std::norm(ref));
     const double d_deg = std::arg(far / ref) * 180.0 / kPi;
-    std::cout << "vehicle " << pol_name(pol) << ": loop extrapolated to the far field "
+    std::cout << "vehicle " << polarisation_name(pol) << ": loop extrapolated to the far field "
               << db(std::norm(far)) << " dBsm, RCS engine " << db(std::norm(ref))
               << " dBsm, difference " << d_db << " dB, " << d_deg << " deg\n";
-    EXPECT_LT(std::abs(d_db), 0.05) << pol_name(pol);
-    EXPECT_LT(std::abs(d_deg), 1.0) << pol_name(pol);
+    EXPECT_LT(std::abs(d_db), 0.05) << polarisation_name(pol);
+    EXPECT_LT(std::abs(d_deg), 1.0) << polarisation_name(pol);
     // The 1 / R law: at 4 R the loop sits halfway between S(2R) and S_inf.
-    EXPECT_LT(std::abs(at[2] - 0.5 * (far + at[1])), 0.002 * std::abs(far)) << pol_name(pol);
+    EXPECT_LT(std::abs(at[2] - 0.5 * (far + at[1])), 0.002 * std::abs(far))
+        << polarisation_name(pol);
   }
 }
 
@@ -468,10 +460,10 @@ TEST(SbrGround, PlateOnAsphaltDoubleBounceIsTheDielectricDihedral) {
     const double r = pol == rd::Polarisation::kHH ? fresnel_perp(eps, psi) : fresnel_par(eps, psi);
     const double expected = 8 * kPi * a * a * b * b * r * r / (lambda * lambda);
     const double got = std::norm(referred_sum(out, range, 2));
-    std::cout << "plate on asphalt (eps " << eps << ") " << pol_name(pol) << ": double bounce "
-              << db(got) << " dBsm, dielectric dihedral " << db(expected) << " dBsm (|R| " << r
-              << "), difference " << db(got) - db(expected) << " dB\n";
-    EXPECT_NEAR(db(got), db(expected), 0.15) << pol_name(pol);
+    std::cout << "plate on asphalt (eps " << eps << ") " << polarisation_name(pol)
+              << ": double bounce " << db(got) << " dBsm, dielectric dihedral " << db(expected)
+              << " dBsm (|R| " << r << "), difference " << db(got) - db(expected) << " dB\n";
+    EXPECT_NEAR(db(got), db(expected), 0.15) << polarisation_name(pol);
   }
 }
 

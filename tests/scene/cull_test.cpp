@@ -8,10 +8,10 @@
 #include <cmath>
 #include <iostream>
 #include <map>
-#include <numbers>
 #include <random>
 #include <string>
 
+#include "common/units.hpp"
 #include "scene/scene.hpp"
 #include "scene/scene_builders.hpp"
 #include "tests/alloc_counter.hpp"
@@ -20,7 +20,7 @@ namespace sc = radar_emu::scene;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 constexpr int kTiles = 8;                            // 8 x 8 tiles
 constexpr double kTile_m = 400.0;                    // tile side
 constexpr double kSpacing_m = 20.0;                  // level 0 grid; level L: 20 * 2^L
@@ -102,10 +102,10 @@ sc::ViewVolume view(glm::dvec3 position, const glm::dmat3& r) {
   sc::ViewVolume v;
   v.position_m = position;
   v.world_from_antenna = r;
-  v.azimuth_min_rad = -12.0 * kDeg;
-  v.azimuth_max_rad = 10.0 * kDeg;
-  v.elevation_min_rad = -6.0 * kDeg;
-  v.elevation_max_rad = 4.0 * kDeg;
+  v.azimuth_min_rad = common::radians(-12.0);
+  v.azimuth_max_rad = common::radians(10.0);
+  v.elevation_min_rad = common::radians(-6.0);
+  v.elevation_max_rad = common::radians(4.0);
   v.max_range_m = 2500.0;
   v.range_cell_m = 1e-3;  // forces level 0 everywhere
   return v;
@@ -152,9 +152,9 @@ TEST(SceneCull, RaysInsideTheBeamHitExactlyWhatTheFullSceneHits) {
   for (int view_index = 0; view_index < 6; ++view_index) {
     const glm::dvec3 position(-500.0 + 600.0 * u(rng), -500.0 + 600.0 * u(rng),
                               120.0 + 300.0 * u(rng));
-    const sc::ViewVolume v =
-        view(position, antenna((25.0 + 40.0 * u(rng)) * kDeg, (2.0 + 6.0 * u(rng)) * kDeg,
-                               (-30.0 + 60.0 * u(rng)) * kDeg));
+    const sc::ViewVolume v = view(position, antenna(common::radians(25.0 + 40.0 * u(rng)),
+                                                    common::radians(2.0 + 6.0 * u(rng)),
+                                                    common::radians(-30.0 + 60.0 * u(rng))));
     const double t_s = 50.0 * u(rng);
     s.lod.set_time(t_s);
     s.full.set_time(t_s);
@@ -202,7 +202,8 @@ TEST(SceneCull, RaysOutsideTheBeamMissCulledTiles) {
   // Looking north-east from the south-west corner: the south-east and north-west tiles are out
   // of the 22-degree beam. A ray straight down onto a culled tile finds nothing in the culled
   // scene, the terrain in the full one.
-  const sc::ViewVolume v = view({-300.0, -300.0, 300.0}, antenna(45.0 * kDeg, 5.0 * kDeg, 0.0));
+  const sc::ViewVolume v =
+      view({-300.0, -300.0, 300.0}, antenna(common::radians(45.0), common::radians(5.0), 0.0));
   s.lod.set_view(v);
   EXPECT_EQ(s.lod.active_lod_level(7), -1);  // tile (7, 0): south-east corner
   sc::Ray down;
@@ -229,7 +230,8 @@ TEST(SceneCull, RaysOutsideTheBeamMissCulledTiles) {
 
 TEST(SceneCull, CoarserLevelsAtLongRangeFollowTheRule) {
   Scenes& s = scenes();
-  sc::ViewVolume v = view({-400.0, -400.0, 250.0}, antenna(45.0 * kDeg, 4.0 * kDeg, 0.0));
+  sc::ViewVolume v =
+      view({-400.0, -400.0, 250.0}, antenna(common::radians(45.0), common::radians(4.0), 0.0));
   v.cull_outside = false;
   v.range_cell_m = 1.0;
   v.angular_cell_rad = 0.05;  // allowed facet max(1 m, 0.05 R): level 1 from 1200 m, 2 from 2400 m
@@ -324,7 +326,8 @@ TEST(SceneCull, DefaultViewIsTheFullSceneForEveryRay) {
 
 TEST(SceneCull, InvalidViewsFallBackToTheDefault) {
   sc::Scene s(database(1));
-  sc::ViewVolume v = view({-300.0, -300.0, 300.0}, antenna(45.0 * kDeg, 5.0 * kDeg, 0.0));
+  sc::ViewVolume v =
+      view({-300.0, -300.0, 300.0}, antenna(common::radians(45.0), common::radians(5.0), 0.0));
   s.set_view(v);
   EXPECT_EQ(s.view_stats().views_set, 1u);
   EXPECT_EQ(s.active_lod_level(7), -1);
@@ -356,7 +359,7 @@ TEST(SceneCull, LongestEdgeIsTheFacetSizeWhenNotGiven) {
     d.objects.push_back(o);
   }
   sc::Scene s(d);
-  sc::ViewVolume v = view({-100.0, 200.0, 100.0}, antenna(0.0, 10.0 * kDeg, 0.0));
+  sc::ViewVolume v = view({-100.0, 200.0, 100.0}, antenna(0.0, common::radians(10.0), 0.0));
   v.range_cell_m = 40.0 * std::sqrt(2.0) + 1e-9;  // the level-1 diagonal
   s.set_view(v);
   EXPECT_EQ(s.active_lod_level(0), 1);
@@ -367,21 +370,22 @@ TEST(SceneCull, LongestEdgeIsTheFacetSizeWhenNotGiven) {
 
 TEST(SceneCull, SetViewAndSetTimeDoNotAllocate) {
   sc::Scene s(database(2));
-  sc::ViewVolume v = view({-300.0, -300.0, 300.0}, antenna(45.0 * kDeg, 5.0 * kDeg, 0.0));
+  sc::ViewVolume v =
+      view({-300.0, -300.0, 300.0}, antenna(common::radians(45.0), common::radians(5.0), 0.0));
   v.angular_cell_rad = 0.05;
   sc::Hit hit;
   s.set_view(v);
   s.set_time(1.0);
-  (void)s.intersect(beam_ray(v, 0.0, -3.0 * kDeg), hit);
+  (void)s.intersect(beam_ray(v, 0.0, common::radians(-3.0)), hit);
   radar_emu::test::start_counting_allocations();
   int hits = 0;
   for (int i = 0; i < 500; ++i) {
     s.set_time(0.1 * i);
     v.position_m.x += 1.0;
-    v.world_from_antenna = antenna((45.0 + 0.01 * i) * kDeg, 5.0 * kDeg, 0.0);
+    v.world_from_antenna = antenna(common::radians(45.0 + 0.01 * i), common::radians(5.0), 0.0);
     s.set_view(v);
-    hits += s.intersect(beam_ray(v, 0.0, -3.0 * kDeg), hit) ? 1 : 0;
-    hits += s.occluded(beam_ray(v, 0.0, -3.0 * kDeg)) ? 1 : 0;
+    hits += s.intersect(beam_ray(v, 0.0, common::radians(-3.0)), hit) ? 1 : 0;
+    hits += s.occluded(beam_ray(v, 0.0, common::radians(-3.0))) ? 1 : 0;
   }
   s.clear_view();
   EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u)

@@ -9,6 +9,7 @@
 #include <numbers>
 #include <tuple>
 
+#include "common/units.hpp"
 #include "scene/scene.hpp"
 #include "tests/scene/mesh_parts.hpp"
 
@@ -17,7 +18,7 @@ using L = sc::DefaultSceneLayout;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 const sc::ObjectDesc& object(const sc::SceneDescription& d, const std::string& name) {
   for (const auto& o : d.objects) {
@@ -120,8 +121,8 @@ TEST(DefaultScene, HasTheNamedObjectsWithTheirMaterials) {
   EXPECT_TRUE(object(d, "moving_vehicle").motion.has_value());
   EXPECT_EQ(object(d, "moving_vehicle").motion->velocity_mps, glm::dvec3(0.0, 15.0, 0.0));
   EXPECT_EQ(object(d, "moving_vehicle").motion->start_position_m, glm::dvec3(-120, 200, 0));
-  EXPECT_NEAR(d.anchor.latitude_rad, 43.6 * kDeg, 1e-15);
-  EXPECT_NEAR(d.anchor.longitude_rad, 1.4 * kDeg, 1e-15);
+  EXPECT_NEAR(d.anchor.latitude_rad, common::radians(43.6), 1e-15);
+  EXPECT_NEAR(d.anchor.longitude_rad, common::radians(1.4), 1e-15);
   EXPECT_EQ(d.anchor.height_m, 150.0);
 }
 
@@ -156,7 +157,7 @@ TEST(DefaultScene, BoundsMatchTheLayout) {
   EXPECT_EQ(runway.bounds_max_m, glm::dvec3(22.5, 3000, rz));
   // Fuselage 32 m east-west, wings 30 m north-south, fin tip at 11.3 m, fuselage bottom at
   // 3.5 - 2 sin 75 deg (the 12-gon has flat faces at top and bottom).
-  const double bottom = 3.5 - 2.0 * std::sin(75.0 * kDeg);
+  const double bottom = 3.5 - 2.0 * std::sin(common::radians(75.0));
   check("parked_aircraft", {110 - 16, 700 - 15, bottom}, {110 + 16, 700 + 15, 11.3});
   check("parked_vehicle", {-72.5, 398.9, 0}, {-67.5, 401.1, 2.2});
   check("light_mast", {58, 249.5, 0}, {62, 250.5, 13});
@@ -219,7 +220,7 @@ TEST(DefaultScene, RaysFindEachObjectWhereTheLayoutPutsIt) {
     double t_m;
     glm::dvec3 normal;
   };
-  const double fuselage_top = 3.5 + 2.0 * std::sin(75.0 * kDeg);  // flat top face
+  const double fuselage_top = 3.5 + 2.0 * std::sin(common::radians(75.0));  // flat top face
   auto horizontal = [](glm::dvec3 o, glm::dvec3 dir) {
     sc::Ray r;
     r.origin_m = o;

@@ -10,8 +10,10 @@
 #include <numbers>
 #include <random>
 
+#include "common/units.hpp"
+
 namespace w = radar_emu::scene::wgs84;
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 namespace {
 // Independent constants (NIMA TR8350.2, 3rd ed., 2000, table 3.1), not the library's.
@@ -26,13 +28,13 @@ TEST(Wgs84, EquatorAndPoleAreTheEllipsoidAxes) {
   EXPECT_NEAR(e.y, 0.0, 1e-9);
   EXPECT_NEAR(e.z, 0.0, 1e-9);
   // Semi-minor axis b = a (1 - f) = 6356752.3142 m (NIMA TR8350.2, table 3.3).
-  const glm::dvec3 p = w::ecef_from_geodetic({90.0 * kDeg, 0.0, 0.0});
+  const glm::dvec3 p = w::ecef_from_geodetic({common::radians(90.0), 0.0, 0.0});
   EXPECT_NEAR(p.z, 6356752.314245, 1e-6);
   EXPECT_NEAR(std::hypot(p.x, p.y), 0.0, 1e-6);
-  const glm::dvec3 s = w::ecef_from_geodetic({-90.0 * kDeg, 0.0, 1000.0});
+  const glm::dvec3 s = w::ecef_from_geodetic({common::radians(-90.0), 0.0, 1000.0});
   EXPECT_NEAR(s.z, -6357752.314245, 1e-6);
   // lon 90 deg puts the equator point on +y.
-  const glm::dvec3 y = w::ecef_from_geodetic({0.0, 90.0 * kDeg, 10.0});
+  const glm::dvec3 y = w::ecef_from_geodetic({0.0, common::radians(90.0), 10.0});
   EXPECT_NEAR(y.y, 6378147.0, 1e-6);
   EXPECT_NEAR(y.x, 0.0, 1e-6);
 }
@@ -45,24 +47,24 @@ TEST(Wgs84, GeographicLibCartConvertExamples) {
   // (WGS84; -l gives local cartesian x east, y north, z up.) Printed to 1 cm. Evaluated with
   // 40-digit arithmetic the local point is (37288.9732, 33374.2949, 5783.6466): the page's z is
   // 6.6 mm below that (its last digit looks truncated, not rounded), so compare to 1 cm.
-  const w::Geodetic g{33.3 * kDeg, 44.4 * kDeg, 6000.0};
+  const w::Geodetic g{common::radians(33.3), common::radians(44.4), 6000.0};
   const glm::dvec3 e = w::ecef_from_geodetic(g);
   EXPECT_NEAR(e.x, 3816209.60, 0.0051);
   EXPECT_NEAR(e.y, 3737108.55, 0.0051);
   EXPECT_NEAR(e.z, 3485109.57, 0.0051);
-  const w::EnuFrame local(w::Geodetic{33.0 * kDeg, 44.0 * kDeg, 20.0});
+  const w::EnuFrame local(w::Geodetic{common::radians(33.0), common::radians(44.0), 20.0});
   const glm::dvec3 enu = local.enu_from_geodetic(g);
   EXPECT_NEAR(enu.x, 37288.97, 0.01);
   EXPECT_NEAR(enu.y, 33374.29, 0.01);
   EXPECT_NEAR(enu.z, 5783.64, 0.01);
   // The inverse of the published (cm-rounded) points: 1 cm is about 1e-7 deg on the Earth.
   const w::Geodetic back = w::geodetic_from_ecef({3816209.60, 3737108.55, 3485109.57});
-  EXPECT_NEAR(back.latitude_rad / kDeg, 33.3, 1e-7);
-  EXPECT_NEAR(back.longitude_rad / kDeg, 44.4, 1e-7);
+  EXPECT_NEAR(back.latitude_rad / common::kRadPerDeg, 33.3, 1e-7);
+  EXPECT_NEAR(back.longitude_rad / common::kRadPerDeg, 44.4, 1e-7);
   EXPECT_NEAR(back.height_m, 6000.0, 0.01);
   const w::Geodetic back_local = local.geodetic_from_enu({37288.97, 33374.29, 5783.64});
-  EXPECT_NEAR(back_local.latitude_rad / kDeg, 33.3, 1e-7);
-  EXPECT_NEAR(back_local.longitude_rad / kDeg, 44.4, 1e-7);
+  EXPECT_NEAR(back_local.latitude_rad / common::kRadPerDeg, 33.3, 1e-7);
+  EXPECT_NEAR(back_local.longitude_rad / common::kRadPerDeg, 44.4, 1e-7);
   EXPECT_NEAR(back_local.height_m, 6000.0, 0.01);
 }
 
@@ -73,8 +75,8 @@ TEST(Wgs84, EpsgGuidanceNoteWorkedExamples) {
   // transcribed at https://epsg.io/9602-method and https://epsg.io/9836-method.
   // 9602: 53 deg 48' 33.820" N, 2 deg 07' 46.380" E, h = 73.000 m
   //   => X = 3771793.968 m, Y = 140253.342 m, Z = 5124304.349 m (printed to 1 mm).
-  const double lat = (53.0 + 48.0 / 60.0 + 33.820 / 3600.0) * kDeg;
-  const double lon = (2.0 + 7.0 / 60.0 + 46.380 / 3600.0) * kDeg;
+  const double lat = common::radians(53.0 + 48.0 / 60.0 + 33.820 / 3600.0);
+  const double lon = common::radians(2.0 + 7.0 / 60.0 + 46.380 / 3600.0);
   const glm::dvec3 point(3771793.968, 140253.342, 5124304.349);
   const glm::dvec3 x = w::ecef_from_geodetic({lat, lon, 73.0});
   EXPECT_NEAR(x.x, point.x, 0.001);
@@ -89,7 +91,7 @@ TEST(Wgs84, EpsgGuidanceNoteWorkedExamples) {
   // Lo = 0.0872664625 rad (5 deg E) (height 200 m, which the 0.1 mm agreement below confirms);
   // the 9602 point above has U = -189013.869, V = -128642.040, W = -4220.171 m (east, north,
   // up, printed to 1 mm).
-  const w::Geodetic origin{55.0 * kDeg, 5.0 * kDeg, 200.0};
+  const w::Geodetic origin{common::radians(55.0), common::radians(5.0), 200.0};
   const glm::dvec3 o = w::ecef_from_geodetic(origin);
   EXPECT_NEAR(o.x, 3652755.3058, 1e-4);
   EXPECT_NEAR(o.y, 319574.6799, 1e-4);
@@ -97,8 +99,8 @@ TEST(Wgs84, EpsgGuidanceNoteWorkedExamples) {
   // The example's Po and Lo are 55 and 5 deg to their 10 printed decimals (within 1.1e-10
   // rad); from the 0.1 mm origin the inverse gives the exact angles to 1.6e-11 rad.
   const w::Geodetic og = w::geodetic_from_ecef({3652755.3058, 319574.6799, 5201547.3536});
-  EXPECT_NEAR(og.latitude_rad, 55.0 * kDeg, 2e-11);
-  EXPECT_NEAR(og.longitude_rad, 5.0 * kDeg, 2e-11);
+  EXPECT_NEAR(og.latitude_rad, common::radians(55.0), 2e-11);
+  EXPECT_NEAR(og.longitude_rad, common::radians(5.0), 2e-11);
   EXPECT_NEAR(og.latitude_rad, 0.9599310885, 1.1e-10);
   EXPECT_NEAR(og.longitude_rad, 0.0872664625, 1.1e-10);
   EXPECT_NEAR(og.height_m, 200.0, 1e-4);
@@ -118,11 +120,11 @@ TEST(Wgs84, EnuRoundTripOnAGridAtAnchorsWorldwide) {
   // from the equator to near the pole and across the date line: ENU -> WGS84 -> ENU and
   // WGS84 -> ENU -> WGS84 within 1 mm.
   const w::Geodetic anchors[] = {{0.0, 0.0, 0.0},
-                                 {43.6 * kDeg, 1.4 * kDeg, 150.0},
-                                 {-33.95 * kDeg, 151.18 * kDeg, 6.0},
-                                 {69.68 * kDeg, 18.92 * kDeg, 9.0},
-                                 {89.5 * kDeg, -45.0 * kDeg, 2800.0},
-                                 {-12.0 * kDeg, 179.95 * kDeg, -30.0}};
+                                 {common::radians(43.6), common::radians(1.4), 150.0},
+                                 {common::radians(-33.95), common::radians(151.18), 6.0},
+                                 {common::radians(69.68), common::radians(18.92), 9.0},
+                                 {common::radians(89.5), common::radians(-45.0), 2800.0},
+                                 {common::radians(-12.0), common::radians(179.95), -30.0}};
   double worst_enu = 0.0, worst_geo = 0.0;
   int points = 0;
   for (const w::Geodetic& a : anchors) {
@@ -159,7 +161,7 @@ TEST(Wgs84, ClosedFormAtFortyFiveDegrees) {
   // z = N (1 - e^2) sin 45 (TR8350.2 eq. 4-14, 4-15), evaluated here from the constants.
   const double n = kA / std::sqrt(1.0 - kE2 / 2.0);
   EXPECT_NEAR(n, 6388838.2901, 1e-4);
-  const glm::dvec3 x = w::ecef_from_geodetic({45.0 * kDeg, 45.0 * kDeg, 0.0});
+  const glm::dvec3 x = w::ecef_from_geodetic({common::radians(45.0), common::radians(45.0), 0.0});
   EXPECT_NEAR(x.x, n / 2.0, 1e-6);
   EXPECT_NEAR(x.y, n / 2.0, 1e-6);
   EXPECT_NEAR(x.z, n * (1.0 - kE2) * std::sqrt(0.5), 1e-6);
@@ -180,14 +182,14 @@ TEST(Wgs84, InverseIsExactToATenthOfAMillimetreWorldwide) {
                                std::abs(dlon) * kA * std::cos(g.latitude_rad),
                                std::abs(r.height_m - g.height_m)});
     worst_m = std::max(worst_m, e);
-    EXPECT_LT(e, 1e-4) << g.latitude_rad / kDeg << " " << g.longitude_rad / kDeg << " "
-                       << g.height_m;
+    EXPECT_LT(e, 1e-4) << g.latitude_rad / common::kRadPerDeg << " "
+                       << g.longitude_rad / common::kRadPerDeg << " " << g.height_m;
   };
   for (int i = 0; i < 20000; ++i)
-    check({lat(rng) * kDeg, lon(rng) * kDeg, h(rng)});
+    check({common::radians(lat(rng)), common::radians(lon(rng)), h(rng)});
   for (double la : {-90.0, -89.9999, -45.0, 0.0, 1e-9, 45.0, 89.9999, 90.0}) {
     for (double height : {-10000.0, 0.0, 150.0, 100000.0})
-      check({la * kDeg, 10.0 * kDeg, height});
+      check({common::radians(la), common::radians(10.0), height});
   }
   std::cout << "worst inverse error " << worst_m * 1e3 << " mm\n";
 }
@@ -196,7 +198,7 @@ TEST(Wgs84, EnuRoundTripWithinOneMillimetreOverFiftyKilometres) {
   const std::uint32_t seed = 11;
   std::cout << "seed " << seed << "\n";
   std::mt19937 rng(seed);
-  const w::EnuFrame enu(w::Geodetic{43.6 * kDeg, 1.4 * kDeg, 150.0});
+  const w::EnuFrame enu(w::Geodetic{common::radians(43.6), common::radians(1.4), 150.0});
   std::uniform_real_distribution<double> horizontal(-50e3, 50e3), height(-100.0, 10000.0);
   double worst = 0.0;
   for (int i = 0; i < 20000; ++i) {
@@ -212,7 +214,7 @@ TEST(Wgs84, EnuRoundTripWithinOneMillimetreOverFiftyKilometres) {
 }
 
 TEST(Wgs84, EnuAxesAtTheAnchor) {
-  const w::Geodetic anchor{43.6 * kDeg, 1.4 * kDeg, 150.0};
+  const w::Geodetic anchor{common::radians(43.6), common::radians(1.4), 150.0};
   const w::EnuFrame enu(anchor);
   EXPECT_NEAR(glm::length(enu.enu_from_geodetic(anchor)), 0.0, 1e-6);
   // 1 m up along the ellipsoid normal is (0, 0, 1).

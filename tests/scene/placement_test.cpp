@@ -9,10 +9,10 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <numbers>
 #include <stdexcept>
 #include <string>
 
+#include "common/units.hpp"
 #include "scene/gltf.hpp"
 #include "scene/scene.hpp"
 #include "scene/trajectory.hpp"
@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 // The ground of these tests: the plane z = 0.1 x + 0.05 y + 3 over [-100, 100]^2 (two
 // triangles), material "grass".
@@ -131,7 +131,7 @@ TEST(Placement, FixedTargetFacesItsCompassHeadingAndRestsOnTheGround) {
     sc::TargetPlacement t = builtin(sc::TargetKind::kBox, 4, 2, 2);
     t.position_m = {10, 20, 0.5};
     t.on_ground = true;
-    t.heading_rad = heading_deg * kDeg;
+    t.heading_rad = common::radians(heading_deg);
     sc::add_targets(d, {&t, 1});
     ASSERT_EQ(d.objects.size(), 2u);
     const sc::ObjectDesc& o = d.objects[1];
@@ -167,7 +167,7 @@ TEST(Placement, StraightLineMovesAlongTheCourseAndTheNoseKeepsTheHeading) {
     t.position_m = {-20, -30, 0};
     t.speed_mps = 10.0;
     t.course_rad = 0.0;
-    t.heading_rad = heading_deg * kDeg;
+    t.heading_rad = common::radians(heading_deg);
     sc::add_targets(d, {&t, 1});
     const sc::ObjectDesc& o = d.objects[1];
     ASSERT_TRUE(o.motion.has_value());
@@ -187,7 +187,7 @@ TEST(Placement, StraightLineMovesAlongTheCourseAndTheNoseKeepsTheHeading) {
     const glm::dvec3 dir =
         apply(x, o.mesh.positions_m[nose]) - glm::dvec3(x[3]);  // from the body origin
     // Body x along the compass heading h: nose (sin h, cos h), left (-cos h, sin h).
-    const double h = heading_deg * kDeg;
+    const double h = common::radians(heading_deg);
     const glm::dvec3 v(plain.objects[0].mesh.positions_m[nose]);
     EXPECT_NEAR(v.x, 4.0, 1e-6);
     EXPECT_NEAR(dir.x, v.x * std::sin(h) - v.y * std::cos(h), 1e-4) << heading_deg;

@@ -12,13 +12,14 @@
 #include <stdexcept>
 #include <thread>
 
+#include "common/units.hpp"
 #include "scene/default_scene.hpp"
 
 namespace sc = radar_emu::scene;
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 
 // Axis-aligned box [lo, hi] in the body frame, 12 triangles wound counter-clockwise seen from
 // outside. Triangles 2k and 2k+1 are face k: -z, +z, -y, +y, -x, +x.
@@ -96,7 +97,7 @@ TEST(SceneRays, TriangleHitAtTheSlantRangeOfEachAngle) {
   const sc::Scene s(triangle_and_moving_box());
   const double h = 100.0;
   for (double incidence_deg : {0.0, 10.0, 30.0, 45.0, 60.0, 80.0}) {
-    const double a = incidence_deg * kDeg;  // from the vertical
+    const double a = common::radians(incidence_deg);  // from the vertical
     const sc::Ray r = ray({0.0, -500.0, h}, {0.0, std::sin(a), -std::cos(a)});
     sc::Hit hit;
     ASSERT_TRUE(s.intersect(r, hit)) << incidence_deg;
@@ -152,7 +153,7 @@ TEST(SceneRays, DefaultGroundAndRunwayAtTheSlantRange) {
   const sc::Scene s(d);
   const double h = 300.0;
   for (double incidence_deg : {0.0, 20.0, 50.0, 75.0}) {
-    const double a = incidence_deg * kDeg;
+    const double a = common::radians(incidence_deg);
     sc::Hit hit;
     // Grass east of the runway, looking east.
     ASSERT_TRUE(s.intersect(ray({500.0, 2000.0, h}, {std::sin(a), 0.0, -std::cos(a)}), hit));
@@ -177,7 +178,7 @@ TEST(SceneRays, RotatedBoxEntryDistanceIsTheSlabSolution) {
   // A static 4 x 2 x 3 m box yawed by 30 deg and placed at (200, 50, 10).
   sc::SceneDescription d;
   d.materials = {{"metal", {}}};
-  const double yaw = 30.0 * kDeg;
+  const double yaw = common::radians(30.0);
   glm::dmat4 world_from_body(1.0);
   world_from_body[0] = {std::cos(yaw), std::sin(yaw), 0, 0};
   world_from_body[1] = {-std::sin(yaw), std::cos(yaw), 0, 0};
@@ -252,7 +253,7 @@ TEST(SceneRefit, HitsFromTenKilometresLieOnTheTrianglePlane) {
         w2 *= 0.9 / sum;
       }
       const glm::dvec3 target = a + w1 * (b - a) + w2 * (c - a);
-      const double az = 2.0 * std::numbers::pi * u(rng), el = (10.0 + 70.0 * u(rng)) * kDeg;
+      const double az = 2.0 * std::numbers::pi * u(rng), el = common::radians(10.0 + 70.0 * u(rng));
       const glm::dvec3 from = target + 1e4 * glm::dvec3(std::cos(el) * std::cos(az),
                                                         std::cos(el) * std::sin(az), std::sin(el));
       const sc::Ray r = ray(from, target - from);

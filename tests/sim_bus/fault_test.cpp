@@ -10,10 +10,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <numbers>
 #include <random>
 #include <vector>
 
+#include "common/units.hpp"
 #include "io/canaerospace.hpp"
 #include "sim_bus/aircraft_player.hpp"
 #include "sim_bus/fault_injector.hpp"
@@ -491,11 +491,9 @@ TEST(StaleSender, FrozenReplaysLastValuesWithFrozenOrLiveMessageCode) {
     canas::Decoder decoder;
     const sb::Trajectory traj = StaleRig::trajectory();
     // Last instants before the window: attitude 0.9875 s, navigation 0.9 s.
-    constexpr double kDegPerRad = 180.0 / std::numbers::pi;  // as the player converts
-    constexpr double kRadPerDeg = std::numbers::pi / 180.0;  // as the decoder converts
-    const double frozen_pitch_rad =
-        static_cast<double>(static_cast<float>(traj.at(0.9875).pitch_rad * kDegPerRad)) *
-        kRadPerDeg;
+    // Degrees as the player converts, a float on the bus, radians as the decoder converts.
+    const double frozen_pitch_rad = radar_emu::common::radians(static_cast<double>(
+        static_cast<float>(radar_emu::common::degrees(traj.at(0.9875).pitch_rad))));
     const double frozen_height_m = static_cast<double>(static_cast<float>(traj.at(0.9).height_m));
     std::uint64_t gaps_before = 0;
     for (std::int64_t t_ms = 50; t_ms <= 3'000; t_ms += 50) {  // 50 ms loop frames

@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/units.hpp"
 #include "io/modbus_map.hpp"
 #include "sim_bus/loopback_registers.hpp"
 #include "sim_bus/nav_register_player.hpp"
@@ -18,8 +19,6 @@ namespace {
 using namespace radar_emu;
 using io::RegisterStatus;
 using io::canas::Field;
-
-constexpr double kRad = std::numbers::pi / 180.0;
 
 TEST(LoopbackRegisterBank, ChecksQuantityThenAddressLikeAServer) {
   sim_bus::LoopbackRegisterBank bank(100, 10);
@@ -53,15 +52,15 @@ TEST(LoopbackRegisterBank, RejectsBadSetup) {
 // Straight and level eastbound at 100 m/s, 10 s; climbing 5 m/s.
 sim_bus::Trajectory line() {
   sim_bus::AircraftState a;
-  a.latitude_rad = 48.0 * kRad;
-  a.longitude_rad = 11.0 * kRad;
+  a.latitude_rad = common::radians(48.0);
+  a.longitude_rad = common::radians(11.0);
   a.height_m = 1000.0;
-  a.true_heading_rad = 90.0 * kRad;
+  a.true_heading_rad = common::radians(90.0);
   a.vel_east_mps = 100.0;
   a.vel_up_mps = 5.0;
   sim_bus::AircraftState b = a;
   b.time_s = 10.0;
-  b.longitude_rad = 11.01 * kRad;
+  b.longitude_rad = common::radians(11.01);
   b.height_m = 1050.0;
   return sim_bus::Trajectory({a, b});
 }
@@ -87,8 +86,8 @@ TEST(NavRegisterPlayer, WritesTheNewestDueUpdateOnly) {
   EXPECT_EQ(decoder.last_sender_time_ms(), 100u);
   const auto& s = decoder.state();
   // Linear between the waypoints: 1 % of the way at 0.1 s.
-  EXPECT_NEAR(s[Field::kLongitude].value, (11.0 + 0.01 * 0.01) * kRad, 1e-15);
-  EXPECT_NEAR(s[Field::kLatitude].value, 48.0 * kRad, 1e-15);
+  EXPECT_NEAR(s[Field::kLongitude].value, common::radians(11.0 + 0.01 * 0.01), 1e-15);
+  EXPECT_NEAR(s[Field::kLatitude].value, common::radians(48.0), 1e-15);
   EXPECT_NEAR(s[Field::kHeight].value, 1000.5, 1000.5 * 0x1p-24);
   EXPECT_NEAR(s[Field::kTrueHeading].value, std::numbers::pi / 2, 1e-7);
   EXPECT_NEAR(s[Field::kVelEast].value, 100.0, 1e-12);

@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
 #include <vector>
 
+#include "common/units.hpp"
 #include "io/canaerospace.hpp"
 #include "io/detection_icd.hpp"
 #include "sim_bus/aircraft_player.hpp"
@@ -25,7 +25,7 @@ io::CanFrame frame_with_id(std::uint32_t id) {
   f.data[0] = static_cast<std::uint8_t>(id);
   return f;
 }
-constexpr double kDeg = std::numbers::pi / 180.0;
+namespace common = radar_emu::common;
 }  // namespace
 
 TEST(LoopbackCanBus, EveryOtherEndpointReceivesInSendOrder) {
@@ -73,13 +73,13 @@ TEST(Trajectory, InterpolatesLinearlyAndHeadingAlongShorterArc) {
   b.time_s = 10.0;
   a.height_m = 100.0;
   b.height_m = 200.0;
-  a.true_heading_rad = 350.0 * kDeg;
-  b.true_heading_rad = 10.0 * kDeg;  // shorter arc passes through north
+  a.true_heading_rad = common::radians(350.0);
+  b.true_heading_rad = common::radians(10.0);  // shorter arc passes through north
   sb::Trajectory traj({a, b});
   const sb::AircraftState m = traj.at(2.5);
   EXPECT_DOUBLE_EQ(m.height_m, 125.0);
-  EXPECT_NEAR(m.true_heading_rad, 355.0 * kDeg, 1e-12);
-  EXPECT_NEAR(traj.at(7.5).true_heading_rad, 5.0 * kDeg, 1e-12);
+  EXPECT_NEAR(m.true_heading_rad, common::radians(355.0), 1e-12);
+  EXPECT_NEAR(traj.at(7.5).true_heading_rad, common::radians(5.0), 1e-12);
   EXPECT_DOUBLE_EQ(traj.at(-5.0).height_m, 100.0);  // held before the first waypoint
   EXPECT_DOUBLE_EQ(traj.at(50.0).height_m, 200.0);
   EXPECT_THROW(sb::Trajectory({b, a}), std::invalid_argument);
@@ -89,18 +89,18 @@ TEST(Trajectory, InterpolatesLinearlyAndHeadingAlongShorterArc) {
 TEST(AircraftStatePlayer, BaselineScheduleAndDecodedValues) {
   sb::AircraftState a;
   a.time_s = 0.0;
-  a.latitude_rad = 43.6 * kDeg;
-  a.longitude_rad = 1.4 * kDeg;
+  a.latitude_rad = common::radians(43.6);
+  a.longitude_rad = common::radians(1.4);
   a.height_m = 500.0;
-  a.pitch_rad = 2.0 * kDeg;
-  a.roll_rad = -1.0 * kDeg;
-  a.true_heading_rad = 90.0 * kDeg;
+  a.pitch_rad = common::radians(2.0);
+  a.roll_rad = common::radians(-1.0);
+  a.true_heading_rad = common::radians(90.0);
   a.vel_east_mps = 70.0;
   a.vel_north_mps = 0.0;
   a.vel_up_mps = -3.5;
   sb::AircraftState b = a;
   b.time_s = 100.0;
-  b.longitude_rad = 1.5 * kDeg;
+  b.longitude_rad = common::radians(1.5);
   b.height_m = 150.0;
 
   sb::LoopbackCanBus bus;
@@ -133,12 +133,13 @@ TEST(AircraftStatePlayer, BaselineScheduleAndDecodedValues) {
   const auto& st = dec.state();
   // Values at t = 1.0 s (last navigation and attitude slot), by linear interpolation.
   const double f_t = 1.0 / 100.0;
-  EXPECT_NEAR(st[canas::Field::kLongitude].value, (1.4 + 0.1 * f_t) * kDeg, 1e-15);  // double
-  EXPECT_NEAR(st[canas::Field::kLatitude].value, 43.6 * kDeg, 1e-15);
+  EXPECT_NEAR(st[canas::Field::kLongitude].value, common::radians(1.4 + 0.1 * f_t),
+              1e-15);  // double
+  EXPECT_NEAR(st[canas::Field::kLatitude].value, common::radians(43.6), 1e-15);
   EXPECT_NEAR(st[canas::Field::kHeight].value, 500.0 - 350.0 * f_t, 1e-4);  // float on the bus
-  EXPECT_NEAR(st[canas::Field::kPitch].value, 2.0 * kDeg, 1e-7);
-  EXPECT_NEAR(st[canas::Field::kRoll].value, -1.0 * kDeg, 1e-7);
-  EXPECT_NEAR(st[canas::Field::kTrueHeading].value, 90.0 * kDeg, 1e-7);
+  EXPECT_NEAR(st[canas::Field::kPitch].value, common::radians(2.0), 1e-7);
+  EXPECT_NEAR(st[canas::Field::kRoll].value, common::radians(-1.0), 1e-7);
+  EXPECT_NEAR(st[canas::Field::kTrueHeading].value, common::radians(90.0), 1e-7);
   EXPECT_NEAR(st[canas::Field::kVelEast].value, 70.0, 1e-5);
   EXPECT_NEAR(st[canas::Field::kVelUp].value, -3.5, 1e-6);
   EXPECT_EQ(st[canas::Field::kHeight].updated_ns, 1'000'000'000);
