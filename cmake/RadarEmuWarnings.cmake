@@ -38,7 +38,7 @@ function(radar_emu_module)
   add_library(radar_emu::${M_NAME} ALIAS radar_emu_${M_NAME})
   target_include_directories(radar_emu_${M_NAME} PUBLIC ${PROJECT_SOURCE_DIR})
   target_link_libraries(radar_emu_${M_NAME}
-    PUBLIC radar_emu_common ${M_PUBLIC_DEPS} radar_emu_sanitizers
+    PUBLIC radar_emu::common ${M_PUBLIC_DEPS} radar_emu_sanitizers
     PRIVATE ${M_PRIVATE_DEPS} radar_emu_warnings)
   set_target_properties(radar_emu_${M_NAME} PROPERTIES POSITION_INDEPENDENT_CODE ON)
 endfunction()

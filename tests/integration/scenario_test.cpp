@@ -640,6 +640,6 @@ TEST(SarCase, ErrorsAreOneLineInTheScenariosFormat) {
   // Degrees at the edge: the heading and the beams in radians.
   const radar_emu::tools::SarCase c = radar_emu::tools::parse_sar_case(
       "[platform]\nheading_deg = 45\n[antenna]\nincidence_deg = 60\n", "case.toml");
-  EXPECT_EQ(c.heading_rad, 45.0 * kDeg);
-  EXPECT_EQ(c.p.incidence_rad, 60.0 * kDeg);
+  EXPECT_EQ(c.heading_rad, common::radians(45.0));
+  EXPECT_EQ(c.p.incidence_rad, common::radians(60.0));
 }
