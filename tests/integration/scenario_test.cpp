@@ -629,7 +629,7 @@ TEST(SarCase, ErrorsAreOneLineInTheScenariosFormat) {
   EXPECT_EQ(sar_error("[radar]\nprf_hz = \"fast\"\n"),
             "case.toml: [radar] prf_hz: expected a number, got a string");
   EXPECT_EQ(sar_error("[radar]\npolarisation = \"RHC\"\n"),
-            "case.toml: [radar] polarisation: unknown value \"RHC\" (known: HH, HV, VH, VV)");
+            "case.toml: [radar] polarisation: 'RHC' is not one of HH, HV, VH, VV");
   EXPECT_EQ(sar_error("[[scene.target]]\nposition_m = [0, 0, 0]\n[[scene.target]]\nsize = 1\n"),
             "case.toml: [[scene.target]] #2 size: unknown key (known: name, kind, a_m, b_m, c_m, "
             "position_m, velocity_mps, heading_deg)");
