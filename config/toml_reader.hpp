@@ -111,6 +111,17 @@ class Table {
   /// An array of exactly out.size() numbers, each within `each` (element errors name
   /// "key[i]"); out is written only when the whole array is good.
   bool vector(std::string_view key, std::span<double> out, Range each) const;
+  /// Three numbers, each within +-limit, into a vector indexed by int (glm::dvec3);
+  /// `out` is written only when all three are good.
+  template <class Vec3>
+  bool vec3(std::string_view key, Vec3& out, double limit) const {
+    double v[3] = {0.0, 0.0, 0.0};
+    if (!vector(key, v, {-limit, limit}))
+      return false;
+    for (int i = 0; i < 3; ++i)
+      out[i] = v[i];
+    return true;
+  }
   /// An array of arrays of `length` numbers each within `each` ("key[i][j]"); nullopt if absent.
   [[nodiscard]] std::optional<std::vector<std::vector<double>>> vectors(std::string_view key,
                                                                         std::size_t length,

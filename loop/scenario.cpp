@@ -181,12 +181,6 @@ using config::Range;
 using config::Table;
 
 // [ownship] start_enu_m and friends: three numbers, each within +-limit.
-void vec3(const Table& t, std::string_view key, glm::dvec3& out, double limit) {
-  std::array<double, 3> v{};
-  if (t.vector(key, v, {-limit, limit}))
-    out = glm::dvec3(v[0], v[1], v[2]);
-}
-
 // [weather]: the condition picks which precipitation is present; its amount defaults to a
 // typical value: moderate rain 4 mm/h, medium fog 0.05 g/m^3 (visibility about 300 m; ITU-R
 // P.840-4 sec. 2 gives 0.05 g/m^3 for medium and 0.5 g/m^3 for thick fog, about 50 m).
@@ -424,7 +418,7 @@ void read_target_fixed(const Table& r, scene::TargetPlacement& t) {
   }
   if (!r.has("position_enu_m"))
     r.fail("", "needs position_enu_m = [e, n, u] or waypoints_enu_m = [[e, n, u], ...]");
-  vec3(r, "position_enu_m", t.position_m, 1e6);
+  r.vec3("position_enu_m", t.position_m, 1e6);
   double heading_deg = 0.0, course_deg = 0.0;
   const bool has_heading = r.number("heading_deg", heading_deg, {-360.0, 360.0});
   const bool has_course = r.number("course_deg", course_deg, {-360.0, 360.0});
@@ -530,8 +524,8 @@ void read_ownship(Scenario& s, const Table& root) {
   const Table own = root.table("ownship");
   own.refuse_unknown({"start_enu_m", "velocity_enu_mps", "pitch_deg", "roll_deg", "heading_deg",
                       "ins_node_id", "attitude_rate_hz", "navigation_rate_hz"});
-  vec3(own, "start_enu_m", s.ownship_start_enu_m, 1e6);
-  vec3(own, "velocity_enu_mps", s.ownship_velocity_enu_mps, 1500.0);
+  own.vec3("start_enu_m", s.ownship_start_enu_m, 1e6);
+  own.vec3("velocity_enu_mps", s.ownship_velocity_enu_mps, 1500.0);
   own.degrees("pitch_deg", s.ownship_pitch_rad, {-90.0, 90.0});
   own.degrees("roll_deg", s.ownship_roll_rad, {-180.0, 180.0});
   own.degrees("heading_deg", s.ownship_heading_rad, {-360.0, 360.0});

@@ -71,13 +71,6 @@ double db10(double x) {
 using config::Range;
 using config::Table;
 
-// Three numbers, each within +-limit.
-void vec3(const Table& t, std::string_view key, glm::dvec3& out, double limit) {
-  std::array<double, 3> v{};
-  if (t.vector(key, v, {-limit, limit}))
-    out = glm::dvec3(v[0], v[1], v[2]);
-}
-
 // The case from its parsed TOML; the file's name starts every error.
 SarCase case_from_table(const Table& root) {
   const std::string& path = root.file();
@@ -168,8 +161,8 @@ SarCase case_from_table(const Table& root) {
     tc.spec.c_m = tc.spec.a_m;
     t.number("b_m", tc.spec.b_m, {1e-3, 100.0, true});
     t.number("c_m", tc.spec.c_m, {1e-3, 100.0, true});
-    vec3(t, "position_m", tc.position_m, 15000.0);
-    vec3(t, "velocity_mps", tc.velocity_mps, 1000.0);
+    t.vec3("position_m", tc.position_m, 15000.0);
+    t.vec3("velocity_mps", tc.velocity_mps, 1000.0);
     t.degrees("heading_deg", tc.heading_rad, {-360.0, 360.0});
     c.targets.push_back(tc);
   }
