@@ -14,9 +14,9 @@ echo "== build (release, -Werror) =="
 echo "== tests =="
 ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
 
-echo "== build (ASan+UBSan) =="
-"$root/scripts/build.sh" "$root/build-asan" -DRADAR_EMU_WERROR=ON -DRADAR_EMU_SANITIZE=ON \
-  -DRADAR_EMU_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=Debug
+echo "== build (ASan+UBSan): the sanitize-labelled suites only =="
+RADAR_EMU_TARGETS=sanitize_tests "$root/scripts/build.sh" "$root/build-asan" -DRADAR_EMU_WERROR=ON -DRADAR_EMU_SANITIZE=ON \
+  -DRADAR_EMU_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=Debug -DRADAR_EMU_LINE_DEBUG_INFO=ON
 echo "== tests under ASan+UBSan (label: sanitize) =="
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
   ctest --test-dir "$root/build-asan" --output-on-failure -j "$jobs" -L sanitize
