@@ -22,6 +22,10 @@ struct Sigma0Args {
 };
 
 int sigma0_command(const CLI::App& sigma0, Sigma0Args& a) {
+  if (!a.opt.catalogue_chart_png.empty())
+    return tools::run_catalogue_chart(a.opt);
+  if (sigma0.count("--freq-hz") == 0)
+    throw std::invalid_argument("--freq-hz is required");
   if (sigma0.count("--x-power") > 0 && a.opt.correlation != "xpower")
     throw std::invalid_argument("--x-power: used with --corr xpower only (got --corr " +
                                 a.opt.correlation + ")");
@@ -65,11 +69,24 @@ void add_sigma0_command(CLI::App& app, Commands& commands) {
                    "Exponent of the x-power function (with --corr xpower; default 1.5)")
       ->check(config::in_range(1.0, 20.0, "", true))
       ->needs(s0_corr);
-  sigma0->add_option("--freq-hz", o.freq_hz, "Frequency [Hz]")
-      ->required()
+  sigma0
+      ->add_option("--freq-hz", o.freq_hz,
+                   "Frequency [Hz] (required, except with --catalogue-chart)")
       ->check(config::in_range(0.0, 1e15, "Hz", true));
   sigma0->add_option("--model", o.model,
-                     "empirical, iem, spm, ka, rt or total (surface + volume; default)");
+                     "total (default: the measured-data catalogue, what the images use), "
+                     "physical (IEM surface + RT volume), empirical (Ulaby-Dobson L/S/C rows), "
+                     "iem, spm, ka or rt");
+  sigma0
+      ->add_option("--catalogue-chart", o.catalogue_chart_png,
+                   "PNG: the catalogue's sigma0 vs incidence at 10, 35 and 94 GHz for "
+                   "--chart-materials, with the published points of --points")
+      ->check(config::output_file({".png"}));
+  sigma0->add_option("--chart-materials", o.chart_materials,
+                     "Materials of --catalogue-chart (default grass,asphalt,forest,water)");
+  sigma0->add_option("--points", o.points_csv,
+                     "Published points for --catalogue-chart (default "
+                     "tests/data/sigma0_catalogue_points.csv)");
   sigma0->add_option("--theta-deg", a->theta, "Incidence angles A:B:N [deg] (default 0:85:86)");
   CLI::Option* theta_s =
       sigma0->add_option("--theta-s-deg", a->theta_s, "Bistatic scattering angles A:B:N [deg]");

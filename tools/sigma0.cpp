@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "common/units.hpp"
@@ -40,6 +42,20 @@ double sigma_of(const cl::Sigma0& s, Polarisation p) {
       return s.vh;
   }
   return 0.0;
+}
+
+int cl_pol(Polarisation p) {
+  switch (p) {
+    case Polarisation::kHH:
+      return 0;
+    case Polarisation::kVV:
+      return 1;
+    case Polarisation::kHV:
+      return 2;
+    case Polarisation::kVH:
+      return 3;
+  }
+  return 1;
 }
 
 constexpr double kFloorDb = -300.0;  // written for "no power" (the model gives none)
@@ -113,7 +129,8 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
       throw std::invalid_argument("the empirical curves are backscatter only");
     if (spec.empirical == cl::EmpiricalClass::kNone)
       throw std::invalid_argument("no published empirical curve for " + what +
-                                  " (Ulaby-Dobson classes here: soil, grass, crops, snow)");
+                                  " (Ulaby-Dobson classes here: soil, grass, crops, tall_grass, "
+                                  "snow, snow_wet)");
     if (!cl::empirical_row(spec.empirical, o.freq_hz, 1))
       throw std::invalid_argument(
           "empirical: Ulaby-Dobson coefficients are available for L, S and C band (1-8 GHz) "
@@ -141,6 +158,16 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
                                                      common::radians(o.phi_s_deg)}
                                       : cl::Geometry::backscatter(common::radians(t));
       Row r{t, ts, cl::evaluate_sigma0(spec, model, o.freq_hz, g)};
+      if (model == cl::Sigma0Model::kTotal && !bistatic &&
+          spec.curve != cl::CatalogueCurve::kNone) {
+        // The catalogue's bits of the polarisations asked for only (evaluate_sigma0 ORs all four).
+        r.s.invalid = 0;
+        for (Polarisation p : pols)
+          r.s.invalid |=
+              cl::catalogue_sigma0(spec.curve, spec.sea_state, o.freq_hz,
+                                   static_cast<cl::Sigma0Pol>(cl_pol(p)), common::radians(t))
+                  .flags;
+      }
       rows.push_back(r);
     }
   }
@@ -162,7 +189,7 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     std::fprintf(f, ",theta_s_deg,phi_s_deg");
   for (Polarisation p : pols)
     std::fprintf(f, ",sigma0_%s_db", std::string(common::polarisation_name(p)).c_str());
-  std::fprintf(f, ",valid\n");
+  std::fprintf(f, ",valid,flags\n");
   for (const Row& r : rows) {
     std::fprintf(f, "%.6g", r.theta);
     if (bistatic)
@@ -171,7 +198,7 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
       std::fprintf(f, ",%.4f", to_db(sigma_of(r.s.incoherent, p)));
     const std::uint32_t flags = row_valid(r);
     seen |= flags;
-    std::fprintf(f, ",%d\n", flags == 0 ? 1 : 0);
+    std::fprintf(f, ",%d,%u\n", flags == 0 ? 1 : 0, static_cast<unsigned>(flags));
   }
   const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
   if (std::fclose(f) != 0 || !ok)
@@ -289,6 +316,103 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     std::fprintf(stderr, "radar-emu: warning: rows with valid=0 leave a model's domain: %s\n",
                  reasons.c_str());
   }
+  return 0;
+}
+
+int run_catalogue_chart(const Sigma0ToolOptions& o) {
+  std::vector<std::string> materials;
+  {
+    std::stringstream ss(o.chart_materials);
+    std::string name;
+    while (std::getline(ss, name, ','))
+      if (!name.empty())
+        materials.push_back(name);
+  }
+  if (materials.empty())
+    throw std::invalid_argument("--chart-materials: give at least one material");
+  for (const std::string& m : materials)
+    (void)cl::terrain_material(m);  // unknown: one line naming the known ones
+  struct Point {
+    std::string material, pol;
+    double freq_hz, theta_deg, db;
+  };
+  std::vector<Point> points;
+  {
+    std::ifstream in(o.points_csv);
+    if (!in)
+      throw std::runtime_error(o.points_csv + ": cannot open (--points)");
+    std::string line;
+    std::getline(in, line);
+    int line_no = 1;
+    while (std::getline(in, line)) {
+      ++line_no;
+      std::stringstream ss(line);
+      std::string c[5];
+      for (auto& x : c)
+        std::getline(ss, x, ',');
+      try {
+        points.push_back({c[0], c[2], std::stod(c[1]), std::stod(c[3]), std::stod(c[4])});
+      } catch (const std::exception&) {
+        throw std::invalid_argument(o.points_csv + ":" + std::to_string(line_no) +
+                                    ": expected material,freq_hz,pol,theta_deg,sigma0_db,...");
+      }
+    }
+  }
+  std::vector<Canvas> panels;
+  for (double f : {10e9, 35e9, 94e9}) {
+    LineChart chart;
+    char title[200];
+    std::snprintf(title, sizeof title,
+                  "sigma0 VV, catalogue (model total), %.0f GHz: dashed = assumed or "
+                  "extrapolated; markers = published points",
+                  f * 1e-9);
+    chart.title = title;
+    chart.x_label = "incidence angle [deg]";
+    chart.y_label = "sigma0 [dB]";
+    chart.y_min = -60.0;
+    chart.y_max = 15.0;
+    chart.x_min = 0.0;
+    chart.x_max = 90.0;
+    chart.height = 520;
+    std::size_t colour = 0;
+    for (const std::string& m : materials) {
+      const cl::TerrainMaterial& mat = cl::terrain_material(m);
+      Series inside, outside, pts;
+      inside.label = m;
+      inside.colour = outside.colour = pts.colour = series_colour(colour++);
+      outside.dashed = true;
+      pts.markers = true;
+      for (int i = 0; i <= 899; ++i) {
+        const double th = i * 0.1;
+        const cl::Sigma0Value v = cl::sigma0(mat, f, cl::Sigma0Pol::kVV, th * radar::kPi / 180.0);
+        const double y = to_db(v.linear);
+        inside.x.push_back(th);
+        outside.x.push_back(th);
+        inside.y.push_back(v.flags == 0 ? y : std::nan(""));
+        outside.y.push_back(v.flags != 0 ? y : std::nan(""));
+      }
+      if (std::none_of(inside.y.begin(), inside.y.end(), [](double y) { return std::isfinite(y); }))
+        outside.label = m;  // the legend names the material even where all of it is flagged
+      for (const Point& p : points) {
+        if (p.material != m || p.pol != "VV" || std::abs(p.freq_hz - f) > 0.1 * f)
+          continue;
+        pts.x.push_back(p.theta_deg);
+        pts.y.push_back(p.db);
+        pts.x.push_back(p.theta_deg);
+        pts.y.push_back(std::nan(""));
+      }
+      for (Series* series : {&inside, &outside, &pts}) {
+        if (std::any_of(series->y.begin(), series->y.end(),
+                        [](double y) { return std::isfinite(y); }))
+          chart.series.push_back(std::move(*series));
+      }
+    }
+    panels.push_back(plot::render_line_chart(chart));
+  }
+  stack_panels(panels).write_png(o.catalogue_chart_png);
+  if (!o.quiet)
+    std::printf("catalogue chart of %s at 10, 35, 94 GHz with %s: wrote %s\n",
+                o.chart_materials.c_str(), o.points_csv.c_str(), o.catalogue_chart_png.c_str());
   return 0;
 }
 

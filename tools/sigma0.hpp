@@ -24,10 +24,20 @@ struct Sigma0ToolOptions {
   std::string out_csv = "sigma0.csv";
   std::string plot_png;
   bool quiet = false;
+  std::string catalogue_chart_png;  ///< --catalogue-chart: run_catalogue_chart()
+  std::string chart_materials = "grass,asphalt,forest,water";
+  std::string points_csv = "tests/data/sigma0_catalogue_points.csv";
 };
 
-/// Writes `theta_deg[,theta_s_deg,phi_s_deg],sigma0_P_db...,valid`. Throws
-/// std::invalid_argument with a one-line reason for unusable input.
+/// Writes `theta_deg[,theta_s_deg,phi_s_deg],sigma0_P_db...,valid,flags` (flags: the
+/// validity bits of radar/clutter/surface.hpp, e.g. 1024 kOutsideMeasuredRange, 2048
+/// kAssumedValue of the catalogue). Throws std::invalid_argument with a one-line reason for
+/// unusable input.
 int run_sigma0_tool(const Sigma0ToolOptions& options);
+
+/// The catalogue chart (docs/validation.md): three panels (10, 35, 94 GHz), sigma0 VV of each of
+/// `chart_materials` against incidence 0-89.9 deg (dashed where flagged assumed or outside the
+/// measured range), with the points of `points_csv` within 10 % of the panel's frequency.
+int run_catalogue_chart(const Sigma0ToolOptions& options);
 
 }  // namespace radar_emu::tools

@@ -552,6 +552,9 @@ std::string describe_validity(std::uint32_t flags) {
       {kCrossPolNotModelled,
        "this model has no cross-polarised backscatter (SPM, KA first order; RT spheres)"},
       {kAlbedoHigh, "RT: albedo > 0.2 (first order only)"},
+      {kOutsideMeasuredRange,
+       "catalogue: extrapolated beyond the measured angles or frequencies of its source"},
+      {kAssumedValue, "catalogue: assumed value (no published data found)"},
   };
   std::string out;
   for (const auto& n : kNames) {

@@ -81,6 +81,11 @@ enum Invalid : std::uint32_t {
   kCrossPolNotModelled = 1u << 7,  ///< backscatter HV/VH from a model that has none (SPM and
                                    ///< KA first order, RT volume of spheres)
   kAlbedoHigh = 1u << 8,           ///< RT: albedo > 0.2, multiple volume scattering ignored
+  // (1u << 9: kEmpiricalOutside, terrain.hpp)
+  kOutsideMeasuredRange = 1u << 10,  ///< catalogue: extrapolated beyond the angles or
+                                     ///< frequencies of its source (terrain.hpp)
+  kAssumedValue = 1u << 11,          ///< catalogue: rests on an assumed value (no published
+                                     ///< data found; docs/validation.md)
 };
 /// One line naming every condition set in `flags` ("valid" when none).
 [[nodiscard]] std::string describe_validity(std::uint32_t flags);

@@ -18,12 +18,13 @@ constexpr double kDbPerNp = 4.342944819032518;  // 10 log10(e): power dB per nep
 
 // The catalogue. Where no published value was found, the value is ours and says "assumed";
 // docs/notes/clutter_data_sources.md records what was searched.
-const std::array<TerrainMaterial, 12>& catalogue() {
+const std::array<TerrainMaterial, 15>& catalogue() {
   using P = PermittivityModel;
   using E = EmpiricalClass;
   using C = Correlation;
   using L = VolumeLayer::Placement;
-  static const std::array<TerrainMaterial, 12> k{{
+  using K = CatalogueCurve;
+  static const std::array<TerrainMaterial, 15> k{{
       {"asphalt",
        "asphalt road surface (aggregate in bitumen)",
        P::kFixed,
@@ -39,7 +40,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        false,
        "extinction 25 Np/m from the same 4 cm penetration depth; thickness 4 cm (one "
        "penetration depth); albedo 0.1 assumed",
-       E::kNone},
+       E::kNone,
+       K::kAsphalt},
       {"concrete",
        "concrete pavement or apron",
        P::kFixed,
@@ -54,7 +56,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {L::kInsideGround, 0.03, 30.0, 0.1},
        false,
        "assumed: aggregate inclusions, extinction 30 Np/m, 3 cm, albedo 0.1",
-       E::kNone},
+       E::kNone,
+       K::kConcrete},
       {"grass",
        "grass 0.3 m over moist soil",
        P::kSoil,
@@ -70,7 +73,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        true,
        "canopy 0.3 m; extinction = ITU-R P.833 woodland gamma (Figure 2, held at 30 GHz "
        "above); albedo 0.15 assumed",
-       E::kGrass},
+       E::kGrass,
+       K::kGrass},
       {"crops",
        "crops 1 m over moist soil",
        P::kSoil,
@@ -84,7 +88,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {L::kCanopyAboveGround, 1.0, 0.0, 0.15},
        true,
        "canopy 1 m; extinction = P.833 gamma; albedo 0.15 assumed",
-       E::kShortVegetation},
+       E::kShortVegetation,
+       K::kCrops},
       {"forest",
        "forest canopy 10 m over soil",
        P::kSoil,
@@ -98,7 +103,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {L::kCanopyAboveGround, 10.0, 0.0, 0.2},
        true,
        "canopy 10 m; extinction = P.833 gamma; albedo 0.2 assumed",
-       E::kNone},
+       E::kNone,
+       K::kForest},
       {"soil_dry",
        "bare dry soil",
        P::kSoil,
@@ -112,7 +118,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {},
        false,
        "",
-       E::kSoil},
+       E::kSoil,
+       K::kSoilDry},
       {"soil_wet",
        "bare wet soil",
        P::kSoil,
@@ -126,9 +133,10 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {},
        false,
        "",
-       E::kSoil},
+       E::kSoil,
+       K::kSoilWet},
       {"water",
-       "calm fresh water",
+       "calm inland water (sea state 1)",
        P::kWater,
        {1.0, 0.0},
        0.0,
@@ -140,7 +148,9 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {},
        false,
        "",
-       E::kNone},
+       E::kNone,
+       K::kWater,
+       1.0},
       {"gravel",
        "gravel or dry sand",
        P::kFixed,
@@ -154,9 +164,10 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {L::kInsideGround, 0.05, 10.0, 0.1},
        false,
        "assumed: grain scattering, extinction 10 Np/m, 5 cm, albedo 0.1",
-       E::kNone},
+       E::kNone,
+       K::kGravel},
       {"snow",
-       "dry snow 0.3 g/cm3",
+       "dry snow 0.3 g/cm3 (snow_dry)",
        P::kDrySnow,
        {1.0, 0.0},
        0.0,
@@ -170,7 +181,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        false,
        "assumed: grains, extinction 5 Np/m, 0.5 m, albedo 0.5 (snow scatters more than it "
        "absorbs at mm-wave; first order flagged)",
-       E::kDrySnow},
+       E::kDrySnow,
+       K::kSnowDry},
       {"urban",
        "built-up ground between modelled buildings",
        P::kFixed,
@@ -184,7 +196,54 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {},
        false,
        "",
-       E::kNone},
+       E::kNone,
+       K::kUrban},
+      {"tall_grass",
+       "tall grass 0.8 m over moist soil",
+       P::kSoil,
+       {1.0, 0.0},
+       0.2,
+       0.0,
+       "ground: Dobson et al. 1985 (m_v 0.2)",
+       {0.015, 0.1, C::kExponential, 1.5},
+       "ground: s 1.5 cm, l 10 cm (Oh et al. 1992 range)",
+       true,
+       {L::kCanopyAboveGround, 0.8, 0.0, 0.15},
+       true,
+       "canopy 0.8 m; extinction = P.833 gamma; albedo 0.15 assumed",
+       E::kShrubs,
+       K::kTallGrass},
+      {"snow_wet",
+       "wet snow",
+       P::kFixed,
+       {2.0, -0.3},
+       0.0,
+       0.0,
+       "assumed: eps 2.0 - j0.3 (a few per cent liquid water; no value adopted from a source)",
+       {0.003, 0.03, C::kExponential, 1.5},
+       "assumed: s 3 mm, l 3 cm",
+       false,
+       {},
+       false,
+       "",
+       E::kWetSnow,
+       K::kSnowWet},
+      {"sea",
+       "open sea, sea state 3",
+       P::kWater,
+       {1.0, 0.0},
+       0.0,
+       0.0,
+       "ITU-R P.840-9 double-Debye water permittivity at 15 C (fresh water; salinity ignored)",
+       {0.01, 0.1, C::kGaussian, 1.5},
+       "assumed: s 1 cm, l 10 cm (physical models only; the catalogue uses the NRL model)",
+       false,
+       {},
+       false,
+       "",
+       E::kNone,
+       K::kWater,
+       3.0},
       {"metal",
        "metal (perfect conductor)",
        P::kConductor,
@@ -198,7 +257,8 @@ const std::array<TerrainMaterial, 12>& catalogue() {
        {},
        false,
        "",
-       E::kNone},
+       E::kNone,
+       K::kNone},
   }};
   return k;
 }
@@ -466,18 +526,21 @@ const char* to_string(Sigma0Model m) noexcept {
       return "rt";
     case Sigma0Model::kTotal:
       return "total";
+    case Sigma0Model::kPhysical:
+      return "physical";
   }
   return "?";
 }
 
 Sigma0Model parse_sigma0_model(std::string_view text) {
-  for (Sigma0Model m : {Sigma0Model::kEmpirical, Sigma0Model::kIem, Sigma0Model::kSpm,
-                        Sigma0Model::kKirchhoff, Sigma0Model::kRt, Sigma0Model::kTotal}) {
+  for (Sigma0Model m :
+       {Sigma0Model::kEmpirical, Sigma0Model::kIem, Sigma0Model::kSpm, Sigma0Model::kKirchhoff,
+        Sigma0Model::kRt, Sigma0Model::kTotal, Sigma0Model::kPhysical}) {
     if (text == to_string(m))
       return m;
   }
   throw std::invalid_argument("unknown model '" + std::string(text) +
-                              "' (known: empirical, iem, spm, ka, rt, total)");
+                              "' (known: empirical, iem, spm, ka, rt, total, physical)");
 }
 
 std::optional<EmpiricalRow> empirical_row(EmpiricalClass c, double freq_hz, int pol) noexcept {
@@ -504,6 +567,8 @@ double empirical_sigma0_db(const EmpiricalRow& r, double theta_rad) noexcept {
 SurfaceSpec resolve_surface(const TerrainMaterial& m, double freq_hz) {
   SurfaceSpec s;
   s.empirical = m.empirical;
+  s.curve = m.curve;
+  s.sea_state = m.sea_state;
   if (m.permittivity_model == PermittivityModel::kConductor) {
     s.conductor = true;
     return s;
@@ -557,6 +622,21 @@ SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model, doubl
       return out;
     }
     case Sigma0Model::kTotal:
+      if (spec.curve != CatalogueCurve::kNone && g.is_backscatter()) {
+        // The measured-data catalogue (sigma0_catalogue.cpp).
+        SurfaceScatter out;
+        double* dst[4] = {&out.incoherent.hh, &out.incoherent.vv, &out.incoherent.hv,
+                          &out.incoherent.vh};
+        for (int pol = 0; pol < 4; ++pol) {
+          const Sigma0Value v = catalogue_sigma0(spec.curve, spec.sea_state, freq_hz,
+                                                 static_cast<Sigma0Pol>(pol), g.theta_i_rad);
+          *dst[pol] = v.linear;
+          out.invalid |= v.flags;
+        }
+        return out;
+      }
+      [[fallthrough]];
+    case Sigma0Model::kPhysical:
       return spec.has_volume
                  ? rt_total(spec.volume, spec.surface, freq_hz, g, cross_pol_backscatter)
                  : iem(spec.surface, freq_hz, g, IemConventions::kPublishedEquations,
@@ -567,11 +647,14 @@ SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model, doubl
 
 Sigma0Table::Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, double freq_hz) {
   values_.assign(specs.size() * 4 * kSamples, 0.0f);
-  // Co-polarised sigma0 at every sample. The cross-polarised backscatter (the IEM's
-  // multiple-scattering double integral, ~0.5 ms an angle) is evaluated every
+  flags_.assign(specs.size() * 4 * kSamples, 0u);
+  // Co-polarised sigma0 at every sample. The physical models' cross-polarised backscatter (the
+  // IEM's multiple-scattering double integral, ~0.5 ms an angle) is evaluated every
   // kCrossPolStride samples (0.5 deg) and interpolated linearly in dB in between: the curves are
-  // smooth on that scale (Terrain.Sigma0TableInterpolatesTheModels checks HV too). Angles are
-  // spread over the cores; setup only.
+  // smooth on that scale (Terrain.Sigma0TableInterpolatesTheModels checks HV too). The
+  // catalogue (model total, backscatter) is cheap and evaluated at every sample. Angles are
+  // spread over the cores; setup only. The validity bits of the polarisation's evaluation are
+  // kept per sample (lookup_flags()).
   constexpr int kCrossPolStride = 10;
   static_assert((kSamples - 1) % kCrossPolStride == 0);
   auto theta_of = [](int i) {
@@ -580,8 +663,24 @@ Sigma0Table::Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, 
   };
   for (std::size_t m = 0; m < specs.size(); ++m) {
     float* row[4];
-    for (std::size_t p = 0; p < 4; ++p)
+    std::uint32_t* frow[4];
+    for (std::size_t p = 0; p < 4; ++p) {
       row[p] = values_.data() + (m * 4 + p) * kSamples;
+      frow[p] = flags_.data() + (m * 4 + p) * kSamples;
+    }
+    const bool catalogue = model == Sigma0Model::kTotal && specs[m].curve != CatalogueCurve::kNone;
+    if (catalogue) {
+      for (int i = 0; i < kSamples; ++i) {
+        const auto at = static_cast<std::size_t>(i);
+        for (std::size_t p = 0; p < 4; ++p) {
+          const Sigma0Value v = catalogue_sigma0(specs[m].curve, specs[m].sea_state, freq_hz,
+                                                 static_cast<Sigma0Pol>(p), theta_of(i));
+          row[p][at] = static_cast<float>(v.linear);
+          frow[p][at] = v.flags;
+        }
+      }
+      continue;
+    }
     tbb::parallel_for(0, kSamples, [&](int i) {
       const bool node = i % kCrossPolStride == 0;
       const SurfaceScatter s =
@@ -589,9 +688,11 @@ Sigma0Table::Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, 
       const auto at = static_cast<std::size_t>(i);
       row[kHH][at] = static_cast<float>(s.incoherent.hh);
       row[kVV][at] = static_cast<float>(s.incoherent.vv);
+      frow[kHH][at] = frow[kVV][at] = s.invalid;
       if (node) {
         row[kHV][at] = static_cast<float>(s.incoherent.hv);
         row[kVH][at] = static_cast<float>(s.incoherent.vh);
+        frow[kHV][at] = frow[kVH][at] = s.invalid;
       }
     });
     for (std::size_t p : {std::size_t{kHV}, std::size_t{kVH}}) {
@@ -603,10 +704,31 @@ Sigma0Table::Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, 
           // Geometric (dB-linear) where both ends carry power, linear otherwise.
           const double v = (a > 0.0 && b > 0.0) ? a * std::pow(b / a, w) : a + w * (b - a);
           row[p][node + j] = static_cast<float>(v);
+          frow[p][node + j] = frow[p][node] | frow[p][node + kCrossPolStride];
         }
       }
     }
   }
+}
+
+std::uint32_t Sigma0Table::lookup_flags(std::size_t index, Pol pol,
+                                        double cos_incidence) const noexcept {
+  if (index >= materials() || !(cos_incidence >= 0.0 && cos_incidence <= 1.0))
+    return 0u;
+  const double x = std::acos(cos_incidence) * ((kSamples - 1) / (kPi / 2.0));
+  const int i = std::min(static_cast<int>(x), kSamples - 2);
+  const std::uint32_t* row = flags_.data() + (index * 4 + pol) * kSamples;
+  return row[i] | row[i + 1];
+}
+
+std::uint32_t Sigma0Table::row_flags(std::size_t index, Pol pol) const noexcept {
+  if (index >= materials())
+    return 0u;
+  const std::uint32_t* row = flags_.data() + (index * 4 + pol) * kSamples;
+  std::uint32_t out = 0u;
+  for (int i = 0; i < kSamples; ++i)
+    out |= row[i];
+  return out;
 }
 
 float Sigma0Table::lookup(std::size_t index, Pol pol, double cos_incidence) const noexcept {

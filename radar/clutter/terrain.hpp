@@ -37,6 +37,25 @@ enum class EmpiricalClass : std::uint8_t {
   kWetSnow
 };
 
+/// The measured-data curve of the catalogue (sigma0_catalogue.cpp): which published rows and
+/// points a material's sigma0(incidence, frequency, polarisation) is founded on.
+enum class CatalogueCurve : std::uint8_t {
+  kNone,  ///< no diffuse sigma0 (the conductor)
+  kAsphalt,
+  kConcrete,
+  kGrass,  ///< mown grass
+  kTallGrass,
+  kCrops,
+  kForest,
+  kSoilDry,
+  kSoilWet,
+  kGravel,
+  kSnowDry,
+  kSnowWet,
+  kUrban,
+  kWater  ///< NRL sea-clutter model at TerrainMaterial::sea_state
+};
+
 struct TerrainMaterial {
   std::string_view name;
   std::string_view description;
@@ -52,6 +71,8 @@ struct TerrainMaterial {
   bool canopy_extinction_from_p833 = false;  ///< extinction = P.833 woodland gamma
   std::string_view volume_source;
   EmpiricalClass empirical = EmpiricalClass::kNone;
+  CatalogueCurve curve = CatalogueCurve::kNone;  ///< the measured-data sigma0 curve
+  double sea_state = 0.0;                        ///< kWater: Douglas sea state 0-6 (NRL model)
 };
 
 [[nodiscard]] std::span<const TerrainMaterial> terrain_catalogue() noexcept;
@@ -59,6 +80,9 @@ struct TerrainMaterial {
 [[nodiscard]] const TerrainMaterial* find_terrain_material(std::string_view name) noexcept;
 /// "asphalt, concrete, ..." for error messages and --help.
 [[nodiscard]] std::string terrain_material_names();
+/// The material named `name`; throws std::invalid_argument "unknown terrain material 'x'
+/// (known: asphalt, ...)" otherwise. Setup only.
+[[nodiscard]] const TerrainMaterial& terrain_material(std::string_view name);
 
 /// Relative permittivity of the material at `freq_hz` (eps' - j eps''). Throws
 /// std::invalid_argument for a conductor.
@@ -66,9 +90,21 @@ struct TerrainMaterial {
 /// Extinction of the material's volume layer at `freq_hz` [Np/m].
 [[nodiscard]] double volume_extinction_np_per_m(const TerrainMaterial& m, double freq_hz);
 
-enum class Sigma0Model : std::uint8_t { kEmpirical, kIem, kSpm, kKirchhoff, kRt, kTotal };
+/// kTotal: the model the images use: the measured-data catalogue in backscatter (a material
+/// with a CatalogueCurve), the physical models (kPhysical) bistatic or for a custom surface.
+/// kPhysical: IEM surface + first-order RT volume (the physics of surface.hpp, no data).
+/// kEmpirical: the raw Ulaby-Dobson L/S/C rows only.
+enum class Sigma0Model : std::uint8_t {
+  kEmpirical,
+  kIem,
+  kSpm,
+  kKirchhoff,
+  kRt,
+  kTotal,
+  kPhysical
+};
 [[nodiscard]] const char* to_string(Sigma0Model m) noexcept;
-/// Parses empirical|iem|spm|ka|rt|total; throws std::invalid_argument otherwise.
+/// Parses empirical|iem|spm|ka|rt|total|physical; throws std::invalid_argument otherwise.
 [[nodiscard]] Sigma0Model parse_sigma0_model(std::string_view text);
 
 /// Ulaby & Dobson regression sigma0(dB) = P1 + P2 exp(-P3 t) + P4 cos(P5 t + P6), t the
@@ -80,20 +116,59 @@ struct EmpiricalRow {
                                                         int pol /*0 hh 1 vv 2 hv*/) noexcept;
 [[nodiscard]] double empirical_sigma0_db(const EmpiricalRow& row, double theta_rad) noexcept;
 
+// ---- The measured-data catalogue (sigma0_catalogue.cpp; sources in docs/validation.md) ------
+//
+// sigma0 of each material against incidence 0-90 deg, HH, VV and cross-pol, continuous in
+// frequency 1-100 GHz: per material a few anchor curves (published regression rows, published
+// near-grazing points, and, where nothing was found, assumed rows marked as such), each a
+// Ulaby-Dobson row up to 70 deg continued to grazing by a cos^p tail through a near-grazing
+// point; anchors interpolated linearly in dB against log frequency, held flat outside the
+// first and last anchor. Water: the NRL sea-clutter model. Validity bits (surface.hpp):
+// kOutsideMeasuredRange where the value is extrapolated beyond its source's angles or
+// frequencies, kAssumedValue where it rests on an assumed anchor.
+
+enum class Sigma0Pol : std::uint8_t { kHH = 0, kVV = 1, kHV = 2, kVH = 3 };
+
+struct Sigma0Value {
+  double linear = 0.0;      ///< sigma0 [m^2/m^2]
+  std::uint32_t flags = 0;  ///< kOutsideMeasuredRange | kAssumedValue (surface.hpp), 0: measured
+};
+
+/// sigma0 of catalogue material `m` (backscatter) at `freq_hz` (any > 0; values are held
+/// flat outside 1-100 GHz and flagged), `pol`, incidence `theta_rad` in [0, pi/2] (clamped).
+/// A conductor (CatalogueCurve::kNone) gives 0. Real-time safe (no allocation, no throw), but
+/// meant for setup: the frame path reads Sigma0Table.
+[[nodiscard]] Sigma0Value sigma0(const TerrainMaterial& m, double freq_hz, Sigma0Pol pol,
+                                 double theta_rad) noexcept;
+/// By name: throws std::invalid_argument naming the known materials for an unknown one.
+[[nodiscard]] Sigma0Value sigma0(std::string_view material, double freq_hz, Sigma0Pol pol,
+                                 double theta_rad);
+/// The catalogue curve alone (what sigma0() evaluates for a material).
+[[nodiscard]] Sigma0Value catalogue_sigma0(CatalogueCurve c, double sea_state, double freq_hz,
+                                           Sigma0Pol pol, double theta_rad) noexcept;
+/// NRL sea clutter (Gregers-Hansen & Mital 2012, NRL/MR/5310-12-9346, eq. (7), Table 1) in dB
+/// at grazing angle 90 deg - theta, continued to nadir by a quasi-specular lobe (see .cpp);
+/// HH or VV (cross-pol: assumed offset). `sea_state` 0-6.
+[[nodiscard]] Sigma0Value sea_sigma0(double freq_hz, Sigma0Pol pol, double theta_rad,
+                                     double sea_state) noexcept;
+
 /// Everything the models need about a surface at one frequency, resolved at setup.
 struct SurfaceSpec {
   SurfaceParams surface;
   bool has_volume = false;
   VolumeLayer volume;
   EmpiricalClass empirical = EmpiricalClass::kNone;
+  CatalogueCurve curve = CatalogueCurve::kNone;  ///< kTotal backscatter reads this curve
+  double sea_state = 0.0;
   bool conductor = false;
 };
 /// Resolve a catalogue material at `freq_hz` (throws for unknown ranges with a one-line reason).
 [[nodiscard]] SurfaceSpec resolve_surface(const TerrainMaterial& m, double freq_hz);
 
 /// sigma0 of `spec` under `model` (linear; `invalid` as in surface.hpp, plus kEmpiricalOutside
-/// when the empirical curve has no row there). Setup and offline use. `cross_pol_backscatter`
-/// as in iem().
+/// when the empirical curve has no row there, and for kTotal from the catalogue the OR of the
+/// four polarisations' kOutsideMeasuredRange / kAssumedValue). Setup and offline use.
+/// `cross_pol_backscatter` as in iem().
 inline constexpr std::uint32_t kEmpiricalOutside = 1u << 9;
 [[nodiscard]] SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model,
                                              double freq_hz, const Geometry& g,
@@ -114,9 +189,17 @@ class Sigma0Table {
   /// Linear sigma0 of material `index` for incidence cos(theta) in [0, 1]; out-of-range index
   /// or non-finite input gives 0.
   [[nodiscard]] float lookup(std::size_t index, Pol pol, double cos_incidence) const noexcept;
+  /// Validity bits of the two samples lookup() interpolates (OR); 0 for bad input. Real-time
+  /// safe. For images: kOutsideMeasuredRange / kAssumedValue mark catalogue values that are
+  /// extrapolated or assumed (surface.hpp).
+  [[nodiscard]] std::uint32_t lookup_flags(std::size_t index, Pol pol,
+                                           double cos_incidence) const noexcept;
+  /// OR of the validity bits over all angles of material `index`, polarisation `pol`.
+  [[nodiscard]] std::uint32_t row_flags(std::size_t index, Pol pol) const noexcept;
 
  private:
   std::vector<float> values_;
+  std::vector<std::uint32_t> flags_;
 };
 
 }  // namespace radar_emu::radar::clutter
