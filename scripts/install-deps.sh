@@ -14,6 +14,10 @@ PACKAGES=(
   libopenblas-dev
   # GeoTIFF output of `radar-emu sar` (optional at build time) and gdalinfo, which its test reads
   libgdal-dev gdal-bin
+  # `scene import` (scene/geodata/): PROJ and its EGM96 geoid grid egm96_15.gtx
+  libproj-dev proj-data
+  # scripts/bench-geodata-import.sh writes its DEMs with GDAL's Python bindings
+  python3-gdal
   # coverage-guided fuzzing (tests/fuzz, scripts/fuzz.sh): clang 14 and its libFuzzer runtime
   clang libclang-rt-14-dev
   # independent peers used by the tests (buses.md)
