@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "common/units.hpp"
 #include "radar/clutter/terrain.hpp"
 #include "radar/constants.hpp"
 #include "radar/propagation/itu.hpp"
@@ -38,13 +39,12 @@ namespace radar_emu::radar::clutter {
 
 namespace {
 
-constexpr double kDeg = kPi / 180.0;
 // The angle the regression rows are used to (the handbook's fits cover about 0-70/80 deg,
 // docs/notes/clutter_data_sources.md sec. 2.1); beyond it the cos^p tail.
-constexpr double kRowEndRad = 70.0 * kDeg;
+constexpr double kRowEndRad = common::radians(70.0);
 // Largest incidence evaluated: 90 deg itself has no backscatter (cos^p -> 0, NRL's
 // log10(sin(grazing)) -> -inf); values beyond are those at 89.95 deg, flagged.
-constexpr double kThetaMaxRad = 89.95 * kDeg;
+constexpr double kThetaMaxRad = common::radians(89.95);
 constexpr double kBillingsleyThetaDeg = 87.25;  // [BL] 2.75 deg depression
 constexpr double kAssumedGrazeThetaDeg = 85.0;
 
@@ -273,11 +273,11 @@ double anchor_db(const PolCurve& c, double theta_rad, std::uint32_t* flags) noex
   // 2nd ed., sec. 2.7) through the grazing point; p kept in [0, 4] (never rising to grazing).
   const double v_end = row(kRowEndRad);
   const double log_cos_end = std::log10(std::cos(kRowEndRad));
-  const double drop = std::log10(std::cos(c.graze_theta_deg * kDeg)) - log_cos_end;
+  const double drop = std::log10(std::cos(common::radians(c.graze_theta_deg))) - log_cos_end;
   const double p = std::clamp((c.graze_db - v_end) / (10.0 * drop), 0.0, 4.0);
   if (!c.graze_measured)
     *flags |= kAssumedValue;
-  else if (theta_rad > c.graze_theta_deg * kDeg + 1e-9)
+  else if (theta_rad > common::radians(c.graze_theta_deg) + 1e-9)
     *flags |= kOutsideMeasuredRange;
   if (!c.row_measured)
     *flags |= kAssumedValue;
@@ -315,7 +315,7 @@ Sigma0Value sea_sigma0(double freq_hz, Sigma0Pol pol, double theta_rad, double s
   const bool h = pol == Sigma0Pol::kHH;
   const double c1 = h ? -73.00 : -50.79, c2 = h ? 20.78 : 25.93, c3 = h ? 7.351 : 0.7093,
                c4 = h ? 25.65 : 21.58, c5 = h ? 0.00540 : 0.00211;
-  double alpha_deg = 90.0 - theta_rad / kDeg;
+  double alpha_deg = 90.0 - common::degrees(theta_rad);
   if (alpha_deg < 0.1)
     out.flags |= kOutsideMeasuredRange;
   // Above 60 deg grazing the fit's c5 alpha^2 term runs away: held at its 60 deg value, and
@@ -324,7 +324,7 @@ Sigma0Value sea_sigma0(double freq_hz, Sigma0Pol pol, double theta_rad, double s
     alpha_deg = 60.0;
     out.flags |= kOutsideMeasuredRange;
   }
-  const double nrl_db = c1 + c2 * std::log10(std::sin(alpha_deg * kDeg)) +
+  const double nrl_db = c1 + c2 * std::log10(std::sin(common::radians(alpha_deg))) +
                         (27.5 + c3 * alpha_deg) * std::log10(f_ghz) / (1.0 + 0.95 * alpha_deg) +
                         c4 * std::pow(1.0 + ss, 1.0 / (2.0 + 0.085 * alpha_deg + 0.033 * ss)) +
                         c5 * alpha_deg * alpha_deg;
@@ -339,14 +339,14 @@ Sigma0Value sea_sigma0(double freq_hz, Sigma0Pol pol, double theta_rad, double s
   // The lobe is added below 30 deg incidence only (NRL's data, grazing <= 60 deg, already hold
   // whatever quasi-specular return there is): weight 1 up to 20 deg, a raised-cosine taper to 0
   // at 30 deg (our choice, smooth in angle).
-  const double theta_deg = theta_rad / kDeg;
+  const double theta_deg = common::degrees(theta_rad);
   const double taper =
       theta_deg <= 20.0
           ? 1.0
           : (theta_deg >= 30.0 ? 0.0 : 0.5 * (1.0 + std::cos(kPi * (theta_deg - 20.0) / 10.0)));
   const double go = taper * r0 * std::exp(-t2 / s2) / (s2 * c * c * c * c);
   double linear = std::pow(10.0, nrl_db / 10.0) + go;
-  if (theta_rad < 30.0 * kDeg)
+  if (theta_rad < common::radians(30.0))
     out.flags |= kAssumedValue;  // the lobe's wind speed is assumed
   if (pol == Sigma0Pol::kHV || pol == Sigma0Pol::kVH) {
     // [NRL] is co-polarised only: cross-pol assumed 15 dB under VV.
