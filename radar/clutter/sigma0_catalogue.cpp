@@ -9,7 +9,12 @@
 //         regression sigma0(dB) = P1 + P2 exp(-P3 t) + P4 cos(P5 t + P6), t incidence [rad],
 //         L, S and C band rows per class and polarisation (the rows in terrain.cpp, read through
 //         empirical_row(); transcription DartsTST.jl, see docs/notes/clutter_data_sources.md
-//         sec. 2.1). The handbook's X, Ku, Ka and W rows were not found.
+//         sec. 2.1). The handbook's X (except trees, [UDt]), Ku, Ka and W rows were not found.
+//   [UDt] Ulaby & Dobson (1989), the trees class, X band, HH and VV regression rows, as
+//         transcribed in a public Python file ("library of clutter P-values", function
+//         get_P_vec_tree; repository not identified, found by exact-string search; see
+//         docs/validation.md). Its HV row is malformed there (seven entries) and not used. The
+//         only X-band row of the handbook found.
 //   [BL]  Billingsley (2002), Low-Angle Radar Land Clutter, mean clutter strength sigma0 F^4 per
 //         terrain type, band (L 1.23, S 3.24, X 9.2 GHz) and polarisation at depression angles
 //         of a few degrees (the book's mean-strength tables, as transcribed in AFSIM,
@@ -119,6 +124,15 @@ Anchor carried(Anchor a) {
   return a;
 }
 
+/// A published row for the co-polarised curves of an anchor (HH = 0, VV = 1), marked measured;
+/// the other polarisations keep theirs.
+Anchor with_row(Anchor a, int pol, const double (&p)[6]) {
+  for (int k = 0; k < 6; ++k)
+    a.pol[pol].p[k] = p[k];
+  a.pol[pol].row_measured = true;
+  return a;
+}
+
 Graze bl(double hh_db, double vv_db) {  // a [BL] point at 87.25 deg incidence
   return {hh_db, vv_db, true, kBillingsleyThetaDeg};
 }
@@ -171,12 +185,19 @@ std::vector<Curve> build_curves() {
                 carried(ud_anchor(kX, E::kShortVegetation, kUdC, bl(-32.2, -31.4))),
                 assumed_anchor(kKa, -12.0, 15.0, 3.0, assumed_graze(-18.0, -18.0), 0.0, -8.0),
                 assumed_anchor(kW, -10.0, 12.0, 2.5, assumed_graze(-15.0, -15.0), 0.0, -8.0)}});
-  // Forest: no [UD] trees rows found: rows assumed (a volume scatterer: flat, -12 dB at 70 deg).
-  // Grazing points [BL] low-relief forest (L -25.8/-26.2, S -32.3/-30.7, X -25.1/-23.8).
+  // Forest: X band 0-70 deg HH and VV: the [UDt] trees rows, P1..P6 =
+  // HH -12.078, 1e-6, -10, 4.574, 1.171, 0.583 (-8.3 dB at nadir, -13.8 dB at 70 deg);
+  // VV -11.751, 2e-6, -10, 3.596, 2.033, 0.122 (-8.2 / -14.4 dB). X HV, and L and S rows:
+  // assumed (a volume scatterer: flat, -12 dB at 70 deg; HV = VV - 7 dB). Grazing points [BL]
+  // low-relief forest (L -25.8/-26.2, S -32.3/-30.7, X -25.1/-23.8).
+  constexpr double kTreesXhh[6] = {-12.078, 1e-6, -10.0, 4.574, 1.171, 0.583};  // [UDt]
+  constexpr double kTreesXvv[6] = {-11.751, 2e-6, -10.0, 3.596, 2.033, 0.122};  // [UDt]
   k.push_back({CatalogueCurve::kForest,
                {assumed_anchor(kL, -12.0, 8.0, 3.0, bl(-25.8, -26.2), 0.0, -7.0),
                 assumed_anchor(kS, -12.0, 8.0, 3.0, bl(-32.3, -30.7), 0.0, -7.0),
-                assumed_anchor(kX, -12.0, 8.0, 3.0, bl(-25.1, -23.8), 0.0, -7.0),
+                with_row(with_row(assumed_anchor(kX, -12.0, 8.0, 3.0, bl(-25.1, -23.8), 0.0, -7.0),
+                                  0, kTreesXhh),
+                         1, kTreesXvv),
                 assumed_anchor(kKa, -9.0, 7.0, 3.0, assumed_graze(-15.0, -15.0), 0.0, -7.0),
                 assumed_anchor(kW, -8.0, 6.0, 3.0, assumed_graze(-13.0, -13.0), 0.0, -7.0)}});
   // Dry soil: [UD] soil L/S/C less 3 dB (assumed: the handbook's soil class spans all
@@ -232,9 +253,11 @@ std::vector<Curve> build_curves() {
                 assumed_anchor(kKa, -10.0, 12.0, 3.0, assumed_graze(-17.0, -17.0), 0.0, -8.0),
                 assumed_anchor(kW, -9.0, 11.0, 3.0, assumed_graze(-15.0, -15.0), 0.0, -8.0)}});
   // Asphalt and concrete: no published values obtained (Li & Sarabandi 1999, 94 GHz roads at
-  // 70-88 deg: abstract only). Assumed: a smooth surface (bright nadir lobe, dark off nadir),
-  // at 94 GHz near grazing about 10 dB (asphalt) and 9 dB (concrete) under mown grass, as the
-  // issue reports from 94 GHz landing imagery, and darker at lower frequencies.
+  // 70-88 deg, and Ulaby et al. 1998, 95 GHz terrain at 70-90 deg: abstracts and the fading
+  // statistics only; docs/validation.md lists what was searched). Assumed: a smooth surface (bright
+  // nadir lobe, dark off nadir), at 94 GHz near grazing about 10 dB (asphalt) and 9 dB (concrete)
+  // under mown grass, as the issue reports from 94 GHz landing imagery, and darker at lower
+  // frequencies.
   k.push_back({CatalogueCurve::kAsphalt,
                {assumed_anchor(kX, -30.0, 38.0, 10.0, assumed_graze(-38.0, -38.0), -1.0, -15.0),
                 assumed_anchor(kKa, -27.0, 33.0, 8.0, assumed_graze(-32.0, -32.0), -1.0, -13.0),
