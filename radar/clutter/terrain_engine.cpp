@@ -229,7 +229,8 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
   const std::size_t edges_needed = (grid.per_column_edges ? grid.columns : 1) * (grid.bins + 1);
   if (cells == 0 || !(grid.azimuth_step_rad > 0.0) || grid.range_edges_m.size() < edges_needed ||
       mean.size() < cells || (!field.empty() && field.size() < looks * cells) ||
-      !(view.wavelength_m > 0.0) || !(view.patch_min_m > 0.0) || !(view.patch_angle_rad >= 0.0))
+      !(view.wavelength_m > 0.0) || !(view.patch_min_m > 0.0) || !(view.patch_angle_rad >= 0.0) ||
+      !(view.one_way_loss_db_per_m >= 0.0))
     return st;
   const glm::dmat3 antenna_from_world = glm::transpose(view.world_from_antenna);
   double r_min = std::numeric_limits<double>::infinity(), r_max = 0.0;
@@ -303,7 +304,9 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
         ++st.patches_shadowed;
         continue;
       }
-      const double power = sigma0(f, cos_inc) * p.area_m2;
+      double power = sigma0(f, cos_inc) * p.area_m2;
+      if (view.one_way_loss_db_per_m > 0.0)
+        power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
       const std::size_t cell = bin * grid.columns + col;
       mean[cell] += power;
       ++st.patches_lit;

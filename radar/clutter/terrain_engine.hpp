@@ -121,7 +121,10 @@ struct TerrainView {
   double patch_min_m = 0.5;            ///< patch size near the radar [m], > 0
   /// Patch size at range R: max(patch_min_m, R patch_angle_rad) (a fraction of the angular cell).
   double patch_angle_rad = 0.0;
-  bool shadowing = true;                   ///< occlusion query per patch
+  bool shadowing = true;  ///< occlusion query per patch
+  /// Atmospheric loss, one way [dB/m] >= 0: each patch's power times 10^(-2 L R / 10)
+  /// (radar/propagation/path.hpp's two-way loss, applied per patch at its own range).
+  double one_way_loss_db_per_m = 0.0;
   std::size_t looks = 1;                   ///< independent speckle looks, field holds looks x cells
   std::uint64_t max_patches = 50'000'000;  ///< budget per evaluation (counted when it cuts)
 };
