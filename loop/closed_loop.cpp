@@ -288,22 +288,26 @@ double rain_tilt_rad(radar::Polarisation polarisation) noexcept {
   }
 }
 
-scene::SceneDescription scene_description(const Scenario& s) {
-  scene::SceneDescription d;
-  if (!s.scene_file.empty()) {
-    d = scene::load_gltf(s.scene_file);
-  } else if (s.scene_builtin == "airport") {
+scene::SceneDescription scene_database(const SceneSource& s) {
+  if (!s.file.empty())
+    return scene::load_gltf(s.file);
+  if (s.builtin == "airport") {
     scene::AirportSpec spec;
-    spec.seed = s.scene_seed;
-    spec.corner_reflectors = s.scene_corner_reflectors;
-    d = scene::generate_airport(spec);
-  } else if (s.scene_builtin == "terrain") {
-    scene::TerrainSpec spec;
-    spec.seed = s.scene_seed;
-    d = scene::generate_terrain(spec);
-  } else {
-    d = scene::default_scene();  // parse_scenario() accepts only these built-ins
+    spec.seed = s.seed;
+    spec.corner_reflectors = s.corner_reflectors;
+    return scene::generate_airport(spec);
   }
+  if (s.builtin == "terrain") {
+    scene::TerrainSpec spec;
+    spec.seed = s.seed;
+    return scene::generate_terrain(spec);
+  }
+  return scene::default_scene();  // read_scene_source() accepts only these built-ins
+}
+
+scene::SceneDescription scene_description(const Scenario& s) {
+  scene::SceneDescription d =
+      scene_database({s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file});
   // [[target]] tables: appended after the database's own objects, in table order. A mesh
   // file's own material names must be radar materials too (a [[target]] material was checked
   // when the scenario was read).

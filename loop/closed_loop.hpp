@@ -93,6 +93,10 @@ struct OwnshipInput {
 /// k and alpha then average the two). Real-time safe.
 [[nodiscard]] double rain_tilt_rad(radar::Polarisation polarisation) noexcept;
 
+/// The scene database a [scene] table names (file or builtin, with its seed), without targets:
+/// what the loop and `radar-emu sar` build. Throws with context when a file cannot be loaded.
+[[nodiscard]] scene::SceneDescription scene_database(const SceneSource& source);
+
 /// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop
 /// builds it. Throws with context when a file cannot be loaded.
 [[nodiscard]] scene::SceneDescription scene_description(const Scenario& scenario);

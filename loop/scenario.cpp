@@ -495,28 +495,41 @@ void read_run(Scenario& s, const Table& root) {
   s.stale_output_silent = stale_output == "silent";
 }
 
-// [scene]: which scene database, its seed.
-void read_scene(Scenario& s, const Table& root) {
-  const Table scene = root.table("scene");
-  scene.refuse_unknown({"builtin", "file", "seed", "corner_reflectors"});
+}  // namespace
+
+void read_scene_source(const Table& scene, SceneSource& src) {
   // One source of the scene: a table that names both would silently use the file.
   if (scene.has("builtin") && scene.has("file"))
     scene.fail("file", "builtin and file exclude each other (give one)");
   if (scene.has("seed") && scene.has("file"))
     scene.fail("seed", "seeds a built-in scene, not a file");
-  scene.choice("builtin", s.scene_builtin, {"airport", "default", "terrain"});
-  std::int64_t scene_seed = static_cast<std::int64_t>(s.scene_seed & 0x7fffffffffffffffull);
+  scene.choice("builtin", src.builtin, {"airport", "default", "terrain"});
+  std::int64_t scene_seed = static_cast<std::int64_t>(src.seed & 0x7fffffffffffffffull);
   scene.integer("seed", scene_seed, 0, std::numeric_limits<std::int64_t>::max());
-  s.scene_seed = static_cast<std::uint64_t>(scene_seed);
-  scene.boolean("corner_reflectors", s.scene_corner_reflectors);
+  src.seed = static_cast<std::uint64_t>(scene_seed);
+  scene.boolean("corner_reflectors", src.corner_reflectors);
   std::string file;
   scene.string("file", file);
   if (!file.empty())
-    s.scene_file = file;
-  if (scene.has("corner_reflectors") && (s.scene_builtin != "airport" || !s.scene_file.empty()))
+    src.file = file;
+  if (scene.has("corner_reflectors") && (src.builtin != "airport" || !src.file.empty()))
     scene.fail("corner_reflectors",
                "applies to builtin = \"airport\" only (the runway scene "
                "\"default\" is a test range: it always has them)");
+}
+
+namespace {
+
+// [scene]: which scene database, its seed.
+void read_scene(Scenario& s, const Table& root) {
+  const Table scene = root.table("scene");
+  scene.refuse_unknown(kSceneSourceKeys);
+  SceneSource src{s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file};
+  read_scene_source(scene, src);
+  s.scene_builtin = src.builtin;
+  s.scene_seed = src.seed;
+  s.scene_corner_reflectors = src.corner_reflectors;
+  s.scene_file = src.file;
 }
 
 // [ownship]: the scripted start state and the INS rates.

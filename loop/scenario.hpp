@@ -32,6 +32,29 @@ struct WeatherSpec {
   double pressure_hpa = 1013.25;  ///< dry-air pressure [hPa]
 };
 
+/// Which scene database a [scene] table names: the one reading of its keys (builtin, file, seed,
+/// corner_reflectors), shared by the scenario and `radar-emu sar` (tools/sar_case.hpp).
+struct SceneSource {
+  /// "airport" (scene/airport_gen.hpp), "default" (scene/default_scene.hpp) or "terrain"
+  /// (scene/terrain_gen.hpp) when `file` is empty.
+  std::string builtin = "airport";
+  std::uint64_t seed = 1;          ///< generator seed of the built-in database
+  bool corner_reflectors = false;  ///< airport only
+  std::filesystem::path file;      ///< a glTF scene instead of a built-in one
+};
+/// The keys read_scene_source() reads, for the caller's refuse_unknown().
+inline constexpr std::string_view kSceneSourceKeys[] = {"builtin", "file", "seed",
+                                                        "corner_reflectors"};
+}  // namespace radar_emu::loop
+namespace radar_emu::config {
+class Table;
+}
+namespace radar_emu::loop {
+/// Reads the source keys of a [scene] table into `source` (absent keys keep its values). Throws
+/// config::ConfigError ("FILE: [scene] key: what"): builtin and file together, seed with a file,
+/// corner_reflectors with another scene than the airport, an unknown builtin.
+void read_scene_source(const config::Table& scene, SceneSource& source);
+
 struct Scenario {
   std::string name;
   // [run]

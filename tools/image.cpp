@@ -9,6 +9,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -18,6 +19,8 @@
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
 #include "plot/charts.hpp"
+#include "radar/constants.hpp"
+#include "radar/products/sar_terrain.hpp"
 #include "radar/propagation/path.hpp"
 #include "scene/scene.hpp"
 
@@ -201,8 +204,24 @@ EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std
   p.contributions = n;
   p.trace_s = seconds_since(t);
 
+  // Terrain: the terrain engine per pixel (the tracer's diffuse terrain returns are left out).
   t = std::chrono::steady_clock::now();
-  p.image = radar::form_ev_image(contributions, p.pose, g);
+  std::optional<radar::clutter::TerrainEngine> engine;
+  try {
+    engine.emplace(radar::make_terrain_engine(scene, tracer, {}));
+  } catch (const std::invalid_argument& e) {
+    std::fprintf(stderr, "image: warning: %s: the image shows the structures alone\n", e.what());
+  }
+  radar::EvTerrain terrain;
+  if (engine) {
+    terrain.engine = &*engine;
+    terrain.wavelength_m = radar::kSpeedOfLight_mps / s.sbr.carrier_hz;
+    terrain.one_way_loss_db_per_m = p.weather_one_way_db_per_m;
+    p.terrain_engine = true;
+    p.terrain_facets = engine->facets().size();
+  }
+  p.image = radar::form_ev_image(contributions, p.pose, g, terrain);
+  p.terrain = terrain.stats;
   p.form_s = seconds_since(t);
 
   if (optical_scale > 0) {
@@ -286,6 +305,13 @@ int run_image_tool(const ImageToolOptions& o) {
                  {"no_ground", im.no_ground},
                  {"rays", p.trace.rays},
                  {"dropped_contributions", p.trace.dropped_contributions}};
+  j["terrain"] = {{"source", p.terrain_engine ? "terrain engine" : "none (no terrain)"},
+                  {"facets", p.terrain_facets},
+                  {"facets_considered", p.terrain.facets_considered},
+                  {"patches", p.terrain.patches},
+                  {"patches_lit", p.terrain.patches_lit},
+                  {"patches_shadowed", p.terrain.patches_shadowed},
+                  {"budget_cut", p.terrain.budget_cut}};
   j["timing_s"] = {
       {"trace", p.trace_s}, {"form", p.form_s}, {"optical", p.optical_s}, {"total", p.total_s}};
   {

@@ -45,13 +45,19 @@ struct EvImageProduct {
   double weather_one_way_db_per_m = 0.0;  ///< 0: free space (no [weather] table)
   std::size_t contributions = 0;
   radar::TraceStats trace{};
+  /// Terrain from the terrain engine (radar/clutter/terrain_engine.hpp): its statistics; false
+  /// when the scene has no terrain (the image then holds the structures alone, said on stderr).
+  bool terrain_engine = false;
+  radar::clutter::TerrainStats terrain{};
+  std::size_t terrain_facets = 0;
   double trace_s = 0.0, form_s = 0.0, optical_s = 0.0, total_s = 0.0;  ///< wall times
 };
 
 /// Forms the image of `scenario` at `time_s` (ownship start + velocity t, the scenario's
-/// attitude and antenna depression). The reference ground plane is the first non-target surface
-/// straight below the antenna (0 when there is none). `optical_scale` 0: no optical preview.
-/// Throws std::runtime_error with context for a bad scenario or option.
+/// attitude and antenna depression). Terrain comes from the terrain engine, targets and metal
+/// structures (masts, lights) from the tracer's coherent returns. The reference ground plane is the
+/// first non-target surface straight below the antenna (0 when there is none). `optical_scale` 0:
+/// no optical preview. Throws std::runtime_error with context for a bad scenario or option.
 [[nodiscard]] EvImageProduct compute_ev_image(const loop::Scenario& scenario, double time_s,
                                               int looks, std::uint64_t seed, int optical_scale);
 

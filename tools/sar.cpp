@@ -29,6 +29,7 @@
 #include "common/polarisation.hpp"
 #include "common/units.hpp"
 #include "config/toml_reader.hpp"
+#include "loop/closed_loop.hpp"
 #include "plot/canvas.hpp"
 #include "plot/charts.hpp"
 #include "radar/clutter/speckle.hpp"
@@ -117,7 +118,10 @@ SarCase case_from_table(const Table& root) {
 
   const Table proc = root.table("processing");
   proc.refuse_unknown({"gates", "synthetic_beamwidth_deg", "taper", "upsample", "image_width_m",
-                       "azimuth_spacing_m", "ground_range_spacing_m"});
+                       "azimuth_spacing_m", "ground_range_spacing_m", "centre_east_m",
+                       "centre_north_m"});
+  proc.number("centre_east_m", c.centre_east_m, {-15000.0, 15000.0});
+  proc.number("centre_north_m", c.centre_north_m, {-15000.0, 15000.0});
   proc.integer("gates", p.gates, 8, 65536);
   proc.degrees("synthetic_beamwidth_deg", c.synthetic_beamwidth_rad, {1e-5, 5.0, true});
   std::string taper = "none";
@@ -130,9 +134,26 @@ SarCase case_from_table(const Table& root) {
   proc.number("ground_range_spacing_m", c.ground_range_spacing_m, {0.0, 100.0});
 
   const Table scene = root.table("scene");
-  scene.refuse_unknown({"ground_material", "clutter", "clutter_cell_m", "speckle_seed",
-                        "target_ray_spacing_m", "max_bounces", "latitude_deg", "longitude_deg",
-                        "target"});
+  std::vector<std::string_view> scene_keys{
+      "ground_material", "clutter",      "clutter_cell_m", "speckle_seed", "target_ray_spacing_m",
+      "max_bounces",     "latitude_deg", "longitude_deg",  "target"};
+  scene_keys.insert(scene_keys.end(), std::begin(loop::kSceneSourceKeys),
+                    std::end(loop::kSceneSourceKeys));
+  scene.refuse_unknown(scene_keys);
+  // A scene database (the scenario's [scene] keys, one reader), or the flat ground.
+  c.database = scene.has("builtin") || scene.has("file");
+  if (c.database) {
+    loop::read_scene_source(scene, c.source);
+    for (const char* flat : {"ground_material", "latitude_deg", "longitude_deg"})
+      if (scene.has(flat))
+        scene.fail(flat,
+                   "applies to the flat ground only; builtin or file name a scene database "
+                   "(which has its own materials and anchor)");
+  } else {
+    for (const char* key : {"seed", "corner_reflectors"})
+      if (scene.has(key))
+        scene.fail(key, "needs builtin = \"...\" (a generated scene database)");
+  }
   scene.string("ground_material", c.ground_material);
   if (c.ground_material != "none" && cl::find_terrain_material(c.ground_material) == nullptr)
     scene.unknown_value("ground_material", c.ground_material,
@@ -200,8 +221,9 @@ SarCase case_from_table(const Table& root) {
   const glm::dvec3 tdir{std::sin(c.heading_rad), std::cos(c.heading_rad), 0.0};
   p.velocity_mps = c.speed_mps * tdir;
   const glm::dvec3 ldir = rd::sar_look_dir(p);
-  p.start_position_m =
-      -c.ground_centre_m * ldir - 0.5 * track * tdir + glm::dvec3(0.0, 0.0, c.altitude_m);
+  p.start_position_m = glm::dvec3(c.centre_east_m, c.centre_north_m, 0.0) -
+                       c.ground_centre_m * ldir - 0.5 * track * tdir +
+                       glm::dvec3(0.0, 0.0, c.altitude_m);
   if (c.azimuth_spacing_m == 0.0)
     c.azimuth_spacing_m = 0.8 * r0 * c.synthetic_beamwidth_rad;  // 0.8 x Nyquist
   if (c.ground_range_spacing_m == 0.0)
@@ -251,15 +273,29 @@ glm::dvec3 broadside_platform(const rd::SarParams& p, const glm::dvec3& x) {
 
 sc::SceneDescription build_scene(const SarCase& c, double half_extent_m) {
   sc::SceneDescription d;
-  d.anchor.latitude_rad = common::radians(c.latitude_deg);
-  d.anchor.longitude_rad = common::radians(c.longitude_deg);
-  d.materials.push_back({"metal", {0.8f, 0.8f, 0.8f}});
-  if (c.ground_material != "none") {
+  std::uint16_t metal = 0;
+  if (c.database) {
+    // The scenario's database (its own anchor and materials); targets in its "metal".
+    d = loop::scene_database(c.source);
+    std::size_t k = 0;
+    while (k < d.materials.size() && d.materials[k].name != "metal")
+      ++k;
+    if (k == d.materials.size())
+      d.materials.push_back({"metal", {0.8f, 0.8f, 0.8f}});
+    metal = static_cast<std::uint16_t>(k);
+  } else {
+    d.anchor.latitude_rad = common::radians(c.latitude_deg);
+    d.anchor.longitude_rad = common::radians(c.longitude_deg);
+    d.materials.push_back({"metal", {0.8f, 0.8f, 0.8f}});
+  }
+  if (!c.database && c.ground_material != "none") {
     d.materials.push_back({c.ground_material, {0.3f, 0.5f, 0.2f}});
     sc::ObjectDesc g;
     g.name = "ground";
     const auto e = static_cast<float>(half_extent_m);
-    g.mesh.positions_m = {{-e, -e, 0.0f}, {e, -e, 0.0f}, {e, e, 0.0f}, {-e, e, 0.0f}};
+    const auto x = static_cast<float>(c.centre_east_m), y = static_cast<float>(c.centre_north_m);
+    g.mesh.positions_m = {
+        {x - e, y - e, 0.0f}, {x + e, y - e, 0.0f}, {x + e, y + e, 0.0f}, {x - e, y + e, 0.0f}};
     g.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
     g.mesh.triangle_material = {1, 1};
     d.objects.push_back(std::move(g));
@@ -268,7 +304,7 @@ sc::SceneDescription build_scene(const SarCase& c, double half_extent_m) {
     sc::SceneDescription one = sc::make_target(t.spec);
     sc::ObjectDesc o = std::move(one.objects.at(0));
     o.name = t.name;
-    std::fill(o.mesh.triangle_material.begin(), o.mesh.triangle_material.end(), 0);
+    std::fill(o.mesh.triangle_material.begin(), o.mesh.triangle_material.end(), metal);
     glm::dmat3 rot(1.0);
     if (is_trihedral(t.spec.kind)) {
       // Symmetry axis (1,1,1) toward the platform at broadside.
@@ -385,7 +421,8 @@ struct GdalDataset {
 void write_geotiff(const std::string& path, std::size_t rows, std::size_t cols,
                    const std::vector<std::complex<float>>& data, const SarCase& c,
                    const double* geotransform, const std::vector<GDAL_GCP>& gcps,
-                   const std::vector<std::pair<std::string, std::string>>& metadata) {
+                   const std::vector<std::pair<std::string, std::string>>& metadata,
+                   const std::vector<std::pair<std::string, std::vector<float>>>& extra = {}) {
   GDALAllRegister();
   GDALDriverH drv = GDALGetDriverByName("GTiff");
   if (drv == nullptr)
@@ -393,8 +430,8 @@ void write_geotiff(const std::string& path, std::size_t rows, std::size_t cols,
   char** opts = nullptr;
   opts = CSLSetNameValue(opts, "BIGTIFF", "IF_SAFER");
   GdalDataset ds;
-  ds.h = GDALCreate(drv, path.c_str(), static_cast<int>(cols), static_cast<int>(rows), 1,
-                    GDT_CFloat32, opts);
+  ds.h = GDALCreate(drv, path.c_str(), static_cast<int>(cols), static_cast<int>(rows),
+                    static_cast<int>(1 + extra.size()), GDT_CFloat32, opts);
   CSLDestroy(opts);
   if (ds.h == nullptr)
     throw std::runtime_error(path + ": GDAL cannot create the file: " + CPLGetLastErrorMsg());
@@ -414,6 +451,17 @@ void write_geotiff(const std::string& path, std::size_t rows, std::size_t cols,
                    static_cast<int>(rows), GDT_CFloat32, 0, 0);
   if (err != CE_None)
     throw std::runtime_error(path + ": GDAL write failed: " + CPLGetLastErrorMsg());
+  // Further bands (real values in the file's complex type: GDAL sets the imaginary part 0).
+  for (std::size_t b = 0; b < extra.size(); ++b) {
+    GDALRasterBandH h = GDALGetRasterBand(ds.h, static_cast<int>(b + 2));
+    GDALSetDescription(h, extra[b].first.c_str());
+    if (GDALRasterIO(h, GF_Write, 0, 0, static_cast<int>(cols), static_cast<int>(rows),
+                     const_cast<float*>(extra[b].second.data()), static_cast<int>(cols),
+                     static_cast<int>(rows), GDT_Float32, 0, 0) != CE_None)
+      throw std::runtime_error(path + ": GDAL write failed: " + CPLGetLastErrorMsg());
+  }
+  if (!extra.empty())
+    GDALSetDescription(band, "scattering amplitude [m]");
 }
 #endif
 
@@ -447,7 +495,7 @@ int run_sar_tool(const SarToolOptions& o) {
     throw std::invalid_argument(
         "sar: GeoTIFF output needs GDAL, and this radar-emu was built without it (install "
         "libgdal-dev and reconfigure)");
-  const SarCase c = load_case(o.config);
+  SarCase c = load_case(o.config);
   const rd::SarParams& p = c.p;
   std::filesystem::create_directories(o.out_dir);
   const std::filesystem::path dir(o.out_dir);
@@ -465,11 +513,21 @@ int run_sar_tool(const SarToolOptions& o) {
   grid.ground_range_spacing_m = c.ground_range_spacing_m;
   grid.rows = static_cast<std::size_t>(std::floor(c.image_width_m / c.azimuth_spacing_m)) + 1;
   grid.cols = static_cast<std::size_t>(std::floor((g_far - g_near) / c.ground_range_spacing_m)) + 1;
-  grid.origin_m = -0.5 * c.image_width_m * tdir + (g_near - c.ground_centre_m) * ldir;
+  const glm::dvec3 centre{c.centre_east_m, c.centre_north_m, 0.0};
+  grid.origin_m = centre - 0.5 * c.image_width_m * tdir + (g_near - c.ground_centre_m) * ldir;
+  auto progress = [&](const std::string& line) {
+    if (!o.quiet)
+      std::fprintf(stderr, "sar: %s\n", line.c_str());
+  };
 
   // Scene: ground wide enough for the whole track and swath.
   const double half_extent = 0.5 * track_len + g_far + 100.0;
+  progress(c.database ? "building the scene database" : "building the scene");
   sc::Scene scene(build_scene(c, half_extent));
+  if (c.database) {
+    c.latitude_deg = common::degrees(scene.anchor().latitude_rad);
+    c.longitude_deg = common::degrees(scene.anchor().longitude_rad);
+  }
   rd::SbrConfig cfg;
   cfg.carrier_hz = p.carrier_hz;
   cfg.azimuth_min_rad = -1.29 * p.azimuth_beamwidth_rad;
@@ -483,27 +541,51 @@ int run_sar_tool(const SarToolOptions& o) {
   cfg.polarisation = c.pol;
   rd::SbrTracer tracer(scene, cfg);
 
-  // --- clutter cells (setup ray casting counted as ray tracing).
+  // --- terrain: the terrain engine's patches as fixed scatterers, the DEM and its mask (setup
+  // ray casting counted as ray tracing).
   const auto t_raw0 = Clock::now();
   double trace_s = 0.0;
   std::vector<rd::SarScatterer> cells;
-  std::size_t shadowed = 0;
-  if (c.clutter && c.ground_material != "none") {
+  std::size_t shadowed = 0, patches = 0;
+  std::optional<rd::clutter::TerrainEngine> engine;
+  rd::SarDem dem;
+  if (c.clutter && (c.database || c.ground_material != "none")) {
     const auto t0 = Clock::now();
-    // Cells over the image plus the beam's reach beyond it along track and a margin in range.
-    rd::TerrainCellSpec ts;
-    ts.cell_m = c.clutter_cell_m;
+    // The image plus the beam's reach beyond it along track and a margin in range: its
+    // horizontal bounding box (the track may have any heading).
     const double reach = far * std::tan(1.58 * p.azimuth_beamwidth_rad) + 2.0;
     const double a0 = -0.5 * c.image_width_m - reach, a1 = 0.5 * c.image_width_m + reach;
     const double r0 = g_near - c.ground_centre_m - 20.0, r1 = g_far - c.ground_centre_m + 20.0;
-    ts.origin_m = a0 * tdir + r0 * ldir;
-    ts.along = static_cast<std::size_t>((a1 - a0) / ts.cell_m) + 1;
-    ts.across = static_cast<std::size_t>((r1 - r0) / ts.cell_m) + 1;
-    ts.polarisation = c.pol;
-    ts.speckle.seed = c.speckle_seed;
-    rd::TerrainCells tc = rd::terrain_cells(scene, tracer, p, ts);
+    rd::clutter::TerrainEngineSpec es;
+    es.clip_to_region = true;
+    es.region_min_m = glm::dvec2(std::numeric_limits<double>::infinity());
+    es.region_max_m = -es.region_min_m;
+    for (double a : {a0, a1})
+      for (double r : {r0, r1}) {
+        const glm::dvec3 q = centre + a * tdir + r * ldir;
+        es.region_min_m = glm::min(es.region_min_m, glm::dvec2(q));
+        es.region_max_m = glm::max(es.region_max_m, glm::dvec2(q));
+      }
+    es.max_facet_m = 25.0;
+    es.speckle.seed = c.speckle_seed;
+    progress("terrain engine: facets of the scene's terrain");
+    engine.emplace(rd::make_terrain_engine(scene, tracer, es));
+    progress("terrain engine: " + std::to_string(engine->facets().size()) + " facets; patches of " +
+             fmt(c.clutter_cell_m) + " m with shadowing");
+    rd::TerrainCells tc = rd::terrain_cells(*engine, p, c.clutter_cell_m);
     cells = std::move(tc.cells);
     shadowed = tc.shadowed;
+    patches = tc.patches;
+    progress("terrain engine: " + std::to_string(cells.size()) + " lit patches (" +
+             std::to_string(shadowed) + " in shadow); DEM and mask of the image grid");
+    dem = rd::sar_dem(*engine, p, grid);
+    grid.height_m = dem.height_m;
+    if (dem.holes > 0)
+      std::fprintf(stderr,
+                   "sar: warning: %zu image pixels have no terrain under them (a DEM hole): "
+                   "imaged at the nearest terrain height of their row, flagged 8 in the mask "
+                   "band\n",
+                   dem.holes);
     trace_s += seconds_since(t0);
   }
 
@@ -515,7 +597,16 @@ int run_sar_tool(const SarToolOptions& o) {
   mpi_work::start();
   const mpi_work::Block block = mpi_work::my_block(p.pulses);
   const auto t_cl = Clock::now();
-  rd::synthesise_points(p, cells, block.begin, block.end, raw);
+  if (!cells.empty()) {
+    // In ten steps, for the progress lines.
+    const std::size_t n = block.end - block.begin, steps = std::min<std::size_t>(10, n);
+    for (std::size_t k = 0; k < steps; ++k) {
+      rd::synthesise_points(p, cells, block.begin + n * k / steps,
+                            block.begin + n * (k + 1) / steps, raw);
+      progress("terrain echoes: " + std::to_string(100 * (k + 1) / steps) + " % of " +
+               std::to_string(n) + " pulses (" + fmt(std::round(seconds_since(t_cl))) + " s)");
+    }
+  }
   const double clutter_s = seconds_since(t_cl);
   std::vector<rd::Contribution> out(tracer.max_contributions());
   std::vector<rd::SarEcho> echoes;
@@ -528,7 +619,11 @@ int run_sar_tool(const SarToolOptions& o) {
   // Pulses [begin, end) of the targets' echoes into the preallocated raw matrix (the clutter's
   // synthesise_points takes the same range): a rank of a scale-out can run its share.
   auto target_pulses = [&](std::size_t begin, std::size_t end) {
+    const std::size_t tenth = std::max<std::size_t>(1, (end - begin) / 10);
     for (std::size_t i = begin; i < end; ++i) {
+      if (i > begin && (i - begin) % tenth == 0)
+        progress("targets and structures: " + std::to_string(100 * (i - begin) / (end - begin)) +
+                 " % of the pulses");
       const double t = rd::sar_pulse_time_s(p, i);
       const auto t0 = Clock::now();
       scene.set_time(t);
@@ -555,8 +650,11 @@ int run_sar_tool(const SarToolOptions& o) {
       echo_s += seconds_since(t1);
     }
   };
-  if (!c.targets.empty())
+  // Targets of the case, and the database's own structures (conductors: pylons, wires, ...).
+  if (!c.targets.empty() || c.database) {
+    progress("targets and structures: SBR per pulse");
     target_pulses(block.begin, block.end);
+  }
   mpi_work::gather_blocks(std::span(raw.data), raw.samples);
   mpi_work::gather_blocks(std::span(echoes_per_pulse));
   mpi_work::gather_blocks(std::span(rays_per_pulse));
@@ -574,6 +672,8 @@ int run_sar_tool(const SarToolOptions& o) {
   const rd::SarCompressed rc = rd::range_compress(p, raw, c.taper);
   const double rc_s = seconds_since(t_img0);
   const auto t_bp0 = Clock::now();
+  progress(std::string("backprojection onto ") +
+           (grid.height_m.empty() ? "the ground plane" : "the DEM"));
   const rd::SarImage img = rd::backproject(p, rc, grid, {c.theta_rad, c.taper, c.upsample, 0.01});
   const double bp_s = seconds_since(t_bp0);
   const double image_s = seconds_since(t_img0);
@@ -741,7 +841,16 @@ int run_sar_tool(const SarToolOptions& o) {
     auto mdi = md;
     mdi.emplace_back("UNITS", "scattering amplitude [m]: |pixel|^2 = sigma of a point target");
     mdi.emplace_back("INTEGRATION_ANGLE_RAD", fmt(c.theta_rad));
-    write_geotiff((dir / "image.tif").string(), grid.rows, grid.cols, img.pixels, c, gt, {}, mdi);
+    std::vector<std::pair<std::string, std::vector<float>>> bands;
+    if (!dem.mask.empty()) {
+      mdi.emplace_back("BAND_2", "mask: 1 shadow, 2 layover, 4 foreshortening, 8 no DEM (sum)");
+      mdi.emplace_back("BAND_3", "DEM height the image is focused on [m], world up");
+      bands.emplace_back("mask: 1 shadow, 2 layover, 4 foreshortening, 8 no DEM",
+                         std::vector<float>(dem.mask.begin(), dem.mask.end()));
+      bands.emplace_back("DEM height [m]", dem.height_m);
+    }
+    write_geotiff((dir / "image.tif").string(), grid.rows, grid.cols, img.pixels, c, gt, {}, mdi,
+                  bands);
   }
 #endif
   std::ostringstream title;
@@ -822,17 +931,84 @@ int run_sar_tool(const SarToolOptions& o) {
       {"image_cols", grid.cols},
       {"azimuth_spacing_m", grid.azimuth_spacing_m},
       {"ground_range_spacing_m", grid.ground_range_spacing_m}};
-  j["scene"] = {{"ground_material", c.ground_material},
-                {"clutter", c.clutter},
-                {"clutter_cells", cells.size()},
-                {"shadowed_cells", shadowed},
-                {"clutter_cell_m", c.clutter_cell_m},
-                {"speckle_seed", c.speckle_seed},
-                {"targets", c.targets.size()},
-                {"target_echoes", target_echoes},
-                {"rays", rays},
-                {"latitude_deg", c.latitude_deg},
-                {"longitude_deg", c.longitude_deg}};
+  // Land-cover regions (the DEM's top facet's material): the mean sigma0 the image gives over
+  // each region's interior pixels (every pixel within 3 of it the same material, no mask bit),
+  // intensity / (rho_r / sin(theta) rho_a) (sar.hpp: a distributed target's mean intensity), next
+  // to the catalogue's sigma0 at each pixel's local incidence (Sigma0Table through the engine).
+  nlohmann::json regions = nlohmann::json::array();
+  if (engine && c.taper == rd::SarTaper::kNone) {
+    const auto facets = engine->facets();
+    const std::size_t nm = scene.materials().size();
+    std::vector<double> meas(nm, 0.0), cat(nm, 0.0);
+    std::vector<std::size_t> count(nm, 0);
+    const long k = 3;
+    for (std::size_t r = 0; r < grid.rows; ++r)
+      for (std::size_t col = 0; col < grid.cols; ++col) {
+        const std::size_t i = r * grid.cols + col;
+        if (dem.facet[i] < 0 || dem.mask[i] != 0)
+          continue;
+        const rd::clutter::TerrainFacet& f = facets[static_cast<std::size_t>(dem.facet[i])];
+        bool interior = true;
+        for (long dr = -k; dr <= k && interior; ++dr)
+          for (long dc = -k; dc <= k && interior; ++dc) {
+            const long rr = static_cast<long>(r) + dr, cc = static_cast<long>(col) + dc;
+            if (rr < 0 || cc < 0 || rr >= static_cast<long>(grid.rows) ||
+                cc >= static_cast<long>(grid.cols)) {
+              interior = false;
+              break;
+            }
+            const std::size_t j2 =
+                static_cast<std::size_t>(rr) * grid.cols + static_cast<std::size_t>(cc);
+            interior = dem.facet[j2] >= 0 && dem.mask[j2] == 0 &&
+                       facets[static_cast<std::size_t>(dem.facet[j2])].material == f.material;
+          }
+        if (!interior)
+          continue;
+        const glm::dvec3 x = grid.origin_m + double(r) * grid.azimuth_spacing_m * tdir +
+                             double(col) * grid.ground_range_spacing_m * ldir;
+        const glm::dvec3 pt{x.x, x.y, static_cast<double>(dem.height_m[i])};
+        const glm::dvec3 radar = broadside_platform(p, pt);
+        const glm::dvec3 u = glm::normalize(radar - pt);
+        const double sin_inc = glm::length(glm::dvec2(u));
+        meas[f.material] +=
+            static_cast<double>(std::norm(img.pixels[i])) / (rho_r / sin_inc * rho_a);
+        cat[f.material] += engine->sigma0(f, std::abs(glm::dot(f.normal, u)));
+        ++count[f.material];
+      }
+    for (std::size_t m = 0; m < nm; ++m) {
+      if (count[m] == 0)
+        continue;
+      const double a = meas[m] / double(count[m]), b = cat[m] / double(count[m]);
+      regions.push_back({{"material", scene.materials()[m].name},
+                         {"pixels", count[m]},
+                         {"image_sigma0_db", db10(a)},
+                         {"catalogue_sigma0_db", db10(b)},
+                         {"difference_db", db10(a) - db10(b)}});
+    }
+  }
+  j["regions"] = regions;
+  if (engine)
+    j["mask"] = {{"shadow_pixels", dem.shadow},
+                 {"layover_pixels", dem.layover},
+                 {"foreshortening_pixels", dem.foreshortening},
+                 {"dem_hole_pixels", dem.holes},
+                 {"band", 2},
+                 {"bits", "1 shadow, 2 layover, 4 foreshortening, 8 no DEM"}};
+  j["scene"] = {
+      {"database", c.database ? (c.source.file.empty() ? c.source.builtin : c.source.file.string())
+                              : std::string("none")},
+      {"terrain_patches", patches},
+      {"ground_material", c.ground_material},
+      {"clutter", c.clutter},
+      {"clutter_cells", cells.size()},
+      {"shadowed_cells", shadowed},
+      {"clutter_cell_m", c.clutter_cell_m},
+      {"speckle_seed", c.speckle_seed},
+      {"targets", c.targets.size()},
+      {"target_echoes", target_echoes},
+      {"rays", rays},
+      {"latitude_deg", c.latitude_deg},
+      {"longitude_deg", c.longitude_deg}};
   j["timing_s"] = {{"raw", raw_s},
                    {"raw_ray_tracing", trace_s},
                    {"raw_clutter_synthesis", clutter_s},

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "common/units.hpp"
+#include "loop/scenario.hpp"
 #include "radar/constants.hpp"
 #include "radar/em/sbr_core.hpp"
 #include "radar/products/sar.hpp"
@@ -42,9 +43,16 @@ struct SarCase {
   double ground_centre_m = 0.0;                                  ///< derived
   radar::Polarisation pol = radar::Polarisation::kVV;
   std::string pol_name = "VV";
+  /// [scene] builtin or file: a scene database (the scenario's [scene] keys, read by
+  /// loop::read_scene_source) instead of the flat ground_material plane; its anchor then
+  /// georeferences the outputs (latitude_deg, longitude_deg are refused).
+  bool database = false;
+  loop::SceneSource source;
+  /// [processing] centre_east_m, centre_north_m: the image centre (world ENU) [m].
+  double centre_east_m = 0.0, centre_north_m = 0.0;
   std::string ground_material = "grass";
   bool clutter = true;
-  double clutter_cell_m = 0.0;  ///< 0: a third of the finer resolution
+  double clutter_cell_m = 0.0;  ///< terrain engine patch size [m]; 0: half the finer pixel spacing
   std::uint64_t speckle_seed = 20261124;
   double target_ray_spacing_m = 0.05;
   int max_bounces = 3;

@@ -68,6 +68,13 @@ double ev_row_elevation_rad(const EvImageConfig& c, int row) noexcept {
 
 EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPose& pose,
                       const EvImageConfig& c) {
+  EvTerrain none;
+  return form_ev_image(contributions, pose, c, none);
+}
+
+EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPose& pose,
+                      const EvImageConfig& c, EvTerrain& terrain) {
+  const bool engine = terrain.engine != nullptr;
   EvImage img;
   img.columns = ev_image_columns(c);
   img.rows = ev_image_rows(c);
@@ -93,6 +100,8 @@ EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPo
   std::vector<std::uint32_t> cell(contributions.size(), std::numeric_limits<std::uint32_t>::max());
   for (std::size_t i = 0; i < contributions.size(); ++i) {
     const Contribution& q = contributions[i];
+    if (engine && !q.coherent)
+      continue;  // terrain comes from the engine
     const double x = (q.azimuth_rad - c.azimuth_min_rad) / c.pixel_rad;
     if (!(x >= 0.0 && x < static_cast<double>(cols))) {
       ++img.outside_columns;
@@ -139,9 +148,79 @@ EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPo
     else
       clutter_power[cell[i]] += std::norm(q.amplitude);
   }
+  // The engine's terrain: its cells are (bin b = rows - 1 - r, column), range edges ascending.
+  const std::size_t looks_engine = c.speckle ? static_cast<std::size_t>(c.looks) : 1;
+  std::vector<std::complex<double>> terrain_field;
+  if (engine) {
+    std::vector<double> asc(cols * (rows + 1));
+    for (std::size_t col = 0; col < cols; ++col)
+      for (std::size_t b = 0; b <= rows; ++b)
+        asc[col * (rows + 1) + b] = img.range_edges_m[col * (rows + 1) + (rows - b)];
+    clutter::TerrainView v;
+    v.position_m = pose.position_m;
+    v.world_from_antenna = pose.world_from_antenna;
+    v.wavelength_m = terrain.wavelength_m;
+    v.patch_min_m = terrain.patch_min_m;
+    v.patch_angle_rad = c.pixel_rad / 2.0;
+    v.looks = looks_engine;
+    v.one_way_loss_db_per_m = terrain.one_way_loss_db_per_m;
+    // Blocks of columns in parallel, each its own grid and buffers (the result does not depend
+    // on the threading: every cell is summed by one block in facet order).
+    constexpr std::size_t kBlock = 8;
+    const std::size_t blocks = (cols + kBlock - 1) / kBlock;
+    std::vector<clutter::TerrainStats> block_stats(blocks);
+    terrain_field.assign(looks_engine * cells, {0.0, 0.0});
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t k) {
+      const std::size_t c0 = k * kBlock, nc = std::min(kBlock, cols - c0), bc = nc * rows;
+      clutter::CellGrid cg;
+      cg.azimuth_min_rad = c.azimuth_min_rad + static_cast<double>(c0) * c.pixel_rad;
+      cg.azimuth_step_rad = c.pixel_rad;
+      cg.columns = nc;
+      cg.elevation_min_rad = c.elevation_min_rad;
+      cg.elevation_max_rad = c.elevation_max_rad;
+      cg.bins = rows;
+      cg.range_edges_m = std::span<const double>(asc).subspan(c0 * (rows + 1), nc * (rows + 1));
+      cg.per_column_edges = true;
+      std::vector<double> mean(bc, 0.0);
+      std::vector<std::complex<double>> field(looks_engine * bc);
+      block_stats[k] = terrain.engine->integrate(v, cg, field, mean);
+      // Back to the image's rows (row r = bin rows - 1 - r) and columns.
+      for (std::size_t b = 0; b < rows; ++b)
+        for (std::size_t j = 0; j < nc; ++j) {
+          const std::size_t from = b * nc + j, to = (rows - 1 - b) * cols + c0 + j;
+          clutter_power[to] += mean[from];
+          for (std::size_t l = 0; l < looks_engine; ++l)
+            terrain_field[l * cells + to] = field[l * bc + from];
+        }
+    });
+    for (const clutter::TerrainStats& b : block_stats) {
+      terrain.stats.facets_considered += b.facets_considered;
+      terrain.stats.patches += b.patches;
+      terrain.stats.patches_lit += b.patches_lit;
+      terrain.stats.patches_shadowed += b.patches_shadowed;
+      terrain.stats.patches_grazing += b.patches_grazing;
+      terrain.stats.patches_outside += b.patches_outside;
+      terrain.stats.budget_cut += b.budget_cut;
+    }
+  }
   img.mean_m2.resize(cells);
   for (std::size_t p = 0; p < cells; ++p)
     img.mean_m2[p] = static_cast<float>(clutter_power[p] + std::norm(coherent[p]));
+  if (engine) {
+    // Looks: the targets' coherent sum plus the engine's field of that look.
+    if (!c.speckle) {
+      img.intensity_m2 = img.mean_m2;
+      return img;
+    }
+    img.intensity_m2.assign(cells, 0.0f);
+    for (std::size_t p = 0; p < cells; ++p) {
+      double sum = 0.0;
+      for (std::size_t l = 0; l < looks_engine; ++l)
+        sum += std::norm(coherent[p] + terrain_field[l * cells + p]);
+      img.intensity_m2[p] = static_cast<float>(sum / static_cast<double>(looks_engine));
+    }
+    return img;
+  }
   if (!c.speckle) {
     img.intensity_m2 = img.mean_m2;
     return img;

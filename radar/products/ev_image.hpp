@@ -50,6 +50,7 @@
 #include <span>
 #include <vector>
 
+#include "radar/clutter/terrain_engine.hpp"
 #include "radar/em/sbr.hpp"
 
 namespace radar_emu::radar {
@@ -100,5 +101,23 @@ struct EvImage {
 /// seen from `pose`.
 [[nodiscard]] EvImage form_ev_image(std::span<const Contribution> contributions,
                                     const RadarPose& pose, const EvImageConfig& config);
+
+/// Terrain from the terrain engine (radar/clutter/terrain_engine.hpp) instead of the tracer's
+/// diffuse terrain returns: every pixel (column c, the range interval of row r) is one cell of
+/// the engine, which adds the patches whose range and azimuth fall in it (and whose elevation is
+/// inside the field), look l's field with speckle look l (look 0: the texture stored per patch);
+/// the contributions' non-coherent (diffuse) returns are then left out, their coherent ones
+/// (targets, structures) added as in the header. Patches are half a pixel wide at their
+/// range (at least `patch_min_m`); the one-way atmospheric loss is applied per patch.
+struct EvTerrain {
+  const clutter::TerrainEngine* engine = nullptr;
+  double wavelength_m = 0.0;
+  double patch_min_m = 0.5;
+  double one_way_loss_db_per_m = 0.0;
+  clutter::TerrainStats stats{};  ///< filled by form_ev_image
+};
+[[nodiscard]] EvImage form_ev_image(std::span<const Contribution> contributions,
+                                    const RadarPose& pose, const EvImageConfig& config,
+                                    EvTerrain& terrain);
 
 }  // namespace radar_emu::radar

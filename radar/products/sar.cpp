@@ -388,6 +388,8 @@ SarImage backproject(const SarParams& p, const SarCompressed& rc, const SarImage
           "range-compressed matrix does not match the parameters");
   require(grid.rows >= 1 && grid.cols >= 1 && grid.rows * grid.cols <= 400000000ull,
           "image grid must have 1..4e8 pixels");
+  require(grid.height_m.empty() || grid.height_m.size() == grid.rows * grid.cols,
+          "image grid heights must be empty or one per pixel");
   require(positive(grid.azimuth_spacing_m) && positive(grid.ground_range_spacing_m),
           "image pixel spacings must be > 0");
   require(positive(o.integration_angle_rad) && o.integration_angle_rad < 1.0,
@@ -448,8 +450,9 @@ SarImage backproject(const SarParams& p, const SarCompressed& rc, const SarImage
                 continue;
               const auto& line = lines[i - b0];
               for (std::size_t col = 0; col < grid.cols; ++col) {
-                const glm::dvec3 x =
-                    row0 + static_cast<double>(col) * grid.ground_range_spacing_m * look;
+                glm::dvec3 x = row0 + static_cast<double>(col) * grid.ground_range_spacing_m * look;
+                if (!grid.height_m.empty())
+                  x.z = static_cast<double>(grid.height_m[row * grid.cols + col]);
                 const glm::dvec3 d = x - pos;
                 const double range = glm::length(d);
                 const double s = along / range;  // sin of the angle off broadside
@@ -484,9 +487,10 @@ SarImage backproject(const SarParams& p, const SarCompressed& rc, const SarImage
       const std::size_t i = row * grid.cols + col;
       if (!(wsum[i] > 0.0))
         continue;
-      const glm::dvec3 x = grid.origin_m +
-                           static_cast<double>(row) * grid.azimuth_spacing_m * track +
-                           static_cast<double>(col) * grid.ground_range_spacing_m * look;
+      glm::dvec3 x = grid.origin_m + static_cast<double>(row) * grid.azimuth_spacing_m * track +
+                     static_cast<double>(col) * grid.ground_range_spacing_m * look;
+      if (!grid.height_m.empty())
+        x.z = static_cast<double>(grid.height_m[i]);
       const glm::dvec3 d = x - p.start_position_m;
       const double r0 = glm::length(d - glm::dot(d, track) * track);
       img.pixels[i] = std::complex<float>(acc[i] / wsum[i] * std::polar(1.0, -k2 * r0));

@@ -162,12 +162,14 @@ struct SarCompressed {
 };
 [[nodiscard]] SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper taper);
 
-/// A ground-plane image grid: pixel (row r, column c) at origin + r d_az track + c d_gr look
-/// (rows along track, columns away from the track), at height origin.z.
+/// A ground image grid: pixel (row r, column c) at origin + r d_az track + c d_gr look (rows
+/// along track, columns away from the track), at height origin.z, or at height_m[r cols + c]
+/// when height_m is given (backprojection onto a DEM: radar/products/sar_terrain.hpp sar_dem).
 struct SarImageGrid {
   glm::dvec3 origin_m{0.0};
   double azimuth_spacing_m = 1.0, ground_range_spacing_m = 1.0;
   std::size_t rows = 0, cols = 0;
+  std::vector<float> height_m{};  ///< empty, or rows x cols world heights [m]
 };
 
 struct BackprojectionOptions {

@@ -5,85 +5,196 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <stdexcept>
 
-#include "radar/clutter/terrain.hpp"
 #include "radar/em/surfaces.hpp"
 
 namespace radar_emu::radar {
 
-TerrainCells terrain_cells(const scene::Scene& scene, const SbrTracer& tracer, const SarParams& p,
-                           const TerrainCellSpec& spec) {
-  validate(p);
-  clutter::validate(spec.speckle);
-  if (!(spec.cell_m > 0.0) || !std::isfinite(spec.cell_m))
-    throw std::invalid_argument("sar terrain: cell size must be > 0");
-  if (spec.along * spec.across > 200'000'000ull)
-    throw std::invalid_argument("sar terrain: more than 2e8 cells; make the cells larger");
-  // sigma0 of the scene's materials: the tracer's, resolved once at its carrier.
-  if (tracer.config().carrier_hz != p.carrier_hz)
-    throw std::invalid_argument("sar terrain: the tracer's carrier differs from the SAR carrier");
-  const SurfaceSet& surfaces = tracer.surfaces();
-  TerrainCells out;
-  if (std::none_of(surfaces.surfaces.begin(), surfaces.surfaces.end(),
-                   [](const Surface& s) { return s.sigma0_row >= 0; }))
-    return out;
-  const clutter::Sigma0Table::Pol pol = sigma0_channel(spec.polarisation);
-  const glm::dvec3 track = sar_track_dir(p), look = sar_look_dir(p);
+clutter::TerrainEngine make_terrain_engine(const scene::Scene& scene, const SbrTracer& tracer,
+                                           clutter::TerrainEngineSpec spec) {
+  const SurfaceSet& s = tracer.surfaces();
+  std::vector<int> rows;
+  for (const Surface& m : s.surfaces)
+    rows.push_back(m.sigma0_row);
+  std::vector<std::uint8_t> structures(scene.objects().size(), 0);
+  for (std::uint32_t id = 0; id < structures.size(); ++id)
+    structures[id] = tracer.is_target(id) ? 1 : 0;
+  spec.channel = s.channel;
+  return clutter::TerrainEngine(
+      scene, clutter::terrain_materials(rows, s.sigma0_table, scene.materials()), structures, spec);
+}
 
-  struct Line {
-    std::vector<SarScatterer> cells;
-    std::size_t shadowed = 0, empty = 0;
-  };
-  std::vector<Line> lines(spec.along);
-  tbb::parallel_for(std::size_t{0}, spec.along, [&](std::size_t i) {
-    Line& line = lines[i];
-    for (std::size_t j = 0; j < spec.across; ++j) {
-      const std::uint64_t index = static_cast<std::uint64_t>(i) * spec.across + j;
-      const glm::dvec3 xy = spec.origin_m + static_cast<double>(i) * spec.cell_m * track +
-                            static_cast<double>(j) * spec.cell_m * look;
-      const scene::Ray down{{xy.x, xy.y, xy.z + 5000.0}, {0.0, 0.0, -1.0}, 0.0, 10000.0};
-      scene::Hit hit;
-      if (!scene.intersect(down, hit) || tracer.is_target(hit.object_id) ||
-          hit.material_id >= surfaces.surfaces.size() ||
-          surfaces.surfaces[hit.material_id].sigma0_row < 0) {
-        ++line.empty;
-        continue;
-      }
-      glm::dvec3 n = hit.normal;
-      if (n.z < 0.0)
-        n = -n;
-      // The platform at broadside of the cell.
+TerrainCells terrain_cells(const clutter::TerrainEngine& engine, const SarParams& p,
+                           double patch_m) {
+  validate(p);
+  if (!(patch_m > 0.0) || !std::isfinite(patch_m))
+    throw std::invalid_argument("sar terrain: patch size must be > 0");
+  const auto facets = engine.facets();
+  // Patches per facet, and where each facet's start in the output.
+  std::vector<std::size_t> first(facets.size() + 1, 0);
+  for (std::size_t i = 0; i < facets.size(); ++i) {
+    const std::uint64_t n = clutter::patch_divisions(facets[i], patch_m);
+    first[i + 1] = first[i] + n * n;
+  }
+  if (first.back() > 200'000'000ull)
+    throw std::invalid_argument("sar terrain: more than 2e8 patches; make the patches larger");
+  const glm::dvec3 track = sar_track_dir(p);
+  std::vector<SarScatterer> all(first.back());
+  std::vector<std::uint8_t> lit(first.back(), 0);
+  tbb::parallel_for(std::size_t{0}, facets.size(), [&](std::size_t i) {
+    const clutter::TerrainFacet& f = facets[i];
+    const std::uint32_t n = clutter::patch_divisions(f, patch_m);
+    for (std::uint32_t k = 0; k < n * n; ++k) {
+      const clutter::TerrainPatch pt = clutter::facet_patch(f, static_cast<std::uint32_t>(i), n, k);
+      // The platform at broadside of the patch.
       const glm::dvec3 radar =
-          p.start_position_m + glm::dot(hit.position_m - p.start_position_m, track) * track;
-      const glm::dvec3 to = radar - hit.position_m;
+          p.start_position_m + glm::dot(pt.centre_m - p.start_position_m, track) * track;
+      const glm::dvec3 to = radar - pt.centre_m;
       const double dist = glm::length(to);
-      const double cos_inc = glm::dot(n, to / dist);
-      const scene::Ray up{hit.position_m + 0.01 * n, to / dist, 0.0, dist};
-      if (cos_inc <= 0.0 || scene.occluded(up)) {
-        ++line.shadowed;
+      const double cos_inc = std::abs(glm::dot(f.normal, to / dist));
+      if (!(cos_inc > 1e-9) || !engine.clear(pt.centre_m, f.normal, radar))
         continue;
-      }
-      const double s0 = static_cast<double>(surfaces.sigma0_table.lookup(
-          static_cast<std::size_t>(surfaces.surfaces[hit.material_id].sigma0_row), pol, cos_inc));
-      const clutter::SpeckleSample s = clutter::speckle_sample(spec.speckle, index);
-      const double area = spec.cell_m * spec.cell_m / std::max(n.z, 1e-3);
-      line.cells.push_back(
-          {hit.position_m, std::polar(std::sqrt(s0 * area * static_cast<double>(s.intensity)),
-                                      static_cast<double>(s.phase_rad))});
+      const double power = engine.sigma0(f, cos_inc) * pt.area_m2;
+      const clutter::SpeckleSample s = engine.speckle(pt, 0);
+      all[first[i] + k] = {pt.centre_m,
+                           std::polar(std::sqrt(power * double(s.intensity)), double(s.phase_rad))};
+      lit[first[i] + k] = 1;
     }
   });
-  std::size_t total = 0;
-  for (const Line& l : lines)
-    total += l.cells.size();
-  out.cells.reserve(total);
-  for (const Line& l : lines) {
-    out.cells.insert(out.cells.end(), l.cells.begin(), l.cells.end());
-    out.shadowed += l.shadowed;
-    out.empty += l.empty;
-  }
-  (void)look;
+  TerrainCells out;
+  out.patches = all.size();
+  out.area_m2 = engine.area_m2();
+  std::size_t n_lit = 0;
+  for (std::uint8_t l : lit)
+    n_lit += l;
+  out.cells.reserve(n_lit);
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (lit[i] != 0)
+      out.cells.push_back(all[i]);
+  out.shadowed = all.size() - n_lit;
   return out;
+}
+
+SarDem sar_dem(const clutter::TerrainEngine& engine, const SarParams& p, const SarImageGrid& grid) {
+  validate(p);
+  if (grid.rows == 0 || grid.cols == 0 || !(grid.azimuth_spacing_m > 0.0) ||
+      !(grid.ground_range_spacing_m > 0.0))
+    throw std::invalid_argument("sar DEM: the image grid is empty");
+  const glm::dvec3 track = sar_track_dir(p), look = sar_look_dir(p);
+  const std::size_t n = grid.rows * grid.cols;
+  constexpr float kNone = -std::numeric_limits<float>::infinity();
+  SarDem dem;
+  dem.height_m.assign(n, kNone);
+  dem.mask.assign(n, 0);
+  dem.facet.assign(n, -1);
+  // Rasterise each facet's horizontal projection at the pixel centres (grid coordinates: row
+  // along track, column along the look direction); the highest surface wins.
+  const auto facets = engine.facets();
+  for (std::size_t fi = 0; fi < facets.size(); ++fi) {
+    const clutter::TerrainFacet& f = facets[fi];
+    glm::dvec2 q[3];
+    const glm::dvec3 v[3] = {f.a_m, f.b_m, f.c_m};
+    for (int i = 0; i < 3; ++i) {
+      const glm::dvec3 rel = v[i] - grid.origin_m;
+      q[i] = {glm::dot(rel, track) / grid.azimuth_spacing_m,
+              glm::dot(rel, look) / grid.ground_range_spacing_m};
+    }
+    const double det =
+        (q[1].x - q[0].x) * (q[2].y - q[0].y) - (q[2].x - q[0].x) * (q[1].y - q[0].y);
+    if (std::abs(det) < 1e-12)
+      continue;  // vertical facet: no area seen from above
+    const double r0 = std::max(0.0, std::ceil(std::min({q[0].x, q[1].x, q[2].x})));
+    const double r1 =
+        std::min(double(grid.rows) - 1, std::floor(std::max({q[0].x, q[1].x, q[2].x})));
+    const double c0 = std::max(0.0, std::ceil(std::min({q[0].y, q[1].y, q[2].y})));
+    const double c1 =
+        std::min(double(grid.cols) - 1, std::floor(std::max({q[0].y, q[1].y, q[2].y})));
+    for (double r = r0; r <= r1; r += 1.0)
+      for (double c = c0; c <= c1; c += 1.0) {
+        const double l1 =
+            ((r - q[0].x) * (q[2].y - q[0].y) - (q[2].x - q[0].x) * (c - q[0].y)) / det;
+        const double l2 =
+            ((q[1].x - q[0].x) * (c - q[0].y) - (r - q[0].x) * (q[1].y - q[0].y)) / det;
+        const double tol = -1e-9;
+        if (l1 < tol || l2 < tol || 1.0 - l1 - l2 < tol)
+          continue;
+        const double z = f.a_m.z + l1 * (f.b_m.z - f.a_m.z) + l2 * (f.c_m.z - f.a_m.z);
+        const std::size_t i = static_cast<std::size_t>(r) * grid.cols + static_cast<std::size_t>(c);
+        if (static_cast<float>(z) > dem.height_m[i]) {
+          dem.height_m[i] = static_cast<float>(z);
+          dem.facet[i] = static_cast<std::int32_t>(fi);
+        }
+      }
+  }
+  // Holes: the nearest covered pixel of the row, else the mean height (flagged).
+  double sum = 0.0;
+  std::size_t covered = 0;
+  for (float h : dem.height_m)
+    if (h != kNone) {
+      sum += static_cast<double>(h);
+      ++covered;
+    }
+  const float mean = covered > 0 ? static_cast<float>(sum / double(covered)) : 0.0f;
+  for (std::size_t r = 0; r < grid.rows; ++r) {
+    float* row = dem.height_m.data() + r * grid.cols;
+    std::uint8_t* m = dem.mask.data() + r * grid.cols;
+    for (std::size_t c = 0; c < grid.cols; ++c) {
+      if (row[c] != kNone)
+        continue;
+      m[c] |= kSarNoDem;
+      ++dem.holes;
+    }
+    for (std::size_t c = 0; c < grid.cols; ++c) {
+      if ((m[c] & kSarNoDem) == 0)
+        continue;
+      float best = mean;
+      std::size_t best_d = std::numeric_limits<std::size_t>::max();
+      for (std::size_t k = 0; k < grid.cols; ++k)
+        if ((m[k] & kSarNoDem) == 0) {
+          const std::size_t d = k > c ? k - c : c - k;
+          if (d < best_d) {
+            best_d = d;
+            best = row[k];
+          }
+        }
+      row[c] = best;
+    }
+  }
+  // Mask.
+  tbb::parallel_for(std::size_t{0}, grid.rows, [&](std::size_t r) {
+    for (std::size_t c = 0; c < grid.cols; ++c) {
+      const std::size_t i = r * grid.cols + c;
+      const double z = dem.height_m[i];
+      const glm::dvec3 x = grid.origin_m + double(r) * grid.azimuth_spacing_m * track +
+                           double(c) * grid.ground_range_spacing_m * look;
+      const glm::dvec3 pt{x.x, x.y, z};
+      const glm::dvec3 radar =
+          p.start_position_m + glm::dot(pt - p.start_position_m, track) * track;
+      const std::size_t ca = c > 0 ? c - 1 : c, cb = c + 1 < grid.cols ? c + 1 : c;
+      const double s = cb > ca ? (double(dem.height_m[r * grid.cols + cb]) -
+                                  double(dem.height_m[r * grid.cols + ca])) /
+                                     (double(cb - ca) * grid.ground_range_spacing_m)
+                               : 0.0;
+      const glm::dvec3 hz = pt - radar;
+      const double g = std::hypot(hz.x, hz.y), below = radar.z - z;
+      std::uint8_t bits = 0;
+      if (below > 0.0 && s * below > g)
+        bits |= kSarLayover;
+      else if (below > 0.0 && s * below > 0.2 * g)
+        bits |= kSarForeshortening;
+      if (!engine.clear(pt, {0.0, 0.0, 1.0}, radar))
+        bits |= kSarShadow;
+      dem.mask[i] |= bits;
+    }
+  });
+  for (std::uint8_t m : dem.mask) {
+    dem.shadow += (m & kSarShadow) != 0;
+    dem.layover += (m & kSarLayover) != 0;
+    dem.foreshortening += (m & kSarForeshortening) != 0;
+  }
+  return dem;
 }
 
 }  // namespace radar_emu::radar

@@ -313,3 +313,96 @@ TEST_F(EvImageScenario, FogDimsATargetAt1KmByTheTwoWayP840Loss) {
       "fog 0.05 g/m^3, target at %.1f m: image dims it by %.4f dB, P.840-9 two-way %.4f dB\n",
       range_m, measured_db, expected_db);
 }
+
+// Terrain from the terrain engine: the runway's mean pixel under the grass beside it by the
+// catalogue's contrast at each row's incidence (sigma0 of asphalt and grass read from the
+// catalogue's table here, independently of the engine), within 1 dB; pixels whose four corners
+// all fall on asphalt clear of the markings (x 1-8 m, y 150-1050 m: between the centreline and
+// the touchdown-zone stripes, ICAO Annex 14, scene/airport_gen.hpp) or on the grass east of it
+// (x 30-80 m, y 300-650 m); row by row (one range interval, one incidence), then averaged.
+TEST_F(EvImageScenario, RunwayUnderGrassByTheCatalogueContrastAndApproachLightsAsPoints) {
+  namespace rd = radar_emu::radar;
+  const loop::Scenario s = loop::parse_scenario(text_, "ev_radar_94ghz.toml");
+  const tools::EvImageProduct p = tools::compute_ev_image(s, kTimeS, 10, 20261124, 0);
+  ASSERT_TRUE(p.terrain_engine);
+  const auto& im = p.image;
+  const std::vector<radar_emu::scene::Material> mats{{"asphalt", {}}, {"grass", {}}};
+  const rd::SurfaceSet set = rd::resolve_surfaces(mats, {s.sbr.carrier_hz, s.sbr.polarisation, {}});
+  const auto ch = rd::sigma0_channel(s.sbr.polarisation);
+  const glm::dvec3 pos = p.pose.position_m;
+  const double half = 0.5 * p.config.pixel_rad;
+  // Ground point (the runway's level) of antenna direction (az, el); nullopt above the horizon.
+  auto ground = [&](double az, double el) -> std::optional<glm::dvec2> {
+    const glm::dvec3 w = p.pose.world_from_antenna * rd::direction_from_azel({az, el});
+    if (w.z >= -1e-9)
+      return std::nullopt;
+    const double t = (pos.z - 0.05) / -w.z;
+    return glm::dvec2(pos.x + t * w.x, pos.y + t * w.y);
+  };
+  auto inside = [&](int r, int c, double x0, double x1, double y0, double y1) {
+    const double az = rd::ev_column_azimuth_rad(p.config, c);
+    const double el = rd::ev_row_elevation_rad(p.config, r);
+    for (double da : {-half, half})
+      for (double de : {-half, half}) {
+        const auto g = ground(az + da, el + de);
+        if (!g || g->x < x0 || g->x > x1 || g->y < y0 || g->y > y1)
+          return false;
+      }
+    return true;
+  };
+  double sum_diff = 0.0;
+  int rows_used = 0;
+  for (int r = 0; r < im.rows; ++r) {
+    double run = 0.0, grass = 0.0;
+    int nr = 0, ng = 0;
+    for (int c = 0; c < im.columns; ++c) {
+      const double v = static_cast<double>(im.at(r, c));
+      if (inside(r, c, 1.0, 8.0, 150.0, 1050.0)) {
+        run += v;
+        ++nr;
+      } else if (inside(r, c, 30.0, 80.0, 300.0, 650.0)) {
+        grass += v;
+        ++ng;
+      }
+    }
+    if (nr < 1 || ng < 3)
+      continue;
+    const auto g = ground(0.0, rd::ev_row_elevation_rad(p.config, r));
+    const double range = std::hypot(g->x - pos.x, g->y - pos.y, pos.z);
+    const double cos_inc = pos.z / range;
+    const double expected = db(double(set.sigma0_table.lookup(0, ch, cos_inc))) -
+                            db(double(set.sigma0_table.lookup(1, ch, cos_inc)));
+    const double measured = db((run / nr) / (grass / ng));
+    std::printf("row %d, range %.0f m: runway - grass %.2f dB (catalogue %.2f dB)\n", r, range,
+                measured, expected);
+    sum_diff += measured - expected;
+    ++rows_used;
+  }
+  ASSERT_GE(rows_used, 3);
+  const double mean_diff = sum_diff / rows_used;
+  std::printf("runway contrast against the catalogue: %.2f dB over %d rows\n", mean_diff,
+              rows_used);
+  EXPECT_LT(std::abs(mean_diff), 1.0);
+
+  // Approach lights (metal masts and barrettes on the centreline, 30 m apart south of the
+  // threshold): in the centre column, pixels brighter than the grass beside them by 10 dB.
+  const int c0 =
+      static_cast<int>(std::lround(-p.config.azimuth_min_rad / p.config.pixel_rad - 0.5));
+  int points = 0;
+  for (int r = 0; r < im.rows; ++r) {
+    std::vector<double> side;
+    for (int d = 6; d <= 12; ++d) {
+      side.push_back(static_cast<double>(im.at(r, c0 - d)));
+      side.push_back(static_cast<double>(im.at(r, c0 + d)));
+    }
+    std::sort(side.begin(), side.end());
+    const double ref = side[side.size() / 2];
+    const auto g = ground(0.0, rd::ev_row_elevation_rad(p.config, r));
+    if (g && g->y < 0.0 && static_cast<double>(im.at(r, c0)) > 10.0 * ref) {
+      std::printf("approach light row %d (ground y %.0f m): %.1f dB over the grass\n", r, g->y,
+                  db(static_cast<double>(im.at(r, c0)) / ref));
+      ++points;
+    }
+  }
+  EXPECT_GE(points, 2);
+}

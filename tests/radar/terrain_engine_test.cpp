@@ -1,0 +1,380 @@
+// The terrain engine (radar/clutter/terrain_engine.hpp) against theory:
+//  - a homogeneous flat field: each range-azimuth cell's mean equals the closed-form integral of
+//    sigma0 dA over the cell's annular sector (sigma0 read from the catalogue's table at each
+//    ring's incidence, independently of the engine) within 0.5 dB, and the single-look
+//    intensity normalised by it is exponential (Kolmogorov-Smirnov, alpha = 0.01);
+//  - the SAR chain over the engine's terrain (sar_terrain -> synthesis -> backprojection onto the
+//    DEM): a ridge's shadow ends where the line of sight over its crest meets the ground, and a
+//    tower's wall lays over toward the radar by the displacement of equal slant range (h cot
+//    theta in the far field), each within one pixel;
+//  - the frame path does not allocate; bad input is a clear error; a DEM hole is flagged.
+#include "radar/clutter/terrain_engine.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <iostream>
+#include <vector>
+
+#include "../alloc_counter.hpp"
+#include "radar/constants.hpp"
+#include "radar/em/surfaces.hpp"
+#include "radar/products/sar.hpp"
+#include "radar/products/sar_terrain.hpp"
+#include "scene/scene.hpp"
+
+namespace radar_emu::radar {
+namespace {
+
+namespace cl = clutter;
+constexpr double kC = kSpeedOfLight_mps;
+constexpr std::uint64_t kSeed = 20261124;
+
+double db(double x) {
+  return 10.0 * std::log10(x);
+}
+
+// A quad a b c d (counter-clockwise from above) of material `mat`.
+void quad(scene::Mesh& m, glm::dvec3 a, glm::dvec3 b, glm::dvec3 c, glm::dvec3 d,
+          std::uint16_t mat) {
+  const auto base = static_cast<std::uint32_t>(m.positions_m.size());
+  for (const glm::dvec3& v : {a, b, c, d})
+    m.positions_m.emplace_back(v);
+  m.triangles.push_back({base, base + 1, base + 2});
+  m.triangles.push_back({base, base + 2, base + 3});
+  m.triangle_material.push_back(mat);
+  m.triangle_material.push_back(mat);
+}
+
+struct Built {
+  scene::Scene scene;
+  SurfaceSet surfaces;
+};
+
+cl::TerrainEngine engine_of(const scene::Scene& s, const SurfaceSet& set,
+                            const cl::TerrainEngineSpec& spec) {
+  std::vector<int> rows;
+  for (const Surface& m : set.surfaces)
+    rows.push_back(m.sigma0_row);
+  std::vector<std::uint8_t> structures(s.objects().size(), 0);
+  return cl::TerrainEngine(s, cl::terrain_materials(rows, set.sigma0_table, s.materials()),
+                           structures, spec);
+}
+
+// Kolmogorov-Smirnov distance of samples against Exp(1).
+double ks_exponential(std::vector<double> xs) {
+  std::sort(xs.begin(), xs.end());
+  const double n = static_cast<double>(xs.size());
+  double d = 0.0;
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    const double f = 1.0 - std::exp(-xs[i]);
+    d = std::max({d, std::abs(f - static_cast<double>(i) / n),
+                  std::abs(f - static_cast<double>(i + 1) / n)});
+  }
+  return d;
+}
+
+TEST(TerrainEngine, HomogeneousFieldCellMeanAndExponentialIntensity) {
+  constexpr double kF = 35e9, kH = 100.0;
+  scene::SceneDescription d;
+  d.materials = {{"grass", {}}};
+  scene::ObjectDesc g;
+  g.name = "field";
+  quad(g.mesh, {-200, 250, 0}, {200, 250, 0}, {200, 850, 0}, {-200, 850, 0}, 0);
+  d.objects.push_back(g);
+  const scene::Scene s(d);
+  const SurfaceSet set = resolve_surfaces(s.materials(), {kF, Polarisation::kVV, {}});
+  cl::TerrainEngineSpec spec;
+  spec.speckle.seed = kSeed;
+  std::cout << "speckle seed " << kSeed << "\n";
+  const cl::TerrainEngine eng = engine_of(s, set, spec);
+
+  // Antenna level, looking north: x north, y east, z down; azimuth is the horizontal angle.
+  cl::TerrainView view;
+  view.position_m = {0.0, 0.0, kH};
+  view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
+  view.wavelength_m = kC / kF;
+  view.patch_min_m = 1.0;
+  view.looks = 4;
+  constexpr double kDeg = kPi / 180.0;
+  cl::CellGrid grid;
+  grid.azimuth_min_rad = -10.0 * kDeg;
+  grid.azimuth_step_rad = 2.0 * kDeg;
+  grid.columns = 10;
+  grid.bins = 50;
+  std::vector<double> edges;
+  for (std::size_t b = 0; b <= grid.bins; ++b)
+    edges.push_back(300.0 + 10.0 * static_cast<double>(b));
+  grid.range_edges_m = edges;
+  const std::size_t cells = grid.columns * grid.bins;
+  std::vector<std::complex<double>> field(view.looks * cells);
+  std::vector<double> mean(cells, 0.0);
+  const cl::TerrainStats st = eng.integrate(view, grid, field, mean);
+  EXPECT_EQ(st.patches_shadowed, 0u);
+  EXPECT_EQ(st.budget_cut, 0u);
+
+  // Closed form per cell: dphi * integral of sigma0(theta(rho)) rho drho over the ground ranges
+  // of the slant bin, rho = sqrt(R^2 - H^2), cos theta = H / R (midpoint rule, 1 mm steps).
+  double worst_db = 0.0;
+  std::vector<double> normalised;
+  for (std::size_t b = 0; b < grid.bins; ++b) {
+    const double rho1 = std::sqrt(edges[b] * edges[b] - kH * kH);
+    const double rho2 = std::sqrt(edges[b + 1] * edges[b + 1] - kH * kH);
+    double ring = 0.0;
+    const double step = 1e-3;
+    for (double rho = rho1 + step / 2; rho < rho2; rho += step)
+      ring += static_cast<double>(
+                  set.sigma0_table.lookup(0, cl::Sigma0Table::kVV, kH / std::hypot(rho, kH))) *
+              rho * step;
+    const double expected = ring * grid.azimuth_step_rad;
+    for (std::size_t c = 0; c < grid.columns; ++c) {
+      const std::size_t cell = b * grid.columns + c;
+      worst_db = std::max(worst_db, std::abs(db(mean[cell] / expected)));
+      for (std::size_t l = 0; l < view.looks; ++l)
+        normalised.push_back(std::norm(field[l * cells + cell]) / expected);
+    }
+  }
+  double sum = 0.0;
+  for (double x : normalised)
+    sum += x;
+  const double speckled_db = db(sum / static_cast<double>(normalised.size()));
+  const double d_ks = ks_exponential(normalised);
+  const double critical = 1.63 / std::sqrt(static_cast<double>(normalised.size()));  // Massey
+  std::cout << "cells " << cells << ": worst cell mean vs closed form " << worst_db
+            << " dB; speckled mean " << speckled_db << " dB; KS D " << d_ks << " (critical "
+            << critical << ")\n";
+  EXPECT_LT(worst_db, 0.5);
+  EXPECT_NEAR(speckled_db, 0.0, 0.5);
+  EXPECT_LT(d_ks, critical);
+
+  // The frame path allocates nothing.
+  std::fill(mean.begin(), mean.end(), 0.0);
+  test::start_counting_allocations();
+  const cl::TerrainStats again = eng.integrate(view, grid, field, mean);
+  EXPECT_EQ(test::stop_counting_allocations(), 0u);
+  EXPECT_EQ(again.patches_lit, st.patches_lit);
+}
+
+// ------------------------------------------------------------------ SAR geometry over the engine
+
+// 35 GHz, 500 m altitude, 63 deg, B = 100 MHz; flying +x, looking right (-y).
+SarParams geometry_case() {
+  SarParams p;
+  p.carrier_hz = 35e9;
+  p.bandwidth_hz = 100e6;
+  p.sample_rate_hz = 120e6;
+  p.pulse_duration_s = 0.3e-6;
+  p.gates = 192;
+  p.incidence_rad = 63.0 * kPi / 180.0;
+  p.azimuth_beamwidth_rad = 0.5 * kPi / 180.0;
+  p.elevation_beamwidth_rad = 20.0 * kPi / 180.0;
+  p.prf_hz = 600.0;  // 0.167 m between pulses <= lambda / (4 sin(1.29 beamwidth)) = 0.19 m
+  p.velocity_mps = {100.0, 0.0, 0.0};
+  const double r0 = 500.0 / std::cos(p.incidence_rad);
+  p.near_range_m = r0 - 0.5 * static_cast<double>(p.gates) * kC / (2 * p.sample_rate_hz);
+  const double track = 40.0;
+  p.pulses = static_cast<std::size_t>(track / (100.0 / p.prf_hz)) + 1;
+  p.start_position_m = {-0.5 * track, 0.0, 500.0};
+  return p;
+}
+constexpr double kTheta = 0.004;
+
+struct Imaged {
+  SarImageGrid grid;
+  SarImage img;
+  SarDem dem;
+};
+
+// Terrain cells -> raw -> range compression -> backprojection on the DEM; image rows along x
+// from -12 to 12 m, columns over ground range (distance from the track) [g0, g1] every 1 m.
+Imaged image_scene(const scene::SceneDescription& d, double g0, double g1) {
+  const SarParams p = geometry_case();
+  const scene::Scene s(d);
+  const SurfaceSet set = resolve_surfaces(s.materials(), {p.carrier_hz, Polarisation::kVV, {}});
+  cl::TerrainEngineSpec spec;
+  spec.speckle.seed = kSeed;
+  spec.max_facet_m = 10.0;
+  const cl::TerrainEngine eng = engine_of(s, set, spec);
+  const TerrainCells cells = terrain_cells(eng, p, 0.6);
+  SarRaw raw = make_raw(p);
+  synthesise_points(p, cells.cells, 0, p.pulses, raw);
+  const SarCompressed rc = range_compress(p, raw, SarTaper::kNone);
+  Imaged out;
+  out.grid.azimuth_spacing_m = 0.5;
+  out.grid.ground_range_spacing_m = 1.0;
+  out.grid.rows = 49;
+  out.grid.cols = static_cast<std::size_t>(g1 - g0) + 1;
+  out.grid.origin_m = {-12.0, -g0, 0.0};
+  out.dem = sar_dem(eng, p, out.grid);
+  out.grid.height_m = out.dem.height_m;
+  out.img = backproject(p, rc, out.grid, {kTheta, SarTaper::kNone, 16, 0.01});
+  return out;
+}
+
+// Mean intensity of each column over every row.
+std::vector<double> column_means(const Imaged& im) {
+  std::vector<double> m(im.grid.cols, 0.0);
+  for (std::size_t r = 0; r < im.grid.rows; ++r)
+    for (std::size_t c = 0; c < im.grid.cols; ++c)
+      m[c] += static_cast<double>(std::norm(im.img.pixels[r * im.grid.cols + c])) /
+              static_cast<double>(im.grid.rows);
+  return m;
+}
+
+TEST(TerrainEngineSar, RidgeShadowEndsWhereTheLineOverTheCrestMeetsTheGround) {
+  // A ridge along track: front foot at ground range gc - 20 (45 deg slope facing the radar),
+  // crest h = 20 m at gc, back foot at gc + 10 (63 deg, steeper than the 27 deg grazing angle).
+  const double H = 500.0, gc = H * std::tan(63.0 * kPi / 180.0), h = 20.0;
+  scene::SceneDescription d;
+  d.materials = {{"grass", {}}};
+  scene::ObjectDesc o;
+  o.name = "ground";
+  const double x0 = -20.0, x1 = 20.0;
+  auto y = [](double g) { return -g; };  // look right of +x: ground range along -y
+  // Wound counter-clockwise seen from above/outside (y = -g flips the handedness).
+  quad(o.mesh, {x0, y(gc - 70), 0}, {x0, y(gc - 20), 0}, {x1, y(gc - 20), 0}, {x1, y(gc - 70), 0},
+       0);
+  quad(o.mesh, {x0, y(gc - 20), 0}, {x0, y(gc), h}, {x1, y(gc), h}, {x1, y(gc - 20), 0}, 0);
+  quad(o.mesh, {x0, y(gc), h}, {x0, y(gc + 10), 0}, {x1, y(gc + 10), 0}, {x1, y(gc), h}, 0);
+  quad(o.mesh, {x0, y(gc + 10), 0}, {x0, y(gc + 90), 0}, {x1, y(gc + 90), 0}, {x1, y(gc + 10), 0},
+       0);
+  d.objects.push_back(o);
+  const double g0 = gc - 60.0, g1 = gc + 80.0;
+  const Imaged im = image_scene(d, g0, g1);
+  const std::vector<double> m = column_means(im);
+  // Field level: the flat ground well beyond the shadow.
+  double field = 0.0;
+  int n = 0;
+  for (std::size_t c = 0; c < m.size(); ++c)
+    if (g0 + static_cast<double>(c) > gc + 60.0) {
+      field += m[c];
+      ++n;
+    }
+  field /= n;
+  // Geometry: the line from the platform (height H, ground range 0) over the crest (gc, h)
+  // meets z = 0 at gc H / (H - h).
+  const double shadow_end = gc * H / (H - h);
+  // Measured: coming back from the far field toward the crest, the first column under half the
+  // field's level (the crossing lies half a pixel beyond it).
+  double measured = -1.0;
+  for (std::size_t c = m.size() - 1; c > static_cast<std::size_t>(gc - g0); --c)
+    if (m[c] < 0.5 * field) {
+      measured = g0 + static_cast<double>(c) + 0.5;
+      break;
+    }
+  std::size_t masked = 0;
+  for (std::size_t c = 0; c < im.grid.cols; ++c)
+    masked += (im.dem.mask[24 * im.grid.cols + c] & kSarShadow) != 0;
+  std::cout << "ridge: shadow ends at " << measured - gc << " m beyond the crest (geometry "
+            << shadow_end - gc << " m, flat-earth h tan theta " << h * gc / H << " m); mask "
+            << masked << " shadow pixels in a row\n";
+  EXPECT_NEAR(measured, shadow_end, 1.0);
+  // The mask's shadow run: from the crest to the shadow's end, within a pixel.
+  EXPECT_NEAR(static_cast<double>(masked), shadow_end - gc, 1.5);
+}
+
+TEST(TerrainEngineSar, TowerLaysOverTowardTheRadarByEqualRange) {
+  // A concrete tower 20 m along track, 6 m deep, h = 40 m tall, its near wall at ground range
+  // gw, standing on water (dark): its near wall's top images where the ground has the same
+  // slant range.
+  const double H = 500.0, gw = H * std::tan(63.0 * kPi / 180.0), h = 40.0;
+  scene::SceneDescription d;
+  d.materials = {{"water", {}}, {"concrete", {}}};
+  scene::ObjectDesc o;
+  o.name = "ground";
+  auto y = [](double g) { return -g; };
+  quad(o.mesh, {-20, y(gw - 50), 0}, {-20, y(gw + 30), 0}, {20, y(gw + 30), 0}, {20, y(gw - 50), 0},
+       0);
+  d.objects.push_back(o);
+  scene::ObjectDesc t;
+  t.name = "tower";
+  const double xa = -10.0, xb = 10.0, ga = gw, gb = gw + 6.0;
+  quad(t.mesh, {xa, y(ga), 0}, {xb, y(ga), 0}, {xb, y(ga), h}, {xa, y(ga), h}, 1);  // near wall
+  quad(t.mesh, {xa, y(ga), h}, {xb, y(ga), h}, {xb, y(gb), h}, {xa, y(gb), h}, 1);  // roof
+  quad(t.mesh, {xb, y(gb), 0}, {xa, y(gb), 0}, {xa, y(gb), h}, {xb, y(gb), h}, 1);  // far wall
+  d.objects.push_back(t);
+  const double g0 = gw - 40.0, g1 = gw + 20.0;
+  const Imaged im = image_scene(d, g0, g1);
+  // Rows over the tower's middle 12 m along track.
+  std::vector<double> m(im.grid.cols, 0.0);
+  for (std::size_t r = 12; r < 37; ++r)
+    for (std::size_t c = 0; c < im.grid.cols; ++c)
+      m[c] += static_cast<double>(std::norm(im.img.pixels[r * im.grid.cols + c]));
+  // Smear level: the median of the columns between the expected top image and the wall.
+  const double r_top = std::hypot(gw, H - h);
+  const double g_top = std::sqrt(r_top * r_top - H * H);  // same slant range on the ground
+  std::vector<double> smear;
+  for (std::size_t c = 0; c < m.size(); ++c) {
+    const double g = g0 + static_cast<double>(c);
+    if (g > g_top + 3.0 && g < gw - 3.0)
+      smear.push_back(m[c]);
+  }
+  std::nth_element(smear.begin(), smear.begin() + static_cast<std::ptrdiff_t>(smear.size() / 2),
+                   smear.end());
+  const double level = smear[smear.size() / 2];
+  double measured = -1.0;
+  for (std::size_t c = 0; c < m.size(); ++c)
+    if (m[c] > 0.5 * level) {
+      measured = g0 + static_cast<double>(c) - 0.5;
+      break;
+    }
+  std::size_t layover = 0;
+  for (std::uint8_t b : im.dem.mask)
+    layover += (b & kSarLayover) != 0;
+  std::cout << "tower: layover " << gw - measured << " m toward the radar (geometry " << gw - g_top
+            << " m, far-field h cot theta " << h / std::tan(63.0 * kPi / 180.0) << " m)\n";
+  EXPECT_NEAR(measured, g_top, 1.0);
+}
+
+TEST(TerrainEngine, BadInputIsAClearError) {
+  // A scene of metal only: no terrain.
+  scene::SceneDescription d;
+  d.materials = {{"metal", {}}};
+  scene::ObjectDesc o;
+  o.name = "plate";
+  quad(o.mesh, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, 0);
+  d.objects.push_back(o);
+  const scene::Scene s(d);
+  const SurfaceSet set = resolve_surfaces(s.materials(), {35e9, Polarisation::kVV, {}});
+  try {
+    (void)engine_of(s, set, {});
+    FAIL() << "no terrain accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("no terrain"), std::string::npos) << e.what();
+  }
+  // An unknown material: the resolver's error names it.
+  scene::SceneDescription u = d;
+  u.materials = {{"plasticine", {}}};
+  const scene::Scene su(u);
+  EXPECT_THROW((void)resolve_surfaces(su.materials(), {35e9, Polarisation::kVV, {}}),
+               UnresolvedMaterial);
+  // A DEM hole: a field with a square gap; the gap's pixels are flagged, not black-and-silent.
+  scene::SceneDescription h;
+  h.materials = {{"grass", {}}};
+  scene::ObjectDesc g;
+  g.name = "field";
+  quad(g.mesh, {-50, -950, 0}, {50, -950, 0}, {50, -900, 0}, {-50, -900, 0}, 0);
+  quad(g.mesh, {-50, -900, 0}, {-5, -900, 0}, {-5, -890, 0}, {-50, -890, 0}, 0);
+  quad(g.mesh, {5, -900, 0}, {50, -900, 0}, {50, -890, 0}, {5, -890, 0}, 0);
+  quad(g.mesh, {-50, -890, 0}, {50, -890, 0}, {50, -850, 0}, {-50, -850, 0}, 0);
+  h.objects.push_back(g);
+  const scene::Scene sh(h);
+  const SurfaceSet hs = resolve_surfaces(sh.materials(), {35e9, Polarisation::kVV, {}});
+  const cl::TerrainEngine eng = engine_of(sh, hs, {});
+  SarImageGrid grid;
+  grid.rows = 21;
+  grid.cols = 41;
+  grid.azimuth_spacing_m = 1.0;
+  grid.ground_range_spacing_m = 1.0;
+  grid.origin_m = {-10.0, -880.0, 0.0};
+  const SarDem dem = sar_dem(eng, geometry_case(), grid);
+  // The gap: x in (-5, 5), ground range in (890, 900): 9 x 9 pixel centres strictly inside.
+  EXPECT_EQ(dem.holes, 81u);
+  EXPECT_EQ(dem.mask[10 * grid.cols + 15] & kSarNoDem, kSarNoDem);
+  EXPECT_EQ(dem.mask[0] & kSarNoDem, 0);
+}
+
+}  // namespace
+}  // namespace radar_emu::radar
