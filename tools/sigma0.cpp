@@ -384,7 +384,7 @@ int run_catalogue_chart(const Sigma0ToolOptions& o) {
       pts.markers = true;
       for (int i = 0; i <= 899; ++i) {
         const double th = i * 0.1;
-        const cl::Sigma0Value v = cl::sigma0(mat, f, cl::Sigma0Pol::kVV, th * radar::kPi / 180.0);
+        const cl::Sigma0Value v = cl::sigma0(mat, f, cl::Sigma0Pol::kVV, common::radians(th));
         const double y = to_db(v.linear);
         inside.x.push_back(th);
         outside.x.push_back(th);

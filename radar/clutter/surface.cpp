@@ -6,6 +6,7 @@
 #include <glm/glm.hpp>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "radar/constants.hpp"
 
 namespace radar_emu::radar::clutter {
@@ -15,7 +16,7 @@ namespace {
 using cplx = std::complex<double>;
 using glm::dvec3;
 
-constexpr double kGrazingLimit_rad = 70.0 * kPi / 180.0;
+constexpr double kGrazingLimit_rad = common::radians(70.0);
 constexpr int kMaxSeriesTerms = 2000;
 // IEM -> geometrical optics beyond ks = 5 (the IEM's own domain ends at ks = 3). Decided by ks
 // alone, not by ks cos, so that one surface is one model at every angle: an angle-dependent

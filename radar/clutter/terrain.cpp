@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "radar/constants.hpp"
 #include "radar/propagation/itu.hpp"
 
@@ -604,7 +605,7 @@ SurfaceScatter evaluate_sigma0(const SurfaceSpec& spec, Sigma0Model model, doubl
         *dst[pol] = std::pow(10.0, empirical_sigma0_db(*row, g.theta_i_rad) / 10.0);
       }
       // The regressions were fitted to data out to about 70-80 deg.
-      if (g.theta_i_rad > 70.0 * kPi / 180.0)
+      if (g.theta_i_rad > common::radians(70.0))
         out.invalid |= kGrazing;
       return out;
     }
@@ -659,7 +660,7 @@ Sigma0Table::Sigma0Table(std::span<const SurfaceSpec> specs, Sigma0Model model, 
   static_assert((kSamples - 1) % kCrossPolStride == 0);
   auto theta_of = [](int i) {
     // Sample at most 89.95 deg: the models are finite there and the table stays continuous.
-    return std::min(i * (kPi / 2.0) / (kSamples - 1), 89.95 * kPi / 180.0);
+    return std::min(i * (kPi / 2.0) / (kSamples - 1), common::radians(89.95));
   };
   for (std::size_t m = 0; m < specs.size(); ++m) {
     float* row[4];

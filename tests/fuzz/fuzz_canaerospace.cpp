@@ -15,6 +15,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "common/units.hpp"
 #include "io/canaerospace.hpp"
 #include "tests/fuzz/fuzz_input.hpp"
 #include "tests/fuzz/harnesses.hpp"
@@ -35,7 +36,7 @@ struct SiRange {
 
 // Physical ranges in SI (docs/icd/canaerospace_input.md), with heading in [0, 2 pi).
 SiRange si_range(Field f) {
-  constexpr double d = kPi / 180.0;
+  constexpr double d = common::kRadPerDeg;
   switch (f) {
     case Field::kPitch:
     case Field::kLatitude:
