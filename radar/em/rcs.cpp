@@ -146,8 +146,10 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
     }
     // Edges over the facets of all objects together, in the world frame (objects that meet at
     // coincident vertices share their edges there); closed parts above are per object.
+    // Every joint that turns at all is a candidate; the wedge rule (edges.hpp, wedge_weight)
+    // sorts wedges from joints of smooth surfaces per call, at its wavelength.
     edges_ = find_wedge_edges(tris, scene::build_topology(tris), outward, pec,
-                              config_.edge_min_turn_rad, census_);
+                              kWedgeCandidateTurnRad, census_);
     if (config_.edge_order >= 2)
       pairs_ = find_edge_pairs(edges_, tris, epsilon_m_);
     // Reflecting planes: the PEC facets grouped by plane (normal to 1e-6, offset to 100 ray
@@ -353,39 +355,67 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
   // --- Edge diffraction: fringe equivalent edge currents (radar/em/edges.hpp). --------------
   // An edge radiates when a face of it is lit and the path from beside its midpoint (in the free
   // space) to the transmitter is clear (the same occlusion query as the facets').
+  // Where an edge's occlusion test toward `toward` starts: beside its midpoint in the free space
+  // (edge_probe), and for an open sheet's boundary (whose exterior bisector lies in the sheet's
+  // own plane) also lifted off that plane on the side of `toward`, so that a wave travelling
+  // exactly along the sheet is not blocked by the sheet's own facets seen edge-on (which made
+  // the double-diffraction term vanish at exactly grazing incidence, a step in the pattern).
+  auto probe_toward = [&](const WedgeEdge& e, const glm::dvec3& toward) {
+    glm::dvec3 p = edge_probe(e, 10.0 * eps);
+    if (e.alpha_rad > 2.0 * kPi - 1e-9)
+      p += (glm::dot(e.y0, toward) >= 0.0 ? 10.0 : -10.0) * eps * e.y0;
+    return p;
+  };
   std::vector<EdgeTerm> edge_terms;
+  // The wedge rule at the call's shortest wavelength (edges.hpp): weight 0 for the joints of a
+  // smooth surface, 1 for wedges, a smooth ramp between.
+  std::vector<double> weight(edges_.size());
+  const double lambda_min_m = kSpeedOfLight_mps / f_hi;
+  {
+    for (std::size_t i = 0; i < edges_.size(); ++i)
+      weight[i] = wedge_weight(edges_[i], lambda_min_m, config_.edge_min_turn_rad);
+  }
   if (!edges_.empty()) {
     std::vector<EdgeTerm> all(edges_.size());
-    std::vector<std::uint8_t> state(edges_.size());  // 0 used, 1 shadowed, 2 skipped
+    std::vector<std::uint8_t> state(edges_.size());  // 0 used, 1 shadowed, 2 skipped, 3 smooth
     std::atomic<std::uint64_t> guarded{0}, e_occl{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges_.size(), 256),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        std::uint64_t n_guard = 0, n_occl = 0;
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                          bool g = false;
-                          if (edge_term(edges_[i], d_i, s, tx_h, tx_v, rx_h, rx_v,
-                                        EdgeCoefficient::kFringe, all[i], g) != EdgeSkip::kNone) {
-                            state[i] = 2;
-                            continue;
-                          }
-                          n_guard += g ? 1u : 0u;
-                          if (shadowing) {
-                            ++n_occl;
-                            if (!clear(edge_probe(edges_[i], 10.0 * eps), r_t)) {
-                              state[i] = 1;
-                              continue;
-                            }
-                          }
-                          state[i] = 0;
-                        }
-                        guarded += n_guard;
-                        e_occl += n_occl;
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, edges_.size(), 256),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          std::uint64_t n_guard = 0, n_occl = 0;
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (weight[i] == 0.0) {
+              state[i] = 3;
+              continue;
+            }
+            bool g = false;
+            if (edge_term(edges_[i], d_i, s, tx_h, tx_v, rx_h, rx_v, EdgeCoefficient::kFringe,
+                          all[i], g, lambda_min_m / edges_[i].length_m,
+                          kMonostaticFringeBound) != EdgeSkip::kNone) {
+              state[i] = 2;
+              continue;
+            }
+            n_guard += g ? 1u : 0u;
+            if (shadowing) {
+              ++n_occl;
+              if (!clear(probe_toward(edges_[i], r_t), r_t)) {
+                state[i] = 1;
+                continue;
+              }
+            }
+            for (cplx& c : all[i].c)
+              c *= weight[i];
+            state[i] = 0;
+          }
+          guarded += n_guard;
+          e_occl += n_occl;
+        });
     for (std::size_t i = 0; i < edges_.size(); ++i) {
       if (state[i] == 0)
         edge_terms.push_back(all[i]);
       stats.edges_shadowed += state[i] == 1 ? 1u : 0u;
       stats.edges_skipped += state[i] == 2 ? 1u : 0u;
+      stats.edges_smooth += state[i] == 3 ? 1u : 0u;
     }
     stats.edges_used += edge_terms.size();
     stats.edges_guarded += guarded;
@@ -434,6 +464,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           std::uint64_t n_occl = 0;
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const WedgeEdge& edge = edges_[i];
+            if (weight[i] == 0.0)
+              continue;
             const glm::dvec3 probe = edge_probe(edge, 10.0 * eps);
             for (const Image& im : images) {
               const ReflectingPlane& plane = *im.plane;
@@ -471,10 +503,13 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
                              double phase_m) {
                 EdgeTerm t;
                 bool g = false;
-                if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g) !=
-                    EdgeSkip::kNone)
+                if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g,
+                              lambda_min_m / edge.length_m,
+                              kMonostaticFringeBound) != EdgeSkip::kNone)
                   return;
                 t.phase_m += phase_m;
+                for (cplx& c : t.c)
+                  c *= weight[i];
                 found[i].push_back(t);
               };
               if (rd)
@@ -503,14 +538,19 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         return true;
       if (memo[i] < 0) {
         ++occl;
-        memo[i] = clear(edge_probe(edges_[i], 10.0 * eps), toward) ? 1 : 0;
+        memo[i] = clear(probe_toward(edges_[i], toward), toward) ? 1 : 0;
       }
       return memo[i] == 1;
     };
     for (const EdgePair& pair : pairs_) {
+      const double w_pair = weight[pair.from] * weight[pair.to];
+      if (w_pair == 0.0)
+        continue;
       DoubleEdgeTerm t;
       if (double_edge_term(pair, edges_, d_i, s, tx_h, tx_v, rx_h, rx_v, t) != EdgeSkip::kNone)
         continue;
+      for (double& p : t.pol)
+        p *= w_pair;
       if (sees(sees_tx, pair.from, r_t) && sees(sees_rx, pair.to, r_r))
         double_terms.push_back(t);
     }
