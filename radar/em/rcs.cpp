@@ -35,10 +35,23 @@ struct FacetTerm {
 struct PathTerm {
   std::array<cplx, 4> c;
   double area_m2;      // tube footprint on the last facet
-  double phase_len_m;  // unfolded path to the exit point minus s . exit point
+  double phase_len_m;  // unfolded path to the exit point minus s . exit point (first tube)
   double taper_u_m;    // (s - d) . u_footprint / 2: the footprint integral is
   double taper_v_m;    // area sinc(k taper_u) sinc(k taper_v)
+  // A run of `count` neighbouring tubes of one grid row that met the same facets in the same
+  // order (hence the same field, footprint and tapers): their phase paths step by step_m from
+  // tube to tube (planar facets: the path is affine in the tube's position), and their sum is
+  // the footprint term times sum_i exp(-j k (L0 + i step)) = exp(-j k (L0 + (n - 1) step / 2))
+  // sin(n k step / 2) / sin(k step / 2) (a geometric series): one term per run, not per tube.
+  std::uint32_t count;
+  double step_m;
 };
+
+// The Dirichlet kernel sin(n x / 2) / sin(x / 2) from its two sines and cosines (the limit
+// n cos(n x / 2) / cos(x / 2) where sin(x / 2) vanishes).
+double dirichlet(double sin_n, double cos_n, double sin_1, double cos_1, double n) noexcept {
+  return std::abs(sin_1) > 1e-9 ? sin_n / sin_1 : n * cos_n / cos_1;
+}
 
 }  // namespace
 
@@ -150,8 +163,25 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
     // sorts wedges from joints of smooth surfaces per call, at its wavelength.
     edges_ = find_wedge_edges(tris, scene::build_topology(tris), outward, pec,
                               kWedgeCandidateTurnRad, census_);
-    if (config_.edge_order >= 2)
-      pairs_ = find_edge_pairs(edges_, tris, epsilon_m_);
+    if (config_.edge_order >= 2) {
+      // Double diffraction only between joints turning at least half the full turn (the ramp's
+      // foot, edges.hpp): the surface wave a face carries from a wedge to a parallel one needs
+      // real wedges at both ends, and the many parallel joints of a tessellated cylinder would
+      // make the pair search quadratic.
+      std::vector<WedgeEdge> sharp;
+      std::vector<std::uint32_t> index;
+      for (std::uint32_t i = 0; i < edges_.size(); ++i) {
+        if (edges_[i].alpha_rad - kPi >= 0.5 * config_.edge_min_turn_rad) {
+          sharp.push_back(edges_[i]);
+          index.push_back(i);
+        }
+      }
+      pairs_ = find_edge_pairs(sharp, tris, epsilon_m_);
+      for (EdgePair& p : pairs_) {
+        p.from = index[p.from];
+        p.to = index[p.to];
+      }
+    }
     // Reflecting planes: the PEC facets grouped by plane (normal to 1e-6, offset to 100 ray
     // offsets), the largest kept.
     using Key = std::tuple<long long, long long, long long, long long>;
@@ -578,7 +608,18 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0, l_cut = 0;
       std::array<std::uint64_t, kMaxRcsBounces + 1> l_by{};
       const glm::dvec3 row_origin = grid.origin_m + static_cast<double>(row) * grid.dv_m;
+      // The open run per bounce (PathTerm): its term's index, the facet sequence's key, the
+      // last tube's column and phase path.
+      struct Run {
+        std::size_t term = 0;
+        std::uint64_t key = 0, col = 0;
+        double last_len_m = 0.0;
+        bool open = false;
+      };
+      std::array<Run, kMaxRcsBounces + 1> runs{};
+      const double run_tolerance_m = 1e-9 * glm::length(grid.du_m);
       for (std::uint64_t col = 0; col < cols; ++col) {
+        std::uint64_t seq_key = 0x9e3779b97f4a7c15ull;  // the facets met so far, hashed
         scene::Ray ray;
         ray.origin_m = row_origin + static_cast<double>(col) * grid.du_m;
         ray.direction = d_i;
@@ -594,6 +635,9 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           if (!scene_->intersect(ray, hit))
             break;
           ++l_hits;
+          seq_key = (seq_key ^ ((std::uint64_t{hit.object_id} << 32) | hit.primitive_id)) *
+                    0x100000001b3ull;
+          seq_key ^= seq_key >> 29;
           hit.position_m =
               extend_path(bounce == 1, hit.t_m, last_hit, d, hit.position_m, hit.normal, path_m);
           last_hit = hit.position_m;
@@ -628,7 +672,31 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             t.phase_len_m = path_m - glm::dot(s, hit.position_m);
             t.taper_u_m = fp.taper_u_m;
             t.taper_v_m = fp.taper_v_m;
-            row_terms[row].push_back(t);
+            t.count = 1;
+            t.step_m = 0.0;
+            std::vector<PathTerm>& terms = row_terms[row];
+            Run& run = runs[static_cast<std::size_t>(bounce)];
+            bool merged = false;
+            if (run.open && run.key == seq_key && run.col + 1 == col) {
+              PathTerm& r = terms[run.term];
+              const double step = t.phase_len_m - run.last_len_m;
+              if (r.c == t.c && r.area_m2 == t.area_m2 && r.taper_u_m == t.taper_u_m &&
+                  r.taper_v_m == t.taper_v_m &&
+                  (r.count == 1 || std::abs(step - r.step_m) <= run_tolerance_m)) {
+                if (r.count == 1)
+                  r.step_m = step;
+                ++r.count;
+                merged = true;
+              }
+            }
+            if (!merged) {
+              run.term = terms.size();
+              run.key = seq_key;
+              run.open = true;
+              terms.push_back(t);
+            }
+            run.col = col;
+            run.last_len_m = t.phase_len_m;
           }
           // Specular reflection: direction, tube edges and field (law of reflection).
           const glm::dvec3 d_r = mirror(d, n);
@@ -726,26 +794,43 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         continue;
       }
       const PathTerm& t = path_terms[ti - facet_list.size()];
+      const double n_run = static_cast<double>(t.count);
+      const double centre_len_m = t.phase_len_m + 0.5 * (n_run - 1.0) * t.step_m;
       if (!uniform) {
         for (std::size_t fi = 0; fi < nf; ++fi) {
           const double k = k_of_hz * freqs_hz[fi];
-          const double a = t.area_m2 * sinc(k * t.taper_u_m) * sinc(k * t.taper_v_m);
-          const cplx integral = std::polar(a, -k * t.phase_len_m);
+          double a = t.area_m2 * sinc(k * t.taper_u_m) * sinc(k * t.taper_v_m);
+          if (t.count > 1) {
+            const double h = 0.5 * k * t.step_m;
+            a *= dirichlet(std::sin(n_run * h), std::cos(n_run * h), std::sin(h), std::cos(h),
+                           n_run);
+          }
+          const cplx integral = std::polar(a, -k * centre_len_m);
           for (std::size_t p = 0; p < 4; ++p)
             acc[fi][p] += t.c[p] * integral;
         }
         continue;
       }
       const double k0 = k_of_hz * freqs_hz[0], dk = k_of_hz * df;
-      cplx z = std::polar(1.0, -k0 * t.phase_len_m), dz = std::polar(1.0, -dk * t.phase_len_m);
+      cplx z = std::polar(1.0, -k0 * centre_len_m), dz = std::polar(1.0, -dk * centre_len_m);
       cplx pu = std::polar(1.0, k0 * t.taper_u_m), dpu = std::polar(1.0, dk * t.taper_u_m);
       cplx pv = std::polar(1.0, k0 * t.taper_v_m), dpv = std::polar(1.0, dk * t.taper_v_m);
+      // The run's Dirichlet kernel: sin and cos of n k step / 2 and of k step / 2, rotated.
+      const double h0 = 0.5 * k0 * t.step_m, dh = 0.5 * dk * t.step_m;
+      cplx qn = std::polar(1.0, n_run * h0), dqn = std::polar(1.0, n_run * dh);
+      cplx q1 = std::polar(1.0, h0), dq1 = std::polar(1.0, dh);
       for (std::size_t fi = 0; fi < nf; ++fi) {
         const double k = k0 + dk * static_cast<double>(fi);
         const double xu = k * t.taper_u_m, xv = k * t.taper_v_m;
         const double su = std::abs(xu) < 1e-3 ? 1.0 - xu * xu / 6.0 : pu.imag() / xu;
         const double sv = std::abs(xv) < 1e-3 ? 1.0 - xv * xv / 6.0 : pv.imag() / xv;
-        const cplx integral = (t.area_m2 * su * sv) * z;
+        double a = t.area_m2 * su * sv;
+        if (t.count > 1) {
+          a *= dirichlet(qn.imag(), qn.real(), q1.imag(), q1.real(), n_run);
+          qn *= dqn;
+          q1 *= dq1;
+        }
+        const cplx integral = a * z;
         for (std::size_t p = 0; p < 4; ++p)
           acc[fi][p] += t.c[p] * integral;
         z *= dz;
