@@ -177,6 +177,10 @@ struct EdgeTerm {
                                  EdgeCoefficient kind, EdgeTerm& term, bool& guarded,
                                  double min_sin2_beta = 0.0,
                                  double coefficient_bound = 1e300) noexcept;
+/// The engines pass min(lambda / L, kMaxMinSin2Beta) as min_sin2_beta: a segment shorter than
+/// ~30 wavelengths is one piece of a longer edge (a curved rim cut into chords), which together
+/// resolve beta; the regularisation then acts only within 10 deg of end-on (sin^2 10 deg).
+inline constexpr double kMaxMinSin2Beta = 0.03;
 /// The largest |f1|, |g1| of a wedge's fringe coefficients over monostatic directions (above).
 inline constexpr double kMonostaticFringeBound = 1.0;
 

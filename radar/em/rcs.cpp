@@ -420,7 +420,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             }
             bool g = false;
             if (edge_term(edges_[i], d_i, s, tx_h, tx_v, rx_h, rx_v, EdgeCoefficient::kFringe,
-                          all[i], g, lambda_min_m / edges_[i].length_m,
+                          all[i], g, std::min(lambda_min_m / edges_[i].length_m, kMaxMinSin2Beta),
                           kMonostaticFringeBound) != EdgeSkip::kNone) {
               state[i] = 2;
               continue;
@@ -534,7 +534,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
                 EdgeTerm t;
                 bool g = false;
                 if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g,
-                              lambda_min_m / edge.length_m,
+                              std::min(lambda_min_m / edge.length_m, kMaxMinSin2Beta),
                               kMonostaticFringeBound) != EdgeSkip::kNone)
                   return;
                 t.phase_m += phase_m;

@@ -405,7 +405,8 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   // The RCS engine's bounds (edges.hpp, edge_term): 1 / sin^2 beta regularised at lambda / L,
   // coefficients limited to the monostatic bound.
   if (edge_term(w, d, s, h, v, h, v, EdgeCoefficient::kFringe, term, guarded,
-                2.0 * kPi / (k * w.length_m), kMonostaticFringeBound) != EdgeSkip::kNone)
+                std::min(2.0 * kPi / (k * w.length_m), kMaxMinSin2Beta),
+                kMonostaticFringeBound) != EdgeSkip::kNone)
     return kNoTerm;
   ++queries;
   scene::Ray ray;
