@@ -1,6 +1,6 @@
 // Offline RCS engine benchmarks (issue 3): a vehicle-like target of about 25,000 facets
 // (scene::TargetKind::kVehicle, 7 x 3.5 x 2.5 m) at 35 GHz.
-//   BM_VehicleRangeProfile/R   one range profile: 200 frequencies 34.5-35.5 GHz, 3 bounces,
+//   BM_VehicleRangeProfile/R   one range profile: 200 frequencies 34.5-35.5 GHz, 3 bounces, edges,
 //                              R/2 ray tubes per wavelength (argument R = 2 x rays per wavelength)
 //   BM_Vehicle361Angles/R      361 monostatic angles (phi 0..360 deg, theta 80 deg), one frequency
 //                              (35 GHz), R/2 rays per wavelength
@@ -91,6 +91,7 @@ void BM_VehicleRangeProfile(benchmark::State& state) {
   radar::RcsConfig config;
   config.max_bounces = 3;
   config.rays_per_wavelength = static_cast<double>(state.range(0)) / 2.0;
+  config.edges = true;  // as the CLI's default (issue 30: the profile is timed with edges on)
   const radar::RcsEngine engine(v.scene, {radar::SurfaceModel{}}, config);
   const std::vector<double> f = profile_freqs();
   std::vector<radar::ScatteringMatrix> s(f.size());

@@ -14,6 +14,9 @@ namespace {
 
 using cplx = std::complex<double>;
 
+// The wedge rule's bounds on q = psi h / lambda (edges.hpp).
+constexpr double kWedgeSmoothQ = 0.5, kWedgeSharpQ = 1.0;
+
 double wrap_2pi(double a) noexcept {
   a = std::fmod(a, 2.0 * kPi);
   return a < 0.0 ? a + 2.0 * kPi : a;
@@ -109,6 +112,19 @@ WedgeCoefficients wedge_coefficients(double alpha_rad, double phi_rad, double ph
   return {0.5 * (lo.f + hi.f), 0.5 * (lo.g + hi.g)};
 }
 
+double wedge_weight(const WedgeEdge& edge, double lambda_m, double full_turn_rad) noexcept {
+  auto smoothstep = [](double x) {
+    x = std::clamp(x, 0.0, 1.0);
+    return x * x * (3.0 - 2.0 * x);
+  };
+  const double psi = edge.alpha_rad - kPi;
+  const double q = psi * edge.width_m / lambda_m;
+  const double by_size = smoothstep((q - kWedgeSmoothQ) / (kWedgeSharpQ - kWedgeSmoothQ));
+  const double by_turn =
+      full_turn_rad > 0.0 ? smoothstep((psi - 0.5 * full_turn_rad) / (0.5 * full_turn_rad)) : 1.0;
+  return std::max(by_size, by_turn);
+}
+
 std::vector<WedgeEdge> find_wedge_edges(std::span<const std::array<glm::dvec3, 3>> tris,
                                         const scene::MeshTopology& topology,
                                         std::span<const std::int8_t> outward,
@@ -134,6 +150,7 @@ std::vector<WedgeEdge> find_wedge_edges(std::span<const std::array<glm::dvec3, 3
       continue;
     e.t = (b - a) / e.length_m;
     e.x0 = normal_part(third0 - a, e.t);
+    e.width_m = glm::dot(third0 - a, e.x0);
     const glm::dvec3 n0 = glm::normalize(glm::cross(t0[1] - t0[0], t0[2] - t0[0]));  // as wound
     if (u.size() > 2 || glm::length(e.x0) == 0.0) {
       ++census.unsupported;
@@ -157,6 +174,7 @@ std::vector<WedgeEdge> find_wedge_edges(std::span<const std::array<glm::dvec3, 3
     }
     const glm::dvec3 third1 = t1[static_cast<std::size_t>((u[1].corner + 2) % 3)];
     const glm::dvec3 x1 = normal_part(third1 - a, e.t);
+    e.width_m = 0.5 * (e.width_m + glm::dot(third1 - a, x1));
     const std::int8_t o = outward[u[0].triangle];
     e.y0 = o < 0 ? -n0 : n0;
     double alpha = wrap_2pi(std::atan2(glm::dot(x1, e.y0), glm::dot(x1, e.x0)));
@@ -392,18 +410,25 @@ glm::dvec3 edge_probe(const WedgeEdge& edge, double offset_m) noexcept {
 
 EdgeSkip edge_term(const WedgeEdge& edge, const glm::dvec3& d, const glm::dvec3& s,
                    const glm::dvec3& tx_h, const glm::dvec3& tx_v, const glm::dvec3& rx_h,
-                   const glm::dvec3& rx_v, EdgeCoefficient kind, EdgeTerm& term,
-                   bool& guarded) noexcept {
+                   const glm::dvec3& rx_v, EdgeCoefficient kind, EdgeTerm& term, bool& guarded,
+                   double min_sin2_beta, double coefficient_bound) noexcept {
   guarded = false;
   const glm::dvec3& t = edge.t;
   double sin_beta = 0.0, phi0 = 0.0, phi = 0.0;
   if (const EdgeSkip why = edge_angles(edge, edge, d, s, sin_beta, phi0, phi);
       why != EdgeSkip::kNone)
     return why;
-  const WedgeCoefficients w = wedge_coefficients(edge.alpha_rad, phi, phi0, kind, guarded);
+  WedgeCoefficients w = wedge_coefficients(edge.alpha_rad, phi, phi0, kind, guarded);
+  w.f = std::clamp(w.f, -coefficient_bound, coefficient_bound);
+  w.g = std::clamp(w.g, -coefficient_bound, coefficient_bound);
   // S = -(1 / (sqrt(pi) sin^2 beta)) [(e.t) f p.(s x (s x t)) + ((d x e).t) g p.(s x t)]
   // (edges.hpp), times the segment integral.
-  const double pre = -1.0 / (std::sqrt(kPi) * sin_beta * sin_beta);
+  // 1 / sin^2 beta, regularised (edges.hpp): unchanged down to sin^2 beta = m (min_sin2_beta),
+  // then sin^2 beta / m^2, falling linearly to 0 end-on (where the skip at kEdgeMinSin would
+  // otherwise make a step); continuous, never above 1 / m.
+  const double sin2 = sin_beta * sin_beta;
+  const double keller = sin2 >= min_sin2_beta ? 1.0 / sin2 : sin2 / (min_sin2_beta * min_sin2_beta);
+  const double pre = -keller / std::sqrt(kPi);
   const glm::dvec3 sst = glm::cross(s, glm::cross(s, t)), st = glm::cross(s, t);
   auto amp = [&](const glm::dvec3& p, const glm::dvec3& e) {
     const double soft = glm::dot(e, t) * w.f, hard = glm::dot(glm::cross(d, e), t) * w.g;

@@ -63,7 +63,35 @@ struct WedgeEdge {
   glm::dvec3 y0{0.0};      ///< unit normal of face 0 on the free-space side
   double alpha_rad = 0.0;  ///< exterior (free-space) wedge angle, in (pi, 2 pi]
   double length_m = 0.0;
+  /// Mean width of the facets across the edge: the distance from the edge's line to each
+  /// facet's third vertex, averaged over its one or two facets [m] (wedge_weight).
+  double width_m = 0.0;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Which joints are wedges (docs/validation.md, "Edge diffraction": the wedge rule).
+//
+// A mesh joint turning by psi = alpha - pi between facets of width h (WedgeEdge::width_m) is
+// either a real wedge or the trace of a tessellated smooth surface. Seen as a smooth arc of
+// radius R = h / psi cut into chords of width h, each facet departs from the arc by its sagitta
+// delta = h^2 / (8 R) = h psi / 8, and the wave reflected by the facets instead of the arc is
+// off in phase by at most 2 k delta = (pi / 2) q with
+//   q = psi h / lambda,
+// the turn against the facet width in wavelengths. Where 2 k delta < pi / 4 (q < 1/2: the
+// Rayleigh criterion for a smooth surface, Beckmann & Spizzichino, The Scattering of
+// Electromagnetic Waves from Rough Surfaces, 1963, ch. 2 sec. 1) the faceted surface reflects
+// as the smooth one it stands for and PO of its facets is the whole answer: the joint diffracts
+// nothing. Where 2 k delta > pi / 2 (q > 1) the facets are flat over more than the scale the
+// wave resolves: a wedge. A joint turning by at least `full_turn_rad` (RcsConfig::
+// edge_min_turn_rad, 30 deg by default: no tessellation of a smooth surface meant for PO turns
+// that much at one joint) is a wedge at any facet size (a finely meshed box or plate keeps its
+// edges). In between, the weight rises as the smoothstep 3 x^2 - 2 x^3 of each ramp (q from 1/2
+// to 1, psi from full_turn_rad / 2 to full_turn_rad), the larger one taken: the edge terms go to
+// zero continuously as a wedge flattens (psi -> 0 at fixed h, or h -> 0 at fixed psi). An open
+// sheet's boundary (psi = pi) is always a wedge.
+/// The weight in [0, 1] that multiplies `edge`'s terms at wavelength lambda_m (above).
+[[nodiscard]] double wedge_weight(const WedgeEdge& edge, double lambda_m,
+                                  double full_turn_rad) noexcept;
 
 /// How the mesh's edges were sorted.
 struct EdgeCensus {
@@ -121,10 +149,40 @@ struct EdgeTerm {
 /// The term of `edge` for propagation direction d (unit, from the transmitter), receiver
 /// direction s (unit, toward the receiver), transmit polarisations tx_h, tx_v and receive rx_h,
 /// rx_v (header formula). Returns kNone and fills `term`, or the reason for no term.
+///
+/// Bounds (issue 30: no edge term may invent a return):
+///  - `min_sin2_beta` (m): the Keller-cone factor 1 / sin^2 beta is kept where sin^2 beta >= m
+///    and becomes sin^2 beta / m^2 below: continuous, never above 1 / m, and falling to 0 as the
+///    edge is seen end-on (where no term is made, kEdgeMinSin). A segment of length L
+///    resolves directions along itself only to d(cos beta) ~ lambda / (2 L) (the main lobe of its
+///    sinc), hence beta near 0 only to sin^2 beta ~ lambda / L: the engine passes lambda / L
+///    (lambda at the call's highest frequency), so that an edge seen nearly end-on (a plate
+///    edge-on, the radar along one of its edges) gives a term of the order of L^2 / lambda, not 1 /
+///    (k sin^2 beta).
+///  - `coefficient_bound`: |f| and |g| are clamped to it. The fringe coefficients of every
+///    wedge (1 < n <= 2) stay at or under 1 in magnitude for all monostatic directions (scanned
+///    in tests/radar/edges_test.cpp); they grow without bound only in bistatic directions near
+///    a shadow or reflection boundary of a face lit at grazing incidence, where they cancel a PO
+///    end-point term growing as fast (Ufimtsev 2014, ch. 2: PO of a face at grazing). The
+///    engine (rcs.hpp) limits every term to that monostatic bound, kMonostaticFringeBound: its
+///    reflected paths (reflection-diffraction) are bistatic edge terms whose PO counterpart (a
+///    face's PO radiating into the mirrored direction) is not part of the model, so nothing
+///    would cancel the growth there (it put 34.6 dBsm at theta 0.5 deg on a 15.8 dBsm
+///    trihedral); direct and reflected terms keep the same bound so that image theory holds
+///    between them. Monostatic terms are unchanged; bistatic ones near a face's shadow or
+///    reflection boundary are limited (the PTD fringe there is non-uniform anyway).
 [[nodiscard]] EdgeSkip edge_term(const WedgeEdge& edge, const glm::dvec3& d, const glm::dvec3& s,
                                  const glm::dvec3& tx_h, const glm::dvec3& tx_v,
                                  const glm::dvec3& rx_h, const glm::dvec3& rx_v,
-                                 EdgeCoefficient kind, EdgeTerm& term, bool& guarded) noexcept;
+                                 EdgeCoefficient kind, EdgeTerm& term, bool& guarded,
+                                 double min_sin2_beta = 0.0,
+                                 double coefficient_bound = 1e300) noexcept;
+/// The engines pass min(lambda / L, kMaxMinSin2Beta) as min_sin2_beta: a segment shorter than
+/// ~30 wavelengths is one piece of a longer edge (a curved rim cut into chords), which together
+/// resolve beta; the regularisation then acts only within 10 deg of end-on (sin^2 10 deg).
+inline constexpr double kMaxMinSin2Beta = 0.03;
+/// The largest |f1|, |g1| of a wedge's fringe coefficients over monostatic directions (above).
+inline constexpr double kMonostaticFringeBound = 1.0;
 
 // ---------------------------------------------------------------------------------------------
 // Double diffraction across a flat face (second order, hard polarisation).

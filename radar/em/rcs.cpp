@@ -35,10 +35,23 @@ struct FacetTerm {
 struct PathTerm {
   std::array<cplx, 4> c;
   double area_m2;      // tube footprint on the last facet
-  double phase_len_m;  // unfolded path to the exit point minus s . exit point
+  double phase_len_m;  // unfolded path to the exit point minus s . exit point (first tube)
   double taper_u_m;    // (s - d) . u_footprint / 2: the footprint integral is
   double taper_v_m;    // area sinc(k taper_u) sinc(k taper_v)
+  // A run of `count` neighbouring tubes of one grid row that met the same facets in the same
+  // order (hence the same field, footprint and tapers): their phase paths step by step_m from
+  // tube to tube (planar facets: the path is affine in the tube's position), and their sum is
+  // the footprint term times sum_i exp(-j k (L0 + i step)) = exp(-j k (L0 + (n - 1) step / 2))
+  // sin(n k step / 2) / sin(k step / 2) (a geometric series): one term per run, not per tube.
+  std::uint32_t count;
+  double step_m;
 };
+
+// The Dirichlet kernel sin(n x / 2) / sin(x / 2) from its two sines and cosines (the limit
+// n cos(n x / 2) / cos(x / 2) where sin(x / 2) vanishes).
+double dirichlet(double sin_n, double cos_n, double sin_1, double cos_1, double n) noexcept {
+  return std::abs(sin_1) > 1e-9 ? sin_n / sin_1 : n * cos_n / cos_1;
+}
 
 }  // namespace
 
@@ -146,10 +159,29 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
     }
     // Edges over the facets of all objects together, in the world frame (objects that meet at
     // coincident vertices share their edges there); closed parts above are per object.
+    // Every joint that turns at all is a candidate; the wedge rule (edges.hpp, wedge_weight)
+    // sorts wedges from joints of smooth surfaces per call, at its wavelength.
     edges_ = find_wedge_edges(tris, scene::build_topology(tris), outward, pec,
-                              config_.edge_min_turn_rad, census_);
-    if (config_.edge_order >= 2)
-      pairs_ = find_edge_pairs(edges_, tris, epsilon_m_);
+                              kWedgeCandidateTurnRad, census_);
+    if (config_.edge_order >= 2) {
+      // Double diffraction only between joints turning at least half the full turn (the ramp's
+      // foot, edges.hpp): the surface wave a face carries from a wedge to a parallel one needs
+      // real wedges at both ends, and the many parallel joints of a tessellated cylinder would
+      // make the pair search quadratic.
+      std::vector<WedgeEdge> sharp;
+      std::vector<std::uint32_t> index;
+      for (std::uint32_t i = 0; i < edges_.size(); ++i) {
+        if (edges_[i].alpha_rad - kPi >= 0.5 * config_.edge_min_turn_rad) {
+          sharp.push_back(edges_[i]);
+          index.push_back(i);
+        }
+      }
+      pairs_ = find_edge_pairs(sharp, tris, epsilon_m_);
+      for (EdgePair& p : pairs_) {
+        p.from = index[p.from];
+        p.to = index[p.to];
+      }
+    }
     // Reflecting planes: the PEC facets grouped by plane (normal to 1e-6, offset to 100 ray
     // offsets), the largest kept.
     using Key = std::tuple<long long, long long, long long, long long>;
@@ -353,39 +385,67 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
   // --- Edge diffraction: fringe equivalent edge currents (radar/em/edges.hpp). --------------
   // An edge radiates when a face of it is lit and the path from beside its midpoint (in the free
   // space) to the transmitter is clear (the same occlusion query as the facets').
+  // Where an edge's occlusion test toward `toward` starts: beside its midpoint in the free space
+  // (edge_probe), and for an open sheet's boundary (whose exterior bisector lies in the sheet's
+  // own plane) also lifted off that plane on the side of `toward`, so that a wave travelling
+  // exactly along the sheet is not blocked by the sheet's own facets seen edge-on (which made
+  // the double-diffraction term vanish at exactly grazing incidence, a step in the pattern).
+  auto probe_toward = [&](const WedgeEdge& e, const glm::dvec3& toward) {
+    glm::dvec3 p = edge_probe(e, 10.0 * eps);
+    if (e.alpha_rad > 2.0 * kPi - 1e-9)
+      p += (glm::dot(e.y0, toward) >= 0.0 ? 10.0 : -10.0) * eps * e.y0;
+    return p;
+  };
   std::vector<EdgeTerm> edge_terms;
+  // The wedge rule at the call's shortest wavelength (edges.hpp): weight 0 for the joints of a
+  // smooth surface, 1 for wedges, a smooth ramp between.
+  std::vector<double> weight(edges_.size());
+  const double lambda_min_m = kSpeedOfLight_mps / f_hi;
+  {
+    for (std::size_t i = 0; i < edges_.size(); ++i)
+      weight[i] = wedge_weight(edges_[i], lambda_min_m, config_.edge_min_turn_rad);
+  }
   if (!edges_.empty()) {
     std::vector<EdgeTerm> all(edges_.size());
-    std::vector<std::uint8_t> state(edges_.size());  // 0 used, 1 shadowed, 2 skipped
+    std::vector<std::uint8_t> state(edges_.size());  // 0 used, 1 shadowed, 2 skipped, 3 smooth
     std::atomic<std::uint64_t> guarded{0}, e_occl{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges_.size(), 256),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        std::uint64_t n_guard = 0, n_occl = 0;
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                          bool g = false;
-                          if (edge_term(edges_[i], d_i, s, tx_h, tx_v, rx_h, rx_v,
-                                        EdgeCoefficient::kFringe, all[i], g) != EdgeSkip::kNone) {
-                            state[i] = 2;
-                            continue;
-                          }
-                          n_guard += g ? 1u : 0u;
-                          if (shadowing) {
-                            ++n_occl;
-                            if (!clear(edge_probe(edges_[i], 10.0 * eps), r_t)) {
-                              state[i] = 1;
-                              continue;
-                            }
-                          }
-                          state[i] = 0;
-                        }
-                        guarded += n_guard;
-                        e_occl += n_occl;
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, edges_.size(), 256),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          std::uint64_t n_guard = 0, n_occl = 0;
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (weight[i] == 0.0) {
+              state[i] = 3;
+              continue;
+            }
+            bool g = false;
+            if (edge_term(edges_[i], d_i, s, tx_h, tx_v, rx_h, rx_v, EdgeCoefficient::kFringe,
+                          all[i], g, std::min(lambda_min_m / edges_[i].length_m, kMaxMinSin2Beta),
+                          kMonostaticFringeBound) != EdgeSkip::kNone) {
+              state[i] = 2;
+              continue;
+            }
+            n_guard += g ? 1u : 0u;
+            if (shadowing) {
+              ++n_occl;
+              if (!clear(probe_toward(edges_[i], r_t), r_t)) {
+                state[i] = 1;
+                continue;
+              }
+            }
+            for (cplx& c : all[i].c)
+              c *= weight[i];
+            state[i] = 0;
+          }
+          guarded += n_guard;
+          e_occl += n_occl;
+        });
     for (std::size_t i = 0; i < edges_.size(); ++i) {
       if (state[i] == 0)
         edge_terms.push_back(all[i]);
       stats.edges_shadowed += state[i] == 1 ? 1u : 0u;
       stats.edges_skipped += state[i] == 2 ? 1u : 0u;
+      stats.edges_smooth += state[i] == 3 ? 1u : 0u;
     }
     stats.edges_used += edge_terms.size();
     stats.edges_guarded += guarded;
@@ -434,6 +494,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           std::uint64_t n_occl = 0;
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
             const WedgeEdge& edge = edges_[i];
+            if (weight[i] == 0.0)
+              continue;
             const glm::dvec3 probe = edge_probe(edge, 10.0 * eps);
             for (const Image& im : images) {
               const ReflectingPlane& plane = *im.plane;
@@ -471,10 +533,13 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
                              double phase_m) {
                 EdgeTerm t;
                 bool g = false;
-                if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g) !=
-                    EdgeSkip::kNone)
+                if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g,
+                              std::min(lambda_min_m / edge.length_m, kMaxMinSin2Beta),
+                              kMonostaticFringeBound) != EdgeSkip::kNone)
                   return;
                 t.phase_m += phase_m;
+                for (cplx& c : t.c)
+                  c *= weight[i];
                 found[i].push_back(t);
               };
               if (rd)
@@ -503,14 +568,19 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         return true;
       if (memo[i] < 0) {
         ++occl;
-        memo[i] = clear(edge_probe(edges_[i], 10.0 * eps), toward) ? 1 : 0;
+        memo[i] = clear(probe_toward(edges_[i], toward), toward) ? 1 : 0;
       }
       return memo[i] == 1;
     };
     for (const EdgePair& pair : pairs_) {
+      const double w_pair = weight[pair.from] * weight[pair.to];
+      if (w_pair == 0.0)
+        continue;
       DoubleEdgeTerm t;
       if (double_edge_term(pair, edges_, d_i, s, tx_h, tx_v, rx_h, rx_v, t) != EdgeSkip::kNone)
         continue;
+      for (double& p : t.pol)
+        p *= w_pair;
       if (sees(sees_tx, pair.from, r_t) && sees(sees_rx, pair.to, r_r))
         double_terms.push_back(t);
     }
@@ -538,7 +608,18 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0, l_cut = 0;
       std::array<std::uint64_t, kMaxRcsBounces + 1> l_by{};
       const glm::dvec3 row_origin = grid.origin_m + static_cast<double>(row) * grid.dv_m;
+      // The open run per bounce (PathTerm): its term's index, the facet sequence's key, the
+      // last tube's column and phase path.
+      struct Run {
+        std::size_t term = 0;
+        std::uint64_t key = 0, col = 0;
+        double last_len_m = 0.0;
+        bool open = false;
+      };
+      std::array<Run, kMaxRcsBounces + 1> runs{};
+      const double run_tolerance_m = 1e-9 * glm::length(grid.du_m);
       for (std::uint64_t col = 0; col < cols; ++col) {
+        std::uint64_t seq_key = 0x9e3779b97f4a7c15ull;  // the facets met so far, hashed
         scene::Ray ray;
         ray.origin_m = row_origin + static_cast<double>(col) * grid.du_m;
         ray.direction = d_i;
@@ -554,6 +635,9 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
           if (!scene_->intersect(ray, hit))
             break;
           ++l_hits;
+          seq_key = (seq_key ^ ((std::uint64_t{hit.object_id} << 32) | hit.primitive_id)) *
+                    0x100000001b3ull;
+          seq_key ^= seq_key >> 29;
           hit.position_m =
               extend_path(bounce == 1, hit.t_m, last_hit, d, hit.position_m, hit.normal, path_m);
           last_hit = hit.position_m;
@@ -588,7 +672,31 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             t.phase_len_m = path_m - glm::dot(s, hit.position_m);
             t.taper_u_m = fp.taper_u_m;
             t.taper_v_m = fp.taper_v_m;
-            row_terms[row].push_back(t);
+            t.count = 1;
+            t.step_m = 0.0;
+            std::vector<PathTerm>& terms = row_terms[row];
+            Run& run = runs[static_cast<std::size_t>(bounce)];
+            bool merged = false;
+            if (run.open && run.key == seq_key && run.col + 1 == col) {
+              PathTerm& r = terms[run.term];
+              const double step = t.phase_len_m - run.last_len_m;
+              if (r.c == t.c && r.area_m2 == t.area_m2 && r.taper_u_m == t.taper_u_m &&
+                  r.taper_v_m == t.taper_v_m &&
+                  (r.count == 1 || std::abs(step - r.step_m) <= run_tolerance_m)) {
+                if (r.count == 1)
+                  r.step_m = step;
+                ++r.count;
+                merged = true;
+              }
+            }
+            if (!merged) {
+              run.term = terms.size();
+              run.key = seq_key;
+              run.open = true;
+              terms.push_back(t);
+            }
+            run.col = col;
+            run.last_len_m = t.phase_len_m;
           }
           // Specular reflection: direction, tube edges and field (law of reflection).
           const glm::dvec3 d_r = mirror(d, n);
@@ -677,6 +785,40 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     for (std::size_t ti = begin; ti < end; ++ti) {
       if (ti < facet_list.size()) {
         const FacetTerm& t = facet_list[ti];
+        // On a uniform grid, where the phase spread exceeds kSeriesSpreadRad at the lowest
+        // frequency (so at all: it grows with k), the closed form of facet_po.cpp,
+        //   I = -2 A [fd(k b1, k b2) - fd(k b0, k b1)] / (k (b2 - b0)),
+        //   fd(x, y) = j exp(j (x + y) / 2) sinc((x - y) / 2), b0 <= b1 <= b2,
+        // advances its four phasors by one rotation per frequency instead of sin and cos.
+        double b[3] = {t.b0_m, t.b1_m, t.b2_m};
+        std::sort(b, b + 3);
+        if (uniform && k_of_hz * freqs_hz[0] * (b[2] - b[0]) >= kSeriesSpreadRad) {
+          const double k0 = k_of_hz * freqs_hz[0], dk = k_of_hz * df;
+          const double m12 = 0.5 * (b[1] + b[2]), h12 = 0.5 * (b[2] - b[1]);
+          const double m01 = 0.5 * (b[0] + b[1]), h01 = 0.5 * (b[1] - b[0]);
+          cplx e12 = std::polar(1.0, k0 * m12), de12 = std::polar(1.0, dk * m12);
+          cplx e01 = std::polar(1.0, k0 * m01), de01 = std::polar(1.0, dk * m01);
+          cplx s12 = std::polar(1.0, k0 * h12), ds12 = std::polar(1.0, dk * h12);
+          cplx s01 = std::polar(1.0, k0 * h01), ds01 = std::polar(1.0, dk * h01);
+          const double spread = b[2] - b[0];
+          for (std::size_t fi = 0; fi < nf; ++fi) {
+            const double k = k0 + dk * static_cast<double>(fi);
+            const double x12 = k * h12, x01 = k * h01;
+            const double c12 = std::abs(x12) < 1e-3 ? 1.0 - x12 * x12 / 6.0 : s12.imag() / x12;
+            const double c01 = std::abs(x01) < 1e-3 ? 1.0 - x01 * x01 / 6.0 : s01.imag() / x01;
+            // j (e12 c12 - e01 c01) * (-2 A) / (k spread)
+            const cplx diff = e12 * c12 - e01 * c01;
+            const cplx integral =
+                cplx(-diff.imag(), diff.real()) * (-2.0 * t.area_m2 / (k * spread));
+            for (std::size_t p = 0; p < 4; ++p)
+              acc[fi][p] += t.c[p] * integral;
+            e12 *= de12;
+            e01 *= de01;
+            s12 *= ds12;
+            s01 *= ds01;
+          }
+          continue;
+        }
         for (std::size_t fi = 0; fi < nf; ++fi) {
           const cplx integral =
               triangle_phase_integral(t.area_m2, t.b0_m, t.b1_m, t.b2_m, k_of_hz * freqs_hz[fi]);
@@ -686,26 +828,43 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         continue;
       }
       const PathTerm& t = path_terms[ti - facet_list.size()];
+      const double n_run = static_cast<double>(t.count);
+      const double centre_len_m = t.phase_len_m + 0.5 * (n_run - 1.0) * t.step_m;
       if (!uniform) {
         for (std::size_t fi = 0; fi < nf; ++fi) {
           const double k = k_of_hz * freqs_hz[fi];
-          const double a = t.area_m2 * sinc(k * t.taper_u_m) * sinc(k * t.taper_v_m);
-          const cplx integral = std::polar(a, -k * t.phase_len_m);
+          double a = t.area_m2 * sinc(k * t.taper_u_m) * sinc(k * t.taper_v_m);
+          if (t.count > 1) {
+            const double h = 0.5 * k * t.step_m;
+            a *= dirichlet(std::sin(n_run * h), std::cos(n_run * h), std::sin(h), std::cos(h),
+                           n_run);
+          }
+          const cplx integral = std::polar(a, -k * centre_len_m);
           for (std::size_t p = 0; p < 4; ++p)
             acc[fi][p] += t.c[p] * integral;
         }
         continue;
       }
       const double k0 = k_of_hz * freqs_hz[0], dk = k_of_hz * df;
-      cplx z = std::polar(1.0, -k0 * t.phase_len_m), dz = std::polar(1.0, -dk * t.phase_len_m);
+      cplx z = std::polar(1.0, -k0 * centre_len_m), dz = std::polar(1.0, -dk * centre_len_m);
       cplx pu = std::polar(1.0, k0 * t.taper_u_m), dpu = std::polar(1.0, dk * t.taper_u_m);
       cplx pv = std::polar(1.0, k0 * t.taper_v_m), dpv = std::polar(1.0, dk * t.taper_v_m);
+      // The run's Dirichlet kernel: sin and cos of n k step / 2 and of k step / 2, rotated.
+      const double h0 = 0.5 * k0 * t.step_m, dh = 0.5 * dk * t.step_m;
+      cplx qn = std::polar(1.0, n_run * h0), dqn = std::polar(1.0, n_run * dh);
+      cplx q1 = std::polar(1.0, h0), dq1 = std::polar(1.0, dh);
       for (std::size_t fi = 0; fi < nf; ++fi) {
         const double k = k0 + dk * static_cast<double>(fi);
         const double xu = k * t.taper_u_m, xv = k * t.taper_v_m;
         const double su = std::abs(xu) < 1e-3 ? 1.0 - xu * xu / 6.0 : pu.imag() / xu;
         const double sv = std::abs(xv) < 1e-3 ? 1.0 - xv * xv / 6.0 : pv.imag() / xv;
-        const cplx integral = (t.area_m2 * su * sv) * z;
+        double a = t.area_m2 * su * sv;
+        if (t.count > 1) {
+          a *= dirichlet(qn.imag(), qn.real(), q1.imag(), q1.real(), n_run);
+          qn *= dqn;
+          q1 *= dq1;
+        }
+        const cplx integral = a * z;
         for (std::size_t p = 0; p < 4; ++p)
           acc[fi][p] += t.c[p] * integral;
         z *= dz;

@@ -78,6 +78,10 @@ struct ScatteringMatrix {
   std::complex<double> hh{0.0, 0.0}, hv{0.0, 0.0}, vh{0.0, 0.0}, vv{0.0, 0.0};
 };
 
+/// Mesh joints turning by less than this [rad] are flat (coplanar within rounding) and no
+/// candidate wedge; the others are sorted by the wedge rule (edges.hpp, wedge_weight).
+inline constexpr double kWedgeCandidateTurnRad = 1e-3;
+
 /// The largest RcsConfig::max_bounces.
 inline constexpr int kMaxRcsBounces = 64;
 
@@ -99,8 +103,10 @@ struct RcsConfig {
   /// edges and open-sheet boundaries, added to bounce-1 PO. Off here (the closed-form PO tests
   /// compare PO alone); the CLI turns it on by default.
   bool edges = false;
-  /// A shared edge diffracts when its exterior wedge angle departs from pi (flat) by more than
-  /// this [rad]; smoother edges of a faceted curved surface are left to PO.
+  /// A shared edge turning by at least this [rad] (its exterior wedge angle minus pi) is a
+  /// wedge whatever its facets' size; one turning less is a wedge or a joint of a smooth
+  /// surface by the wedge rule (edges.hpp, wedge_weight: the turn against the facets' width in
+  /// wavelengths at the call's highest frequency); joints of a smooth surface are left to PO.
   double edge_min_turn_rad = 30.0 * 3.14159265358979323846 / 180.0;
   /// With edges: 1 = first-order edge currents only; 2 = also the double diffraction of the hard
   /// polarisation between parallel edges across a flat face (edges.hpp, find_edge_pairs).
@@ -130,6 +136,9 @@ struct RcsStats {
   std::uint64_t edges_guarded = 0;    ///< boundary singularities stepped around (edges.hpp)
   std::uint64_t edges_double = 0;     ///< edge-to-edge double-diffraction terms added
   std::uint64_t edges_reflected = 0;  ///< edge terms by way of a reflecting plane (RD, DR, RDR)
+  /// Mesh joints that are no wedge at this call's highest frequency (edges.hpp, wedge_weight 0):
+  /// facets of a smooth surface, left to PO.
+  std::uint64_t edges_smooth = 0;
 };
 
 /// A flat PEC face of the target large enough to light edges by reflection (RcsEngine).

@@ -402,7 +402,11 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   const glm::dvec3 h = pol_vector(true, up, boresight, d), v = pol_vector(false, up, boresight, d);
   EdgeTerm term;
   bool guarded = false;
-  if (edge_term(w, d, s, h, v, h, v, EdgeCoefficient::kFringe, term, guarded) != EdgeSkip::kNone)
+  // The RCS engine's bounds (edges.hpp, edge_term): 1 / sin^2 beta regularised at lambda / L,
+  // coefficients limited to the monostatic bound.
+  if (edge_term(w, d, s, h, v, h, v, EdgeCoefficient::kFringe, term, guarded,
+                std::min(2.0 * kPi / (k * w.length_m), kMaxMinSin2Beta),
+                kMonostaticFringeBound) != EdgeSkip::kNone)
     return kNoTerm;
   ++queries;
   scene::Ray ray;
