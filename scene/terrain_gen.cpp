@@ -88,6 +88,9 @@ constexpr std::array<Def, kCount> kDefs{{{"asphalt", 0.09f, 0.09f, 0.10f},
                                          {"metal", 0.70f, 0.72f, 0.75f}}};
 }  // namespace mat
 
+// Materials no generator places but an imported scene may carry (GIS land cover): preview only.
+constexpr std::array<mat::Def, 1> kPreviewOnly{{{"snow", 0.90f, 0.90f, 0.95f}}};
+
 // Level-0 node coordinates: one formula everywhere, so shared vertices are bit-identical.
 double node_x(int i) {
   return -kHalfEast_m + Layout::kCentralEast_m * i / kCellsX;
@@ -1606,6 +1609,18 @@ SceneDescription generate_terrain(const TerrainSpec& spec) {
     throw std::invalid_argument("TerrainSpec::relief_m must be in [0, 100] m");
   }
   return Builder(spec).build();
+}
+
+glm::vec3 terrain_preview_colour(std::string_view material) noexcept {
+  for (const mat::Def& d : mat::kDefs) {
+    if (material == d.name)
+      return {d.r, d.g, d.b};
+  }
+  for (const mat::Def& d : kPreviewOnly) {
+    if (material == d.name)
+      return {d.r, d.g, d.b};
+  }
+  return {0.5f, 0.5f, 0.5f};
 }
 
 }  // namespace radar_emu::scene

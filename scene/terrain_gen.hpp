@@ -59,6 +59,8 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <glm/glm.hpp>
+#include <string_view>
 
 #include "scene/types.hpp"
 
@@ -102,5 +104,10 @@ struct TerrainSpec {
 /// clock, no threads, no std distributions). Throws std::invalid_argument naming the field when
 /// central_triangles or relief_m is out of range. Setup only (allocates; 0.3 to 0.6 s on one core).
 [[nodiscard]] SceneDescription generate_terrain(const TerrainSpec& spec);
+
+/// Preview colour (linear RGB) of a terrain catalogue material by name, as the generated database
+/// colours it (plus "snow", which the generator does not place); mid grey for any other name.
+/// One table for every scene builder (the generator, GIS import).
+[[nodiscard]] glm::vec3 terrain_preview_colour(std::string_view material) noexcept;
 
 }  // namespace radar_emu::scene

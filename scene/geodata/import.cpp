@@ -17,6 +17,7 @@
 #include "scene/geodata/osm.hpp"
 #include "scene/geodata/polygon.hpp"
 #include "scene/scene_builders.hpp"
+#include "scene/terrain_gen.hpp"
 
 namespace radar_emu::scene::geodata {
 namespace {
@@ -175,7 +176,7 @@ void check_spec(const ImportSpec& s) {
     bad("draped_offset_m", "must be in [0, 10) m");
 }
 
-// Material registry with preview colours (linear RGB) for the catalogue names.
+// Material registry; preview colours from the generated database's table (terrain_gen.hpp).
 class Materials {
  public:
   explicit Materials(SceneDescription& d) : d_(d) {}
@@ -184,27 +185,7 @@ class Materials {
       if (d_.materials[k].name == name)
         return static_cast<std::uint16_t>(k);
     }
-    struct C {
-      const char* n;
-      float r, g, b;
-    };
-    static constexpr std::array<C, 12> kColours{{{"asphalt", 0.09f, 0.09f, 0.10f},
-                                                 {"concrete", 0.55f, 0.55f, 0.52f},
-                                                 {"grass", 0.16f, 0.36f, 0.09f},
-                                                 {"crops", 0.45f, 0.42f, 0.12f},
-                                                 {"forest", 0.05f, 0.16f, 0.05f},
-                                                 {"soil_dry", 0.42f, 0.30f, 0.18f},
-                                                 {"soil_wet", 0.20f, 0.14f, 0.08f},
-                                                 {"water", 0.05f, 0.14f, 0.30f},
-                                                 {"gravel", 0.40f, 0.38f, 0.35f},
-                                                 {"urban", 0.36f, 0.29f, 0.25f},
-                                                 {"metal", 0.70f, 0.72f, 0.75f},
-                                                 {"snow", 0.90f, 0.90f, 0.95f}}};
-    Material m{name, {0.5f, 0.5f, 0.5f}};
-    for (const C& c : kColours) {
-      if (name == c.n)
-        m.base_color = {c.r, c.g, c.b};
-    }
+    const Material m{name, terrain_preview_colour(name)};
     d_.materials.push_back(m);
     return static_cast<std::uint16_t>(d_.materials.size() - 1);
   }
