@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "common/units.hpp"
+#include "config/cli_args.hpp"
 #include "config/toml_reader.hpp"
 #include "radar/em/surfaces.hpp"
 #include "scene/gltf.hpp"
@@ -15,28 +16,6 @@
 #endif
 
 namespace radar_emu::tools {
-namespace {
-
-// "A,B" -> two numbers; throws naming the option.
-std::pair<double, double> pair_of(const std::string& text, const char* option) {
-  const auto comma = text.find(',');
-  try {
-    if (comma == std::string::npos)
-      throw std::invalid_argument("");
-    std::size_t used = 0;
-    const double a = std::stod(text.substr(0, comma), &used);
-    const std::string rest = text.substr(comma + 1);
-    const double b = std::stod(rest, &used);
-    if (used != rest.size())
-      throw std::invalid_argument("");
-    return {a, b};
-  } catch (const std::exception&) {
-    throw std::invalid_argument(std::string(option) + ": '" + text + "' is not two numbers A,B");
-  }
-}
-
-}  // namespace
-
 #if RADAR_EMU_HAVE_GEODATA
 
 scene::geodata::ClassTable load_class_table(const std::string& path) {
@@ -85,12 +64,12 @@ int run_scene_import(const SceneImportOptions& o) {
     spec.landcover = o.landcover;
     spec.classes = load_class_table(o.classes);
   }
-  const auto [lat_deg, lon_deg] = pair_of(o.anchor, "--anchor");
+  const auto [lat_deg, lon_deg] = config::parse_pair(o.anchor, "--anchor");
   if (std::abs(lat_deg) >= 89.0 || std::abs(lon_deg) > 180.0)
     throw std::invalid_argument("--anchor: latitude within +-89 deg, longitude within +-180 deg");
   spec.anchor_latitude_rad = common::radians(lat_deg);
   spec.anchor_longitude_rad = common::radians(lon_deg);
-  const auto [east_m, north_m] = pair_of(o.central, "--central");
+  const auto [east_m, north_m] = config::parse_pair(o.central, "--central");
   spec.central_east_m = east_m;
   spec.central_north_m = north_m;
   spec.central_cell_m = o.cell_m;
