@@ -166,7 +166,7 @@ SarDem sar_dem(const clutter::TerrainEngine& engine, const SarParams& p, const S
   tbb::parallel_for(std::size_t{0}, grid.rows, [&](std::size_t r) {
     for (std::size_t c = 0; c < grid.cols; ++c) {
       const std::size_t i = r * grid.cols + c;
-      const double z = dem.height_m[i];
+      const double z = static_cast<double>(dem.height_m[i]);
       const glm::dvec3 x = grid.origin_m + double(r) * grid.azimuth_spacing_m * track +
                            double(c) * grid.ground_range_spacing_m * look;
       const glm::dvec3 pt{x.x, x.y, z};

@@ -70,8 +70,10 @@ struct Grid {
     const int i = std::min(static_cast<int>(u0), nx - 1),
               j = std::min(static_cast<int>(v0), ny - 1);
     const double u = u0 - i, v = v0 - j;
-    const double z00 = z_m[node(i, j)], z10 = z_m[node(i + 1, j)], z11 = z_m[node(i + 1, j + 1)],
-                 z01 = z_m[node(i, j + 1)];
+    const double z00 = static_cast<double>(z_m[node(i, j)]),
+                 z10 = static_cast<double>(z_m[node(i + 1, j)]),
+                 z11 = static_cast<double>(z_m[node(i + 1, j + 1)]),
+                 z01 = static_cast<double>(z_m[node(i, j + 1)]);
     if (u >= v)
       return z00 + u * (z10 - z00) + v * (z11 - z10);
     return z00 + u * (z11 - z01) + v * (z01 - z00);

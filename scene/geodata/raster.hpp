@@ -70,8 +70,9 @@ class GeoRaster {
   [[nodiscard]] double nearest(double col, double row) const noexcept;
   /// Value of pixel (c, r), 0 <= c < width, 0 <= r < height (after hole filling).
   [[nodiscard]] double at(int c, int r) const noexcept {
-    return values_[static_cast<std::size_t>(r) * static_cast<std::size_t>(width_) +
-                   static_cast<std::size_t>(c)];
+    return static_cast<double>(
+        values_[static_cast<std::size_t>(r) * static_cast<std::size_t>(width_) +
+                static_cast<std::size_t>(c)]);
   }
   /// Whether pixel (c, r) was no-data in the file.
   [[nodiscard]] bool was_nodata(int c, int r) const noexcept {

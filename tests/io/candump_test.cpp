@@ -82,8 +82,8 @@ TEST(Candump, RejectsMalformedLinesWithAReason) {
       "(1.000000) can0 123#0",  // odd hex count
       "(1.000000) can0 123#0011223344556677889",
       "(1.000000) can0 123#001122334455667788",  // 9 bytes classic
-      "(1.000000) can0 123##1"
-      "00112233445566778899",  // FD length 10 not allowed
+      ("(1.000000) can0 123##1"
+       "00112233445566778899"),  // FD length 10 not allowed
       "(1.000000) can0 123##",
       "(1.000000) can0 123#R",
       "(1.000000) averyveryverylongname 123#00",

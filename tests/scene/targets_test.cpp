@@ -389,10 +389,11 @@ TEST(Targets, NamesAndBadDimensions) {
     ASSERT_TRUE(sc::target_kind_from_name(n).has_value()) << n;
     EXPECT_EQ(sc::target_name(*sc::target_kind_from_name(n)), n);
   }
-  EXPECT_THROW(sc::make_target({sc::TargetKind::kPlate, -1.0, 1, 1, 0}), std::invalid_argument);
-  EXPECT_THROW(sc::make_target({sc::TargetKind::kBox, 1, std::nan(""), 1, 0}),
+  EXPECT_THROW((void)sc::make_target({sc::TargetKind::kPlate, -1.0, 1, 1, 0}),
                std::invalid_argument);
-  EXPECT_THROW(sc::make_target({sc::TargetKind::kBox, 1, 1, 1, -0.1}), std::invalid_argument);
+  EXPECT_THROW((void)sc::make_target({sc::TargetKind::kBox, 1, std::nan(""), 1, 0}),
+               std::invalid_argument);
+  EXPECT_THROW((void)sc::make_target({sc::TargetKind::kBox, 1, 1, 1, -0.1}), std::invalid_argument);
 }
 
 TEST(MeshFiles, ObjAndStlRoundTrip) {
