@@ -354,6 +354,14 @@ TEST(WebSocketServer, RunningOutOfDescriptorsBacksOffInsteadOfSpinning) {
   // would count thousands of failures in the 0.6 s below, the back-off at most about 7), and
   // take the connection once descriptors are back.
   ws::Server s(config());
+  // A page served first: the server's thread is in its loop before the limit tightens. (The
+  // sanitizers' runtime checks memory through a pipe of its own; at the limit, its check of the
+  // thread's start would fail and read as a bad vptr under clang's UBSan.)
+  {
+    RawClient warm(s.port());
+    warm.send("GET / HTTP/1.1\r\nHost: x\r\n\r\n");
+    ASSERT_TRUE(warm.read_all().starts_with("HTTP/1.1 200 OK\r\n"));
+  }
   rlimit old{};
   ASSERT_EQ(::getrlimit(RLIMIT_NOFILE, &old), 0);
   const int lowest_free = ::dup(0);
@@ -371,12 +379,12 @@ TEST(WebSocketServer, RunningOutOfDescriptorsBacksOffInsteadOfSpinning) {
     connections = s.counters().connections;
     ASSERT_EQ(::setrlimit(RLIMIT_NOFILE, &old), 0);
     ASSERT_TRUE(connected);
-    EXPECT_TRUE(eventually([&] { return s.counters().connections == 1; }));
+    EXPECT_TRUE(eventually([&] { return s.counters().connections == 2; }));
   }
   std::cout << "accept failures in 0.6 s at the descriptor limit: " << failures << "\n";
   EXPECT_GE(failures, 1u);
   EXPECT_LE(failures, 20u);
-  EXPECT_EQ(connections, 0u);
+  EXPECT_EQ(connections, 1u);  // the page before the limit only
 }
 
 TEST(WebSocketServer, ClosesASilentClient) {
