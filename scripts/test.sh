@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# The test job: installs what is missing, builds with warnings as errors, runs every CTest
-# suite, then rebuilds with AddressSanitizer + UndefinedBehaviorSanitizer and runs the suites
-# that touch parsing and codecs (CTest label "sanitize") under it, then builds the libFuzzer
-# harnesses with clang (ASan + UBSan too) and runs each for a few seconds (scripts/fuzz.sh runs
-# them long; tests/fuzz/README.md).
+# The test job: installs what is missing, builds with warnings as errors (gcc), runs every CTest
+# suite, then builds one clang tree with AddressSanitizer + UndefinedBehaviorSanitizer (and
+# libFuzzer's coverage instrumentation) holding both the suites that touch parsing and codecs
+# (CTest label "sanitize") and the libFuzzer harnesses, runs those suites under the sanitizers
+# and each harness for a few seconds (scripts/fuzz.sh runs them long; docs/fuzzing.md).
+# One sanitizer tree rather than a gcc ASan tree beside a clang fuzz tree: the libraries are
+# compiled once for both (CI from a clean clone: docs/performance.md, "CI time").
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 jobs="$(nproc)"
@@ -14,16 +16,19 @@ echo "== build (release, -Werror) =="
 echo "== tests =="
 ctest --test-dir "$root/build" --output-on-failure -j "$jobs"
 
-echo "== build (ASan+UBSan): the sanitize-labelled suites only =="
-RADAR_EMU_TARGETS=sanitize_tests "$root/scripts/build.sh" "$root/build-asan" -DRADAR_EMU_WERROR=ON -DRADAR_EMU_SANITIZE=ON \
+# RADAR_EMU_CI_FUZZ_S: seconds per harness (default 5; 0 skips fuzzing and the harnesses' build).
+fuzz_s="${RADAR_EMU_CI_FUZZ_S:-5}"
+san_targets="sanitize_tests"
+[ "$fuzz_s" != "0" ] && san_targets="sanitize_tests fuzz_all"
+echo "== build (clang, ASan+UBSan, -Werror): the sanitize-labelled suites and the fuzz harnesses =="
+RADAR_EMU_TARGETS="$san_targets" "$root/scripts/build.sh" "$root/build-sanitize" \
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DRADAR_EMU_FUZZ=ON -DRADAR_EMU_WERROR=ON \
   -DRADAR_EMU_BUILD_BENCHMARKS=OFF -DCMAKE_BUILD_TYPE=Debug -DRADAR_EMU_LINE_DEBUG_INFO=ON
 echo "== tests under ASan+UBSan (label: sanitize) =="
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1 \
-  ctest --test-dir "$root/build-asan" --output-on-failure -j "$jobs" -L sanitize
+  ctest --test-dir "$root/build-sanitize" --output-on-failure -j "$jobs" -L sanitize
 
-# RADAR_EMU_CI_FUZZ_S: seconds per harness (default 5; 0 skips the stage and its clang build).
-fuzz_s="${RADAR_EMU_CI_FUZZ_S:-5}"
 if [ "$fuzz_s" != "0" ]; then
-  echo "== fuzzing, bounded: each harness $fuzz_s s (clang, libFuzzer + ASan + UBSan) =="
-  "$root/scripts/fuzz.sh" --time "$fuzz_s" --parallel "$jobs" --build "$root/build-fuzz"
+  echo "== fuzzing, bounded: each harness $fuzz_s s (libFuzzer + ASan + UBSan) =="
+  "$root/scripts/fuzz.sh" --no-build --time "$fuzz_s" --parallel "$jobs" --build "$root/build-sanitize"
 fi
