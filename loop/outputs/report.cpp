@@ -284,6 +284,12 @@ void add_governor(const RunReport& p, Json& rep) {
       {"frames_at_level", std::move(levels)},
       {"frames_degraded", r.governor.frames_degraded},
       {"frames_predicted_late", r.governor.frames_predicted_late},
+      {"error_model",
+       {{"source",
+         "FidelityGovernor::kLevelSnrError_db: mean |SNR error| per level measured by "
+         "`radar-emu tradeoff --cases frame` on the default scenario's frame"},
+        {"measured_on_this_scenario", false},
+        {"summary_estimate", "the estimate of the coarsest level used (the worst)"}}},
       {"per_frame",
        {{"note",
          "every frame in order (the first 1,048,576; frames.csv has them all and the rays); "
@@ -527,6 +533,31 @@ void print_run_lines(const RunReport& p, std::FILE* out) {
                static_cast<ull>(r.bus_frames_out), static_cast<ull>(r.sink_lists));
 }
 
+// "N of M frames degraded (levels a-b, est. X dB)": X the governor's estimated SNR error at the
+// coarsest level used (the worst), and where that estimate comes from.
+void print_governor_line(const RunReport& p, std::FILE* out) {
+  const RunResult& r = *p.result;
+  const RunResult::GovernorTotals& g = r.governor;
+  if (g.frames_degraded == 0)
+    return;
+  int lowest = g.max_level;
+  for (int k = 1; k <= g.max_level; ++k) {
+    if (g.level_frames[static_cast<std::size_t>(k)] > 0) {
+      lowest = k;
+      break;
+    }
+  }
+  const double est_db = FidelityGovernor::kLevelSnrError_db[static_cast<std::size_t>(
+      std::clamp(g.max_level, 0, FidelityGovernor::kMaxLevel))];
+  std::fprintf(out, "  governor    %llu of %llu frames degraded (levels %d-%d, est. %.1f dB)\n",
+               static_cast<ull>(g.frames_degraded), static_cast<ull>(r.frames), lowest, g.max_level,
+               est_db);
+  std::fprintf(out,
+               "              est.: mean |SNR error| of level %d (the worst used), measured by "
+               "radar-emu tradeoff on the default scenario's frame, not on this scenario\n",
+               g.max_level);
+}
+
 // The outcome per target: one row per object that was in the beam, then the false alarms.
 void print_outcome_lines(const RunReport& p, std::FILE* out) {
   const OutcomeTotals& o = p.result->outcome;
@@ -646,6 +677,7 @@ void write_report_json(const RunReport& report, const std::filesystem::path& pat
 
 void print_summary(const RunReport& report, std::FILE* out) {
   print_run_lines(report, out);
+  print_governor_line(report, out);
   print_exception_lines(report, out);
   print_outcome_lines(report, out);
   print_output_lines(report, out);
