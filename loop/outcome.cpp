@@ -97,6 +97,8 @@ void OutcomeTally::frame(std::span<const ObjectTruth> truth, std::span<const dou
     association_[i] = best;
     if (best < 0) {
       ++totals_.false_alarms;
+      if (d.object_id != radar::kNoObject)
+        ++totals_.false_alarms_on_objects;
       continue;
     }
     const auto j = static_cast<std::size_t>(best);

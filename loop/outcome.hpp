@@ -81,6 +81,10 @@ struct OutcomeTotals {
   std::uint64_t frames_scored = 0;  ///< frames with an ownship state (truth and detections)
   std::uint64_t detections = 0;     ///< detections of those frames
   std::uint64_t false_alarms = 0;   ///< associated with no object in the beam
+  /// Of those, the ones whose cell a scene object's return dominates (Detection::object_id):
+  /// objects truth does not cover (buildings: no conducting material) or whose box centre is
+  /// outside the field of view; the rest are clutter or noise.
+  std::uint64_t false_alarms_on_objects = 0;
   [[nodiscard]] double false_alarms_per_frame() const noexcept {
     return frames_scored > 0
                ? static_cast<double>(false_alarms) / static_cast<double>(frames_scored)

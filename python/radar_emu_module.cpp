@@ -631,6 +631,7 @@ class Loop {
     const loop::OutcomeTotals& o = r.outcome;
     d["frames_scored"] = o.frames_scored;
     d["false_alarms"] = o.false_alarms;
+    d["false_alarms_on_objects"] = o.false_alarms_on_objects;
     d["false_alarms_per_frame"] = o.false_alarms_per_frame();
     py::list targets;
     for (const loop::TargetOutcome& t : o.targets) {

@@ -354,6 +354,7 @@ void add_outcome(const RunReport& p, Json& rep) {
       {"frames_scored", o.frames_scored},
       {"detections", o.detections},
       {"false_alarms", o.false_alarms},
+      {"false_alarms_on_objects", o.false_alarms_on_objects},
       {"false_alarms_per_frame", o.false_alarms_per_frame()},
       {"targets", std::move(targets)}};
 }
@@ -596,9 +597,11 @@ void print_outcome_lines(const RunReport& p, std::FILE* out) {
   }
   std::fprintf(out,
                "  false alarms %.2f per frame (%llu of %llu detections associated with no object "
-               "in the beam, over %llu frames)\n",
+               "in the beam, over %llu frames; %llu of them the return of a scene object truth "
+               "does not cover)\n",
                o.false_alarms_per_frame(), static_cast<ull>(o.false_alarms),
-               static_cast<ull>(o.detections), static_cast<ull>(o.frames_scored));
+               static_cast<ull>(o.detections), static_cast<ull>(o.frames_scored),
+               static_cast<ull>(o.false_alarms_on_objects));
   if (never > 0) {
     std::fprintf(out, "  never in the beam: %zu of %zu objects (%s%s)\n", never, o.targets.size(),
                  never_names.c_str(), never > 6 ? ", ..." : "");

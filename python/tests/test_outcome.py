@@ -19,7 +19,7 @@ def test_outcome_matches_the_frames_and_the_cli(cli, tmp_path):
     targets = {t["object_id"]: t for t in summary["targets"]}
     assert summary["frames_scored"] == n
 
-    in_beam, detected, false_alarms = {}, {}, 0
+    in_beam, detected, false_alarms, on_objects = {}, {}, 0, 0
     errors = {}  # object id -> range errors of its associated detections, per frame
     for f in frames:
         truth, dets, assoc = f["truth"], f["detections"], f["association"]
@@ -27,6 +27,7 @@ def test_outcome_matches_the_frames_and_the_cli(cli, tmp_path):
         for oid in truth["object_id"]:
             in_beam[int(oid)] = in_beam.get(int(oid), 0) + 1
         false_alarms += int(np.sum(assoc < 0))
+        on_objects += int(np.sum((assoc < 0) & (dets["object_id"] >= 0)))
         per_object = {}
         for i, j in enumerate(assoc):
             if j < 0:
@@ -39,6 +40,7 @@ def test_outcome_matches_the_frames_and_the_cli(cli, tmp_path):
 
     checked = 0
     assert summary["false_alarms"] == false_alarms
+    assert summary["false_alarms_on_objects"] == on_objects
     assert abs(summary["false_alarms_per_frame"] - false_alarms / n) < 1e-12
     for oid, t in targets.items():
         assert t["frames_in_beam"] == in_beam.get(oid, 0), t["object"]

@@ -82,8 +82,11 @@ TEST(Outcome, ErrorsPdAndFalseAlarmsAgainstHandComputedValues) {
   loop::OutcomeTally tally(test_gate(), ids, 8, 4);
   const std::array<loop::ObjectTruth, 2> truths{truth(7, 1000.0, 0.0), truth(9, 1020.0, 0.01)};
   const std::array<double, 2> size_m{1.0, 1.0};
+  // The one at 1050 m is the return of an object truth does not cover (object 42).
+  radar::Detection uncovered = detection(1050.0, 0.01, 0.0);
+  uncovered.object_id = 42;
   const std::vector<std::vector<radar::Detection>> frames = {
-      {detection(999.0, 0.001, 0.5), detection(1020.5, 0.01, 0.0), detection(1050.0, 0.01, 0.0)},
+      {detection(999.0, 0.001, 0.5), detection(1020.5, 0.01, 0.0), uncovered},
       {detection(1000.0, 0.001, 0.5), detection(1009.0, 0.0, 0.0)},
       {detection(1001.0, 0.001, 0.5), detection(996.5, 0.0, 0.0)},
       {detection(1002.0, 0.001, 0.5, 0.2)},
@@ -109,6 +112,7 @@ TEST(Outcome, ErrorsPdAndFalseAlarmsAgainstHandComputedValues) {
   EXPECT_EQ(t.frames_scored, 6u);
   EXPECT_EQ(t.detections, 9u);
   EXPECT_EQ(t.false_alarms, 2u);
+  EXPECT_EQ(t.false_alarms_on_objects, 1u);
   EXPECT_DOUBLE_EQ(t.false_alarms_per_frame(), 2.0 / 6.0);
   ASSERT_EQ(t.targets.size(), 2u);
 
