@@ -81,7 +81,7 @@ void Accounting::frame(FrameRecord rec, std::int64_t frame_start_wall, const Fra
     if (outputs.stream)
       outputs.stream->frame(rec, stage_ns, p.detections, p.sensor_detections, p.truth);
     if (outputs.view)
-      outputs.view->publish(rec, p.velocity_mps, stage_ns, p.detections, p.truth);
+      outputs.view->publish(rec, p.velocity_mps, stage_ns, p.detections, p.truth, p.outcome);
   }
   const std::size_t n_det = p.detections.size(), n_truth = p.truth.size();
   if (r.records.size() < recorded_frames_) {

@@ -36,6 +36,7 @@ struct FrameProducts {
   std::span<const radar::Detection> sensor_detections;  ///< same index
   std::span<const ObjectTruth> truth;                   ///< objects in the beam
   glm::dvec3 velocity_mps{0.0};                         ///< ownship (0 without a state) [m/s]
+  OutcomeSoFar outcome{};                               ///< per target so far (the live view)
 };
 
 /// The run under way (begin() to finish()): its result so far, its clocks and its schedule.

@@ -229,6 +229,70 @@ std::vector<std::uint32_t> truth_objects(const scene::Scene& scene,
   return ids;
 }
 
+// The association gate of the outcome per target (loop/outcome.hpp): the sensor's resolution
+// cells and ambiguity intervals.
+AssociationGate association_gate(const Scenario& s, const radar::Sensor& sensor) {
+  AssociationGate g;
+  g.range_cell_m = radar::range_resolution_m(s.sensor.processing.waveform);
+  g.azimuth_cell_rad = sensor.antenna().sum_beamwidth_az_rad();
+  g.elevation_cell_rad = sensor.antenna().sum_beamwidth_el_rad();
+  g.unambiguous_range_m = sensor.unambiguous_range_m();
+  g.unambiguous_velocity_mps = sensor.unambiguous_velocity_mps();
+  return g;
+}
+
+// Setup: a [[target]] that never enters the beam over the planned run gets a warning. The
+// check flies the scripted ownship (the scenario's [ownship] straight line and attitude in the
+// anchor's ENU frame) against each target's scripted trajectory (Scene::set_time: transforms
+// only), at every frame time, or at kSamples times evenly spread over a longer run; in the beam
+// means what truth.json means (objects_in_view). A run whose ownship comes from elsewhere (a
+// real bus, a replay, an external Modbus source, Python) flies what it is given: the summary's
+// per-target table says what it saw. Leaves the scene at time 0.
+void warn_targets_never_in_beam(const Scenario& s, scene::Scene& scene,
+                                std::vector<std::string>& warnings) {
+  const std::size_t n_objects = scene.objects().size();
+  if (s.targets.empty() || s.targets.size() > n_objects || s.frames == 0)
+    return;
+  const std::size_t first = n_objects - s.targets.size();  // appended in table order
+  std::vector<std::uint32_t> ids;
+  for (std::size_t k = first; k < n_objects; ++k)
+    ids.push_back(static_cast<std::uint32_t>(k));
+  std::vector<bool> seen(ids.size(), false);
+  std::vector<ObjectTruth> in_view(ids.size());
+  constexpr std::uint64_t kSamples = 100'000;
+  const std::uint64_t samples = std::min<std::uint64_t>(s.frames, kSamples);
+  const double duration_s = static_cast<double>(s.frames - 1) / s.rate_hz;
+  radar::RadarPose pose;
+  pose.world_from_antenna =
+      enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      body_from_antenna(s.antenna_depression_rad);
+  pose.velocity_mps = s.ownship_velocity_enu_mps;
+  std::size_t unseen = ids.size();
+  for (std::uint64_t k = 0; k < samples && unseen > 0; ++k) {
+    const double t_s =
+        samples > 1 ? duration_s * static_cast<double>(k) / static_cast<double>(samples - 1) : 0.0;
+    scene.set_time(t_s);
+    pose.position_m = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * t_s;
+    const std::size_t n = objects_in_view(pose, scene.objects(), ids, s.sbr, in_view);
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::size_t idx = in_view[j].object_id - first;
+      if (!seen[idx]) {
+        seen[idx] = true;
+        --unseen;
+      }
+    }
+  }
+  scene.set_time(0.0);
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (seen[i])
+      continue;
+    const scene::TargetPlacement& t = s.targets[i];
+    warnings.push_back((t.context.empty() ? "[[target]]" : t.context) + " '" + t.name +
+                       "' never enters the beam over the planned run (" + std::to_string(s.frames) +
+                       " frames along the scripted [ownship] flight): it will not be seen");
+  }
+}
+
 // ---- the loop's parts (each built once from the scenario) ----
 
 // The scene database, its anchor's ENU frame, and the objects ground truth covers.
@@ -238,6 +302,7 @@ struct SceneSide {
   scene::wgs84::EnuFrame enu;
   std::vector<std::uint32_t> truth_objects;  ///< objects truth.json covers
   std::vector<ObjectTruth> frame_truth;      ///< the current frame's objects in view
+  std::vector<double> frame_size_m;          ///< their sizes (half the box diagonal) [m]
 };
 
 // The SBR tracer, its contribution buffer and the path loss every return takes.
@@ -353,6 +418,10 @@ struct ClosedLoop::Impl {
     tracer.weather = weather_figures(s);
     scene.truth_objects = truth_objects(scene.scene, tracer.tracer);
     scene.frame_truth.resize(scene.truth_objects.size());
+    scene.frame_size_m.resize(scene.truth_objects.size());
+    outcome.emplace(association_gate(s, sensor.sensor), scene.truth_objects,
+                    s.sensor.max_detections, scene.truth_objects.size());
+    warn_targets_never_in_beam(s, scene.scene, warnings);
     if (!o.out_dir.empty())
       outputs.stream = open_output_stream(scenario, o, scene.scene, scene.truth_objects);
     if (!o.serve.empty())
@@ -395,7 +464,8 @@ struct ClosedLoop::Impl {
   OwnshipSource ownship;
   Accounting accounting;
   RunOutputs outputs;
-  std::vector<std::string> warnings;  ///< from backend setup
+  std::optional<OutcomeTally> outcome;  ///< built once the truth objects are known
+  std::vector<std::string> warnings;    ///< from backend setup and the beam check
 };
 
 // A stop request ends the run at a frame boundary: before the wait, or after it (a real-time
@@ -566,6 +636,17 @@ void ClosedLoop::Impl::send(Frame& f) {
   f.truth = f.valid ? objects_in_view(f.pose, scene.scene.objects(), scene.truth_objects, s.sbr,
                                       scene.frame_truth)
                     : 0;
+  // The outcome per target: the detections associated with the objects in the beam.
+  if (f.valid) {
+    const std::span<const scene::ObjectState> states = scene.scene.objects();
+    for (std::size_t j = 0; j < f.truth; ++j) {
+      const scene::ObjectState& o = states[scene.frame_truth[j].object_id];
+      scene.frame_size_m[j] = 0.5 * glm::length(o.bounds_max_m - o.bounds_min_m);
+    }
+    outcome->frame(std::span(scene.frame_truth.data(), f.truth),
+                   std::span(scene.frame_size_m.data(), f.truth),
+                   std::span(sensor.detections.data(), f.detections));
+  }
   FrameRecord& rec = f.record;
   rec.frame_index = f.tick.period_index;
   rec.time_s = f.t_s;
@@ -661,6 +742,7 @@ bool ClosedLoop::step(FrameOutput& out, const OwnshipInput* ownship) {
       std::span<const radar::Detection>(m.sensor.detections.data(), f.detections);
   products.truth = std::span<const ObjectTruth>(m.scene.frame_truth.data(), f.truth);
   products.velocity_mps = f.valid ? f.pose.velocity_mps : glm::dvec3(0.0);
+  products.outcome = m.outcome->so_far();
   m.accounting.frame(f.record, f.start_wall_ns, products, m.outputs);
   // The avionics under test read what the radar sent.
   m.peers.poll_avionics();
@@ -668,6 +750,7 @@ bool ClosedLoop::step(FrameOutput& out, const OwnshipInput* ownship) {
   out.detections = products.detections;
   out.sensor_detections = products.sensor_detections;
   out.truth = products.truth;
+  out.association = f.valid ? m.outcome->association() : std::span<const int>();
   if (m.options.progress)
     m.options.progress(rs.done, m.scenario.frames);
   return true;
@@ -685,6 +768,7 @@ RunResult ClosedLoop::finish() {
     m.outputs.view->end();
   RunResult& r = rs.r;
   m.accounting.finish(r);
+  r.outcome = m.outcome->totals();
   r.decoder = m.bus.decoder().counters();
   r.link_faults = m.bus.link().counters();
   r.bus_rx_overflows = m.bus.rx_overflows();
@@ -740,6 +824,8 @@ RunReport ClosedLoop::report(const RunResult& result) const {
               sn.antenna().sum_beamwidth_el_rad(),
               sn.processor().processing_gain(),
               sn.cfar_training_cells()};
+  for (const auto& obj : sc.description().objects)
+    p.object_names.push_back(obj.name);
   p.out_dir = m.options.out_dir;
   p.outputs = output_counters();
   p.live_view = live_view_counters();

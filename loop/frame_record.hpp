@@ -13,6 +13,7 @@
 #include "io/canaerospace.hpp"
 #include "io/detection_icd.hpp"
 #include "loop/governor.hpp"
+#include "loop/outcome.hpp"
 #include "loop/truth.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
@@ -132,6 +133,9 @@ struct RunResult {
   std::vector<radar::Detection> sensor_detections;
   /// Objects in the beam per recorded frame (FrameRecord::first_truth / truth_count).
   std::vector<ObjectTruth> truth;
+  /// The outcome per truth object (in truth.json's order) and the false alarms, over every
+  /// frame with an ownship state (loop/outcome.hpp).
+  OutcomeTotals outcome;
 };
 
 /// What one stepped frame produced. The spans point into the loop's own buffers: valid until
@@ -141,6 +145,9 @@ struct FrameOutput {
   std::span<const io::icd::Detection> detections;       ///< as sent (before ICD quantisation)
   std::span<const radar::Detection> sensor_detections;  ///< the sensor's view, same index
   std::span<const ObjectTruth> truth;                   ///< objects in the beam
+  /// Per detection (same index): the index into `truth` it was associated with, -1 for a false
+  /// alarm (loop/outcome.hpp); empty in a frame without an ownship state.
+  std::span<const int> association;
 };
 
 }  // namespace radar_emu::loop

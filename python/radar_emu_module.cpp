@@ -625,6 +625,40 @@ class Loop {
     d["bus_frames_out"] = r.bus_frames_out;
     d["sink_lists"] = r.sink_lists;
     d["frames_over_budget"] = r.frames_over_budget;
+    d["frames_degraded"] = r.governor.frames_degraded;
+    // The outcome per target (loop/outcome.hpp, docs/outcome.md), in report.json's units.
+    const loop::RunReport rep = loop_->report(r);
+    const loop::OutcomeTotals& o = r.outcome;
+    d["frames_scored"] = o.frames_scored;
+    d["false_alarms"] = o.false_alarms;
+    d["false_alarms_on_objects"] = o.false_alarms_on_objects;
+    d["false_alarms_per_frame"] = o.false_alarms_per_frame();
+    py::list targets;
+    for (const loop::TargetOutcome& t : o.targets) {
+      py::dict e;
+      e["object_id"] = t.object_id;
+      e["object"] =
+          t.object_id < rep.object_names.size() ? rep.object_names[t.object_id] : std::string();
+      e["frames_in_beam"] = t.frames_in_beam;
+      e["frames_detected"] = t.frames_detected;
+      e["pd"] = t.frames_in_beam > 0 ? py::object(py::float_(t.pd())) : py::object(py::none());
+      e["detections_associated"] = t.detections_associated;
+      auto error = [](const loop::ErrorStats& x, double scale) -> py::object {
+        if (x.count == 0)
+          return py::none();
+        py::dict s;
+        s["mean"] = x.mean * scale;
+        s["std"] = x.std_dev() * scale;
+        s["stated_sigma_rms"] = x.stated_sigma_rms() * scale;
+        return s;
+      };
+      e["range_error_m"] = error(t.range_m, 1.0);
+      e["azimuth_error_deg"] = error(t.azimuth_rad, common::degrees(1.0));
+      e["elevation_error_deg"] = error(t.elevation_rad, common::degrees(1.0));
+      e["radial_velocity_error_mps"] = error(t.radial_velocity_mps, 1.0);
+      targets.append(e);
+    }
+    d["targets"] = targets;
     return d;
   }
 
@@ -732,6 +766,14 @@ class Loop {
       tt.set(truth, i, 4, o.radial_velocity_mps);
     }
     d["truth"] = truth;
+    // Per detection: the index into "truth" of the object it was associated with, -1 for a
+    // false alarm (docs/outcome.md).
+    py::array_t<std::int64_t> association(static_cast<py::ssize_t>(f.detections.size()));
+    for (std::size_t i = 0; i < f.detections.size(); ++i) {
+      association.mutable_at(static_cast<py::ssize_t>(i)) =
+          i < f.association.size() ? f.association[i] : -1;
+    }
+    d["association"] = association;
     return d;
   }
 

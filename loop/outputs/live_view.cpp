@@ -56,6 +56,7 @@ LiveView::Snapshot initial_snapshot(const LiveViewConfig& c) {
   LiveView::Snapshot s;
   s.detections.resize(std::max<std::size_t>(c.max_detections, 1));
   s.truth.resize(std::max<std::size_t>(c.max_truth, 1));
+  s.targets.resize(std::max<std::size_t>(c.max_truth, 1));
   return s;
 }
 
@@ -119,7 +120,7 @@ const std::string& LiveView::address() const noexcept {
 void LiveView::publish(const FrameRecord& rec, const glm::dvec3& velocity_enu_mps,
                        const std::array<std::int64_t, timing::kStageCount>& stage_ns,
                        std::span<const io::icd::Detection> detections,
-                       std::span<const ObjectTruth> truth) noexcept {
+                       std::span<const ObjectTruth> truth, const OutcomeSoFar& outcome) noexcept {
   Snapshot& s = buffer_.write_slot();
   s.frame_index = rec.frame_index;
   s.time_s = rec.time_s;
@@ -135,6 +136,10 @@ void LiveView::publish(const FrameRecord& rec, const glm::dvec3& velocity_enu_mp
   std::copy_n(detections.begin(), s.detection_count, s.detections.begin());
   s.truth_count = std::min(truth.size(), s.truth.size());
   std::copy_n(truth.begin(), s.truth_count, s.truth.begin());
+  s.target_count = std::min(outcome.targets.size(), s.targets.size());
+  std::copy_n(outcome.targets.begin(), s.target_count, s.targets.begin());
+  s.frames_scored = outcome.frames_scored;
+  s.false_alarms = outcome.false_alarms;
   ++published_;
   s.published = published_;
   s.dropped = dropped_.load(std::memory_order_relaxed);
@@ -264,7 +269,50 @@ void LiveView::format(const Snapshot& s, bool ended, std::string& o) const {
     number(o, t.range_m, 2);
     o += '}';
   }
-  o += "]}";
+  // The outcome per target so far (loop/outcome.hpp): the objects that have been in the beam.
+  o += "],\"outcome\":{\"frames_scored\":";
+  integer(o, s.frames_scored);
+  o += ",\"false_alarms\":";
+  integer(o, s.false_alarms);
+  o += ",\"false_alarms_per_frame\":";
+  number(o, s.frames_scored > 0
+                ? static_cast<double>(s.false_alarms) / static_cast<double>(s.frames_scored)
+                : 0.0);
+  o += ",\"targets\":[";
+  bool first = true;
+  for (std::size_t i = 0; i < s.target_count; ++i) {
+    const TargetOutcome& t = s.targets[i];
+    if (t.frames_in_beam == 0)
+      continue;
+    o += first ? "{" : ",{";
+    first = false;
+    o += "\"object\":";
+    o += t.object_id < object_json_.size() ? object_json_[t.object_id] : std::string("null");
+    o += ",\"frames_in_beam\":";
+    integer(o, t.frames_in_beam);
+    o += ",\"frames_detected\":";
+    integer(o, t.frames_detected);
+    o += ",\"pd\":";
+    number(o, t.pd());
+    o += ",\"range_error_m\":[";
+    number(o, t.range_m.mean, 2);
+    o += ',';
+    number(o, t.range_m.std_dev(), 2);
+    o += "],\"azimuth_error_deg\":[";
+    number(o, common::degrees(t.azimuth_rad.mean), 4);
+    o += ',';
+    number(o, common::degrees(t.azimuth_rad.std_dev()), 4);
+    o += "],\"elevation_error_deg\":[";
+    number(o, common::degrees(t.elevation_rad.mean), 4);
+    o += ',';
+    number(o, common::degrees(t.elevation_rad.std_dev()), 4);
+    o += "],\"radial_velocity_error_mps\":[";
+    number(o, t.radial_velocity_mps.mean, 2);
+    o += ',';
+    number(o, t.radial_velocity_mps.std_dev(), 2);
+    o += "]}";
+  }
+  o += "]}}";
 }
 
 LiveViewCounters LiveView::counters() const {

@@ -24,6 +24,7 @@
 #include "io/detection_icd.hpp"
 #include "io/triple_buffer.hpp"
 #include "io/websocket.hpp"
+#include "loop/outcome.hpp"
 #include "loop/truth.hpp"
 #include "timing/profiler.hpp"
 
@@ -59,7 +60,7 @@ struct LiveViewConfig {
   const Scenario* scenario = nullptr;     ///< name, B-scope geometry, frame period
   std::vector<std::string> object_names;  ///< scene objects by id (truth labels)
   std::size_t max_detections = 64;        ///< per frame
-  std::size_t max_truth = 64;             ///< per frame
+  std::size_t max_truth = 64;             ///< per frame; also the truth objects of the outcome
   int update_interval_ms = 40;            ///< how often the server takes the newest frame
 };
 
@@ -74,11 +75,12 @@ class LiveView {
 
   /// The frame thread, once a frame: copies the frame (at most max_detections and max_truth
   /// entries) into the free snapshot and publishes it. Real-time safe: no allocation, no lock,
-  /// no exception. `velocity_enu_mps` is the ownship's (used when record.ownship_valid).
+  /// no exception. `velocity_enu_mps` is the ownship's (used when record.ownship_valid);
+  /// `outcome` the outcome per target so far (at most max_truth targets copied).
   void publish(const FrameRecord& record, const glm::dvec3& velocity_enu_mps,
                const std::array<std::int64_t, timing::kStageCount>& stage_ns,
-               std::span<const io::icd::Detection> detections,
-               std::span<const ObjectTruth> truth) noexcept;
+               std::span<const io::icd::Detection> detections, std::span<const ObjectTruth> truth,
+               const OutcomeSoFar& outcome = {}) noexcept;
   /// The run is over: the page says so (the last frame stays shown).
   void end() noexcept;
   /// Waits until a browser has connected its WebSocket, at most `timeout_s`, or until `*stop`
@@ -101,6 +103,10 @@ class LiveView {
     std::size_t detection_count = 0, truth_count = 0;
     std::vector<io::icd::Detection> detections;  ///< max_detections, first detection_count used
     std::vector<ObjectTruth> truth;              ///< max_truth, first truth_count used
+    /// The outcome per target so far: max_truth, first target_count used.
+    std::vector<TargetOutcome> targets;
+    std::size_t target_count = 0;
+    std::uint64_t frames_scored = 0, false_alarms = 0;
   };
   /// The JSON message of a snapshot (the server thread; exposed for tests).
   void format(const Snapshot& s, bool ended, std::string& out) const;

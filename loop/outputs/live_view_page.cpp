@@ -28,6 +28,9 @@ constexpr std::string_view kPage = R"HTML(<!DOCTYPE html>
   td { padding: 1px 10px 1px 0; }
   .k { color: #8c96aa; }
   #state.ok { color: #6fdc8c; } #state.bad { color: #e6a04a; }
+  #outcome { max-height: 330px; overflow-y: auto; }
+  #outcome td { padding: 0 6px 0 0; text-align: right; }
+  #outcome td:first-child { text-align: left; }
 </style>
 </head>
 <body>
@@ -43,6 +46,9 @@ constexpr std::string_view kPage = R"HTML(<!DOCTYPE html>
   <table id="counters"></table>
   <div class="k">magenta squares: detections of the current frame;
     green rings: ground truth (objects in the beam)</div>
+  <h1 style="margin-top:10px">outcome per target so far</h1>
+  <div id="false_alarms" class="k"></div>
+  <div id="outcome"><table id="targets"></table></div>
 </div>
 <script>
 "use strict";
@@ -156,6 +162,20 @@ function show(m) {
     ["view updates dropped", m.view.dropped],
     ["late / degraded", `${m.status.late} / ${m.status.degraded} (level ${m.status.governor_level})`],
   ]);
+  // The outcome per target (docs/outcome.md): Pd, and the mean error of range and azimuth.
+  const oc = m.outcome;
+  if (oc) {
+    document.getElementById("false_alarms").textContent =
+      `false alarms ${fmt(oc.false_alarms_per_frame, 2)} per frame (${oc.false_alarms} in ` +
+      `${oc.frames_scored} frames)`;
+    document.getElementById("targets").innerHTML =
+      "<tr class='k'><td>object</td><td>beam</td><td>det</td><td>Pd</td><td>dR m</td>" +
+      "<td>dAz deg</td></tr>" +
+      oc.targets.map((t) => `<tr><td>${t.object}</td><td>${t.frames_in_beam}</td>` +
+        `<td>${t.frames_detected}</td><td>${fmt(t.pd, 2)}</td>` +
+        `<td>${t.frames_detected ? fmt(t.range_error_m[0], 2) : "-"}</td>` +
+        `<td>${t.frames_detected ? fmt(t.azimuth_error_deg[0], 3) : "-"}</td></tr>`).join("");
+  }
 }
 
 let ended = false;

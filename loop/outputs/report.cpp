@@ -284,6 +284,12 @@ void add_governor(const RunReport& p, Json& rep) {
       {"frames_at_level", std::move(levels)},
       {"frames_degraded", r.governor.frames_degraded},
       {"frames_predicted_late", r.governor.frames_predicted_late},
+      {"error_model",
+       {{"source",
+         "FidelityGovernor::kLevelSnrError_db: mean |SNR error| per level measured by "
+         "`radar-emu tradeoff --cases frame` on the default scenario's frame"},
+        {"measured_on_this_scenario", false},
+        {"summary_estimate", "the estimate of the coarsest level used (the worst)"}}},
       {"per_frame",
        {{"note",
          "every frame in order (the first 1,048,576; frames.csv has them all and the rays); "
@@ -293,6 +299,64 @@ void add_governor(const RunReport& p, Json& rep) {
         {"level", std::move(level)},
         {"predicted_ms", std::move(predicted)},
         {"estimated_snr_error_db", std::move(error)}}}};
+}
+
+// The object's name by id ("object N" when the report has no names).
+std::string object_name(const RunReport& p, std::uint32_t id) {
+  return id < p.object_names.size() ? p.object_names[id] : "object " + std::to_string(id);
+}
+
+// One error's statistics (loop/outcome.hpp), scaled to the output's unit; null without samples.
+Json error_json(const ErrorStats& e, double scale) {
+  if (e.count == 0)
+    return nullptr;
+  return {{"mean", e.mean * scale},
+          {"std", e.std_dev() * scale},
+          {"stated_sigma_rms", e.stated_sigma_rms() * scale}};
+}
+
+// outcome: per truth object, frames in the beam, detected, Pd and the errors; the false alarms.
+void add_outcome(const RunReport& p, Json& rep) {
+  const OutcomeTotals& o = p.result->outcome;
+  const AssociationGate& g = o.gate;
+  Json targets = Json::array();
+  for (const TargetOutcome& t : o.targets) {
+    targets.push_back({{"object_id", t.object_id},
+                       {"object", object_name(p, t.object_id)},
+                       {"frames_in_beam", t.frames_in_beam},
+                       {"frames_detected", t.frames_detected},
+                       {"pd", t.frames_in_beam > 0 ? Json(t.pd()) : Json(nullptr)},
+                       {"detections_associated", t.detections_associated},
+                       {"range_error_m", error_json(t.range_m, 1.0)},
+                       {"azimuth_error_deg", error_json(t.azimuth_rad, common::degrees(1.0))},
+                       {"elevation_error_deg", error_json(t.elevation_rad, common::degrees(1.0))},
+                       {"radial_velocity_error_mps", error_json(t.radial_velocity_mps, 1.0)}});
+  }
+  rep["outcome"] = {
+      {"note",
+       "per truth object (truth.json's objects): frames in the beam, frames with a detection "
+       "associated (pd = detected / in beam), and the error of its associated detection "
+       "(detection - truth: mean, sample std, and the rms of the one-sigma accuracies the "
+       "sensor stated for those detections); a false alarm is a detection associated with no "
+       "object in the beam (clutter or noise, or an object whose box centre is outside the "
+       "field of view); association: docs/outcome.md"},
+      {"gate",
+       {{"rule",
+         "|detection - truth| <= cell + sigmas x stated one-sigma + size in range, azimuth and "
+         "elevation each (size: half the bounding-box diagonal, over the range in the angles); "
+         "nearest object in normalised distance; radial velocity not gated"},
+        {"range_cell_m", g.range_cell_m},
+        {"azimuth_cell_deg", common::degrees(g.azimuth_cell_rad)},
+        {"elevation_cell_deg", common::degrees(g.elevation_cell_rad)},
+        {"sigmas", g.sigmas},
+        {"unambiguous_range_m", g.unambiguous_range_m},
+        {"unambiguous_velocity_mps", g.unambiguous_velocity_mps}}},
+      {"frames_scored", o.frames_scored},
+      {"detections", o.detections},
+      {"false_alarms", o.false_alarms},
+      {"false_alarms_on_objects", o.false_alarms_on_objects},
+      {"false_alarms_per_frame", o.false_alarms_per_frame()},
+      {"targets", std::move(targets)}};
 }
 
 // trace, sensor.
@@ -470,6 +534,80 @@ void print_run_lines(const RunReport& p, std::FILE* out) {
                static_cast<ull>(r.bus_frames_out), static_cast<ull>(r.sink_lists));
 }
 
+// "N of M frames degraded (levels a-b, est. X dB)": X the governor's estimated SNR error at the
+// coarsest level used (the worst), and where that estimate comes from.
+void print_governor_line(const RunReport& p, std::FILE* out) {
+  const RunResult& r = *p.result;
+  const RunResult::GovernorTotals& g = r.governor;
+  if (g.frames_degraded == 0)
+    return;
+  int lowest = g.max_level;
+  for (int k = 1; k <= g.max_level; ++k) {
+    if (g.level_frames[static_cast<std::size_t>(k)] > 0) {
+      lowest = k;
+      break;
+    }
+  }
+  const double est_db = FidelityGovernor::kLevelSnrError_db[static_cast<std::size_t>(
+      std::clamp(g.max_level, 0, FidelityGovernor::kMaxLevel))];
+  std::fprintf(out, "  governor    %llu of %llu frames degraded (levels %d-%d, est. %.1f dB)\n",
+               static_cast<ull>(g.frames_degraded), static_cast<ull>(r.frames), lowest, g.max_level,
+               est_db);
+  std::fprintf(out,
+               "              est.: mean |SNR error| of level %d (the worst used), measured by "
+               "radar-emu tradeoff on the default scenario's frame, not on this scenario\n",
+               g.max_level);
+}
+
+// The outcome per target: one row per object that was in the beam, then the false alarms.
+void print_outcome_lines(const RunReport& p, std::FILE* out) {
+  const OutcomeTotals& o = p.result->outcome;
+  if (o.frames_scored == 0)
+    return;
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+  std::fprintf(out,
+               "  outcome     per object in the beam (association: docs/outcome.md); error = "
+               "detection - truth: mean std [stated one-sigma rms]\n");
+  std::fprintf(out, "    %-22s %6s %6s %5s  %-26s %-27s %-27s %s\n", "object", "beam", "det", "Pd",
+               "range [m]", "azimuth [deg]", "elevation [deg]", "radial vel [m/s]");
+  std::size_t never = 0;
+  std::string never_names;
+  for (const TargetOutcome& t : o.targets) {
+    const std::string name = object_name(p, t.object_id);
+    if (t.frames_in_beam == 0) {
+      if (never < 6)
+        never_names += (never > 0 ? ", " : "") + name;
+      ++never;
+      continue;
+    }
+    std::fprintf(out, "    %-22s %6llu %6llu %5.2f", name.c_str(),
+                 static_cast<ull>(t.frames_in_beam), static_cast<ull>(t.frames_detected), t.pd());
+    if (t.frames_detected == 0) {
+      std::fprintf(out, "  %-26s %-27s %-27s %s\n", "-", "-", "-", "-");
+      continue;
+    }
+    std::fprintf(out, "  %+8.2f %6.2f [%7.3f] ", t.range_m.mean, t.range_m.std_dev(),
+                 t.range_m.stated_sigma_rms());
+    for (const ErrorStats* e : {&t.azimuth_rad, &t.elevation_rad}) {
+      std::fprintf(out, " %+8.3f %6.3f [%7.4f] ", e->mean * kDeg, e->std_dev() * kDeg,
+                   e->stated_sigma_rms() * kDeg);
+    }
+    std::fprintf(out, " %+7.2f %5.2f [%6.3f]\n", t.radial_velocity_mps.mean,
+                 t.radial_velocity_mps.std_dev(), t.radial_velocity_mps.stated_sigma_rms());
+  }
+  std::fprintf(out,
+               "  false alarms %.2f per frame (%llu of %llu detections associated with no object "
+               "in the beam, over %llu frames; %llu of them the return of a scene object truth "
+               "does not cover)\n",
+               o.false_alarms_per_frame(), static_cast<ull>(o.false_alarms),
+               static_cast<ull>(o.detections), static_cast<ull>(o.frames_scored),
+               static_cast<ull>(o.false_alarms_on_objects));
+  if (never > 0) {
+    std::fprintf(out, "  never in the beam: %zu of %zu objects (%s%s)\n", never, o.targets.size(),
+                 never_names.c_str(), never > 6 ? ", ..." : "");
+  }
+}
+
 void print_exception_lines(const RunReport& p, std::FILE* out) {
   const Scenario& s = *p.scenario;
   const RunResult& r = *p.result;
@@ -530,6 +668,7 @@ void write_report_json(const RunReport& report, const std::filesystem::path& pat
   add_faults(report, rep);
   add_scene_and_weather(report, rep);
   add_governor(report, rep);
+  add_outcome(report, rep);
   add_trace_and_sensor(report, rep);
   add_bus_and_outputs(report, rep);
   add_live_view_and_trace_events(report, rep);
@@ -541,7 +680,9 @@ void write_report_json(const RunReport& report, const std::filesystem::path& pat
 
 void print_summary(const RunReport& report, std::FILE* out) {
   print_run_lines(report, out);
+  print_governor_line(report, out);
   print_exception_lines(report, out);
+  print_outcome_lines(report, out);
   print_output_lines(report, out);
 }
 

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "io/modbus.hpp"
 #include "loop/frame_record.hpp"
@@ -84,8 +85,9 @@ struct RunReport {
   double governor_trace_factor = 1.0;
   double governor_sensor_factor = 1.0;
   SensorFigures sensor{};
-  std::filesystem::path out_dir;  ///< "" = no output files
-  OutputCounters outputs;         ///< complete once the streamed outputs finished
+  std::vector<std::string> object_names;  ///< scene objects by id (the outcome's names)
+  std::filesystem::path out_dir;          ///< "" = no output files
+  OutputCounters outputs;                 ///< complete once the streamed outputs finished
   std::optional<LiveViewCounters> live_view;
 };
 

@@ -377,6 +377,93 @@ TEST_F(ClosedLoopDefault, DetectionsMatchIndependentGeometry) {
   }
 }
 
+// The summary says what was seen (issue 29): one row per object that was in the beam, its
+// frames in the beam counted here from the recorded truth, the four objects carrying corner
+// reflectors detected in every such frame (as DetectionsMatchIndependentGeometry requires), the
+// false alarms over every detection; and where the governor degraded frames, "N of M frames
+// degraded (levels a-b, est. X dB)" with N, a and b counted here from the per-frame levels.
+TEST_F(ClosedLoopDefault, SummaryGivesTheOutcomePerTargetAndTheDegradedFrames) {
+  const loop::RunResult& r = *result_;
+  const loop::RunReport rep = loop_->report(r);
+  char* buf = nullptr;
+  std::size_t len = 0;
+  std::FILE* mem = open_memstream(&buf, &len);
+  ASSERT_NE(mem, nullptr);
+  loop::print_summary(rep, mem);
+  std::fclose(mem);
+  const std::string text(buf, len);
+  std::free(buf);
+  std::cout << text;
+
+  ASSERT_EQ(r.records.size(), r.frames) << "every frame recorded";
+  std::map<std::uint32_t, std::uint64_t> in_beam;
+  for (const loop::FrameRecord& rec : r.records) {
+    for (std::uint32_t k = 0; k < rec.truth_count; ++k)
+      ++in_beam[r.truth[rec.first_truth + k].object_id];
+  }
+  ASSERT_FALSE(in_beam.empty());
+  const std::vector<std::string> with_reflector{"parked_aircraft", "parked_vehicle", "light_mast",
+                                                "moving_vehicle"};
+  std::size_t reflectors_seen = 0;
+  for (const loop::TargetOutcome& t : r.outcome.targets) {
+    const std::string& name = rep.object_names.at(t.object_id);
+    EXPECT_EQ(t.frames_in_beam, in_beam[t.object_id]) << name;
+    EXPECT_LE(t.frames_detected, t.frames_in_beam) << name;
+    if (t.frames_in_beam == 0)
+      continue;
+    std::istringstream rows(text);
+    std::string line;
+    bool found = false;
+    while (std::getline(rows, line)) {
+      std::istringstream cols(line);
+      std::string first;
+      std::uint64_t beam = 0, detected = 0;
+      double pd = -1.0;
+      if (line.rfind("    ", 0) == 0 && (cols >> first >> beam >> detected >> pd) &&
+          first == name) {
+        found = true;
+        EXPECT_EQ(beam, in_beam[t.object_id]) << line;
+        EXPECT_EQ(detected, t.frames_detected) << line;
+        EXPECT_NEAR(pd, static_cast<double>(detected) / static_cast<double>(beam), 0.005) << line;
+      }
+    }
+    EXPECT_TRUE(found) << "no summary row for " << name;
+    if (std::find(with_reflector.begin(), with_reflector.end(), name) != with_reflector.end()) {
+      ++reflectors_seen;
+      EXPECT_EQ(t.frames_detected, t.frames_in_beam) << name << " carries a corner reflector";
+      // Its associated detection lies within its gate: the range error within a cell plus its
+      // size (a few metres), whatever its mean.
+      EXPECT_LT(std::abs(t.range_m.mean), 25.0) << name;
+    }
+  }
+  EXPECT_EQ(reflectors_seen, 4u);
+  EXPECT_NE(text.find(" of " + std::to_string(r.detections_total) + " detections associated"),
+            std::string::npos);
+  EXPECT_EQ(r.outcome.detections, r.detections_total);
+
+  std::uint64_t degraded = 0;
+  int lowest = 99, highest = 0;
+  for (const std::int8_t l : r.governor.per_frame_level) {
+    if (l > 0) {
+      ++degraded;
+      lowest = std::min<int>(lowest, l);
+      highest = std::max<int>(highest, l);
+    }
+  }
+  if (degraded == 0) {
+    EXPECT_EQ(text.find("frames degraded"), std::string::npos);
+    return;
+  }
+  char want[160];
+  std::snprintf(want, sizeof want,
+                "  governor    %llu of %llu frames degraded (levels %d-%d, est. %.1f dB)\n",
+                static_cast<unsigned long long>(degraded),
+                static_cast<unsigned long long>(r.frames), lowest, highest,
+                loop::FidelityGovernor::kLevelSnrError_db[static_cast<std::size_t>(highest)]);
+  EXPECT_NE(text.find(want), std::string::npos) << "expected: " << want;
+  EXPECT_NE(text.find("not on this scenario"), std::string::npos);
+}
+
 TEST_F(ClosedLoopDefault, MovingVehicleRadialVelocityFromItsKnownVelocity) {
   // Tighter than the cell check: the reported radial velocity (a Doppler cell centre) is within
   // one Doppler cell of the value computed from the vehicle's and the ownship's known velocities.

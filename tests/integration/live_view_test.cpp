@@ -46,10 +46,12 @@ TEST(LiveView, PublishDoesNotAllocateAndCountsSupersededUpdates) {
   std::vector<radar_emu::io::icd::Detection> det(20);  // more than max_detections: clipped
   std::vector<loop::ObjectTruth> truth(3);
   std::array<std::int64_t, radar_emu::timing::kStageCount> stage_ns{};
+  std::vector<loop::TargetOutcome> targets(6);  // more than max_truth: clipped
+  const loop::OutcomeSoFar outcome{targets, 10, 3};
   radar_emu::test::start_counting_allocations();
   for (std::uint64_t i = 0; i < 10; ++i) {
     rec.frame_index = i;
-    view.publish(rec, glm::dvec3(1.0, 2.0, 3.0), stage_ns, det, truth);
+    view.publish(rec, glm::dvec3(1.0, 2.0, 3.0), stage_ns, det, truth, outcome);
   }
   EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u);
   const loop::LiveViewCounters c = view.counters();
@@ -82,6 +84,18 @@ TEST(LiveView, MessageCarriesTheFrame) {
   snap.truth[0].azimuth_rad = std::numbers::pi / 180.0 * 2.0;
   snap.truth[0].range_m = 1500.0;
   snap.truth_count = 1;
+  // The outcome so far: object 1 in the beam 4 frames, detected in 3 with range errors 1, 2, 3 m
+  // (mean 2, sample std 1); object 0 never in the beam (left out of the message).
+  snap.targets.resize(2);
+  snap.targets[0].object_id = 0;
+  snap.targets[1].object_id = 1;
+  snap.targets[1].frames_in_beam = 4;
+  snap.targets[1].frames_detected = 3;
+  for (double e : {1.0, 2.0, 3.0})
+    snap.targets[1].range_m.add(e, 0.1);
+  snap.target_count = 2;
+  snap.frames_scored = 4;
+  snap.false_alarms = 2;
   std::string text;
   view.format(snap, true, text);
   const nlohmann::json m = nlohmann::json::parse(text);
@@ -105,6 +119,15 @@ TEST(LiveView, MessageCarriesTheFrame) {
   EXPECT_EQ(m["truth"][0]["object"], "tug \"7\"");  // escaped in the JSON, intact after
   EXPECT_DOUBLE_EQ(m["truth"][0]["azimuth_deg"].get<double>(), 2.0);
   EXPECT_EQ(m["view"]["dropped"], 7);
+  EXPECT_DOUBLE_EQ(m["outcome"]["false_alarms_per_frame"].get<double>(), 0.5);
+  ASSERT_EQ(m["outcome"]["targets"].size(), 1u);
+  const nlohmann::json& t = m["outcome"]["targets"][0];
+  EXPECT_EQ(t["object"], "tug \"7\"");
+  EXPECT_EQ(t["frames_in_beam"], 4);
+  EXPECT_EQ(t["frames_detected"], 3);
+  EXPECT_DOUBLE_EQ(t["pd"].get<double>(), 0.75);
+  EXPECT_DOUBLE_EQ(t["range_error_m"][0].get<double>(), 2.0);
+  EXPECT_DOUBLE_EQ(t["range_error_m"][1].get<double>(), 1.0);
 }
 
 TEST(LiveView, ServeAddresses) {
