@@ -332,7 +332,8 @@ MomSolver::MomSolver(const scene::SceneDescription& description,
         "has " +
         std::to_string(info_.boundary_edges) + " open edges");
 
-  // Colour triangles so that no two sharing an edge (hence a row) have the same colour.
+  // Colour triangles so that no two sharing an edge (hence a basis function: a row and a column)
+  // have the same colour.
   colour_.assign(triangles_.size(), 0);
   for (std::uint32_t t = 0; t < triangles_.size(); ++t) {
     std::uint8_t used = 0;
@@ -382,128 +383,141 @@ MomFactorInfo MomSolver::factor(double frequency_hz) {
   std::uint8_t colours = 0;
   for (std::uint8_t c : colour_)
     colours = std::max<std::uint8_t>(colours, static_cast<std::uint8_t>(c + 1));
+  // Column by column: the matrix is column-major (LAPACK) with a column per source basis
+  // function, so a thread takes a source triangle and runs down its (at most three) columns over
+  // every observation triangle, writing nearby rows. (Row by row, each of the 9 writes of a pair
+  // landed n entries from the last: a cache miss each, most of the fill's time.) Source
+  // triangles of one colour share no basis function, hence no column: they fill in parallel.
   std::vector<std::size_t> near_count(triangles_.size(), 0);
   const std::size_t nt = triangles_.size();
   for (std::uint8_t colour = 0; colour < colours; ++colour) {
-    std::vector<std::uint32_t> rows;
+    std::vector<std::uint32_t> sources;
     for (std::uint32_t t = 0; t < nt; ++t)
       if (colour_[t] == colour)
-        rows.push_back(t);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 1), [&](const auto& range) {
-      std::array<Inner, 6> inner;
-      for (std::size_t ri = range.begin(); ri != range.end(); ++ri) {
-        const std::uint32_t tm = rows[ri];
-        const Triangle& m = triangles_[tm];
-        const double alpha = efie_weight(m);
-        const bool mfie = alpha < 1.0;
-        const std::array<glm::dvec3, 6>& rq = m.points;
-        // The identity term of the MFIE, (1/2) <f_i, f_j> on the observation triangle.
-        if (mfie) {
-          for (std::size_t i = 0; i < 3; ++i) {
-            if (m.basis[i] < 0)
-              continue;
-            for (std::size_t j = 0; j < 3; ++j) {
-              if (m.basis[j] < 0)
-                continue;
-              double s = 0.0;
-              for (std::size_t q = 0; q < kRule6.n; ++q)
-                s += kRule6.weight[q] *
-                     glm::dot(rq[q] - vertices_m_[m.v[i]], rq[q] - vertices_m_[m.v[j]]);
-              const double v = 0.5 * m.coefficient[i] * m.coefficient[j] * s * m.area_m2;
-              lu_[static_cast<std::size_t>(m.basis[j]) * n +
-                  static_cast<std::size_t>(m.basis[i])] += (1.0 - alpha) * v;
-            }
-          }
-        }
-        for (std::uint32_t tn = 0; tn < nt; ++tn) {
-          const Triangle& s = triangles_[tn];
-          if (s.basis[0] < 0 && s.basis[1] < 0 && s.basis[2] < 0)
-            continue;
-          const glm::dvec3 sa = vertices_m_[s.v[0]], sb = vertices_m_[s.v[1]],
-                           sc = vertices_m_[s.v[2]];
-          const double dist = glm::length(m.centroid - s.centroid);
-          const double scale_m = m.size_m + s.size_m;
-          for (auto& in : inner)
-            in = Inner{};
-          if (dist < 0.75 * scale_m) {
-            ++near_count[tm];
-            // Duffy coordinates about the projection p of each observation point onto the
-            // source plane: three sub-triangles (p, v_a, v_b), x = p + u (v_a - p) + u v (v_b -
-            // v_a), dA = u ((v_a - p) x (v_b - v_a)) . n du dv (signed: p may lie outside).
-            const std::array<glm::dvec3, 3> sv = {sa, sb, sc};
-            for (std::size_t q = 0; q < kRule6.n; ++q) {
-              const glm::dvec3 p = rq[q] - s.normal * glm::dot(rq[q] - sa, s.normal);
-              for (std::size_t e = 0; e < 3; ++e) {
-                const glm::dvec3 va = sv[e], vb = sv[(e + 1) % 3];
-                const double jac = glm::dot(glm::cross(va - p, vb - va), s.normal);
-                if (std::abs(jac) <= 1e-14 * s.area_m2)
+        sources.push_back(t);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, sources.size(), 1), [&](const auto& range) {
+          std::array<Inner, 6> inner;
+          for (std::size_t si = range.begin(); si != range.end(); ++si) {
+            const std::uint32_t tn = sources[si];
+            const Triangle& s = triangles_[tn];
+            const bool has_basis = s.basis[0] >= 0 || s.basis[1] >= 0 || s.basis[2] >= 0;
+            // The identity term of the MFIE, (1/2) <f_i, f_j> on triangle tn as observation
+            // triangle: its entries lie in its own columns.
+            const double alpha_s = efie_weight(s);
+            if (alpha_s < 1.0) {
+              for (std::size_t i = 0; i < 3; ++i) {
+                if (s.basis[i] < 0)
                   continue;
-                for (std::size_t iu = 0; iu < kDuffyU.x.size(); ++iu) {
-                  const double u = kDuffyU.x[iu];
-                  for (std::size_t iv = 0; iv < kDuffyV.x.size(); ++iv) {
-                    const double v = kDuffyV.x[iv];
-                    const glm::dvec3 x = p + u * (va - p) + u * v * (vb - va);
-                    inner[q].add(rq[q], x, kDuffyU.w[iu] * kDuffyV.w[iv] * u * jac, k, mfie);
-                  }
+                for (std::size_t j = 0; j < 3; ++j) {
+                  if (s.basis[j] < 0)
+                    continue;
+                  double sum = 0.0;
+                  for (std::size_t q = 0; q < kRule6.n; ++q)
+                    sum += kRule6.weight[q] * glm::dot(s.points[q] - vertices_m_[s.v[i]],
+                                                       s.points[q] - vertices_m_[s.v[j]]);
+                  const double v = 0.5 * s.coefficient[i] * s.coefficient[j] * sum * s.area_m2;
+                  lu_[static_cast<std::size_t>(s.basis[j]) * n +
+                      static_cast<std::size_t>(s.basis[i])] += (1.0 - alpha_s) * v;
                 }
               }
             }
-          } else {
-            const TriRule& rule = dist < 3.0 * scale_m ? kRule6 : kRule3;
-            for (std::size_t j = 0; j < rule.n; ++j) {
-              const glm::dvec3 x =
-                  rule.bary[j][0] * sa + rule.bary[j][1] * sb + rule.bary[j][2] * sc;
-              const double w = rule.weight[j] * s.area_m2;
-              for (std::size_t q = 0; q < kRule6.n; ++q)
-                inner[q].add(rq[q], x, w, k, mfie);
-            }
-          }
-          // Moments over the observation triangle (weights times its area).
-          cd i0(0.0, 0.0), irr(0.0, 0.0), m1(0.0, 0.0);
-          CplxVec ir, irp, m2, m3, m4;
-          for (std::size_t q = 0; q < kRule6.n; ++q) {
-            const double w = kRule6.weight[q] * m.area_m2;
-            const Inner& in = inner[q];
-            i0 += w * in.sG;
-            ir += scale(rq[q], w * in.sG);
-            irp += CplxVec{in.vG.re * w, in.vG.im * w};
-            irr += w * dot(rq[q], in.vG);
-            if (mfie && tn != tm) {
-              const CplxVec d = minus(scale(rq[q], in.sg), in.vg);  // int g (r - r')
-              const glm::dvec3 rxn = glm::cross(rq[q], m.normal);
-              const CplxVec rxv = cross(rq[q], in.vg);
-              m1 += w * dot(rxn, rxv);
-              m2 += CplxVec{rxv.re * w, rxv.im * w};
-              const CplxVec rxnd = cross(rxn, d);
-              m3 += CplxVec{rxnd.re * w, rxnd.im * w};
-              m4 += CplxVec{d.re * w, d.im * w};
-            }
-          }
-          for (std::size_t i = 0; i < 3; ++i) {
-            if (m.basis[i] < 0)
+            if (!has_basis)
               continue;
-            const glm::dvec3 pi = vertices_m_[m.v[i]];
-            const glm::dvec3 bi = glm::cross(pi, m.normal);
-            const std::size_t row = static_cast<std::size_t>(m.basis[i]);
-            for (std::size_t j = 0; j < 3; ++j) {
-              if (s.basis[j] < 0)
-                continue;
-              const glm::dvec3 pj = vertices_m_[s.v[j]];
-              const double cc = m.coefficient[i] * s.coefficient[j];
-              // EFIE: jk [ int int f.f' G - (1/k^2) int int div f div' f' G ], div f = 2 c.
-              const cd ff = irr - dot(pj, ir) - dot(pi, irp) + glm::dot(pi, pj) * i0;
-              cd z = alpha * cd(0.0, k) * cc * (ff - 4.0 / (k * k) * i0);
-              if (mfie && tn != tm) {
-                // MFIE: - int f . (n x int grad G x f' dS') dS (derivation beside Inner).
-                const cd h = m1 - dot(bi, m2) - dot(pj, m3) + dot(pj, cross(bi, m4));
-                z += (1.0 - alpha) * (-cc * h);
+            const glm::dvec3 sa = vertices_m_[s.v[0]], sb = vertices_m_[s.v[1]],
+                             sc = vertices_m_[s.v[2]];
+            for (std::uint32_t tm = 0; tm < nt; ++tm) {
+              const Triangle& m = triangles_[tm];
+              const double dist = glm::length(m.centroid - s.centroid);
+              const double scale_m = m.size_m + s.size_m;
+              const bool near = dist < 0.75 * scale_m;
+              if (near)
+                ++near_count[tn];
+              if (m.basis[0] < 0 && m.basis[1] < 0 && m.basis[2] < 0)
+                continue;  // no row to fill
+              const double alpha = efie_weight(m);
+              const bool mfie = alpha < 1.0;
+              const std::array<glm::dvec3, 6>& rq = m.points;
+              for (auto& in : inner)
+                in = Inner{};
+              if (near) {
+                // Duffy coordinates about the projection p of each observation point onto the
+                // source plane: three sub-triangles (p, v_a, v_b), x = p + u (v_a - p) + u v (v_b -
+                // v_a), dA = u ((v_a - p) x (v_b - v_a)) . n du dv (signed: p may lie outside).
+                const std::array<glm::dvec3, 3> sv = {sa, sb, sc};
+                for (std::size_t q = 0; q < kRule6.n; ++q) {
+                  const glm::dvec3 p = rq[q] - s.normal * glm::dot(rq[q] - sa, s.normal);
+                  for (std::size_t e = 0; e < 3; ++e) {
+                    const glm::dvec3 va = sv[e], vb = sv[(e + 1) % 3];
+                    const double jac = glm::dot(glm::cross(va - p, vb - va), s.normal);
+                    if (std::abs(jac) <= 1e-14 * s.area_m2)
+                      continue;
+                    for (std::size_t iu = 0; iu < kDuffyU.x.size(); ++iu) {
+                      const double u = kDuffyU.x[iu];
+                      for (std::size_t iv = 0; iv < kDuffyV.x.size(); ++iv) {
+                        const double v = kDuffyV.x[iv];
+                        const glm::dvec3 x = p + u * (va - p) + u * v * (vb - va);
+                        inner[q].add(rq[q], x, kDuffyU.w[iu] * kDuffyV.w[iv] * u * jac, k, mfie);
+                      }
+                    }
+                  }
+                }
+              } else {
+                const TriRule& rule = dist < 3.0 * scale_m ? kRule6 : kRule3;
+                for (std::size_t j = 0; j < rule.n; ++j) {
+                  const glm::dvec3 x =
+                      rule.bary[j][0] * sa + rule.bary[j][1] * sb + rule.bary[j][2] * sc;
+                  const double w = rule.weight[j] * s.area_m2;
+                  for (std::size_t q = 0; q < kRule6.n; ++q)
+                    inner[q].add(rq[q], x, w, k, mfie);
+                }
               }
-              lu_[static_cast<std::size_t>(s.basis[j]) * n + row] += z;
+              // Moments over the observation triangle (weights times its area).
+              cd i0(0.0, 0.0), irr(0.0, 0.0), m1(0.0, 0.0);
+              CplxVec ir, irp, m2, m3, m4;
+              for (std::size_t q = 0; q < kRule6.n; ++q) {
+                const double w = kRule6.weight[q] * m.area_m2;
+                const Inner& in = inner[q];
+                i0 += w * in.sG;
+                ir += scale(rq[q], w * in.sG);
+                irp += CplxVec{in.vG.re * w, in.vG.im * w};
+                irr += w * dot(rq[q], in.vG);
+                if (mfie && tn != tm) {
+                  const CplxVec d = minus(scale(rq[q], in.sg), in.vg);  // int g (r - r')
+                  const glm::dvec3 rxn = glm::cross(rq[q], m.normal);
+                  const CplxVec rxv = cross(rq[q], in.vg);
+                  m1 += w * dot(rxn, rxv);
+                  m2 += CplxVec{rxv.re * w, rxv.im * w};
+                  const CplxVec rxnd = cross(rxn, d);
+                  m3 += CplxVec{rxnd.re * w, rxnd.im * w};
+                  m4 += CplxVec{d.re * w, d.im * w};
+                }
+              }
+              for (std::size_t i = 0; i < 3; ++i) {
+                if (m.basis[i] < 0)
+                  continue;
+                const glm::dvec3 pi = vertices_m_[m.v[i]];
+                const glm::dvec3 bi = glm::cross(pi, m.normal);
+                const std::size_t row = static_cast<std::size_t>(m.basis[i]);
+                for (std::size_t j = 0; j < 3; ++j) {
+                  if (s.basis[j] < 0)
+                    continue;
+                  const glm::dvec3 pj = vertices_m_[s.v[j]];
+                  const double cc = m.coefficient[i] * s.coefficient[j];
+                  // EFIE: jk [ int int f.f' G - (1/k^2) int int div f div' f' G ], div f = 2 c.
+                  const cd ff = irr - dot(pj, ir) - dot(pi, irp) + glm::dot(pi, pj) * i0;
+                  cd z = alpha * cd(0.0, k) * cc * (ff - 4.0 / (k * k) * i0);
+                  if (mfie && tn != tm) {
+                    // MFIE: - int f . (n x int grad G x f' dS') dS (derivation beside Inner).
+                    const cd h = m1 - dot(bi, m2) - dot(pj, m3) + dot(pj, cross(bi, m4));
+                    z += (1.0 - alpha) * (-cc * h);
+                  }
+                  lu_[static_cast<std::size_t>(s.basis[j]) * n + row] += z;
+                }
+              }
             }
           }
-        }
-      }
-    });
+        });
   }
   fi.near_pairs = std::accumulate(near_count.begin(), near_count.end(), std::size_t{0});
   const auto t1 = std::chrono::steady_clock::now();

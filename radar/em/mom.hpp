@@ -129,7 +129,7 @@ class MomSolver {
   [[nodiscard]] double efie_weight(const Triangle& t) const noexcept;
   std::vector<glm::dvec3> vertices_m_;  ///< relative to centre_m_
   std::vector<Triangle> triangles_;
-  std::vector<std::uint8_t> colour_;  ///< neighbours differ: rows filled in parallel per colour
+  std::vector<std::uint8_t> colour_;  ///< neighbours differ: columns filled in parallel per colour
   glm::dvec3 centre_m_{0.0};
   std::size_t unknowns_ = 0;
   MomConfig config_;
