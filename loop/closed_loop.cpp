@@ -25,6 +25,7 @@
 #include "loop/ownship.hpp"
 #include "loop/ownship_source.hpp"
 #include "loop/peers.hpp"
+#include "loop/scene_import.hpp"
 #include "radar/em/surfaces.hpp"
 #include "radar/propagation/itu.hpp"
 #include "radar/propagation/path.hpp"
@@ -289,6 +290,10 @@ double rain_tilt_rad(radar::Polarisation polarisation) noexcept {
 }
 
 scene::SceneDescription scene_database(const SceneSource& s) {
+  if (s.import) {
+    scene::geodata::ImportReport report;  // the command prints it; the run reports its source
+    return import_scene(*s.import, report);
+  }
   if (!s.file.empty())
     return scene::load_gltf(s.file);
   if (s.builtin == "airport") {
@@ -306,8 +311,8 @@ scene::SceneDescription scene_database(const SceneSource& s) {
 }
 
 scene::SceneDescription scene_description(const Scenario& s) {
-  scene::SceneDescription d =
-      scene_database({s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file});
+  scene::SceneDescription d = scene_database(
+      {s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file, s.scene_import});
   // [[target]] tables: appended after the database's own objects, in table order. A mesh
   // file's own material names must be radar materials too (a [[target]] material was checked
   // when the scenario was read).

@@ -93,8 +93,9 @@ struct OwnshipInput {
 /// k and alpha then average the two). Real-time safe.
 [[nodiscard]] double rain_tilt_rad(radar::Polarisation polarisation) noexcept;
 
-/// The scene database a [scene] table names (file or builtin, with its seed), without targets:
-/// what the loop and `radar-emu sar` build. Throws with context when a file cannot be loaded.
+/// The scene database a [scene] table names (file, builtin with its seed, or [scene.import]
+/// through loop/scene_import.hpp), without targets: what the loop, `image` and `sar` build.
+/// Throws with context when a file cannot be loaded or imported.
 [[nodiscard]] scene::SceneDescription scene_database(const SceneSource& source);
 
 /// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop

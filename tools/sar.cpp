@@ -141,13 +141,13 @@ SarCase case_from_table(const Table& root) {
                     std::end(loop::kSceneSourceKeys));
   scene.refuse_unknown(scene_keys);
   // A scene database (the scenario's [scene] keys, one reader), or the flat ground.
-  c.database = scene.has("builtin") || scene.has("file");
+  c.database = scene.has("builtin") || scene.has("file") || scene.has("import");
   if (c.database) {
     loop::read_scene_source(scene, c.source);
     for (const char* flat : {"ground_material", "latitude_deg", "longitude_deg"})
       if (scene.has(flat))
         scene.fail(flat,
-                   "applies to the flat ground only; builtin or file name a scene database "
+                   "applies to the flat ground only; builtin, file or import name a scene database "
                    "(which has its own materials and anchor)");
   } else {
     for (const char* key : {"seed", "corner_reflectors"})
@@ -994,21 +994,22 @@ int run_sar_tool(const SarToolOptions& o) {
                  {"dem_hole_pixels", dem.holes},
                  {"band", 2},
                  {"bits", "1 shadow, 2 layover, 4 foreshortening, 8 no DEM"}};
-  j["scene"] = {
-      {"database", c.database ? (c.source.file.empty() ? c.source.builtin : c.source.file.string())
-                              : std::string("none")},
-      {"terrain_patches", patches},
-      {"ground_material", c.ground_material},
-      {"clutter", c.clutter},
-      {"clutter_cells", cells.size()},
-      {"shadowed_cells", shadowed},
-      {"clutter_cell_m", c.clutter_cell_m},
-      {"speckle_seed", c.speckle_seed},
-      {"targets", c.targets.size()},
-      {"target_echoes", target_echoes},
-      {"rays", rays},
-      {"latitude_deg", c.latitude_deg},
-      {"longitude_deg", c.longitude_deg}};
+  j["scene"] = {{"database", !c.database             ? std::string("none")
+                             : c.source.import       ? "import:" + c.source.import->dem.string()
+                             : c.source.file.empty() ? c.source.builtin
+                                                     : c.source.file.string()},
+                {"terrain_patches", patches},
+                {"ground_material", c.ground_material},
+                {"clutter", c.clutter},
+                {"clutter_cells", cells.size()},
+                {"shadowed_cells", shadowed},
+                {"clutter_cell_m", c.clutter_cell_m},
+                {"speckle_seed", c.speckle_seed},
+                {"targets", c.targets.size()},
+                {"target_echoes", target_echoes},
+                {"rays", rays},
+                {"latitude_deg", c.latitude_deg},
+                {"longitude_deg", c.longitude_deg}};
   j["timing_s"] = {{"raw", raw_s},
                    {"raw_ray_tracing", trace_s},
                    {"raw_clutter_synthesis", clutter_s},

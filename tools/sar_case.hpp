@@ -43,8 +43,8 @@ struct SarCase {
   double ground_centre_m = 0.0;                                  ///< derived
   radar::Polarisation pol = radar::Polarisation::kVV;
   std::string pol_name = "VV";
-  /// [scene] builtin or file: a scene database (the scenario's [scene] keys, read by
-  /// loop::read_scene_source) instead of the flat ground_material plane; its anchor then
+  /// [scene] builtin, file or [scene.import]: a scene database (the scenario's [scene] keys, read
+  /// by loop::read_scene_source) instead of the flat ground_material plane; its anchor then
   /// georeferences the outputs (latitude_deg, longitude_deg are refused).
   bool database = false;
   loop::SceneSource source;

@@ -206,21 +206,22 @@ void add_scene_and_weather(const RunReport& p, Json& rep) {
   const Scenario& s = *p.scenario;
   const RunResult& r = *p.result;
   const double n = r.view.frames > 0 ? static_cast<double>(r.view.frames) : 1.0;
-  rep["scene"] = {
-      {"source", s.scene_file.empty() ? "builtin:" + s.scene_builtin : s.scene_file.string()},
-      {"seed", s.scene_seed},
-      {"objects", p.scene.objects},
-      {"triangles", p.scene.triangles},
-      {"lod_tiles", p.scene.lod_tiles},
-      {"per_frame_mean",
-       {{"lod_tiles_in_view", static_cast<double>(r.view.lod_groups_in_view) / n},
-        {"lod_tiles_culled", static_cast<double>(r.view.lod_groups_culled) / n},
-        {"lod_tiles_at_level",
-         {static_cast<double>(r.view.lod_groups_at_level[0]) / n,
-          static_cast<double>(r.view.lod_groups_at_level[1]) / n,
-          static_cast<double>(r.view.lod_groups_at_level[2]) / n,
-          static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
-        {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
+  rep["scene"] = {{"source", s.scene_import         ? "import:" + s.scene_import->dem.string()
+                             : s.scene_file.empty() ? "builtin:" + s.scene_builtin
+                                                    : s.scene_file.string()},
+                  {"seed", s.scene_seed},
+                  {"objects", p.scene.objects},
+                  {"triangles", p.scene.triangles},
+                  {"lod_tiles", p.scene.lod_tiles},
+                  {"per_frame_mean",
+                   {{"lod_tiles_in_view", static_cast<double>(r.view.lod_groups_in_view) / n},
+                    {"lod_tiles_culled", static_cast<double>(r.view.lod_groups_culled) / n},
+                    {"lod_tiles_at_level",
+                     {static_cast<double>(r.view.lod_groups_at_level[0]) / n,
+                      static_cast<double>(r.view.lod_groups_at_level[1]) / n,
+                      static_cast<double>(r.view.lod_groups_at_level[2]) / n,
+                      static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
+                    {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
   // The atmosphere the returns crossed and its two-way loss at reference ranges.
   const WeatherSpec& w = s.weather;
   const WeatherFigures& f = p.weather;
