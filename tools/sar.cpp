@@ -549,7 +549,10 @@ int run_sar_tool(const SarToolOptions& o) {
   std::size_t shadowed = 0, patches = 0;
   std::optional<rd::clutter::TerrainEngine> engine;
   rd::SarDem dem;
-  if (c.clutter && (c.database || c.ground_material != "none")) {
+  // A scene database is always focused on its DEM (with or without clutter: the image's
+  // georeferencing holds for what stands on the terrain); the flat ground needs the engine only
+  // for its clutter.
+  if (c.database || (c.clutter && c.ground_material != "none")) {
     const auto t0 = Clock::now();
     // The image plus the beam's reach beyond it along track and a margin in range: its
     // horizontal bounding box (the track may have any heading).
@@ -570,14 +573,19 @@ int run_sar_tool(const SarToolOptions& o) {
     es.speckle.seed = c.speckle_seed;
     progress("terrain engine: facets of the scene's terrain");
     engine.emplace(rd::make_terrain_engine(scene, tracer, es));
-    progress("terrain engine: " + std::to_string(engine->facets().size()) + " facets; patches of " +
-             fmt(c.clutter_cell_m) + " m with shadowing");
-    rd::TerrainCells tc = rd::terrain_cells(*engine, p, c.clutter_cell_m);
-    cells = std::move(tc.cells);
-    shadowed = tc.shadowed;
-    patches = tc.patches;
-    progress("terrain engine: " + std::to_string(cells.size()) + " lit patches (" +
-             std::to_string(shadowed) + " in shadow); DEM and mask of the image grid");
+    if (c.clutter) {
+      progress("terrain engine: " + std::to_string(engine->facets().size()) +
+               " facets; patches of " + fmt(c.clutter_cell_m) + " m with shadowing");
+      rd::TerrainCells tc = rd::terrain_cells(*engine, p, c.clutter_cell_m);
+      cells = std::move(tc.cells);
+      shadowed = tc.shadowed;
+      patches = tc.patches;
+      progress("terrain engine: " + std::to_string(cells.size()) + " lit patches (" +
+               std::to_string(shadowed) + " in shadow); DEM and mask of the image grid");
+    } else {
+      progress("terrain engine: " + std::to_string(engine->facets().size()) +
+               " facets, no clutter; DEM and mask of the image grid");
+    }
     dem = rd::sar_dem(*engine, p, grid);
     grid.height_m = dem.height_m;
     if (dem.holes > 0)
