@@ -495,10 +495,6 @@ void read_run(Scenario& s, const Table& root) {
   s.stale_output_silent = stale_output == "silent";
 }
 
-}  // namespace
-
-namespace {
-
 // [scene.import]: the GIS inputs and the options of `radar-emu scene import`, SI inside.
 GeodataSource read_import(const Table& im) {
   im.refuse_unknown({"dem", "surround_dem", "landcover", "classes", "osm", "anchor_deg",

@@ -39,6 +39,7 @@
 #include "radar/products/irf.hpp"
 #include "radar/products/sar.hpp"
 #include "radar/products/sar_terrain.hpp"
+#include "scene/geo.hpp"
 #include "scene/scene.hpp"
 #include "scene/targets.hpp"
 #include "tools/mpi_work.hpp"
@@ -395,12 +396,23 @@ void write_png(const rd::SarImage& img, const std::string& title, const std::str
 }
 
 #ifdef RADAR_EMU_HAVE_GDAL
-// Local transverse Mercator at the scene anchor: within a few km its easting/northing equal the
-// ENU x/y of the scene to millimetres (scale error x^2 / (2 R^2) < 1e-7 at 2 km).
+// Local transverse Mercator at the scene anchor, its scale factor (R + h0) / R for the anchor's
+// ellipsoidal height h0 (R the ellipsoid's Gaussian radius sqrt(M N) there): within a few km
+// its easting/northing equal the ENU x/y of the scene to millimetres (scale error
+// x^2 / (2 R^2) < 1e-7 at 2 km, plus x (h - h0) / R for ground at another height h). With a
+// scale of 1 the ENU distances of ground at h0 would read h0 / R too long: 1.6 m at 10 km on a
+// 1000 m plateau.
 std::string local_wkt(const SarCase& c) {
+  namespace g = sc::wgs84;
+  const double s = std::sin(common::radians(c.latitude_deg));
+  const double w = 1.0 - g::kFirstEccentricitySquared * s * s;
+  const double n_m = g::kSemiMajorAxis_m / std::sqrt(w);
+  const double m_m =
+      g::kSemiMajorAxis_m * (1.0 - g::kFirstEccentricitySquared) / (w * std::sqrt(w));
+  const double scale = 1.0 + c.anchor_height_m / std::sqrt(m_m * n_m);
   OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
   OSRSetWellKnownGeogCS(srs, "WGS84");
-  OSRSetTM(srs, c.latitude_deg, c.longitude_deg, 1.0, 0.0, 0.0);
+  OSRSetTM(srs, c.latitude_deg, c.longitude_deg, scale, 0.0, 0.0);
   OSRSetLinearUnits(srs, SRS_UL_METER, 1.0);
   char* wkt = nullptr;
   OSRExportToWkt(srs, &wkt);
@@ -527,6 +539,7 @@ int run_sar_tool(const SarToolOptions& o) {
   if (c.database) {
     c.latitude_deg = common::degrees(scene.anchor().latitude_rad);
     c.longitude_deg = common::degrees(scene.anchor().longitude_rad);
+    c.anchor_height_m = scene.anchor().height_m;
   }
   rd::SbrConfig cfg;
   cfg.carrier_hz = p.carrier_hz;

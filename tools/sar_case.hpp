@@ -57,6 +57,9 @@ struct SarCase {
   double target_ray_spacing_m = 0.05;
   int max_bounces = 3;
   double latitude_deg = 43.6, longitude_deg = 1.4;
+  /// Ellipsoidal height of the scene's anchor [m] (its ENU origin): 0 for the flat ground, the
+  /// database's otherwise (set by run_sar_tool); scales the GeoTIFF's transverse Mercator.
+  double anchor_height_m = 0.0;
   std::vector<TargetCase> targets;
 };
 

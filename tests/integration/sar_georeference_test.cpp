@@ -11,7 +11,10 @@
 //      longitude to a pixel, where the trihedral's peak must lie within one pixel; the peak's
 //      pixel maps back to latitude / longitude within one pixel spacing of the point.
 // The terrain is tilted so that an image focused on the flat z = 0 plane instead of the DEM
-// would put the points several pixels off (checked too).
+// would put the points several pixels off (checked too), and lies on a 3000 m plateau, where a
+// transverse Mercator of scale 1 would stretch the image by h0 / R (4.7e-4): every pixel centre
+// GDAL maps to latitude / longitude must also lie within 1 cm of where the import's frame puts
+// that pixel's ground (its ENU x, y from the product's coordinates and the DEM band's height).
 
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
@@ -41,7 +44,7 @@ constexpr double kLat0_deg = 43.45, kLon0_deg = 1.30;  // the anchor
 constexpr double kIncidence_deg = 50.0;
 constexpr double kSpacing_m = 2.0;  // image pixel, azimuth and ground range
 // The DEM: a plane in UTM 31N metres around the anchor's easting / northing (e0, n0).
-constexpr double kBase_m = 200.0, kSlopeEast = 0.02, kSlopeNorth = 0.1;
+constexpr double kBase_m = 3000.0, kSlopeEast = 0.02, kSlopeNorth = 0.1;
 
 struct Utm {
   OGRSpatialReference wgs84, utm;
@@ -164,7 +167,31 @@ TEST(SarGeoreference, LatLonToSceneToSarPixelAndBackWithinOnePixel) {
   ASSERT_EQ(
       ds->GetRasterBand(1)->RasterIO(GF_Read, 0, 0, w, h, px.data(), w, h, GDT_CFloat32, 0, 0),
       CE_None);
+  std::vector<float> dem_m(px.size());
+  ASSERT_EQ(ds->GetRasterCount(), 3);
+  ASSERT_EQ(
+      ds->GetRasterBand(3)->RasterIO(GF_Read, 0, 0, w, h, dem_m.data(), w, h, GDT_Float32, 0, 0),
+      CE_None);
   GDALClose(ds);
+
+  // Every 8th pixel centre: GDAL's latitude / longitude against the import's frame at that
+  // pixel's ground (product coordinates are ENU x, y; band 3 the DEM height, world up).
+  double worst_grid_m = 0.0;
+  for (int r = 0; r < h; r += 8)
+    for (int c = 0; c < w; c += 8) {
+      const double pc = c + 0.5, pr = r + 0.5;
+      const glm::dvec3 ground{gt[0] + gt[1] * pc + gt[2] * pr, gt[3] + gt[4] * pc + gt[5] * pr,
+                              dem_m[static_cast<std::size_t>(r * w + c)]};
+      double lon = ground.x, lat = ground.y;
+      ASSERT_TRUE(to_wgs84->Transform(1, &lon, &lat));
+      const scene::wgs84::Geodetic g = frame.geodetic_from_enu(ground);
+      const glm::dvec3 back = frame.enu_from_geodetic({radians(lat), radians(lon), g.height_m});
+      worst_grid_m = std::max(worst_grid_m, std::hypot(back.x - ground.x, back.y - ground.y));
+    }
+  std::printf("pixel grid: GDAL's latitude / longitude within %.4f m of the scene's frame\n",
+              worst_grid_m);
+  EXPECT_LT(worst_grid_m, 0.01);
+
   auto amp = [&](int c, int r) {
     return std::abs(px[static_cast<std::size_t>(r) * static_cast<std::size_t>(w) +
                        static_cast<std::size_t>(c)]);
