@@ -29,6 +29,10 @@
 #include "timing/profiler.hpp"
 #include "timing/realtime.hpp"
 
+namespace radar_emu::scene::geodata {
+struct ImportReport;
+}
+
 namespace radar_emu::loop {
 
 struct RunOptions {
@@ -96,11 +100,14 @@ struct OwnshipInput {
 /// The scene database a [scene] table names (file, builtin with its seed, or [scene.import]
 /// through loop/scene_import.hpp), without targets: what the loop, `image` and `sar` build.
 /// Throws with context when a file cannot be loaded or imported.
-[[nodiscard]] scene::SceneDescription scene_database(const SceneSource& source);
+/// `import_report` (optional) receives the import's report when [scene.import] names the scene.
+[[nodiscard]] scene::SceneDescription scene_database(
+    const SceneSource& source, scene::geodata::ImportReport* import_report = nullptr);
 
 /// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop
 /// builds it. Throws with context when a file cannot be loaded.
-[[nodiscard]] scene::SceneDescription scene_description(const Scenario& scenario);
+[[nodiscard]] scene::SceneDescription scene_description(
+    const Scenario& scenario, scene::geodata::ImportReport* import_report = nullptr);
 
 class ClosedLoop {
  public:

@@ -222,6 +222,17 @@ void add_scene_and_weather(const RunReport& p, Json& rep) {
                       static_cast<double>(r.view.lod_groups_at_level[2]) / n,
                       static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
                     {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
+  if (p.scene.import) {
+    const SceneFigures::Import& im = *p.scene.import;
+    rep["scene"]["import"] = {{"vertical", im.vertical},
+                              {"anchor_height_m", im.anchor_height_m},
+                              {"anchor_undulation_m", im.anchor_undulation_m},
+                              {"dem_holes_filled", im.dem_holes_filled},
+                              {"unknown_class_cells", im.unknown_class_cells},
+                              {"osm_broken_ways", im.osm_broken_ways},
+                              {"osm_outside", im.osm_outside},
+                              {"seconds", im.seconds}};
+  }
   // The atmosphere the returns crossed and its two-way loss at reference ranges.
   const WeatherSpec& w = s.weather;
   const WeatherFigures& f = p.weather;

@@ -105,6 +105,27 @@ TEST(SceneImportTool, ScenarioImportEqualsTheCommandsDatabase) {
   EXPECT_GT(triangles, 100000u);
 }
 
+// The loop reports how the import converted the heights (report.json "scene"."import"): the
+// Olinda tile states no vertical datum, so EGM96 is assumed and said to be; the anchor's
+// ellipsoidal height is the scene's own anchor height.
+TEST(SceneImportTool, TheRunReportsTheImport) {
+  Scenario s = load_scenario(source("examples/geodata/olinda_approach.toml"));
+  s.frames = 2;
+  ClosedLoop loop(s, {});
+  const RunResult r = loop.run();
+  const RunReport report = loop.report(r);
+  ASSERT_TRUE(report.scene.import.has_value());
+  const SceneFigures::Import& im = *report.scene.import;
+  std::printf("import: %s; anchor %.3f m (N %.3f m), %.2f s\n", im.vertical.c_str(),
+              im.anchor_height_m, im.anchor_undulation_m, im.seconds);
+  EXPECT_NE(im.vertical.find("EGM96"), std::string::npos) << im.vertical;
+  EXPECT_NE(im.vertical.find("assumed"), std::string::npos) << im.vertical;
+  EXPECT_NE(im.anchor_undulation_m, 0.0);
+  EXPECT_EQ(im.dem_holes_filled, 0u);
+  EXPECT_EQ(im.osm_broken_ways, 0u);
+  EXPECT_NEAR(im.anchor_height_m, scene_description(s).anchor.height_m, 1e-9);
+}
+
 // [scene.import] refused with the reader's one line: with another source, without its required
 // keys, land cover without a class table, an unknown key.
 TEST(SceneImportTool, ScenarioImportTableErrorsAreOneLine) {
