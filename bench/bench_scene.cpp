@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -104,6 +105,26 @@ void BM_LoadAndBuildAllLevelsGlb(benchmark::State& state) {
   load_and_build(state, files().full, files().full_triangles);
 }
 BENCHMARK(BM_LoadAndBuildAllLevelsGlb)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+
+// (a') load_gltf + BVH build of any .glb named by RADAR_EMU_BENCH_GLB (registered only then):
+// scripts/bench-geodata-import.sh compares an imported database with the generated one above
+// in one run.
+const bool kFileBenchmark = [] {
+  const char* path = std::getenv("RADAR_EMU_BENCH_GLB");
+  if (path == nullptr || *path == '\0')
+    return false;
+  std::size_t triangles = 0;
+  for (const auto& o : sc::load_gltf(path).objects)
+    triangles += o.mesh.triangles.size();
+  benchmark::RegisterBenchmark("BM_LoadAndBuildGlbFile",
+                               [file = fs::path(path), triangles](benchmark::State& state) {
+                                 load_and_build(state, file, triangles);
+                               })
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->Iterations(3);
+  return true;
+}();
 
 // (b) set_time with N movers on looping trajectories (8 waypoints, 40 m turns), each a 12-
 // triangle box, over a static ground.

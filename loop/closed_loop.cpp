@@ -25,6 +25,7 @@
 #include "loop/ownship.hpp"
 #include "loop/ownship_source.hpp"
 #include "loop/peers.hpp"
+#include "loop/scene_import.hpp"
 #include "radar/em/surfaces.hpp"
 #include "radar/propagation/itu.hpp"
 #include "radar/propagation/path.hpp"
@@ -297,7 +298,9 @@ void warn_targets_never_in_beam(const Scenario& s, scene::Scene& scene,
 
 // The scene database, its anchor's ENU frame, and the objects ground truth covers.
 struct SceneSide {
-  explicit SceneSide(const Scenario& s) : scene(scene_description(s)), enu(scene.anchor()) {}
+  explicit SceneSide(const Scenario& s)
+      : scene(scene_description(s, &import)), enu(scene.anchor()) {}
+  scene::geodata::ImportReport import;  ///< [scene.import]'s report (before `scene`: filled by it)
   scene::Scene scene;
   scene::wgs84::EnuFrame enu;
   std::vector<std::uint32_t> truth_objects;  ///< objects truth.json covers
@@ -353,7 +356,15 @@ double rain_tilt_rad(radar::Polarisation polarisation) noexcept {
   }
 }
 
-scene::SceneDescription scene_database(const SceneSource& s) {
+scene::SceneDescription scene_database(const SceneSource& s,
+                                       scene::geodata::ImportReport* import_report) {
+  if (s.import) {
+    scene::geodata::ImportReport report;
+    scene::SceneDescription d = import_scene(*s.import, report);
+    if (import_report != nullptr)
+      *import_report = std::move(report);
+    return d;
+  }
   if (!s.file.empty())
     return scene::load_gltf(s.file);
   if (s.builtin == "airport") {
@@ -370,9 +381,11 @@ scene::SceneDescription scene_database(const SceneSource& s) {
   return scene::default_scene();  // read_scene_source() accepts only these built-ins
 }
 
-scene::SceneDescription scene_description(const Scenario& s) {
-  scene::SceneDescription d =
-      scene_database({s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file});
+scene::SceneDescription scene_description(const Scenario& s,
+                                          scene::geodata::ImportReport* import_report) {
+  scene::SceneDescription d = scene_database(
+      {s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file, s.scene_import},
+      import_report);
   // [[target]] tables: appended after the database's own objects, in table order. A mesh
   // file's own material names must be radar materials too (a [[target]] material was checked
   // when the scenario was read).
@@ -809,7 +822,20 @@ RunReport ClosedLoop::report(const RunResult& result) const {
   p.trace_events_file = m.options.trace_events_file;
   p.trace_events = m.accounting.profiler.events().size();
   const scene::Scene& sc = m.scene.scene;
-  p.scene = {sc.objects().size(), sc.triangle_count(), sc.view_stats().lod_groups};
+  p.scene.objects = sc.objects().size();
+  p.scene.triangles = sc.triangle_count();
+  p.scene.lod_tiles = sc.view_stats().lod_groups;
+  if (m.scenario.scene_import) {
+    const scene::geodata::ImportReport& ir = m.scene.import;
+    p.scene.import = {ir.vertical,
+                      ir.anchor_height_m,
+                      ir.anchor_undulation_m,
+                      ir.dem_holes_filled,
+                      ir.unknown_class_cells,
+                      ir.osm_broken_ways,
+                      ir.osm_outside,
+                      ir.seconds};
+  }
   p.weather = m.tracer.weather;
   p.governor = m.governor.config();
   p.governor_trace_factor = m.governor.trace_factor();

@@ -29,6 +29,10 @@
 #include "timing/profiler.hpp"
 #include "timing/realtime.hpp"
 
+namespace radar_emu::scene::geodata {
+struct ImportReport;
+}
+
 namespace radar_emu::loop {
 
 struct RunOptions {
@@ -93,13 +97,17 @@ struct OwnshipInput {
 /// k and alpha then average the two). Real-time safe.
 [[nodiscard]] double rain_tilt_rad(radar::Polarisation polarisation) noexcept;
 
-/// The scene database a [scene] table names (file or builtin, with its seed), without targets:
-/// what the loop and `radar-emu sar` build. Throws with context when a file cannot be loaded.
-[[nodiscard]] scene::SceneDescription scene_database(const SceneSource& source);
+/// The scene database a [scene] table names (file, builtin with its seed, or [scene.import]
+/// through loop/scene_import.hpp), without targets: what the loop, `image` and `sar` build.
+/// Throws with context when a file cannot be loaded or imported.
+/// `import_report` (optional) receives the import's report when [scene.import] names the scene.
+[[nodiscard]] scene::SceneDescription scene_database(
+    const SceneSource& source, scene::geodata::ImportReport* import_report = nullptr);
 
 /// The scene database a scenario names ([scene] file or builtin, with its seed), as the loop
 /// builds it. Throws with context when a file cannot be loaded.
-[[nodiscard]] scene::SceneDescription scene_description(const Scenario& scenario);
+[[nodiscard]] scene::SceneDescription scene_description(
+    const Scenario& scenario, scene::geodata::ImportReport* import_report = nullptr);
 
 class ClosedLoop {
  public:

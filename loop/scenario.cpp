@@ -495,12 +495,70 @@ void read_run(Scenario& s, const Table& root) {
   s.stale_output_silent = stale_output == "silent";
 }
 
+// [scene.import]: the GIS inputs and the options of `radar-emu scene import`, SI inside.
+GeodataSource read_import(const Table& im) {
+  im.refuse_unknown({"dem", "surround_dem", "landcover", "classes", "osm", "anchor_deg",
+                     "central_m", "cell_m", "surround_m", "surround_cell_m", "datum", "tile_cells",
+                     "lod_levels", "default_material", "max_memory_mib"});
+  im.require("dem");
+  im.require("anchor_deg");
+  GeodataSource g;
+  std::string path;
+  const auto read_path = [&](std::string_view key, std::filesystem::path& out) {
+    if (im.string(key, path)) {
+      if (path.empty())
+        im.fail(key, "is empty (leave the key out instead)");
+      out = path;
+    }
+  };
+  read_path("dem", g.dem);
+  read_path("surround_dem", g.surround_dem);
+  read_path("landcover", g.landcover);
+  read_path("classes", g.classes);
+  read_path("osm", g.osm);
+  if (!g.landcover.empty() && g.classes.empty())
+    im.fail("landcover", "needs classes = \"TABLE.toml\" (examples/landcover/)");
+  double anchor_deg[2] = {0.0, 0.0};
+  im.vector("anchor_deg", anchor_deg, {-180.0, 180.0});
+  if (!(std::abs(anchor_deg[0]) < 89.0))
+    im.fail("anchor_deg", "latitude within +-89 deg");
+  g.anchor_latitude_rad = common::radians(anchor_deg[0]);
+  g.anchor_longitude_rad = common::radians(anchor_deg[1]);
+  double central_m[2] = {g.central_east_m, g.central_north_m};
+  im.vector("central_m", central_m, {0.0, 1e6, true});
+  g.central_east_m = central_m[0];
+  g.central_north_m = central_m[1];
+  im.number("cell_m", g.cell_m, {0.0, 1e4, true});
+  im.number("surround_m", g.surround_m, {0.0, 1e7});
+  im.number("surround_cell_m", g.surround_cell_m, {0.0, 1e5, true});
+  im.choice("datum", g.datum, {"file", "egm96", "ellipsoid"});
+  im.integer("tile_cells", g.tile_cells, 1, 4096);
+  im.integer("lod_levels", g.lod_levels, 1, 4);
+  im.string("default_material", g.default_material);
+  if (!radar::is_surface_material(g.default_material))
+    im.unknown_value("default_material", g.default_material, radar::surface_material_names());
+  double max_mib = static_cast<double>(g.max_memory_bytes) / 1048576.0;
+  im.number("max_memory_mib", max_mib, {1.0, 1048576.0});
+  g.max_memory_bytes = static_cast<std::uint64_t>(max_mib * 1048576.0);
+  return g;
+}
+
 }  // namespace
 
 void read_scene_source(const Table& scene, SceneSource& src) {
   // One source of the scene: a table that names both would silently use the file.
   if (scene.has("builtin") && scene.has("file"))
     scene.fail("file", "builtin and file exclude each other (give one)");
+  if (scene.has("import")) {
+    for (const char* other : {"builtin", "file", "seed", "corner_reflectors"})
+      if (scene.has(other))
+        scene.fail(other, "excludes [scene.import] (the database is built from its GIS files)");
+    src.import = read_import(scene.table("import"));
+    src.file.clear();
+    return;
+  }
+  if (scene.has("builtin") || scene.has("file"))
+    src.import.reset();
   if (scene.has("seed") && scene.has("file"))
     scene.fail("seed", "seeds a built-in scene, not a file");
   scene.choice("builtin", src.builtin, {"airport", "default", "terrain"});
@@ -524,12 +582,14 @@ namespace {
 void read_scene(Scenario& s, const Table& root) {
   const Table scene = root.table("scene");
   scene.refuse_unknown(kSceneSourceKeys);
-  SceneSource src{s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file};
+  SceneSource src{s.scene_builtin, s.scene_seed, s.scene_corner_reflectors, s.scene_file,
+                  s.scene_import};
   read_scene_source(scene, src);
   s.scene_builtin = src.builtin;
   s.scene_seed = src.seed;
   s.scene_corner_reflectors = src.corner_reflectors;
   s.scene_file = src.file;
+  s.scene_import = src.import;
 }
 
 // [ownship]: the scripted start state and the INS rates.
@@ -919,6 +979,12 @@ Scenario parse_impl(std::string_view toml_text, const std::string& origin,
     apply_toml(s, toml_text, origin);
   if (!s.scene_file.empty() && s.scene_file.is_relative() && !base_dir.empty())
     s.scene_file = base_dir / s.scene_file;  // relative to the scenario file
+  if (s.scene_import && !base_dir.empty()) {
+    GeodataSource& g = *s.scene_import;
+    for (std::filesystem::path* p : {&g.dem, &g.surround_dem, &g.landcover, &g.classes, &g.osm})
+      if (!p->empty() && p->is_relative())
+        *p = base_dir / *p;  // relative to the scenario file
+  }
   if (!s.pattern_file.empty() && s.pattern_file.is_relative() && !base_dir.empty())
     s.pattern_file = base_dir / s.pattern_file;
   for (scene::TargetPlacement& t : s.targets) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <glm/glm.hpp>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -32,19 +33,44 @@ struct WeatherSpec {
   double pressure_hpa = 1013.25;  ///< dry-air pressure [hPa]
 };
 
+/// [scene.import]: a scene database built at setup from GIS files, by the one import path of
+/// `radar-emu scene import` (loop/scene_import.hpp; the layout in scene/geodata/import.hpp).
+/// Paths are relative to the scenario file (a SAR case: to the working directory, as its
+/// `file`). Each field is the command's option of the same name.
+struct GeodataSource {
+  std::filesystem::path dem;           ///< any GDAL raster (GeoTIFF, DTED, ...); required
+  std::filesystem::path surround_dem;  ///< optional coarser DEM for the surround
+  std::filesystem::path landcover;     ///< optional land-cover raster (class codes)
+  std::filesystem::path classes;       ///< class table TOML, required with landcover
+  std::filesystem::path osm;           ///< optional OpenStreetMap file (.osm / .pbf)
+  double anchor_latitude_rad = 0.0;    ///< origin of the scene's ENU frame; required
+  double anchor_longitude_rad = 0.0;
+  double central_east_m = 5000.0;  ///< central area, centred on the anchor
+  double central_north_m = 7000.0;
+  double cell_m = 5.0;                          ///< central grid cell side
+  double surround_m = 0.0;                      ///< surround square side; 0: none
+  double surround_cell_m = 30.0;                ///< surround grid cell side
+  std::string datum = "file";                   ///< file | egm96 | ellipsoid
+  int tile_cells = 64;                          ///< cells along a tile side
+  int lod_levels = 3;                           ///< 1 .. 4
+  std::string default_material = "grass";       ///< cells without land cover or OSM area
+  std::uint64_t max_memory_bytes = 8ull << 30;  ///< refused past this estimate
+};
+
 /// Which scene database a [scene] table names: the one reading of its keys (builtin, file, seed,
-/// corner_reflectors), shared by the scenario and `radar-emu sar` (tools/sar_case.hpp).
+/// corner_reflectors, import), shared by the scenario and `radar-emu sar` (tools/sar_case.hpp).
 struct SceneSource {
   /// "airport" (scene/airport_gen.hpp), "default" (scene/default_scene.hpp) or "terrain"
   /// (scene/terrain_gen.hpp) when `file` is empty.
   std::string builtin = "airport";
-  std::uint64_t seed = 1;          ///< generator seed of the built-in database
-  bool corner_reflectors = false;  ///< airport only
-  std::filesystem::path file;      ///< a glTF scene instead of a built-in one
+  std::uint64_t seed = 1;               ///< generator seed of the built-in database
+  bool corner_reflectors = false;       ///< airport only
+  std::filesystem::path file;           ///< a glTF scene instead of a built-in one
+  std::optional<GeodataSource> import;  ///< [scene.import]: GIS files instead of both
 };
 /// The keys read_scene_source() reads, for the caller's refuse_unknown().
 inline constexpr std::string_view kSceneSourceKeys[] = {"builtin", "file", "seed",
-                                                        "corner_reflectors"};
+                                                        "corner_reflectors", "import"};
 }  // namespace radar_emu::loop
 namespace radar_emu::config {
 class Table;
@@ -52,7 +78,15 @@ class Table;
 namespace radar_emu::loop {
 /// Reads the source keys of a [scene] table into `source` (absent keys keep its values). Throws
 /// config::ConfigError ("FILE: [scene] key: what"): builtin and file together, seed with a file,
-/// corner_reflectors with another scene than the airport, an unknown builtin.
+/// corner_reflectors with another scene than the airport, an unknown builtin, import with
+/// builtin, file or seed, an import without dem or anchor_deg, a value out of range.
+///
+///   [scene.import]
+///   dem = "dem.tif"                 # required; also surround_dem, landcover, classes, osm
+///   anchor_deg = [-8.005, -34.878]  # required: latitude, longitude of the ENU origin
+///   central_m = [4000, 4000]        # east, north extent (default 5000, 7000)
+///   cell_m = 10                     # and surround_m, surround_cell_m, datum, tile_cells,
+///                                   # lod_levels, default_material, max_memory_mib
 void read_scene_source(const config::Table& scene, SceneSource& source);
 
 struct Scenario {
@@ -74,6 +108,7 @@ struct Scenario {
   /// Built-in "airport": its closed-loop objects carry 0.5 m trihedrals (a test range's).
   bool scene_corner_reflectors = false;
   std::filesystem::path scene_file;
+  std::optional<GeodataSource> scene_import;  ///< [scene.import] (loop/scene_import.hpp)
   /// [[target]] tables: objects added to whichever scene the [scene] table names
   /// (docs/scene_format.md), in table order, named "target_N" (N from 1) unless named.
   std::vector<scene::TargetPlacement> targets;

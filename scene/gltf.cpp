@@ -1,5 +1,6 @@
 #include "scene/gltf.hpp"
 
+#include <tbb/parallel_for.h>
 #include <tiny_gltf.h>
 
 #include <algorithm>
@@ -743,15 +744,21 @@ SceneDescription load_gltf(const std::filesystem::path& path, std::vector<std::s
     fail(path, "no triangle meshes in the scene");
   // Degenerate triangles are dropped (a node with nothing else is dropped whole), reported
   // with the node; open and non-manifold surfaces are reported (scene/mesh_check.hpp).
+  // One check per node (it welds and builds the node's topology, most of the load's time), the
+  // nodes in parallel: each check reads its own mesh only.
+  std::vector<MeshCheck> checks(desc.objects.size());
+  tbb::parallel_for(std::size_t{0}, desc.objects.size(),
+                    [&](std::size_t i) { checks[i] = check_mesh(desc.objects[i].mesh); });
   std::vector<ObjectDesc> kept;
-  for (ObjectDesc& o : desc.objects) {
+  for (std::size_t i = 0; i < desc.objects.size(); ++i) {
+    ObjectDesc& o = desc.objects[i];
     const std::string source = path.string() + ": node " + o.name;
-    if (check_mesh(o.mesh).degenerate.size() == o.mesh.triangles.size()) {
+    if (checks[i].degenerate.size() == o.mesh.triangles.size()) {
       if (warnings != nullptr)
         warnings->push_back(source + ": every triangle is degenerate: node dropped");
       continue;
     }
-    std::vector<std::string> w = clean_loaded_mesh(o.mesh, source);
+    std::vector<std::string> w = clean_loaded_mesh(o.mesh, checks[i], source);
     if (warnings != nullptr)
       warnings->insert(warnings->end(), w.begin(), w.end());
     kept.push_back(std::move(o));

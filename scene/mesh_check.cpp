@@ -88,7 +88,11 @@ MeshCheck check_mesh(const Mesh& m) {
 
 std::vector<std::string> clean_loaded_mesh(Mesh& m, const std::string& source,
                                            std::span<const std::size_t> lines) {
-  const MeshCheck c = check_mesh(m);
+  return clean_loaded_mesh(m, check_mesh(m), source, lines);
+}
+
+std::vector<std::string> clean_loaded_mesh(Mesh& m, const MeshCheck& c, const std::string& source,
+                                           std::span<const std::size_t> lines) {
   std::vector<std::string> warnings;
   constexpr std::size_t kListed = 10;
   for (std::size_t i = 0; i < c.degenerate.size() && i < kListed; ++i) {

@@ -41,5 +41,10 @@ struct MeshCheck {
 /// Throws std::runtime_error "SOURCE: every triangle is degenerate" when nothing is left.
 [[nodiscard]] std::vector<std::string> clean_loaded_mesh(Mesh& mesh, const std::string& source,
                                                          std::span<const std::size_t> lines = {});
+/// The same with `check`, the mesh's check_mesh() computed by the caller (the glTF loader
+/// checks each node once, in parallel, and drops the wholly degenerate ones itself).
+[[nodiscard]] std::vector<std::string> clean_loaded_mesh(Mesh& mesh, const MeshCheck& check,
+                                                         const std::string& source,
+                                                         std::span<const std::size_t> lines = {});
 
 }  // namespace radar_emu::scene

@@ -39,6 +39,7 @@
 #include "radar/products/irf.hpp"
 #include "radar/products/sar.hpp"
 #include "radar/products/sar_terrain.hpp"
+#include "scene/geo.hpp"
 #include "scene/scene.hpp"
 #include "scene/targets.hpp"
 #include "tools/mpi_work.hpp"
@@ -141,13 +142,13 @@ SarCase case_from_table(const Table& root) {
                     std::end(loop::kSceneSourceKeys));
   scene.refuse_unknown(scene_keys);
   // A scene database (the scenario's [scene] keys, one reader), or the flat ground.
-  c.database = scene.has("builtin") || scene.has("file");
+  c.database = scene.has("builtin") || scene.has("file") || scene.has("import");
   if (c.database) {
     loop::read_scene_source(scene, c.source);
     for (const char* flat : {"ground_material", "latitude_deg", "longitude_deg"})
       if (scene.has(flat))
         scene.fail(flat,
-                   "applies to the flat ground only; builtin or file name a scene database "
+                   "applies to the flat ground only; builtin, file or import name a scene database "
                    "(which has its own materials and anchor)");
   } else {
     for (const char* key : {"seed", "corner_reflectors"})
@@ -395,12 +396,23 @@ void write_png(const rd::SarImage& img, const std::string& title, const std::str
 }
 
 #ifdef RADAR_EMU_HAVE_GDAL
-// Local transverse Mercator at the scene anchor: within a few km its easting/northing equal the
-// ENU x/y of the scene to millimetres (scale error x^2 / (2 R^2) < 1e-7 at 2 km).
+// Local transverse Mercator at the scene anchor, its scale factor (R + h0) / R for the anchor's
+// ellipsoidal height h0 (R the ellipsoid's Gaussian radius sqrt(M N) there): within a few km
+// its easting/northing equal the ENU x/y of the scene to millimetres (scale error
+// x^2 / (2 R^2) < 1e-7 at 2 km, plus x (h - h0) / R for ground at another height h). With a
+// scale of 1 the ENU distances of ground at h0 would read h0 / R too long: 1.6 m at 10 km on a
+// 1000 m plateau.
 std::string local_wkt(const SarCase& c) {
+  namespace g = sc::wgs84;
+  const double s = std::sin(common::radians(c.latitude_deg));
+  const double w = 1.0 - g::kFirstEccentricitySquared * s * s;
+  const double n_m = g::kSemiMajorAxis_m / std::sqrt(w);
+  const double m_m =
+      g::kSemiMajorAxis_m * (1.0 - g::kFirstEccentricitySquared) / (w * std::sqrt(w));
+  const double scale = 1.0 + c.anchor_height_m / std::sqrt(m_m * n_m);
   OGRSpatialReferenceH srs = OSRNewSpatialReference(nullptr);
   OSRSetWellKnownGeogCS(srs, "WGS84");
-  OSRSetTM(srs, c.latitude_deg, c.longitude_deg, 1.0, 0.0, 0.0);
+  OSRSetTM(srs, c.latitude_deg, c.longitude_deg, scale, 0.0, 0.0);
   OSRSetLinearUnits(srs, SRS_UL_METER, 1.0);
   char* wkt = nullptr;
   OSRExportToWkt(srs, &wkt);
@@ -527,6 +539,7 @@ int run_sar_tool(const SarToolOptions& o) {
   if (c.database) {
     c.latitude_deg = common::degrees(scene.anchor().latitude_rad);
     c.longitude_deg = common::degrees(scene.anchor().longitude_rad);
+    c.anchor_height_m = scene.anchor().height_m;
   }
   rd::SbrConfig cfg;
   cfg.carrier_hz = p.carrier_hz;
@@ -549,7 +562,10 @@ int run_sar_tool(const SarToolOptions& o) {
   std::size_t shadowed = 0, patches = 0;
   std::optional<rd::clutter::TerrainEngine> engine;
   rd::SarDem dem;
-  if (c.clutter && (c.database || c.ground_material != "none")) {
+  // A scene database is always focused on its DEM (with or without clutter: the image's
+  // georeferencing holds for what stands on the terrain); the flat ground needs the engine only
+  // for its clutter.
+  if (c.database || (c.clutter && c.ground_material != "none")) {
     const auto t0 = Clock::now();
     // The image plus the beam's reach beyond it along track and a margin in range: its
     // horizontal bounding box (the track may have any heading).
@@ -570,14 +586,19 @@ int run_sar_tool(const SarToolOptions& o) {
     es.speckle.seed = c.speckle_seed;
     progress("terrain engine: facets of the scene's terrain");
     engine.emplace(rd::make_terrain_engine(scene, tracer, es));
-    progress("terrain engine: " + std::to_string(engine->facets().size()) + " facets; patches of " +
-             fmt(c.clutter_cell_m) + " m with shadowing");
-    rd::TerrainCells tc = rd::terrain_cells(*engine, p, c.clutter_cell_m);
-    cells = std::move(tc.cells);
-    shadowed = tc.shadowed;
-    patches = tc.patches;
-    progress("terrain engine: " + std::to_string(cells.size()) + " lit patches (" +
-             std::to_string(shadowed) + " in shadow); DEM and mask of the image grid");
+    if (c.clutter) {
+      progress("terrain engine: " + std::to_string(engine->facets().size()) +
+               " facets; patches of " + fmt(c.clutter_cell_m) + " m with shadowing");
+      rd::TerrainCells tc = rd::terrain_cells(*engine, p, c.clutter_cell_m);
+      cells = std::move(tc.cells);
+      shadowed = tc.shadowed;
+      patches = tc.patches;
+      progress("terrain engine: " + std::to_string(cells.size()) + " lit patches (" +
+               std::to_string(shadowed) + " in shadow); DEM and mask of the image grid");
+    } else {
+      progress("terrain engine: " + std::to_string(engine->facets().size()) +
+               " facets, no clutter; DEM and mask of the image grid");
+    }
     dem = rd::sar_dem(*engine, p, grid);
     grid.height_m = dem.height_m;
     if (dem.holes > 0)
@@ -994,21 +1015,22 @@ int run_sar_tool(const SarToolOptions& o) {
                  {"dem_hole_pixels", dem.holes},
                  {"band", 2},
                  {"bits", "1 shadow, 2 layover, 4 foreshortening, 8 no DEM"}};
-  j["scene"] = {
-      {"database", c.database ? (c.source.file.empty() ? c.source.builtin : c.source.file.string())
-                              : std::string("none")},
-      {"terrain_patches", patches},
-      {"ground_material", c.ground_material},
-      {"clutter", c.clutter},
-      {"clutter_cells", cells.size()},
-      {"shadowed_cells", shadowed},
-      {"clutter_cell_m", c.clutter_cell_m},
-      {"speckle_seed", c.speckle_seed},
-      {"targets", c.targets.size()},
-      {"target_echoes", target_echoes},
-      {"rays", rays},
-      {"latitude_deg", c.latitude_deg},
-      {"longitude_deg", c.longitude_deg}};
+  j["scene"] = {{"database", !c.database             ? std::string("none")
+                             : c.source.import       ? "import:" + c.source.import->dem.string()
+                             : c.source.file.empty() ? c.source.builtin
+                                                     : c.source.file.string()},
+                {"terrain_patches", patches},
+                {"ground_material", c.ground_material},
+                {"clutter", c.clutter},
+                {"clutter_cells", cells.size()},
+                {"shadowed_cells", shadowed},
+                {"clutter_cell_m", c.clutter_cell_m},
+                {"speckle_seed", c.speckle_seed},
+                {"targets", c.targets.size()},
+                {"target_echoes", target_echoes},
+                {"rays", rays},
+                {"latitude_deg", c.latitude_deg},
+                {"longitude_deg", c.longitude_deg}};
   j["timing_s"] = {{"raw", raw_s},
                    {"raw_ray_tracing", trace_s},
                    {"raw_clutter_synthesis", clutter_s},

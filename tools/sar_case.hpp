@@ -43,8 +43,8 @@ struct SarCase {
   double ground_centre_m = 0.0;                                  ///< derived
   radar::Polarisation pol = radar::Polarisation::kVV;
   std::string pol_name = "VV";
-  /// [scene] builtin or file: a scene database (the scenario's [scene] keys, read by
-  /// loop::read_scene_source) instead of the flat ground_material plane; its anchor then
+  /// [scene] builtin, file or [scene.import]: a scene database (the scenario's [scene] keys, read
+  /// by loop::read_scene_source) instead of the flat ground_material plane; its anchor then
   /// georeferences the outputs (latitude_deg, longitude_deg are refused).
   bool database = false;
   loop::SceneSource source;
@@ -57,6 +57,9 @@ struct SarCase {
   double target_ray_spacing_m = 0.05;
   int max_bounces = 3;
   double latitude_deg = 43.6, longitude_deg = 1.4;
+  /// Ellipsoidal height of the scene's anchor [m] (its ENU origin): 0 for the flat ground, the
+  /// database's otherwise (set by run_sar_tool); scales the GeoTIFF's transverse Mercator.
+  double anchor_height_m = 0.0;
   std::vector<TargetCase> targets;
 };
 

@@ -1,24 +1,13 @@
 #pragma once
 // `radar-emu scene import`: a scene database from GIS files (scene/geodata/import.hpp) into glTF,
 // which scenarios then load with [scene] file = "..." (the loop, `image` and `sar` unchanged).
-// The class -> material table is a TOML file (examples/landcover/*.toml):
-//
-//   [classes]
-//   name = "ESA WorldCover 10 m v200"   # reports
-//   fallback = "grass"                  # optional: unknown codes and no-data; absent: error
-//   [[class]]
-//   code = 10                           # the raster's value
-//   label = "Tree cover"                # documentation only
-//   material = "forest"                 # a radar terrain catalogue name
+// The class -> material table is a TOML file (examples/landcover/*.toml; format in
+// loop/scene_import.hpp, whose import path the command shares with [scene.import]).
 //
 // Errors are exceptions whose message is one line naming the option or file.
 
 #include <optional>
 #include <string>
-
-namespace radar_emu::scene::geodata {
-struct ClassTable;
-}
 
 namespace radar_emu::tools {
 
@@ -42,10 +31,6 @@ struct SceneImportOptions {
   bool dry_run = false;  ///< estimate only
   bool quiet = false;
 };
-
-/// Reads a class table (format above); material names are checked against the radar terrain
-/// catalogue. Throws config::ConfigError "FILE: [table] key: what".
-[[nodiscard]] scene::geodata::ClassTable load_class_table(const std::string& path);
 
 /// Estimates, refuses past the memory limit, imports (progress on stderr), writes `out` and
 /// prints the report. Returns 0; throws on bad options, bad input, I/O failure.

@@ -206,21 +206,33 @@ void add_scene_and_weather(const RunReport& p, Json& rep) {
   const Scenario& s = *p.scenario;
   const RunResult& r = *p.result;
   const double n = r.view.frames > 0 ? static_cast<double>(r.view.frames) : 1.0;
-  rep["scene"] = {
-      {"source", s.scene_file.empty() ? "builtin:" + s.scene_builtin : s.scene_file.string()},
-      {"seed", s.scene_seed},
-      {"objects", p.scene.objects},
-      {"triangles", p.scene.triangles},
-      {"lod_tiles", p.scene.lod_tiles},
-      {"per_frame_mean",
-       {{"lod_tiles_in_view", static_cast<double>(r.view.lod_groups_in_view) / n},
-        {"lod_tiles_culled", static_cast<double>(r.view.lod_groups_culled) / n},
-        {"lod_tiles_at_level",
-         {static_cast<double>(r.view.lod_groups_at_level[0]) / n,
-          static_cast<double>(r.view.lod_groups_at_level[1]) / n,
-          static_cast<double>(r.view.lod_groups_at_level[2]) / n,
-          static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
-        {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
+  rep["scene"] = {{"source", s.scene_import         ? "import:" + s.scene_import->dem.string()
+                             : s.scene_file.empty() ? "builtin:" + s.scene_builtin
+                                                    : s.scene_file.string()},
+                  {"seed", s.scene_seed},
+                  {"objects", p.scene.objects},
+                  {"triangles", p.scene.triangles},
+                  {"lod_tiles", p.scene.lod_tiles},
+                  {"per_frame_mean",
+                   {{"lod_tiles_in_view", static_cast<double>(r.view.lod_groups_in_view) / n},
+                    {"lod_tiles_culled", static_cast<double>(r.view.lod_groups_culled) / n},
+                    {"lod_tiles_at_level",
+                     {static_cast<double>(r.view.lod_groups_at_level[0]) / n,
+                      static_cast<double>(r.view.lod_groups_at_level[1]) / n,
+                      static_cast<double>(r.view.lod_groups_at_level[2]) / n,
+                      static_cast<double>(r.view.lod_groups_at_level[3]) / n}},
+                    {"triangles_active", static_cast<double>(r.view.triangles_active) / n}}}};
+  if (p.scene.import) {
+    const SceneFigures::Import& im = *p.scene.import;
+    rep["scene"]["import"] = {{"vertical", im.vertical},
+                              {"anchor_height_m", im.anchor_height_m},
+                              {"anchor_undulation_m", im.anchor_undulation_m},
+                              {"dem_holes_filled", im.dem_holes_filled},
+                              {"unknown_class_cells", im.unknown_class_cells},
+                              {"osm_broken_ways", im.osm_broken_ways},
+                              {"osm_outside", im.osm_outside},
+                              {"seconds", im.seconds}};
+  }
   // The atmosphere the returns crossed and its two-way loss at reference ranges.
   const WeatherSpec& w = s.weather;
   const WeatherFigures& f = p.weather;

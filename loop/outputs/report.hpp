@@ -60,6 +60,18 @@ struct SceneFigures {
   std::size_t objects = 0;
   std::size_t triangles = 0;
   std::uint32_t lod_tiles = 0;  ///< terrain tiles (LOD groups)
+  /// [scene.import]: how the GIS files became the scene (scene/geodata/import.hpp's report).
+  struct Import {
+    std::string vertical;  ///< how heights were converted, e.g. "EGM96 geoid (file) -> ellipsoid"
+    double anchor_height_m = 0.0;      ///< ellipsoidal height of the anchor (ground)
+    double anchor_undulation_m = 0.0;  ///< EGM96 N at the anchor (0 when not used)
+    std::size_t dem_holes_filled = 0;
+    std::size_t unknown_class_cells = 0;  ///< land-cover cells given the fallback material
+    std::size_t osm_broken_ways = 0;      ///< dropped
+    std::size_t osm_outside = 0;          ///< features off the terrain, dropped
+    double seconds = 0.0;                 ///< import time
+  };
+  std::optional<Import> import;
 };
 
 /// Everything report.json and the summary say about a finished run. The pointers are the

@@ -1,5 +1,5 @@
 // The shipped land-cover class tables load, map the published class codes, and a bad table gets
-// the reader's one-line "FILE: [table] key: what".
+// the reader's one-line "FILE: [table] key: what"; so does a bad [scene.import] table.
 
 #include <gtest/gtest.h>
 
@@ -8,10 +8,11 @@
 #include <fstream>
 #include <string>
 
+#include "loop/scenario.hpp"
+#include "loop/scene_import.hpp"
 #include "scene/geodata/import.hpp"
-#include "tools/scene_import.hpp"
 
-namespace radar_emu::tools {
+namespace radar_emu::loop {
 namespace {
 
 std::string source(const std::string& rel) {
@@ -49,5 +50,32 @@ TEST(SceneImportTool, BadClassTableIsOneLine) {
   }
 }
 
+// [scene.import] refused with the reader's one line: with another source, without its required
+// keys, land cover without a class table, an unknown key.
+TEST(SceneImportTool, ScenarioImportTableErrorsAreOneLine) {
+  const std::string base = "[scene.import]\ndem = \"d.tif\"\nanchor_deg = [43.0, 1.0]\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {"[scene]\nbuiltin = \"terrain\"\n" + base, "builtin"},
+      {"[scene]\nfile = \"x.glb\"\n" + base, "file"},
+      {"[scene.import]\nanchor_deg = [43.0, 1.0]\n", "dem"},
+      {"[scene.import]\ndem = \"d.tif\"\n", "anchor_deg"},
+      {base + "anchor_deg_typo = 1\n", "anchor_deg_typo"},
+      {base + "landcover = \"lc.tif\"\n", "classes"},
+      {"[scene.import]\ndem = \"d.tif\"\nanchor_deg = [89.5, 1.0]\n", "latitude"},
+      {base + "datum = \"navd88\"\n", "navd88"},
+  };
+  for (const auto& [text, needle] : cases) {
+    try {
+      (void)parse_scenario(text, "s.toml");
+      ADD_FAILURE() << "accepted:\n" << text;
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("s.toml"), std::string::npos) << what;
+      EXPECT_NE(what.find(needle), std::string::npos) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+  }
+}
+
 }  // namespace
-}  // namespace radar_emu::tools
+}  // namespace radar_emu::loop
