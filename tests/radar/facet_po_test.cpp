@@ -136,11 +136,11 @@ TEST(FacetPo, RandomTrianglesAllRegimes) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0), log_scale(-8.0, 2.0);
   double worst = 0.0;
   for (int trial = 0; trial < 300; ++trial) {
-    const glm::dvec3 v0(unit(rng), unit(rng), unit(rng));
-    const glm::dvec3 v1 = v0 + glm::dvec3(unit(rng), unit(rng), unit(rng));
-    const glm::dvec3 v2 = v0 + glm::dvec3(unit(rng), unit(rng), unit(rng));
+    const glm::dvec3 v0{unit(rng), unit(rng), unit(rng)};
+    const glm::dvec3 v1 = v0 + glm::dvec3{unit(rng), unit(rng), unit(rng)};
+    const glm::dvec3 v2 = v0 + glm::dvec3{unit(rng), unit(rng), unit(rng)};
     // Phase gradient magnitudes from 1e-8 to 100 rad/m: every branch.
-    const glm::dvec3 dir = glm::normalize(glm::dvec3(unit(rng), unit(rng), unit(rng)));
+    const glm::dvec3 dir = glm::normalize(glm::dvec3{unit(rng), unit(rng), unit(rng)});
     const glm::dvec3 g = dir * std::pow(10.0, log_scale(rng));
     const std::complex<double> brute = quadrature(v0, v1, v2, g);
     const double rel = std::abs(triangle_phase_integral(v0, v1, v2, g) - brute) / std::abs(brute);

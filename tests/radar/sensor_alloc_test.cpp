@@ -44,7 +44,8 @@ TEST(SensorAllocation, NoHeapAllocationOverManyFrames) {
         x.coherent = i % 3 == 0;
         x.range_m = p.range_of_bin(120.0 * rng.uniform());
         x.range_spread_m = x.coherent ? 0.0 : 5.0 + 20.0 * rng.uniform();
-        x.amplitude = std::polar(std::sqrt(1e-3 + rng.uniform()), 6.283 * rng.uniform());
+        const double power = 1e-3 + rng.uniform();
+        x.amplitude = std::polar(std::sqrt(power), 6.283 * rng.uniform());
         x.radial_velocity_mps = (rng.uniform() - 0.5) * 10.0;
         x.azimuth_rad = (rng.uniform() - 0.5) * 0.06;
         in.push_back(x);

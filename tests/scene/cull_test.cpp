@@ -321,7 +321,7 @@ TEST(SceneCull, DefaultViewIsTheFullSceneForEveryRay) {
   for (int k = 0; k < 3000; ++k) {
     sc::Ray r;
     r.origin_m = {1600.0 + 2500.0 * u(rng), 1600.0 + 2500.0 * u(rng), 200.0 + 150.0 * u(rng)};
-    r.direction = glm::normalize(glm::dvec3(u(rng), u(rng), -0.2 + 0.5 * u(rng)));
+    r.direction = glm::normalize(glm::dvec3{u(rng), u(rng), -0.2 + 0.5 * u(rng)});
     sc::Hit a, b;
     const bool ha = s.lod.intersect(r, a), hb = s.full.intersect(r, b);
     ASSERT_EQ(ha, hb) << k;

@@ -202,7 +202,7 @@ TEST(Wgs84, EnuRoundTripWithinOneMillimetreOverFiftyKilometres) {
   std::uniform_real_distribution<double> horizontal(-50e3, 50e3), height(-100.0, 10000.0);
   double worst = 0.0;
   for (int i = 0; i < 20000; ++i) {
-    glm::dvec3 p(horizontal(rng), horizontal(rng), height(rng));
+    glm::dvec3 p{horizontal(rng), horizontal(rng), height(rng)};
     if (glm::length(glm::dvec2(p)) > 50e3)
       p = glm::dvec3(glm::normalize(glm::dvec2(p)) * 50e3, p.z);
     const glm::dvec3 q = enu.enu_from_geodetic(enu.geodetic_from_enu(p));

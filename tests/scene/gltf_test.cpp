@@ -471,7 +471,7 @@ TEST(Gltf, DefaultSceneRoundTripsThroughGlbAndGltf) {
     for (int k = 0; k < 200; ++k) {
       sc::Ray ray;
       ray.origin_m = {150 * u(rng), 450 + 300 * u(rng), 50.0};
-      ray.direction = glm::normalize(glm::dvec3(u(rng), u(rng), -1.0));
+      ray.direction = glm::normalize(glm::dvec3{u(rng), u(rng), -1.0});
       sc::Hit h1, h2;
       ASSERT_EQ(original.intersect(ray, h1), loaded.intersect(ray, h2)) << name << " " << k;
       EXPECT_NEAR(h1.t_m, h2.t_m, 1e-9) << name << " " << k;

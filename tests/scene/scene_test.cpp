@@ -194,8 +194,8 @@ TEST(SceneRays, RotatedBoxEntryDistanceIsTheSlabSolution) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int hits = 0;
   for (int i = 0; i < 500; ++i) {
-    const glm::dvec3 o(200 + 300 * u(rng), 50 + 300 * u(rng), 10 + 100 * u(rng));
-    const glm::dvec3 target(200 + 2 * u(rng), 50 + 2 * u(rng), 11.5 + 1.5 * u(rng));
+    const glm::dvec3 o{200 + 300 * u(rng), 50 + 300 * u(rng), 10 + 100 * u(rng)};
+    const glm::dvec3 target{200 + 2 * u(rng), 50 + 2 * u(rng), 11.5 + 1.5 * u(rng)};
     const sc::Ray r = ray(o, target - o);
     const glm::dvec3 ob(body_from_world * glm::dvec4(o, 1.0));
     const glm::dvec3 db(body_from_world * glm::dvec4(r.direction, 0.0));
@@ -391,8 +391,9 @@ TEST(SceneThreads, ConcurrentQueriesMatchSerialOnes) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::vector<sc::Ray> rays;
   for (int i = 0; i < 4000; ++i) {
-    rays.push_back(
-        ray({300 * u(rng), 400 + 400 * u(rng), 200.0}, {0.3 * u(rng), 0.3 * u(rng), -1.0}));
+    const glm::dvec3 origin{300 * u(rng), 400 + 400 * u(rng), 200.0};
+    const glm::dvec3 direction{0.3 * u(rng), 0.3 * u(rng), -1.0};
+    rays.push_back(ray(origin, direction));
   }
   std::vector<sc::Hit> serial(rays.size());
   std::vector<char> serial_hit(rays.size());

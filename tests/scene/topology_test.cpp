@@ -249,7 +249,7 @@ TEST(MeshTopology, WeldIsTransitiveAndIndependentOfVertexOrder) {
         const glm::uvec3 f = ccw ? glm::uvec3(x, y, z) : glm::uvec3(x, z, y);
         const auto base = static_cast<unsigned>(positions.size());
         for (int c = 0; c < 3; ++c)
-          positions.push_back(octa[f[c]] + glm::dvec3(jitter(rng), jitter(rng), jitter(rng)));
+          positions.push_back(octa[f[c]] + glm::dvec3{jitter(rng), jitter(rng), jitter(rng)});
         triangles.push_back({base, base + 1, base + 2});
       }
   const sc::MeshTopology ref =

@@ -113,7 +113,7 @@ TEST(SceneTrajectory, RandomPolylinesAreContinuousWithTheClosedFormLength) {
     const int n = 3 + static_cast<int>(rng() % 5);
     for (int i = 0; i < n; ++i) {
       t.waypoints_m.push_back(p);
-      p += glm::dvec3(300.0 * u(rng), 300.0 * u(rng), 10.0 * u(rng));
+      p += glm::dvec3{300.0 * u(rng), 300.0 * u(rng), 10.0 * u(rng)};
     }
     t.speed_mps = 5.0 + 20.0 * (u(rng) + 1.0);
     t.turn_radius_m = 5.0 + 10.0 * (u(rng) + 1.0);
