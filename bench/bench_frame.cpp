@@ -3,12 +3,16 @@
 
 #include <benchmark/benchmark.h>
 
+#include <optional>
+#include <span>
+#include <string>
 #include <vector>
 
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
+#include "radar/products/terrain_returns.hpp"
 #include "radar/sensor/noise.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "scene/airport_gen.hpp"
@@ -192,6 +196,69 @@ BENCHMARK(BM_SensorReturns)
     ->Arg(1000)
     ->Arg(10000)
     ->Arg(100000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Terrain clutter on the same frame, two ways (issue 28 item 2, issue 29's first lever): the
+// trace with the tracer's terrain rays (argument 1 = 0, [radar] terrain = "rays") against the
+// trace without them plus the terrain engine's cells (1, terrain = "engine"), both from the
+// scenario's first pose. Argument 0: the default scenario (0) or examples/terrain_movers.toml
+// (1, the 207k-polygon terrain). Counters: the rays shot, the returns handed to the sensor, the
+// engine's patches (evaluated, lit).
+void BM_TraceTerrain(benchmark::State& state) {
+  struct Case {
+    loop::Scenario s;
+    radar_emu::scene::Scene scene;
+    radar::RadarPose pose;
+    explicit Case(loop::Scenario sc) : s(std::move(sc)), scene(loop::scene_description(s)) {
+      scene.set_time(0.0);
+      pose.position_m = s.ownship_start_enu_m;
+      pose.velocity_mps = s.ownship_velocity_enu_mps;
+      pose.world_from_antenna =
+          loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+          loop::body_from_antenna(s.antenna_depression_rad);
+    }
+  };
+  static Case cases[] = {
+      Case(loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")),
+      Case(loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml"))};
+  Case& c = cases[state.range(0)];
+  const long mode = state.range(1);
+  const bool engine = mode == 1 || mode == 3;
+  radar::SbrConfig cfg = c.s.sbr;
+  cfg.terrain_rays = mode == 0;
+  radar::SbrTracer tracer(c.scene, cfg);
+  std::optional<radar::TerrainReturns> terrain;
+  radar::TerrainReturnsConfig tc = loop::terrain_returns_config(c.s);
+  tc.shadowing = mode != 3;
+  if (engine)
+    terrain.emplace(c.scene, tracer, tc);
+  std::vector<radar::Contribution> out(tracer.max_contributions() +
+                                       (terrain ? terrain->max_returns() : 0));
+  radar::TraceStats ts;
+  radar::clutter::TerrainStats es;
+  std::uint64_t dropped = 0;
+  std::size_t n = 0;
+  for (auto _ : state) {
+    ts = {};
+    es = {};
+    n = tracer.trace(c.pose, out, ts);
+    if (terrain)
+      n += terrain->compute(c.pose, std::span(out).subspan(n), es, dropped);
+    benchmark::DoNotOptimize(n);
+  }
+  state.counters["rays"] = static_cast<double>(ts.rays);
+  state.counters["returns"] = static_cast<double>(n);
+  state.counters["patches"] = static_cast<double>(es.patches);
+  state.counters["patches_lit"] = static_cast<double>(es.patches_lit);
+  state.counters["facets"] = terrain ? static_cast<double>(terrain->engine().facets().size()) : 0.0;
+  state.counters["facets_considered"] = static_cast<double>(es.facets_considered);
+  static constexpr const char* kModes[] = {", rays", ", engine", ", no terrain",
+                                           ", engine without shadowing"};
+  state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") + kModes[mode]);
+}
+BENCHMARK(BM_TraceTerrain)
+    ->ArgsProduct({{0, 1}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

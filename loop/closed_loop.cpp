@@ -93,11 +93,11 @@ io::icd::Detection to_icd(const radar::Detection& d) noexcept {
 }
 
 // The scenario's sensor, sized for every contribution the tracer can produce.
-radar::SensorConfig sensor_config(const Scenario& s, const radar::SbrTracer& tracer) {
+radar::SensorConfig sensor_config(const Scenario& s, std::size_t max_contributions) {
   radar::SensorConfig c = s.sensor;
   // Up to 2^18 a frame (the default traces 43 k; the tracer's worst case, 2.5 M, would cost the
   // sensor 260 MB of per-return state); beyond it returns are counted as dropped_input.
-  c.max_contributions = std::clamp<std::size_t>(tracer.max_contributions(), 1, 1u << 18);
+  c.max_contributions = std::clamp<std::size_t>(max_contributions, 1, 1u << 18);
   return c;
 }
 
@@ -308,19 +308,24 @@ struct SceneSide {
   std::vector<double> frame_size_m;          ///< their sizes (half the box diagonal) [m]
 };
 
-// The SBR tracer, its contribution buffer and the path loss every return takes.
+// The SBR tracer, the terrain engine's cells ([radar] terrain = "engine"), their contribution
+// buffer (the tracer's returns, then the cells') and the path loss every return takes.
 struct TracerSide {
-  TracerSide(const scene::Scene& scene, const Scenario& s)
-      : tracer(scene, s.sbr), contributions(tracer.max_contributions()) {}
+  TracerSide(const scene::Scene& scene, const Scenario& s) : tracer(scene, s.sbr) {
+    if (s.terrain_engine)
+      terrain.emplace(scene, tracer, terrain_returns_config(s));
+    contributions.resize(tracer.max_contributions() + (terrain ? terrain->max_returns() : 0));
+  }
   radar::SbrTracer tracer;
+  std::optional<radar::TerrainReturns> terrain;
   std::vector<radar::Contribution> contributions;
   WeatherFigures weather;  ///< [weather] one-way; all 0: free space
 };
 
 // The sensor and its detection buffers (the sensor's view and the ICD's).
 struct SensorSide {
-  SensorSide(const Scenario& s, const radar::SbrTracer& tracer)
-      : sensor(sensor_config(s, tracer)),
+  SensorSide(const Scenario& s, const TracerSide& tracer)
+      : sensor(sensor_config(s, tracer.contributions.size())),
         detections(s.sensor.max_detections),
         icd_detections(s.sensor.max_detections) {}
   radar::Sensor sensor;
@@ -417,7 +422,7 @@ struct ClosedLoop::Impl {
         options(o),
         scene(s),
         tracer(scene.scene, s),
-        sensor(s, tracer.tracer),
+        sensor(s, tracer),
         governor(governor_config(s, o), scene.scene, tracer.tracer, sensor.sensor, 1.0 / s.rate_hz),
         bus(require_frames(s), o.replay, list_frames(s)),
         peers(scenario, scene.enu, bus, o.replay, options.replay_input,
@@ -582,6 +587,11 @@ void ClosedLoop::Impl::trace(Frame& f) {
     f.decision = &governor.decide(f.pose);
     f.contributions =
         tracer.tracer.trace(f.pose, tracer.contributions, r.trace, f.decision->knobs);  // adds
+    if (tracer.terrain) {  // terrain clutter per cell after the tracer's returns
+      const std::span<radar::Contribution> rest =
+          std::span(tracer.contributions).subspan(f.contributions);
+      f.contributions += tracer.terrain->compute(f.pose, rest, r.terrain, r.terrain_dropped);
+    }
   }
   // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
   radar::apply_two_way_loss(std::span(tracer.contributions.data(), f.contributions),

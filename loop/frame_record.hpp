@@ -15,6 +15,7 @@
 #include "loop/governor.hpp"
 #include "loop/outcome.hpp"
 #include "loop/truth.hpp"
+#include "radar/clutter/terrain_engine.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "sim_bus/fault_injector.hpp"
@@ -91,6 +92,10 @@ struct RunResult {
   std::uint64_t icd_dropped = 0;
   std::uint64_t icd_truncated = 0;
   radar::TraceStats trace{};  ///< summed over frames
+  /// [radar] terrain = "engine": the terrain engine's patches, summed over frames (all zero with
+  /// terrain rays), and the cell returns that found no room in the contribution buffer.
+  radar::clutter::TerrainStats terrain{};
+  std::uint64_t terrain_dropped = 0;
   /// Scene culling and level of detail (scene::ViewStats), summed over the frames with a view.
   struct ViewTotals {
     std::uint64_t frames = 0;

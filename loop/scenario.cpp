@@ -14,6 +14,7 @@
 #include "common/units.hpp"
 #include "config/toml_reader.hpp"
 #include "radar/em/surfaces.hpp"
+#include "radar/sensor/waveform.hpp"
 #include "scene/targets.hpp"
 #include "scene/trajectory.hpp"
 
@@ -100,6 +101,7 @@ max_range_m = 6000.0        # swath end: 1502 range bins of 3 m
 range_window = "hann"       # rectangular | hann | hamming | blackman | taylor
 doppler_window = "hann"
 max_bounces = 3
+terrain = "rays"            # terrain clutter: "rays" (the tracer's terrain grid) | "engine" (per cell)
 terrain_ray_spacing_deg = 0.0573   # 1 mrad
 target_ray_spacing_m = 0.1
 max_rays_per_target = 20000 # bundles of larger targets (the parked transports) coarsen (counted)
@@ -682,7 +684,10 @@ void read_radar(Scenario& s, const Table& root) {
                       "taylor_nbar",
                       "max_speed_mps",
                       "max_bounces",
+                      "terrain",
                       "terrain_ray_spacing_deg",
+                      "terrain_cell_azimuth_deg",
+                      "terrain_cell_range_bins",
                       "target_ray_spacing_m",
                       "max_rays_per_target",
                       "edges",
@@ -724,7 +729,17 @@ void read_radar(Scenario& s, const Table& root) {
     }
   }
   rad.integer("max_bounces", s.sbr.max_bounces, 1, 16);
+  std::string terrain = s.terrain_engine ? "engine" : "rays";
+  rad.choice("terrain", terrain, {"rays", "engine"});
+  s.terrain_engine = terrain == "engine";
+  s.sbr.terrain_rays = !s.terrain_engine;
   rad.degrees("terrain_ray_spacing_deg", s.sbr.terrain_ray_spacing_rad, {1e-4, 10.0});
+  rad.degrees("terrain_cell_azimuth_deg", s.terrain_cell_azimuth_rad, {1e-3, 10.0});
+  rad.integer("terrain_cell_range_bins", s.terrain_cell_range_bins, 1, 1024);
+  if (!s.terrain_engine)
+    for (const char* key : {"terrain_cell_azimuth_deg", "terrain_cell_range_bins"})
+      if (rad.has(key))
+        rad.fail(key, "is read with terrain = \"engine\" only (terrain is \"rays\")");
   rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, {1e-4, 100.0});
   rad.integer("max_rays_per_target", s.sbr.max_rays_per_target, 1, 100'000'000);
   rad.boolean("edges", s.sbr.edges);
@@ -1013,6 +1028,21 @@ Scenario load_scenario(const std::filesystem::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   return parse_impl(text.str(), path.string(), path.parent_path());
+}
+
+radar::TerrainReturnsConfig terrain_returns_config(const Scenario& s) {
+  radar::TerrainReturnsConfig c;
+  c.azimuth_min_rad = s.sbr.azimuth_min_rad;
+  c.azimuth_max_rad = s.sbr.azimuth_max_rad;
+  c.elevation_min_rad = s.sbr.elevation_min_rad;
+  c.elevation_max_rad = s.sbr.elevation_max_rad;
+  c.azimuth_cell_rad = s.terrain_cell_azimuth_rad;
+  const radar::Waveform& w = s.sensor.processing.waveform;
+  c.range_cell_m = radar::range_bin_m(w) * static_cast<double>(s.terrain_cell_range_bins);
+  c.range_min_m = std::max(0.0, radar::first_range_m(w) - 0.5 * radar::range_bin_m(w));
+  c.range_max_m = std::max(s.sensor.max_range_m, c.range_min_m + c.range_cell_m);
+  c.carrier_hz = s.sbr.carrier_hz;
+  return c;
 }
 
 }  // namespace radar_emu::loop

@@ -14,6 +14,7 @@
 #include "io/canaerospace.hpp"
 #include "loop/governor.hpp"
 #include "radar/em/sbr.hpp"
+#include "radar/products/terrain_returns.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "scene/placement.hpp"
 #include "sim_bus/fault_injector.hpp"
@@ -136,6 +137,12 @@ struct Scenario {
   double prf_hz = 20e3;
   double swath_start_m = -1.0;  ///< pulsed: first range bin; < 0: the blind range c T / 2
   radar::SbrConfig sbr{};
+  /// [radar] terrain = "engine": terrain clutter from the terrain engine per range-azimuth cell
+  /// (radar/products/terrain_returns.hpp), the tracer's terrain rays off (sbr.terrain_rays);
+  /// "rays" (false): the tracer's terrain rays.
+  bool terrain_engine = false;
+  double terrain_cell_azimuth_rad = 4.363323129985824e-3;  ///< engine column width (0.25 deg)
+  std::int64_t terrain_cell_range_bins = 2;                ///< engine bin width, sensor range bins
   radar::SensorConfig sensor{};  ///< derived from the tables above once the file is read
   // [output]
   bool can_fd = false;  ///< detection lists as packed CAN FD frames (docs/icd/detections.md)
@@ -160,5 +167,10 @@ struct Scenario {
 /// out-of-range values; unknown keys are errors too (typos must not pass silently).
 [[nodiscard]] Scenario parse_scenario(std::string_view toml_text, const std::string& origin);
 [[nodiscard]] Scenario load_scenario(const std::filesystem::path& path);
+
+/// The terrain engine's cells for [radar] terrain = "engine": the field of view in columns of
+/// terrain_cell_azimuth_rad, the sensor's swath (first range bin to max_range_m) in bins of
+/// terrain_cell_range_bins range bins, at the carrier.
+[[nodiscard]] radar::TerrainReturnsConfig terrain_returns_config(const Scenario& s);
 
 }  // namespace radar_emu::loop

@@ -392,6 +392,13 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"edges_skipped", r.trace.edges_skipped},
                   {"edges_double", r.trace.edges_double},
                   {"knob_fallbacks", r.trace.knob_fallbacks}};
+  rep["terrain"] = {{"source", s.terrain_engine ? "engine" : "rays"},
+                    {"facets_considered", r.terrain.facets_considered},
+                    {"patches", r.terrain.patches},
+                    {"patches_lit", r.terrain.patches_lit},
+                    {"patches_shadowed", r.terrain.patches_shadowed},
+                    {"budget_cut", r.terrain.budget_cut},
+                    {"dropped_returns", r.terrain_dropped}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   const SensorFigures& f = p.sensor;
   rep["sensor"] = {{"waveform", radar::waveform_name(wf.kind)},

@@ -184,6 +184,8 @@ TerrainEngine::TerrainEngine(const scene::Scene& scene, TerrainMaterials materia
       }
     }
   }
+  if (!facets_.empty())
+    build_tiles();
   if (facets_.empty()) {
     std::string names;
     for (std::size_t m = 0; m < materials_.names.size(); ++m)
@@ -193,6 +195,53 @@ TerrainEngine::TerrainEngine(const scene::Scene& scene, TerrainMaterials materia
          ": no static non-structure triangle of a material with a sigma0 (materials: " + names +
          ")");
   }
+}
+
+void TerrainEngine::build_tiles() {
+  glm::dvec2 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  for (const TerrainFacet& f : facets_) {
+    lo = glm::min(lo, glm::dvec2(f.centroid_m));
+    hi = glm::max(hi, glm::dvec2(f.centroid_m));
+  }
+  // Side 4 max_facet_m, widened so that there are at most 2^20 tiles.
+  double side = 4.0 * spec_.max_facet_m;
+  const glm::dvec2 extent = hi - lo;
+  while ((std::floor(extent.x / side) + 1.0) * (std::floor(extent.y / side) + 1.0) > 1048576.0)
+    side *= 2.0;
+  const auto nx = static_cast<std::size_t>(std::floor(extent.x / side)) + 1;
+  const auto ny = static_cast<std::size_t>(std::floor(extent.y / side)) + 1;
+  auto tile_of = [&](const TerrainFacet& f) {
+    const auto ix = std::min(nx - 1, static_cast<std::size_t>((f.centroid_m.x - lo.x) / side));
+    const auto iy = std::min(ny - 1, static_cast<std::size_t>((f.centroid_m.y - lo.y) / side));
+    return iy * nx + ix;
+  };
+  // Counting sort of the facet indices by tile (ascending index within a tile).
+  std::vector<std::uint32_t> count(nx * ny + 1, 0);
+  for (const TerrainFacet& f : facets_)
+    ++count[tile_of(f) + 1];
+  for (std::size_t t = 0; t < nx * ny; ++t)
+    count[t + 1] += count[t];
+  std::vector<std::uint32_t> order(facets_.size());
+  std::vector<std::uint32_t> next(count.begin(), count.end() - 1);
+  for (std::uint32_t i = 0; i < facets_.size(); ++i)
+    order[next[tile_of(facets_[i])]++] = i;
+  // Keep the non-empty tiles, each with the sphere around its facets' vertex box.
+  tile_facets_ = std::move(order);
+  tile_first_.clear();
+  tiles_.clear();
+  for (std::size_t t = 0; t < nx * ny; ++t) {
+    if (count[t + 1] == count[t])
+      continue;
+    glm::dvec3 b_lo(std::numeric_limits<double>::infinity()), b_hi(-b_lo);
+    for (std::uint32_t k = count[t]; k < count[t + 1]; ++k) {
+      const TerrainFacet& f = facets_[tile_facets_[k]];
+      b_lo = glm::min(glm::min(b_lo, f.a_m), glm::min(f.b_m, f.c_m));
+      b_hi = glm::max(glm::max(b_hi, f.a_m), glm::max(f.b_m, f.c_m));
+    }
+    tile_first_.push_back(count[t]);
+    tiles_.push_back({0.5 * (b_lo + b_hi), 0.5 * glm::length(b_hi - b_lo)});
+  }
+  tile_first_.push_back(static_cast<std::uint32_t>(tile_facets_.size()));
 }
 
 double TerrainEngine::sigma0(const TerrainFacet& f, double cos_incidence) const noexcept {
@@ -221,15 +270,16 @@ bool TerrainEngine::clear(const glm::dvec3& from_m, const glm::dvec3& normal,
 }
 
 TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& grid,
-                                      std::span<std::complex<double>> field,
-                                      std::span<double> mean) const noexcept {
+                                      std::span<std::complex<double>> field, std::span<double> mean,
+                                      std::span<double> elevation_power) const noexcept {
   TerrainStats st;
   const std::size_t cells = grid.columns * grid.bins;
   const std::size_t looks = std::max<std::size_t>(view.looks, 1);
   const std::size_t edges_needed = (grid.per_column_edges ? grid.columns : 1) * (grid.bins + 1);
   if (cells == 0 || !(grid.azimuth_step_rad > 0.0) || grid.range_edges_m.size() < edges_needed ||
       mean.size() < cells || (!field.empty() && field.size() < looks * cells) ||
-      !(view.wavelength_m > 0.0) || !(view.patch_min_m > 0.0) || !(view.patch_angle_rad >= 0.0) ||
+      (!elevation_power.empty() && elevation_power.size() < cells) || !(view.wavelength_m > 0.0) ||
+      !(view.patch_min_m > 0.0) || !(view.patch_angle_rad >= 0.0) ||
       !(view.one_way_loss_db_per_m >= 0.0))
     return st;
   const glm::dmat3 antenna_from_world = glm::transpose(view.world_from_antenna);
@@ -243,80 +293,97 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
       grid.azimuth_min_rad + grid.azimuth_step_rad * static_cast<double>(grid.columns);
   const double k2 = 4.0 * kPi / view.wavelength_m;
 
-  for (std::uint32_t fi = 0; fi < facets_.size(); ++fi) {
-    const TerrainFacet& f = facets_[fi];
-    const glm::dvec3 dc = f.centroid_m - view.position_m;
-    const double rc = glm::length(dc);
-    const double r_near = std::max(0.0, rc - f.radius_m);
-    if (r_near > r_max || rc + f.radius_m < r_min)
-      continue;
-    if (rc > f.radius_m) {  // angular bounds of the facet's sphere against the grid's
+  // Whether a sphere (centre, radius) can meet the grid: range, then angles; its distance
+  // from the radar in rc.
+  auto sphere_meets_grid = [&](const glm::dvec3& centre_m, double radius_m, double& rc) {
+    const glm::dvec3 dc = centre_m - view.position_m;
+    rc = glm::length(dc);
+    if (std::max(0.0, rc - radius_m) > r_max || rc + radius_m < r_min)
+      return false;
+    if (rc > radius_m) {  // angular bounds of the sphere against the grid's
       const glm::dvec3 a = antenna_from_world * (dc / rc);
       const double az = std::atan2(a.y, a.x);
       const double el = std::atan2(-a.z, std::hypot(a.x, a.y));
-      const double ang = std::asin(std::min(1.0, f.radius_m / rc));
+      const double ang = std::asin(std::min(1.0, radius_m / rc));
       if (az + ang < grid.azimuth_min_rad || az - ang > az_max ||
           el + ang < grid.elevation_min_rad || el - ang > grid.elevation_max_rad)
-        continue;
+        return false;
     }
-    ++st.facets_considered;
-    const std::uint32_t n =
-        patch_divisions(f, std::max(view.patch_min_m, r_near * view.patch_angle_rad));
-    const std::uint64_t count = static_cast<std::uint64_t>(n) * n;
-    if (st.patches + count > view.max_patches) {
-      ++st.budget_cut;
+    return true;
+  };
+
+  for (std::size_t t = 0; t < tiles_.size(); ++t) {
+    double rt = 0.0;
+    if (!sphere_meets_grid(tiles_[t].centre_m, tiles_[t].radius_m, rt))
       continue;
-    }
-    for (std::uint32_t k = 0; k < count; ++k) {
-      const TerrainPatch p = facet_patch(f, fi, n, k);
-      ++st.patches;
-      const glm::dvec3 d = p.centre_m - view.position_m;
-      const double range = glm::length(d);
-      if (!(range > 0.0)) {
-        ++st.patches_outside;
+    for (std::uint32_t j = tile_first_[t]; j < tile_first_[t + 1]; ++j) {
+      const std::uint32_t fi = tile_facets_[j];
+      const TerrainFacet& f = facets_[fi];
+      double rc = 0.0;
+      if (!sphere_meets_grid(f.centroid_m, f.radius_m, rc))
+        continue;
+      const double r_near = std::max(0.0, rc - f.radius_m);
+      ++st.facets_considered;
+      const std::uint32_t n =
+          patch_divisions(f, std::max(view.patch_min_m, r_near * view.patch_angle_rad));
+      const std::uint64_t count = static_cast<std::uint64_t>(n) * n;
+      if (st.patches + count > view.max_patches) {
+        ++st.budget_cut;
         continue;
       }
-      const glm::dvec3 u = d / range;
-      const glm::dvec3 a = antenna_from_world * u;
-      const double az = std::atan2(a.y, a.x);
-      const double col_f = (az - grid.azimuth_min_rad) / grid.azimuth_step_rad;
-      const double el = std::atan2(-a.z, std::hypot(a.x, a.y));
-      if (!(col_f >= 0.0 && col_f < static_cast<double>(grid.columns)) ||
-          el < grid.elevation_min_rad || el > grid.elevation_max_rad) {
-        ++st.patches_outside;
-        continue;
-      }
-      const auto col = static_cast<std::size_t>(col_f);
-      const double* e =
-          grid.range_edges_m.data() + (grid.per_column_edges ? col * (grid.bins + 1) : 0);
-      const double* it = std::upper_bound(e, e + grid.bins + 1, range);
-      if (it == e || it == e + grid.bins + 1) {
-        ++st.patches_outside;
-        continue;
-      }
-      const auto bin = static_cast<std::size_t>(it - e - 1);
-      const double cos_inc = std::abs(glm::dot(f.normal, u));
-      if (!(cos_inc > 1e-9)) {
-        ++st.patches_grazing;
-        continue;
-      }
-      if (view.shadowing && !clear(p.centre_m, f.normal, view.position_m)) {
-        ++st.patches_shadowed;
-        continue;
-      }
-      double power = sigma0(f, cos_inc) * p.area_m2;
-      if (view.one_way_loss_db_per_m > 0.0)
-        power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
-      const std::size_t cell = bin * grid.columns + col;
-      mean[cell] += power;
-      ++st.patches_lit;
-      if (field.empty())
-        continue;
-      const double path = -k2 * range;
-      for (std::size_t l = 0; l < looks; ++l) {
-        const SpeckleSample s = speckle(p, l);
-        field[l * cells + cell] += std::polar(std::sqrt(power * static_cast<double>(s.intensity)),
-                                              static_cast<double>(s.phase_rad) + path);
+      for (std::uint32_t k = 0; k < count; ++k) {
+        const TerrainPatch p = facet_patch(f, fi, n, k);
+        ++st.patches;
+        const glm::dvec3 d = p.centre_m - view.position_m;
+        const double range = glm::length(d);
+        if (!(range > 0.0)) {
+          ++st.patches_outside;
+          continue;
+        }
+        const glm::dvec3 u = d / range;
+        const glm::dvec3 a = antenna_from_world * u;
+        const double az = std::atan2(a.y, a.x);
+        const double col_f = (az - grid.azimuth_min_rad) / grid.azimuth_step_rad;
+        const double el = std::atan2(-a.z, std::hypot(a.x, a.y));
+        if (!(col_f >= 0.0 && col_f < static_cast<double>(grid.columns)) ||
+            el < grid.elevation_min_rad || el > grid.elevation_max_rad) {
+          ++st.patches_outside;
+          continue;
+        }
+        const auto col = static_cast<std::size_t>(col_f);
+        const double* e =
+            grid.range_edges_m.data() + (grid.per_column_edges ? col * (grid.bins + 1) : 0);
+        const double* it = std::upper_bound(e, e + grid.bins + 1, range);
+        if (it == e || it == e + grid.bins + 1) {
+          ++st.patches_outside;
+          continue;
+        }
+        const auto bin = static_cast<std::size_t>(it - e - 1);
+        const double cos_inc = std::abs(glm::dot(f.normal, u));
+        if (!(cos_inc > 1e-9)) {
+          ++st.patches_grazing;
+          continue;
+        }
+        if (view.shadowing && !clear(p.centre_m, f.normal, view.position_m)) {
+          ++st.patches_shadowed;
+          continue;
+        }
+        double power = sigma0(f, cos_inc) * p.area_m2;
+        if (view.one_way_loss_db_per_m > 0.0)
+          power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
+        const std::size_t cell = bin * grid.columns + col;
+        mean[cell] += power;
+        if (!elevation_power.empty())
+          elevation_power[cell] += power * el;
+        ++st.patches_lit;
+        if (field.empty())
+          continue;
+        const double path = -k2 * range;
+        for (std::size_t l = 0; l < looks; ++l) {
+          const SpeckleSample s = speckle(p, l);
+          field[l * cells + cell] += std::polar(std::sqrt(power * static_cast<double>(s.intensity)),
+                                                static_cast<double>(s.phase_rad) + path);
+        }
       }
     }
   }

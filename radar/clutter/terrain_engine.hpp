@@ -28,7 +28,10 @@
 // Costs. Setup (the constructor) allocates and throws std::invalid_argument with context. The
 // per-frame evaluation (integrate) allocates nothing and does not throw: patches come from the
 // facets on the fly, their size growing with range (view's patch_angle_rad) so that each cell
-// holds several at every range; a patch budget bounds the work (counted when it cuts).
+// holds several at every range; a patch budget bounds the work (counted when it cuts). Facets
+// are grouped at setup into horizontal tiles with bounding spheres: a tile outside the grid's
+// range or angles is skipped whole (a frame over a large database visits the tiles in the beam,
+// not every facet).
 
 #include <complex>
 #include <cstddef>
@@ -169,12 +172,15 @@ class TerrainEngine {
 
   /// Adds the terrain of every cell of `grid` seen from `view`: mean[cell] += sum sigma_k,
   /// field[l * cells + cell] += sum a_k (look l's speckle), cells = grid.columns * grid.bins.
-  /// `mean` must hold cells values, `field` looks * cells (or be empty: mean only). Real-time
-  /// safe: no allocation, no exception; an unusable grid or view adds nothing and returns
-  /// all-zero statistics.
+  /// `mean` must hold cells values, `field` looks * cells (or be empty: mean only).
+  /// `elevation_power`, when not empty (cells values), gets elevation_power[cell] += sigma_k el_k
+  /// [m^2 rad] (el_k the patch's elevation in the antenna frame): divided by mean, the cell's
+  /// power-weighted elevation. Real-time safe: no allocation, no exception; an unusable grid or
+  /// view adds nothing and returns all-zero statistics.
   [[nodiscard]] TerrainStats integrate(const TerrainView& view, const CellGrid& grid,
                                        std::span<std::complex<double>> field,
-                                       std::span<double> mean) const noexcept;
+                                       std::span<double> mean,
+                                       std::span<double> elevation_power = {}) const noexcept;
 
  private:
   const scene::Scene* scene_;
@@ -182,6 +188,18 @@ class TerrainEngine {
   TerrainEngineSpec spec_;
   std::vector<TerrainFacet> facets_;
   double area_m2_ = 0.0;
+  /// Tiles: the facets grouped by their centroid's square of the horizontal plane (side
+  /// 4 max_facet_m), each with a bounding sphere of its facets, so that integrate() culls a tile
+  /// before its facets (tile t's facets: tile_facets_[tile_first_[t] .. tile_first_[t + 1]), in
+  /// ascending index; empty tiles are left out).
+  struct Tile {
+    glm::dvec3 centre_m{0.0};
+    double radius_m = 0.0;
+  };
+  std::vector<Tile> tiles_;
+  std::vector<std::uint32_t> tile_first_;
+  std::vector<std::uint32_t> tile_facets_;
+  void build_tiles();
 };
 
 /// The materials of a resolved SurfaceSet-like description: per scene material its sigma0 row

@@ -451,6 +451,10 @@ SbrTracer::Frame SbrTracer::frame_for(const TraceKnobs& knobs, TraceStats* stats
   f.terrain_daz_rad = (c.azimuth_max_rad - c.azimuth_min_rad) / static_cast<double>(f.terrain_n_az);
   f.terrain_del_rad =
       (c.elevation_max_rad - c.elevation_min_rad) / static_cast<double>(f.terrain_n_el);
+  if (!c.terrain_rays) {  // terrain from the engine: no grid this frame
+    f.terrain_n_az = 0;
+    f.terrain_n_el = 0;
+  }
   f.max_bounces = c.max_bounces;
   if (knobs.max_bounces != 0) {
     if (knobs.max_bounces >= 1 && knobs.max_bounces <= c.max_bounces)

@@ -88,7 +88,11 @@ struct SbrConfig {
   double azimuth_max_rad = 0.1745;
   double elevation_min_rad = -0.0873;
   double elevation_max_rad = 0.0873;
-  double terrain_ray_spacing_rad = 1e-3;    ///< angular spacing of the terrain grid (az and el)
+  double terrain_ray_spacing_rad = 1e-3;  ///< angular spacing of the terrain grid (az and el)
+  /// Shoot the terrain grid (diffuse clutter at its first hits, and the paths of targets out of
+  /// view). Off when the caller takes terrain clutter from the terrain engine instead
+  /// (radar/products/terrain_returns.hpp): only the targets' bundles are traced.
+  bool terrain_rays = true;
   double target_ray_spacing_m = 0.25;       ///< bundle spacing at the target's nearest range
   std::size_t max_rays_per_target = 50000;  ///< bundles coarsen beyond this (counted)
   double max_range_m = 6000.0;              ///< rays end here (one-way)

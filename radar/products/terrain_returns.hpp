@@ -1,0 +1,99 @@
+#pragma once
+// Terrain clutter of the closed loop from the terrain engine (radar/clutter/terrain_engine.hpp)
+// instead of the frame tracer's terrain rays: one diffuse return per lit range-azimuth cell of
+// the field of view, in the tracer's own return format (Contribution, coherent = false), so the
+// sensor takes both alike and the tracer keeps the targets, structures and their multiple
+// bounces (SbrConfig::terrain_rays = false turns its terrain grid off).
+//
+// Cells. Columns of azimuth_cell_rad across [azimuth_min_rad, azimuth_max_rad) (antenna frame),
+// range bins of range_cell_m from range_min_m to range_max_m. The engine integrates
+// sigma0(local incidence) dA over the terrain patches seen from the antenna (shadowing on,
+// structures shadow the ground) whose elevation lies in [elevation_min_rad, elevation_max_rad]:
+// the discretised integral of sigma0 over the cell's illuminated surface (Ulaby & Long,
+// Microwave Radar and Radiometric Remote Sensing, 2014, eq. 5.35). A lit cell's return:
+//   |A|^2          = sum_k sigma_k over the cell's patches [m^2] (mean power: the sensor draws
+//                    the speckle, as it does for a terrain ray's footprint);
+//   range_m        = the cell's centre, range_spread_m its width (the sensor spreads the power
+//                    uniformly over it, as over a ray footprint's extent along range);
+//   azimuth_rad    = the column's centre;
+//   elevation_rad  = asin(sum_k sigma_k sin el_k / sum_k sigma_k) (the power-weighted patch
+//                    elevation, by its sine);
+//   radial velocity = -v . u, u the unit line of sight to the cell's direction (az, el), v the
+//                    antenna's velocity: static ground seen from a moving radar, positive
+//                    receding (the tracer's rule at a terrain ray's first hit, path rate
+//                    (0 - v) . d; the Doppler shift is the sensor's, f_D = -2 v_r / lambda).
+// Patches are at most patch_fraction of a cell wide (the engine's patch size
+// max(range cell, R azimuth cell) x patch_fraction), so each cell holds one or more.
+//
+// Costs. The constructor allocates and throws (std::invalid_argument; the engine's "no terrain"
+// included). compute() allocates nothing and does not throw: the columns are cut into one slice
+// per worker (TBB), each slice integrated into its own buffers; the output order (slice, bin,
+// column) does not depend on the threading.
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "radar/clutter/terrain_engine.hpp"
+#include "radar/em/sbr.hpp"
+#include "scene/scene.hpp"
+
+namespace radar_emu::radar {
+
+struct TerrainReturnsConfig {
+  double azimuth_min_rad = -0.1745;  ///< field of view, antenna frame
+  double azimuth_max_rad = 0.1745;
+  double elevation_min_rad = -0.0873;
+  double elevation_max_rad = 0.0873;
+  double azimuth_cell_rad = 4.363e-3;  ///< column width (0.25 deg), > 0
+  double range_min_m = 0.0;            ///< first bin's near edge, >= 0
+  double range_max_m = 6000.0;         ///< last bin's far edge, > range_min_m
+  double range_cell_m = 3.0;           ///< bin width, > 0
+  /// Patch size as a fraction of the cell's smaller extent (range bin, R x column), (0, 1].
+  double patch_fraction = 1.0;
+  double carrier_hz = 94e9;  ///< the path phase of the engine's field (not used for the mean)
+  bool shadowing = true;     ///< one occlusion query per patch
+  /// Patches per frame, all slices together (counted in TerrainStats::budget_cut when it cuts).
+  std::uint64_t max_patches = 20'000'000;
+  std::size_t max_cells = 4'000'000;  ///< setup refuses more columns x bins
+};
+
+class TerrainReturns {
+ public:
+  /// Setup: builds the engine from the tracer's resolved materials (make_terrain_engine: the
+  /// tracer's targets left to the rays) and the cell grid; one slice per TBB worker. Throws
+  /// std::invalid_argument naming the field, or the engine's error (a scene with no terrain).
+  /// Keeps a reference to `scene`.
+  TerrainReturns(const scene::Scene& scene, const SbrTracer& tracer,
+                 const TerrainReturnsConfig& config);
+
+  /// Returns per frame at most: the cells of the grid.
+  [[nodiscard]] std::size_t max_returns() const noexcept { return columns_ * bins_; }
+  [[nodiscard]] std::size_t columns() const noexcept { return columns_; }
+  [[nodiscard]] std::size_t bins() const noexcept { return bins_; }
+  [[nodiscard]] const clutter::TerrainEngine& engine() const noexcept { return engine_; }
+  [[nodiscard]] const TerrainReturnsConfig& config() const noexcept { return config_; }
+
+  /// The lit cells' returns for `pose` into `out` (header), in slice, bin, column order; returns
+  /// how many. `stats` is added to. Real-time safe: no allocation, no exception; returns beyond
+  /// out.size() are dropped and counted in `dropped`.
+  [[nodiscard]] std::size_t compute(const RadarPose& pose, std::span<Contribution> out,
+                                    clutter::TerrainStats& stats, std::uint64_t& dropped) noexcept;
+
+ private:
+  struct Slice {
+    std::size_t first_column = 0, columns = 0;
+    std::vector<double> mean, elevation_power;  ///< bins x columns of the slice
+    clutter::TerrainStats stats;
+  };
+  TerrainReturnsConfig config_;
+  clutter::TerrainEngine engine_;
+  std::size_t columns_ = 0, bins_ = 0;
+  std::vector<double> edges_m_;          ///< bins + 1
+  std::vector<double> cos_az_, sin_az_;  ///< per column, of its centre
+  std::vector<Slice> slices_;
+  std::uint32_t terrain_object_ = 0;  ///< Contribution::object_id: the object of most terrain area
+};
+
+}  // namespace radar_emu::radar

@@ -1,0 +1,219 @@
+// The closed loop's terrain clutter from the terrain engine ([radar] terrain = "engine",
+// radar/products/terrain_returns.hpp) against the tracer's terrain rays (terrain = "rays"), two
+// independent computations of the same integral of sigma0 dA: rays sample the field of view on
+// a 1 mrad grid and return sigma0 x their footprint at the first hit; the engine cuts the
+// terrain facets into patches and bins them by range and azimuth. Also: the frame path with the
+// engine does not allocate, and the targets are still detected.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "loop/closed_loop.hpp"
+#include "loop/ownship.hpp"
+#include "loop/scenario.hpp"
+#include "radar/em/sbr.hpp"
+#include "radar/products/terrain_returns.hpp"
+#include "scene/scene.hpp"
+#include "tests/alloc_counter.hpp"
+
+namespace loop = radar_emu::loop;
+namespace radar = radar_emu::radar;
+
+namespace {
+
+loop::Scenario default_scenario() {
+  return loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
+}
+
+loop::Scenario movers_scenario() {
+  return loop::load_scenario(std::string(RADAR_EMU_TEST_DATA_DIR) +
+                             "/../../examples/terrain_movers.toml");
+}
+
+radar::RadarPose first_pose(const loop::Scenario& s) {
+  radar::RadarPose p;
+  p.position_m = s.ownship_start_enu_m;
+  p.velocity_mps = s.ownship_velocity_enu_mps;
+  p.world_from_antenna =
+      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      loop::body_from_antenna(s.antenna_depression_rad);
+  return p;
+}
+
+// Diffuse power per range bin [m^2]: each diffuse return's |A|^2 spread uniformly over
+// [range - spread / 2, range + spread / 2] (the sensor's rule for a footprint), bins of bin_m
+// from r0_m.
+std::vector<double> power_per_bin(std::span<const radar::Contribution> in, double r0_m,
+                                  double bin_m, std::size_t bins) {
+  std::vector<double> p(bins, 0.0);
+  for (const radar::Contribution& c : in) {
+    if (c.coherent)
+      continue;
+    const double power = std::norm(c.amplitude);
+    const double lo = c.range_m - 0.5 * c.range_spread_m, hi = c.range_m + 0.5 * c.range_spread_m;
+    if (!(hi > lo)) {
+      const double b = std::floor((c.range_m - r0_m) / bin_m);
+      if (b >= 0 && b < static_cast<double>(bins))
+        p[static_cast<std::size_t>(b)] += power;
+      continue;
+    }
+    const auto b0 = static_cast<long>(std::floor((lo - r0_m) / bin_m));
+    const auto b1 = static_cast<long>(std::floor((hi - r0_m) / bin_m));
+    for (long b = std::max(0L, b0); b <= b1 && b < static_cast<long>(bins); ++b) {
+      const double a = std::max(lo, r0_m + static_cast<double>(b) * bin_m);
+      const double z = std::min(hi, r0_m + static_cast<double>(b + 1) * bin_m);
+      if (z > a)
+        p[static_cast<std::size_t>(b)] += power * (z - a) / (hi - lo);
+    }
+  }
+  return p;
+}
+
+// Rays and engine on the scenario's first pose: the mean clutter power per range bin averaged
+// over blocks of `block` bins, in dB engine - rays, for the blocks holding at least 1 % of the
+// largest block's power (the lit part of the swath). Prints the table.
+std::vector<double> block_differences_db(const loop::Scenario& s, std::size_t block) {
+  const radar_emu::scene::Scene scene(loop::scene_description(s));
+  const radar::RadarPose pose = first_pose(s);
+  const radar::TerrainReturnsConfig tc = loop::terrain_returns_config(s);
+  const double bin_m = tc.range_cell_m;  // the engine's cell: the sensor's bin x cell_range_bins
+  const auto bins = static_cast<std::size_t>(std::ceil((tc.range_max_m - tc.range_min_m) / bin_m));
+
+  radar::SbrConfig with_rays = s.sbr;
+  with_rays.terrain_rays = true;
+  radar::SbrTracer rays(scene, with_rays);
+  std::vector<radar::Contribution> out(rays.max_contributions());
+  radar::TraceStats ts;
+  const std::size_t n_rays = rays.trace(pose, out, ts);
+  const std::vector<double> p_rays =
+      power_per_bin(std::span(out.data(), n_rays), tc.range_min_m, bin_m, bins);
+
+  radar::SbrConfig no_rays = s.sbr;
+  no_rays.terrain_rays = false;
+  radar::SbrTracer tracer(scene, no_rays);
+  radar::TerrainReturns engine(scene, tracer, tc);
+  std::vector<radar::Contribution> cells(engine.max_returns());
+  radar::clutter::TerrainStats es;
+  std::uint64_t dropped = 0;
+  const std::size_t n_cells = engine.compute(pose, cells, es, dropped);
+  EXPECT_EQ(dropped, 0u);
+  EXPECT_EQ(es.budget_cut, 0u);
+  const std::vector<double> p_engine =
+      power_per_bin(std::span(cells.data(), n_cells), tc.range_min_m, bin_m, bins);
+
+  std::vector<double> sum_rays, sum_engine;
+  for (std::size_t b0 = 0; b0 + block <= bins; b0 += block) {
+    double a = 0.0, e = 0.0;
+    for (std::size_t b = b0; b < b0 + block; ++b) {
+      a += p_rays[b];
+      e += p_engine[b];
+    }
+    sum_rays.push_back(a);
+    sum_engine.push_back(e);
+  }
+  const double peak = *std::max_element(sum_rays.begin(), sum_rays.end());
+  std::vector<double> diff;
+  std::printf("%s: %zu ray returns, %zu engine cells (%llu patches lit of %llu)\n", s.name.c_str(),
+              n_rays, n_cells, static_cast<unsigned long long>(es.patches_lit),
+              static_cast<unsigned long long>(es.patches));
+  std::printf("  range_m  rays_dBsm  engine_dBsm  diff_dB  (per range bin, mean over %zu bins)\n",
+              block);
+  for (std::size_t k = 0; k < sum_rays.size(); ++k) {
+    if (!(sum_rays[k] >= 0.01 * peak))
+      continue;
+    const double r = tc.range_min_m +
+                     (static_cast<double>(k * block) + 0.5 * static_cast<double>(block)) * bin_m;
+    const double ra = 10.0 * std::log10(sum_rays[k] / static_cast<double>(block));
+    const double en =
+        10.0 * std::log10(std::max(sum_engine[k], 1e-300) / static_cast<double>(block));
+    diff.push_back(en - ra);
+    std::printf("  %7.0f  %9.2f  %11.2f  %7.2f\n", r, ra, en, en - ra);
+  }
+  return diff;
+}
+
+void expect_within_db(const std::vector<double>& diff, double tol_db) {
+  ASSERT_GE(diff.size(), 10u) << "too few lit range blocks to compare";
+  double mean = 0.0;
+  for (double d : diff) {
+    EXPECT_LE(std::abs(d), tol_db);
+    mean += d;
+  }
+  mean /= static_cast<double>(diff.size());
+  std::printf("  mean difference %.2f dB over %zu blocks\n", mean, diff.size());
+  EXPECT_LE(std::abs(mean), 0.5 * tol_db);
+}
+
+}  // namespace
+
+// The mean clutter power per range bin, averaged over 100 m of range (the rays' footprints
+// spread over up to 40 m of range each at these grazing angles: a block holds several of their
+// rows), agrees within 1 dB between the two, on the default approach over the runway scene.
+TEST(LoopTerrain, EngineClutterPowerPerRangeBinMatchesTerrainRaysDefault) {
+  expect_within_db(block_differences_db(default_scenario(), 17), 1.0);
+}
+
+// The same on examples/terrain_movers.toml (the 207k-polygon terrain database: hills, forest,
+// roads, lakes; shadows behind the crests).
+TEST(LoopTerrain, EngineClutterPowerPerRangeBinMatchesTerrainRaysTerrainDatabase) {
+  expect_within_db(block_differences_db(movers_scenario(), 17), 1.0);
+}
+
+// The frame path with the engine allocates nothing (frames 5 to the last, the fixture's rule in
+// closed_loop_test.cpp), and every target the terrain rays let the radar detect is still
+// detected, in as many of its in-beam frames within 10 % (the default approach with its
+// trihedrals, the governor off: full physics both ways).
+TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
+  loop::Scenario s = default_scenario();
+  s.scene_corner_reflectors = true;
+  s.governor.enabled = false;
+  s.frames = 30;
+  loop::Scenario e = s;
+  e.terrain_engine = true;
+  e.sbr.terrain_rays = false;
+
+  const loop::RunResult with_rays = loop::ClosedLoop(s, {}).run();
+
+  loop::RunOptions options;
+  options.progress = [](std::uint64_t done, std::uint64_t total) {
+    if (done == 5)
+      radar_emu::test::start_counting_allocations();
+    if (done == total)
+      (void)radar_emu::test::stop_counting_allocations();
+  };
+  loop::ClosedLoop engine_loop(e, options);
+  const loop::RunResult with_engine = engine_loop.run();
+  const std::uint64_t allocations = radar_emu::test::stop_counting_allocations();
+  EXPECT_EQ(allocations, 0u) << "heap allocations between frame 5 and the last frame";
+  EXPECT_EQ(with_rays.terrain.patches, 0u);
+  EXPECT_GT(with_engine.terrain.patches_lit, 0u);
+  EXPECT_EQ(with_engine.terrain_dropped, 0u);
+  EXPECT_EQ(with_engine.terrain.budget_cut, 0u);
+
+  const auto& a = with_rays.outcome.targets;
+  const auto& b = with_engine.outcome.targets;
+  ASSERT_EQ(a.size(), b.size());
+  std::size_t detected = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].object_id, b[i].object_id);
+    EXPECT_EQ(a[i].frames_in_beam, b[i].frames_in_beam);
+    std::printf("object %u: in beam %llu, detected rays %llu, engine %llu\n", a[i].object_id,
+                static_cast<unsigned long long>(a[i].frames_in_beam),
+                static_cast<unsigned long long>(a[i].frames_detected),
+                static_cast<unsigned long long>(b[i].frames_detected));
+    if (a[i].frames_detected == 0)
+      continue;
+    ++detected;
+    EXPECT_GE(static_cast<double>(b[i].frames_detected),
+              0.9 * static_cast<double>(a[i].frames_detected))
+        << "object " << a[i].object_id;
+  }
+  EXPECT_GE(detected, 1u);
+}
