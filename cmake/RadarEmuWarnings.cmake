@@ -23,11 +23,13 @@ if(RADAR_EMU_FUZZ)
     message(FATAL_ERROR "RADAR_EMU_FUZZ needs clang (Debian 12: clang-14); configure a separate "
                         "build tree with -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++")
   endif()
-  # -O1 with line tables (what OSS-Fuzz builds with): quick to build, fast enough to fuzz, stack
-  # traces with lines; configure with CMAKE_BUILD_TYPE=Debug so that assertions stay on.
+  # Line tables (stack traces with lines); configure with CMAKE_BUILD_TYPE=Debug so that
+  # assertions stay on. The libraries and the harnesses are compiled at -O1 (what OSS-Fuzz builds
+  # with: fast enough to fuzz), by radar_emu_module and tests/fuzz; the test suites built in the
+  # same tree keep Debug's -O0 (their time is in the libraries, and -O1 doubled their compile).
   target_compile_options(radar_emu_sanitizers INTERFACE
     -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
-    -O1 -gline-tables-only)
+    -gline-tables-only)
   target_link_options(radar_emu_sanitizers INTERFACE -fsanitize=address,undefined)
 elseif(RADAR_EMU_SANITIZE)
   target_compile_options(radar_emu_sanitizers INTERFACE
@@ -48,4 +50,7 @@ function(radar_emu_module)
     PUBLIC radar_emu::common ${M_PUBLIC_DEPS} radar_emu_sanitizers
     PRIVATE ${M_PRIVATE_DEPS} radar_emu_warnings)
   set_target_properties(radar_emu_${M_NAME} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  if(RADAR_EMU_FUZZ)
+    target_compile_options(radar_emu_${M_NAME} PRIVATE -O1)
+  endif()
 endfunction()
