@@ -14,6 +14,9 @@
 4. Quiet: a short complete `rcs` with stderr a pipe prints no progress line and no "%"; with a
    pseudo-terminal and -q, none either; without -q on a pseudo-terminal the line is there and
    the finished CSV has no incomplete mark.
+5. `tradeoff --quick --cases sphere,grazing,iem`, SIGINT during the sphere case: status 130,
+   the one line, tradeoff.csv holds the sphere rows only and ends "# incomplete: stopped by
+   SIGINT after 1 of 3 cases, before grazing (N rows)" with N its row count.
 
 The moment to signal is read from the progress line itself, never guessed with a sleep.
 
@@ -170,6 +173,35 @@ check(code == 0 and "directions)" not in err, f"rcs -q on a terminal: no progres
 code, err, _ = run_on_pty(rcs_args(short, "300"))
 check(code == 0 and "rcs: 100 % (300/300 directions)" in err,
       "rcs on a terminal: the progress line reaches 100 %")
+
+# 5: tradeoff, stopped between cases (stderr a file: its per-knob lines, no progress line).
+tq = os.path.join(work, "tradeoff")
+err_path = os.path.join(work, "tradeoff.err")
+with open(err_path, "w") as err_file:
+    proc = subprocess.Popen([exe, "tradeoff", "--quick", "--cases", "sphere,grazing,iem",
+                             "--out", tq], cwd=work, stdout=subprocess.DEVNULL, stderr=err_file)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        with open(err_path) as f:
+            if "sphere ka" in f.read():
+                proc.send_signal(signal.SIGINT)
+                break
+        time.sleep(0.05)
+    proc.wait(timeout=120)
+with open(err_path) as f:
+    err = f.read()
+check(proc.returncode == 130, f"tradeoff: exit status {proc.returncode} (want 130)")
+msgs = one_message(err, "tradeoff")
+check(len(msgs) == 1 and msgs[0].startswith(
+    "radar-emu: tradeoff: interrupted by SIGINT after 1 of 3 cases; "), f"tradeoff: {msgs}")
+with open(os.path.join(tq, "tradeoff.csv")) as f:
+    lines = f.read().splitlines()
+rows = [l for l in lines[1:] if not l.startswith("#")]
+m = re.match(r"# incomplete: stopped by SIGINT after 1 of 3 cases, before grazing \((\d+) rows\)$",
+             lines[-1])
+check(m is not None and int(m.group(1)) == len(rows) > 0,
+      f"tradeoff.csv: the mark counts its {len(rows)} rows: {lines[-1]}")
+check(all(r.startswith("sphere,") for r in rows), "tradeoff.csv: the sphere case's rows only")
 
 if failures:
     print(f"{len(failures)} check(s) failed")
