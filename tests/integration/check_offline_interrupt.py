@@ -7,6 +7,8 @@
    rcs.csv holds the header, 2 N data rows (the first N directions at both frequencies, in
    sweep order) and a last line "# incomplete: ... (2N rows)".
 2. `rcs` again with SIGTERM: exit status 143, the CSV's mark says SIGTERM.
+   `profile` likewise (SIGINT): the CSV holds whole profiles of the angles the message counts
+   and ends "# incomplete: ... (R rows)" with R its row count.
 3. `sar examples/sar_trihedrals.toml` on a pseudo-terminal: the estimate line, the progress line
    in pulses; SIGINT after it began: status 130, the one-line message, sar.json says
    "incomplete": true, "stop_signal": "SIGINT" and pulses_done equals the message's count (below
@@ -131,6 +133,29 @@ for sig, sig_name, status in ((signal.SIGINT, "SIGINT", 130), (signal.SIGTERM, "
     check(m is not None, f"rcs {sig_name}: the message names the count and the file: {msgs}")
     if m is not None:
         check_partial_csv(csv, sig_name, int(m.group(1)))
+
+# 2b: profile, stopped by SIGINT mid-sweep: the profiles of the angles done, each whole.
+prof = os.path.join(work, "profile.csv")
+code, err, _ = run_on_pty(
+    [exe, "profile", "--mesh", mesh, "--freq-sweep-hz", "9e9:11e9:64", "--theta-deg", "90",
+     "--phi-deg", "0:360:3000", "--out", prof],
+    lambda e: re.search(r"profile: ([2-9]|\d\d) % \(\d+/3000 angles\)", e) is not None)
+check(code == 130, f"profile: exit status {code} (want 130)")
+msgs = one_message(err, "profile")
+m = re.match(r"radar-emu: profile: interrupted by SIGINT after (\d+) of 3000 angles; ",
+             msgs[0] if len(msgs) == 1 else "")
+check(m is not None, f"profile: one message with the angles: {msgs}")
+with open(prof) as f:
+    lines = f.read().splitlines()
+rows = [l for l in lines[1:] if not l.startswith("#")]
+mark = re.match(r"# incomplete: stopped by SIGINT after (\d+) of 3000 angles \((\d+) rows\)$",
+                lines[-1])
+check(mark is not None and int(mark.group(2)) == len(rows), f"profile.csv: the mark: {lines[-1]}")
+if m is not None and mark is not None:
+    n = int(m.group(1))
+    angles = {tuple(r.split(",")[:2]) for r in rows}
+    check(int(mark.group(1)) == n == len(angles) and 0 < n < 3000 and len(rows) % n == 0,
+          f"profile.csv: {len(angles)} angles, {len(rows)} rows, the message's {n}")
 
 # 3: sar on the three trihedrals.
 sar_out = os.path.join(work, "sar_int")
