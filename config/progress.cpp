@@ -14,8 +14,10 @@ namespace radar_emu::config {
 
 std::string format_duration(double seconds) {
   char buf[32];
-  if (seconds < 90.0)
-    std::snprintf(buf, sizeof buf, "%.0f s", std::max(0.0, seconds));
+  if (seconds < 9.95)
+    std::snprintf(buf, sizeof buf, "%.1f s", std::max(0.0, seconds));
+  else if (seconds < 90.0)
+    std::snprintf(buf, sizeof buf, "%.0f s", seconds);
   else if (seconds < 5400.0)
     std::snprintf(buf, sizeof buf, "%.0f min", seconds / 60.0);
   else

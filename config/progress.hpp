@@ -18,7 +18,7 @@ namespace radar_emu::config {
 
 /// "1.5 GB", "320 MB", "12 kB": a byte count for the estimates printed before a long command.
 [[nodiscard]] std::string format_bytes(double bytes);
-/// "45 s", "3 min", "1.2 h".
+/// "0.3 s", "45 s", "3 min", "1.2 h".
 [[nodiscard]] std::string format_duration(double seconds);
 
 class ProgressLine {

@@ -325,12 +325,13 @@ double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, 
     // GFLOP/s); the progress line then measures the real pace.
     const double n = static_cast<double>(mi.unknowns);
     const double per_freq_s = 1.2e-7 * n * n + (8.0 / 3.0) * n * n * n / 120e9;
-    char buf[200];
-    std::snprintf(buf, sizeof buf,
-                  "method of moments, %zu unknowns: matrix %.2f GB, about %.0f s a frequency "
-                  "(fill + LU on a 2-core reference machine), %zu frequencies: about %.0f s",
-                  mi.unknowns, 16e-9 * n * n, per_freq_s, nf, per_freq_s * static_cast<double>(nf));
-    o.control.tell_estimate(buf);
+    o.control.tell_estimate("method of moments, " + std::to_string(mi.unknowns) +
+                            " unknowns: matrix " + config::format_bytes(16.0 * n * n) +
+                            ", fill + LU about " + config::format_duration(per_freq_s) +
+                            " a frequency on a 2-core reference machine (more below ~5000 "
+                            "unknowns, where the near-pair integrals dominate), " +
+                            std::to_string(nf) + " frequencies: about " +
+                            config::format_duration(per_freq_s * static_cast<double>(nf)));
   }
   std::vector<radar::Direction> tx(nt * np), rx(nt * np);
   for (std::size_t it = 0; it < nt; ++it) {

@@ -15,14 +15,15 @@ TEST(Progress, LineWithPercentCountsElapsedAndTimeLeft) {
 
 TEST(Progress, NoEstimateBeforeTheFirstItemOrSecondNorAtTheEnd) {
   EXPECT_EQ(format_progress("rcs", "directions", 0, 400, 5.0),
-            "rcs: 0 % (0/400 directions), 5 s elapsed");
+            "rcs: 0 % (0/400 directions), 5.0 s elapsed");
   EXPECT_EQ(format_progress("rcs", "directions", 3, 400, 0.4),
-            "rcs: 0 % (3/400 directions), 0 s elapsed");
+            "rcs: 0 % (3/400 directions), 0.4 s elapsed");
   EXPECT_EQ(format_progress("rcs", "directions", 400, 400, 61.0),
             "rcs: 100 % (400/400 directions), 61 s elapsed");
 }
 
 TEST(Progress, DurationsAndBytes) {
+  EXPECT_EQ(format_duration(0.32), "0.3 s");
   EXPECT_EQ(format_duration(89.4), "89 s");
   EXPECT_EQ(format_duration(600.0), "10 min");
   EXPECT_EQ(format_duration(7200.0), "2.0 h");

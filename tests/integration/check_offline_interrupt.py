@@ -7,6 +7,8 @@
    rcs.csv holds the header, 2 N data rows (the first N directions at both frequencies, in
    sweep order) and a last line "# incomplete: ... (2N rows)".
 2. `rcs` again with SIGTERM: exit status 143, the CSV's mark says SIGTERM.
+   `rcs --method mom` (a sphere, 40 frequencies): the estimate line, then SIGINT between
+   frequencies keeps all 19 directions at the k frequencies done (19 k rows).
    `profile` likewise (SIGINT): the CSV holds whole profiles of the angles the message counts
    and ends "# incomplete: ... (R rows)" with R its row count.
 3. `sar examples/sar_trihedrals.toml` on a pseudo-terminal: the estimate line, the progress line
@@ -72,6 +74,15 @@ def run_on_pty(args, signal_when=None, sig=signal.SIGINT, timeout_s=120.0):
     if proc.poll() is None:
         proc.kill()
     out = proc.communicate()[0].decode()
+    # What the child wrote just before it exited may still wait in the terminal's buffer.
+    while select.select([master], [], [], 0.2)[0]:
+        try:
+            chunk = os.read(master, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        err += chunk
     os.close(master)
     return proc.returncode, err.decode(errors="replace").replace("\r\n", "\n"), out
 
@@ -85,7 +96,7 @@ def one_message(err, command):
 mesh = os.path.join(work, "truck.obj")
 subprocess.run([exe, "scene", "target", "truck", "--out", mesh], check=True,
                stdout=subprocess.DEVNULL)
-PROGRESS = re.compile(r"rcs: (\d+) % \((\d+)/3000 directions\), \d+ s elapsed")
+PROGRESS = re.compile(r"rcs: (\d+) % \((\d+)/3000 directions\), [\d.]+ s elapsed")
 
 
 def rcs_args(out, n="3000", extra=()):
@@ -133,6 +144,33 @@ for sig, sig_name, status in ((signal.SIGINT, "SIGINT", 130), (signal.SIGTERM, "
     check(m is not None, f"rcs {sig_name}: the message names the count and the file: {msgs}")
     if m is not None:
         check_partial_csv(csv, sig_name, int(m.group(1)))
+
+# 2a: rcs --method mom on a 960-triangle sphere, 40 frequencies: the estimate line, then a stop
+# between frequencies keeps every direction at the frequencies done.
+sphere = os.path.join(work, "sphere.obj")
+subprocess.run([exe, "scene", "target", "sphere", "--a-m", "0.1", "--facet-m", "0.02", "--out",
+                sphere], check=True, stdout=subprocess.DEVNULL)
+mom_csv = os.path.join(work, "mom.csv")
+code, err, _ = run_on_pty(
+    [exe, "rcs", "--mesh", sphere, "--method", "mom", "--freq-sweep-hz", "1e9:3e9:40",
+     "--theta-deg", "0:180:19", "--out", mom_csv],
+    lambda e: re.search(r"rcs: \d+ % \([2-9]/40 frequencies\)", e) is not None)
+check(code == 130, f"rcs mom: exit status {code} (want 130)")
+check(re.search(r"rcs: estimate: method of moments, \d+ unknowns: matrix \d+ MB, fill \+ LU "
+                r"about [\d.]+ s a frequency", err) is not None, "rcs mom: the estimate line")
+msgs = one_message(err, "rcs")
+m = re.match(r"radar-emu: rcs: interrupted by SIGINT after (\d+) of 40 frequencies; ",
+             msgs[0] if len(msgs) == 1 else "")
+check(m is not None, f"rcs mom: one message with the frequencies: {msgs}")
+with open(mom_csv) as f:
+    lines = f.read().splitlines()
+rows = [l for l in lines[1:] if not l.startswith("#")]
+if m is not None:
+    k = int(m.group(1))
+    check(lines[-1] == f"# incomplete: stopped by SIGINT after 19 of 19 directions x {k} of 40 "
+          f"frequencies ({19 * k} rows)" and len(rows) == 19 * k and 2 <= k < 40,
+          f"mom.csv: 19 directions x {k} frequencies = {len(rows)} rows: {lines[-1]}")
+    check(len({r.split(",")[0] for r in rows}) == k, "mom.csv: the first k frequencies")
 
 # 2b: profile, stopped by SIGINT mid-sweep: the profiles of the angles done, each whole.
 prof = os.path.join(work, "profile.csv")
