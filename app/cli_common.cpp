@@ -4,7 +4,9 @@
 
 #include <cstdio>
 #include <stdexcept>
+#include <utility>
 
+#include "app/cmd.hpp"
 #include "config/cli_args.hpp"
 #include "config/cli_checks.hpp"
 #include "radar/em/rcs.hpp"
@@ -79,6 +81,32 @@ std::vector<double> frequencies(const SweepText& t) {
     throw std::invalid_argument("give exactly one of --freq-hz and --freq-sweep-hz");
   return t.freq.empty() ? config::parse_sweep(t.freq_sweep, "--freq-sweep-hz")
                         : config::parse_sweep(t.freq, "--freq-hz");
+}
+
+OfflineRun::OfflineRun(std::string command, std::string unit, bool quiet)
+    : command_(std::move(command)), quiet_(quiet), line_(command_, std::move(unit), !quiet) {
+  install_stop_handlers(StopScope::kOfflineTool);
+}
+
+common::WorkControl OfflineRun::control() {
+  common::WorkControl c;
+  c.progress = [this](std::size_t done, std::size_t total) { line_.update(done, total); };
+  if (!quiet_) {
+    c.estimate = [this](const std::string& line) {
+      std::fprintf(stderr, "%s: estimate: %s\n", command_.c_str(), line.c_str());
+    };
+  }
+  c.stop = &stop_signal();
+  return c;
+}
+
+int OfflineRun::finish(int status, const std::string& written) {
+  if (status > 128) {
+    line_.abandon();  // the stop handler's acknowledgement began a new line
+    return config::report_interrupted(command_, status - 128, line_, written);
+  }
+  line_.finish();
+  return status;
 }
 
 }  // namespace radar_emu::app

@@ -6,12 +6,36 @@
 #include <string>
 #include <vector>
 
+#include "common/work_control.hpp"
+#include "config/progress.hpp"
+
 namespace radar_emu::app {
 
 /// An output file or directory left at its default: checked before any work too (a given one
 /// was checked by its validator while parsing). Throws std::invalid_argument naming the option.
 void check_default_file(const CLI::Option* opt, const std::string& path);
 void check_default_dir(const CLI::Option* opt, const std::string& path);
+
+/// A long offline command's progress and interruption (sar, rcs, profile, image, tradeoff):
+/// installs the SIGINT/SIGTERM handlers (app/main.cpp), draws the progress line on a terminal
+/// unless quiet, prints the tool's estimate unless quiet, and turns a stopped tool's status into
+/// the one-line message.
+class OfflineRun {
+ public:
+  /// `command` prefixes every line ("sar"), `unit` names the work items ("pulses").
+  OfflineRun(std::string command, std::string unit, bool quiet);
+  /// What the tool's Options take: progress, estimate and the stop flag. Valid while this lives.
+  [[nodiscard]] common::WorkControl control();
+  /// The tool's exit status, passed on; when it is 128 + signal (the tool stopped early and
+  /// wrote `written`), ends the progress line and prints "radar-emu: CMD: interrupted by SIGINT
+  /// after N of M UNIT; WRITTEN".
+  int finish(int status, const std::string& written);
+
+ private:
+  std::string command_;
+  bool quiet_;
+  config::ProgressLine line_;
+};
 
 /// `bytes` as text: "%.3g MB", "%.3g GB" or "%.3g TB".
 [[nodiscard]] std::string si_bytes(double bytes);

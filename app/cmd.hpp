@@ -36,9 +36,13 @@ void add_sigma0_command(CLI::App& app, Commands& commands);
 void add_tradeoff_command(CLI::App& app, Commands& commands);
 void add_sar_command(CLI::App& app, Commands& commands);
 
-/// SIGINT / SIGTERM during a run (main.cpp): the first asks the loop to stop at the next frame
-/// boundary and write every output; a second exits at once (status 128 + signal).
-void install_stop_handlers();
+/// What a stop request ends: the closed loop (at the next frame boundary) or an offline tool
+/// (after its current work item); only the handler's acknowledgement on stderr differs.
+enum class StopScope { kLoop, kOfflineTool };
+/// SIGINT / SIGTERM (main.cpp): the first sets stop_signal(), which the loop or the tool polls
+/// between frames or work items, then writes what is done; a second exits at once (status 128 +
+/// signal).
+void install_stop_handlers(StopScope scope = StopScope::kLoop);
 /// 0, or the first stop signal received since install_stop_handlers().
 std::atomic<int>& stop_signal();
 

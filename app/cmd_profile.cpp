@@ -37,7 +37,10 @@ int profile_command(const CLI::App& profile, ProfileArgs& a) {
     }
   }
   check_default_file(a.out, a.opt.out_csv);
-  return tools::run_profile_tool(a.opt);
+  OfflineRun run("profile", "angles", a.opt.quiet);
+  a.opt.control = run.control();
+  return run.finish(tools::run_profile_tool(a.opt),
+                    "the profiles done are in " + a.opt.out_csv + ", marked incomplete");
 }
 
 }  // namespace

@@ -49,7 +49,11 @@ int rcs_command(const CLI::App& rcs, RcsArgs& a) {
     a.opt.bistatic_theta_deg = a.bistatic_theta;
     a.opt.bistatic_phi_deg = a.bistatic_phi;
   }
-  return tools::run_rcs_tool(a.opt);
+  const bool mom = a.opt.method == "mom";
+  OfflineRun run("rcs", mom ? "frequencies" : "directions", a.opt.quiet);
+  a.opt.control = run.control();
+  return run.finish(tools::run_rcs_tool(a.opt),
+                    "the rows done are in " + a.opt.out_csv + ", marked incomplete");
 }
 
 }  // namespace

@@ -21,11 +21,15 @@ void add_sar_command(CLI::App& app, Commands& commands) {
                       "Output directory: raw.tif, image.tif, image.png, sar.json (default sar_out)")
           ->check(config::output_dir());
   sar->add_flag("--no-raw", o->no_raw, "Do not write raw.tif");
-  sar->add_flag("-q,--quiet", o->quiet, "No summary");
+  sar->add_flag("-q,--quiet", o->quiet, "No progress line, estimate or summary");
   commands.push_back({sar,
                       [sar_out, o] {
                         check_default_dir(sar_out, o->out_dir);
-                        return tools::run_sar_tool(*o);
+                        OfflineRun run("sar", "pulses", o->quiet);
+                        o->control = run.control();
+                        return run.finish(tools::run_sar_tool(*o),
+                                          "the image of the pulses done is in " + o->out_dir +
+                                              ", sar.json says \"incomplete\": true");
                       },
                       true});
 }

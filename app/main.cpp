@@ -21,19 +21,27 @@ namespace {
 
 std::atomic<int> g_stop_signal{0};
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs a lock-free flag");
+std::atomic<bool> g_offline{false};  // which acknowledgement the handler writes
 
 extern "C" void on_stop_signal(int sig) {
   if (g_stop_signal.exchange(sig) != 0)
     _exit(128 + sig);
-  static constexpr char kMsg[] =
+  static constexpr char kRun[] =
       "\nradar-emu: stopping at the next frame boundary and writing the outputs (again: exit "
       "at once)\n";
-  (void)!write(STDERR_FILENO, kMsg, sizeof kMsg - 1);
+  static constexpr char kOffline[] =
+      "\nradar-emu: stopping after the current work item and writing what is done (again: exit "
+      "at once)\n";
+  if (g_offline.load(std::memory_order_relaxed))
+    (void)!write(STDERR_FILENO, kOffline, sizeof kOffline - 1);
+  else
+    (void)!write(STDERR_FILENO, kRun, sizeof kRun - 1);
 }
 
 }  // namespace
 
-void install_stop_handlers() {
+void install_stop_handlers(StopScope scope) {
+  g_offline.store(scope == StopScope::kOfflineTool, std::memory_order_relaxed);
   struct sigaction sa {};
   sa.sa_handler = on_stop_signal;
   sigemptyset(&sa.sa_mask);

@@ -13,6 +13,7 @@
 
 #include "common/units.hpp"
 #include "config/cli_args.hpp"
+#include "config/progress.hpp"
 #include "plot/charts.hpp"
 #include "radar/constants.hpp"
 #include "radar/em/mom.hpp"
@@ -72,34 +73,12 @@ double db_of_power(double p) {
   return p > 0.0 ? common::db_from_power(p) : -400.0;
 }
 
-// Prints "\r  label i/n" to stderr at most every 0.5 s, and a newline at the end.
-class Progress {
- public:
-  Progress(bool enabled, std::string label, std::size_t total)
-      : enabled_(enabled),
-        label_(std::move(label)),
-        total_(total),
-        start_(std::chrono::steady_clock::now()),
-        last_(start_) {}
-  void update(std::size_t done) {
-    if (!enabled_)
-      return;
-    const auto now = std::chrono::steady_clock::now();
-    if (done < total_ && now - last_ < std::chrono::milliseconds(500))
-      return;
-    last_ = now;
-    const double s = std::chrono::duration<double>(now - start_).count();
-    std::fprintf(stderr, "\r  %s %zu/%zu (%.1f s)", label_.c_str(), done, total_, s);
-    if (done == total_)
-      std::fputc('\n', stderr);
-  }
-
- private:
-  bool enabled_;
-  std::string label_;
-  std::size_t total_;
-  std::chrono::steady_clock::time_point start_, last_;
-};
+// A stop request, heard in one process only: under mpirun every rank must run its whole block
+// (the gather waits for all of them), so a split sweep runs to its end.
+bool stopped(const std::atomic<int>* stop) {
+  return stop != nullptr && mpi_work::launched_size() <= 1 &&
+         stop->load(std::memory_order_relaxed) != 0;
+}
 
 // Physical optics is an asymptotic (high-frequency) method: flag small electrical sizes.
 // Sums the counters of one compute() call into a run's total.
@@ -303,7 +282,7 @@ Series read_overlay(const std::string& spec) {
 // The sweep of `rcs --method mom`: one fill and factorisation per frequency, every direction
 // solved from it (radar/em/mom.hpp). Writes s as sweep_rcs does; returns the seconds taken.
 double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, double>>& bistatic,
-                 std::vector<radar::ScatteringMatrix>& s) {
+                 std::vector<radar::ScatteringMatrix>& s, std::size_t& freqs_done) {
   if (mpi_work::launched_size() > 1)
     throw std::invalid_argument(
         "--method mom runs in one process (its LU uses every core); "
@@ -340,6 +319,20 @@ double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, 
         mi.max_edge_m);
   }
   const std::size_t nt = o.theta_deg.size(), np = o.phi_deg.size(), nf = o.freqs_hz.size();
+  {
+    // Before the fill: the matrix (16 N^2 bytes) and the time a frequency takes, scaled from
+    // docs/performance.md's reference machine (fill ~1.2e-7 s N^2, LU 8/3 N^3 flops at ~120
+    // GFLOP/s); the progress line then measures the real pace.
+    const double n = static_cast<double>(mi.unknowns);
+    const double per_freq_s = 1.2e-7 * n * n + (8.0 / 3.0) * n * n * n / 120e9;
+    o.control.tell_estimate("method of moments, " + std::to_string(mi.unknowns) +
+                            " unknowns: matrix " + config::format_bytes(16.0 * n * n) +
+                            ", fill + LU about " + config::format_duration(per_freq_s) +
+                            " a frequency on a 2-core reference machine (more below ~5000 "
+                            "unknowns, where the near-pair integrals dominate), " +
+                            std::to_string(nf) + " frequencies: about " +
+                            config::format_duration(per_freq_s * static_cast<double>(nf)));
+  }
   std::vector<radar::Direction> tx(nt * np), rx(nt * np);
   for (std::size_t it = 0; it < nt; ++it) {
     for (std::size_t ip = 0; ip < np; ++ip) {
@@ -351,7 +344,11 @@ double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, 
   }
   std::vector<radar::ScatteringMatrix> one(nt * np);
   const auto t0 = std::chrono::steady_clock::now();
+  freqs_done = 0;
   for (std::size_t k = 0; k < nf; ++k) {
+    // Between frequencies: one fill and LU is the work item (radar/ polls nothing).
+    if (o.control.stop_signal() != 0)
+      break;
     const double f = o.freqs_hz[k];
     const double lambda = radar::kSpeedOfLight_mps / f;
     if (mi.max_edge_m > 0.25 * lambda || mi.mean_edge_m > 0.15 * lambda) {
@@ -372,6 +369,8 @@ double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, 
                   fi.factor_s);
     for (std::size_t d = 0; d < nt * np; ++d)
       s[d * nf + k] = one[d];
+    freqs_done = k + 1;
+    o.control.report(freqs_done, nf);
   }
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -510,11 +509,13 @@ radar::RcsConfig rcs_config(int bounces, double rays_per_wavelength, bool edges,
   return c;
 }
 
-void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg,
-               std::span<const double> phi_deg, std::span<const double> freqs_hz,
-               std::optional<std::pair<double, double>> bistatic_deg,
-               std::span<radar::ScatteringMatrix> s, std::span<RcsDirectionStats> per_direction,
-               radar::RcsStats& total, const std::function<void(std::size_t)>& progress) {
+std::size_t sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+                      std::span<const double> phi_deg, std::span<const double> freqs_hz,
+                      std::optional<std::pair<double, double>> bistatic_deg,
+                      std::span<radar::ScatteringMatrix> s,
+                      std::span<RcsDirectionStats> per_direction, radar::RcsStats& total,
+                      const std::function<void(std::size_t)>& progress,
+                      const std::atomic<int>* stop) {
   const std::size_t nt = theta_deg.size(), np = phi_deg.size(), nf = freqs_hz.size();
   if (s.size() != nt * np * nf || per_direction.size() != nt * np)
     throw std::invalid_argument("sweep_rcs: output sizes do not match the sweep");
@@ -523,7 +524,12 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
   // whole, exactly as in one process. MPI ranks take contiguous blocks (mpi_work.hpp).
   const mpi_work::Block mine = mpi_work::my_block(nt * np);
   radar::RcsStats mine_total;
+  std::size_t done = nt * np;
   for (std::size_t d = mine.begin; d < mine.end; ++d) {
+    if (stopped(stop)) {
+      done = d;
+      break;
+    }
     const std::size_t it = d / np, ip = d % np;
     const radar::Direction tx{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
     const radar::Direction rx = bistatic_deg
@@ -540,12 +546,14 @@ void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg
   mpi_work::gather_blocks(s, nf);
   mpi_work::gather_blocks(per_direction);
   add_gathered_stats(total, mine_total);
+  return done;
 }
 
-void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
-                   std::span<const double> phi_deg, std::span<const double> freqs_hz,
-                   std::span<radar::ScatteringMatrix> s, std::span<std::uint64_t> edges_used,
-                   radar::RcsStats& total, const std::function<void(std::size_t)>& progress) {
+std::size_t sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+                          std::span<const double> phi_deg, std::span<const double> freqs_hz,
+                          std::span<radar::ScatteringMatrix> s, std::span<std::uint64_t> edges_used,
+                          radar::RcsStats& total, const std::function<void(std::size_t)>& progress,
+                          const std::atomic<int>* stop) {
   const std::size_t nt = theta_deg.size(), np = phi_deg.size(), nf = freqs_hz.size();
   const std::size_t na = nt * np;
   if (nt > 1 && np > 1)
@@ -555,7 +563,12 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
   // The work items are the angles, all frequencies each (as sweep_rcs), split over MPI ranks.
   const mpi_work::Block mine = mpi_work::my_block(na);
   radar::RcsStats mine_total;
+  std::size_t done = na;
   for (std::size_t a = mine.begin; a < mine.end; ++a) {
+    if (stopped(stop)) {
+      done = a;
+      break;
+    }
     const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
     const radar::Direction dir{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
     const std::uint64_t before = mine_total.edges_used;
@@ -567,6 +580,7 @@ void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta
   mpi_work::gather_blocks(s, nf);
   mpi_work::gather_blocks(edges_used);
   add_gathered_stats(total, mine_total);
+  return done;
 }
 
 namespace {
@@ -770,8 +784,11 @@ int run_rcs_tool(const RcsToolOptions& o) {
     bistatic.emplace(*o.bistatic_theta_deg, *o.bistatic_phi_deg);
   std::optional<ToolTarget> target;
   double elapsed_s = 0.0;
+  // How far the sweep got: every direction at the first freqs_done frequencies (MoM), or the
+  // first dirs_done directions at every frequency (PO).
+  std::size_t dirs_done = nt * np, freqs_done = nf;
   if (mom) {
-    elapsed_s = sweep_mom(o, bistatic, s);
+    elapsed_s = sweep_mom(o, bistatic, s, freqs_done);
   } else {
     target.emplace(o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.edges,
                    o.edge_turn_deg, o.edge_order,
@@ -779,15 +796,18 @@ int run_rcs_tool(const RcsToolOptions& o) {
     start_split(nt * np, "directions", o.quiet);
     // Under mpirun: rank 0's block (the others keep pace), the others quiet.
     const std::size_t my_items = mpi_work::my_block(nt * np).size();
-    Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "direction", my_items);
     const auto t0 = std::chrono::steady_clock::now();
-    sweep_rcs(target->engine, o.theta_deg, o.phi_deg, o.freqs_hz, bistatic, s, per_direction, stats,
-              [&progress](std::size_t done) { progress.update(done); });
+    std::function<void(std::size_t)> progress;
+    if (mpi_work::is_root() && o.control.progress)
+      progress = [&o, my_items](std::size_t done) { o.control.report(done, my_items); };
+    dirs_done = sweep_rcs(target->engine, o.theta_deg, o.phi_deg, o.freqs_hz, bistatic, s,
+                          per_direction, stats, progress, o.control.stop);
     elapsed_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!mpi_work::is_root())
       return 0;  // rank 0 has gathered every direction: it alone writes
   }
 
+  const bool interrupted = dirs_done < nt * np || freqs_done < nf;
   {
     File f(open_or_throw(o.out_csv));
     std::fprintf(f.get(), "freq_hz,theta_deg,phi_deg");
@@ -799,8 +819,10 @@ int run_rcs_tool(const RcsToolOptions& o) {
     std::fprintf(f.get(), ",facets_lit,facets_partial,tubes_cut_off,edges,edges_used\n");
     for (std::size_t it = 0; it < nt; ++it) {
       for (std::size_t ip = 0; ip < np; ++ip) {
+        if (it * np + ip >= dirs_done)
+          break;
         const RcsDirectionStats& ds = per_direction[it * np + ip];
-        for (std::size_t k = 0; k < nf; ++k) {
+        for (std::size_t k = 0; k < freqs_done; ++k) {
           const radar::ScatteringMatrix& m = s[(it * np + ip) * nf + k];
           std::fprintf(f.get(), "%.10g,%.10g,%.10g", o.freqs_hz[k], o.theta_deg[it], o.phi_deg[ip]);
           for (Polarisation p : o.pols) {
@@ -815,7 +837,19 @@ int run_rcs_tool(const RcsToolOptions& o) {
         }
       }
     }
+    if (interrupted) {
+      // A comment line (numpy.loadtxt and pandas' comment="#" skip it) that says what is there.
+      std::fprintf(f.get(),
+                   "# incomplete: stopped by %s after %zu of %zu directions x %zu of %zu "
+                   "frequencies (%zu rows)\n",
+                   config::signal_name(o.control.stop_signal()).c_str(), dirs_done, nt * np,
+                   freqs_done, nf, dirs_done * freqs_done);
+    }
     close_or_throw(f, o.out_csv);
+  }
+  if (interrupted) {
+    warn_cut_off(stats, o.bounces);
+    return 128 + o.control.stop_signal();  // no statistics or plot of a partial sweep
   }
 
   // Fluctuation statistics over a sliding aspect window of the swept angle.
@@ -925,10 +959,12 @@ int run_profile_tool(const ProfileToolOptions& o) {
   radar::RcsStats stats;
   start_split(na, "angles", o.quiet);
   const std::size_t my_items = mpi_work::my_block(na).size();
-  Progress progress(!o.quiet && mpi_work::is_root() && my_items > 4, "angle", my_items);
   const auto t0 = std::chrono::steady_clock::now();
-  sweep_profile(engine, o.theta_deg, o.phi_deg, o.freqs_hz, s, edges_used, stats,
-                [&progress](std::size_t done) { progress.update(done); });
+  std::function<void(std::size_t)> progress;
+  if (mpi_work::is_root() && o.control.progress)
+    progress = [&o, my_items](std::size_t done) { o.control.report(done, my_items); };
+  const std::size_t angles_done = sweep_profile(engine, o.theta_deg, o.phi_deg, o.freqs_hz, s,
+                                                edges_used, stats, progress, o.control.stop);
   const double elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (!mpi_work::is_root())
@@ -964,7 +1000,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
   for (std::size_t i = 0; i < na * nf; ++i)
     samples[i] = component(s[i], o.pol);
   std::vector<radar::RangeProfile> profiles;
-  for (std::size_t a = 0; a < na; ++a) {
+  for (std::size_t a = 0; a < angles_done; ++a) {
     profiles.push_back(
         radar::range_profile(std::span<const std::complex<double>>(samples.data() + a * nf, nf),
                              grid, *window, o.oversample));
@@ -973,7 +1009,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
     File f(open_or_throw(o.out_csv));
     // edges: 1 when edge diffraction was on; edges_used: the edge terms of that angle.
     std::fprintf(f.get(), "theta_deg,phi_deg,range_m,amplitude_dbsm,re_m,im_m,edges,edges_used\n");
-    for (std::size_t a = 0; a < na; ++a) {
+    for (std::size_t a = 0; a < angles_done; ++a) {
       const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
       const radar::RangeProfile& p = profiles[a];
       for (std::size_t i = 0; i < p.range_m.size(); ++i) {
@@ -983,8 +1019,15 @@ int run_profile_tool(const ProfileToolOptions& o) {
                      static_cast<unsigned long long>(edges_used[a]));
       }
     }
+    if (angles_done < na) {
+      std::fprintf(f.get(), "# incomplete: stopped by %s after %zu of %zu angles (%zu rows)\n",
+                   config::signal_name(o.control.stop_signal()).c_str(), angles_done, na,
+                   angles_done * (profiles.empty() ? 0 : profiles.front().range_m.size()));
+    }
     close_or_throw(f, o.out_csv);
   }
+  if (angles_done < na)
+    return 128 + o.control.stop_signal();  // no plot or ISAR image of a partial sweep
   const radar::RangeProfile& centre = profiles[na / 2];
   const std::string name = std::filesystem::path(o.mesh).filename().string();
   if (!o.plot_png.empty()) {

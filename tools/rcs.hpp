@@ -2,6 +2,7 @@
 // `radar-emu rcs` and `radar-emu profile`: the offline RCS tools on the PO + SBR engine
 // (radar/em/rcs.hpp). Loading, option checking, sweeps with progress, CSV and PNG outputs.
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "common/polarisation.hpp"
+#include "common/work_control.hpp"
 #include "radar/em/mom.hpp"
 #include "radar/em/rcs.hpp"
 #include "scene/scene.hpp"
@@ -61,25 +63,32 @@ struct RcsDirectionStats {
 /// `freqs_hz`; the receiver at `bistatic_deg` (theta, phi) when given, else monostatic.
 /// Writes s[(it * np + ip) * nf + k] and per_direction[it * np + ip] (sizes nt * np * nf and
 /// nt * np), adds every counter to `total`, and calls `progress` (may be empty) with the number
-/// of directions done after each one. Under mpirun, after mpi_work::start(): each rank computes
-/// its block of directions (mpi_work::my_block(nt * np)), `progress` counts within it, and rank
-/// 0 gathers every direction bit for bit (other ranks' outputs and `total` hold their block
+/// of directions done after each one. In one process, a non-zero `*stop` (may be null) ends the
+/// sweep after the current direction; returns the directions done (nt * np when not stopped;
+/// under mpirun the sweep always runs whole). Under mpirun, after mpi_work::start(): each rank
+/// computes its block of directions (mpi_work::my_block(nt * np)), `progress` counts within it, and
+/// rank 0 gathers every direction bit for bit (other ranks' outputs and `total` hold their block
 /// only). Collective then: every rank calls it.
-void sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg,
-               std::span<const double> phi_deg, std::span<const double> freqs_hz,
-               std::optional<std::pair<double, double>> bistatic_deg,
-               std::span<radar::ScatteringMatrix> s, std::span<RcsDirectionStats> per_direction,
-               radar::RcsStats& total, const std::function<void(std::size_t)>& progress = {});
+std::size_t sweep_rcs(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+                      std::span<const double> phi_deg, std::span<const double> freqs_hz,
+                      std::optional<std::pair<double, double>> bistatic_deg,
+                      std::span<radar::ScatteringMatrix> s,
+                      std::span<RcsDirectionStats> per_direction, radar::RcsStats& total,
+                      const std::function<void(std::size_t)>& progress = {},
+                      const std::atomic<int>* stop = nullptr);
 
 /// The angle sweep of `radar-emu profile`: theta or phi swept (the other one value, degrees),
 /// monostatic, at all `freqs_hz`. Writes s[a * nf + k] and edges_used[a] (the edge terms of
 /// angle a; sizes na * nf and na, na = nt * np), adds every counter to `total`, and calls
 /// `progress` (may be empty) with the number of angles done after each one. Split over MPI
-/// ranks by angle as sweep_rcs is by direction.
-void sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
-                   std::span<const double> phi_deg, std::span<const double> freqs_hz,
-                   std::span<radar::ScatteringMatrix> s, std::span<std::uint64_t> edges_used,
-                   radar::RcsStats& total, const std::function<void(std::size_t)>& progress = {});
+/// ranks by angle as sweep_rcs is by direction, and stopped by `*stop` as it is; returns the
+/// angles done.
+std::size_t sweep_profile(const radar::RcsEngine& engine, std::span<const double> theta_deg,
+                          std::span<const double> phi_deg, std::span<const double> freqs_hz,
+                          std::span<radar::ScatteringMatrix> s, std::span<std::uint64_t> edges_used,
+                          radar::RcsStats& total,
+                          const std::function<void(std::size_t)>& progress = {},
+                          const std::atomic<int>* stop = nullptr);
 
 struct RcsToolOptions {
   std::string mesh;
@@ -108,9 +117,14 @@ struct RcsToolOptions {
   double window_deg = 0.0;  ///< > 0: fluctuation statistics over +-window/2 of the swept angle
   std::string stats_csv;    ///< where they go (default: next to out_csv, *_stats.csv)
   bool quiet = false;
+  /// Progress (directions; with --method mom, frequencies), the estimate before a MoM sweep, and
+  /// the stop flag polled between them.
+  common::WorkControl control;
 };
-/// Runs the sweep and writes the outputs; prints a summary (and progress on long sweeps) unless
-/// quiet. Returns the process exit status. Throws on bad input (with context).
+/// Runs the sweep and writes the outputs; prints a summary unless quiet. Returns the process
+/// exit status: 0, or 128 + the signal when control.stop ended the sweep early: then the CSV
+/// holds the rows of the directions (frequencies) done and ends with a line
+/// "# incomplete: ..." (no plot, no statistics). Throws on bad input (with context).
 int run_rcs_tool(const RcsToolOptions& options);
 
 struct ProfileToolOptions {
@@ -133,7 +147,10 @@ struct ProfileToolOptions {
   std::string isar_csv;  ///< with an angle sweep (default: next to out_csv, *_isar.csv)
   std::string isar_png;
   bool quiet = false;
+  common::WorkControl control;  ///< progress in angles; the stop flag polled between them
 };
+/// As run_rcs_tool: 128 + signal when stopped early, the CSV then holding the profiles of the
+/// angles done and a last line "# incomplete: ..." (no plots, no ISAR image).
 int run_profile_tool(const ProfileToolOptions& options);
 
 }  // namespace radar_emu::tools

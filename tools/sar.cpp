@@ -28,6 +28,7 @@
 
 #include "common/polarisation.hpp"
 #include "common/units.hpp"
+#include "config/progress.hpp"
 #include "config/toml_reader.hpp"
 #include "loop/closed_loop.hpp"
 #include "plot/canvas.hpp"
@@ -502,6 +503,15 @@ bool sar_geotiff_available() noexcept {
 #endif
 }
 
+// The rates of the estimate printed before the raw data, on the 2-core reference machine:
+// seconds per pulse and lit clutter patch (sar_terrain.toml: 46 s for 2616 pulses x 2.47 M
+// patches, docs/performance.md), per pulse of SBR tracing and echo synthesis
+// (sar_trihedrals.toml: 2.2 s for 658 pulses), per pixel and pulse of its synthetic aperture
+// (the same case's backprojection).
+constexpr double kSarClutterS = 7e-9;
+constexpr double kSarTraceS = 3.4e-3;
+constexpr double kSarBackprojectionS = 1.3e-7;
+
 int run_sar_tool(const SarToolOptions& o) {
   if (!sar_geotiff_available())
     throw std::invalid_argument(
@@ -612,23 +622,35 @@ int run_sar_tool(const SarToolOptions& o) {
 
   // --- raw data: clutter cells, then the tracer's coherent returns per pulse.
   rd::SarRaw raw = rd::make_raw(p);
+  {
+    // Before the long part: the arrays (complex floats: the raw rows, the range-compressed gates
+    // upsampled, the image) and a time scaled from the reference 2-core machine (rates of
+    // docs/performance.md's SAR cases); the progress line then measures the real pace.
+    const double pulses = static_cast<double>(p.pulses);
+    const double bytes = 8.0 * (pulses * static_cast<double>(raw.samples) +
+                                pulses * static_cast<double>(p.gates * c.upsample) +
+                                static_cast<double>(grid.rows * grid.cols)) +
+                         64.0 * static_cast<double>(cells.size());
+    const double raw_est_s = kSarClutterS * pulses * static_cast<double>(cells.size()) +
+                             (c.targets.empty() && !c.database ? 0.0 : kSarTraceS * pulses);
+    // Each pixel sums the pulses of its synthetic aperture, about far range x the synthetic
+    // beamwidth long.
+    const double aperture_pulses =
+        std::min(pulses, far * c.theta_rad * p.prf_hz / std::max(c.speed_mps, 1e-3));
+    const double bp_est_s =
+        kSarBackprojectionS * static_cast<double>(grid.rows * grid.cols) * aperture_pulses;
+    o.control.tell_estimate(std::to_string(p.pulses) + " pulses x " + std::to_string(raw.samples) +
+                            " samples, image " + std::to_string(grid.rows) + " x " +
+                            std::to_string(grid.cols) + ": memory about " +
+                            config::format_bytes(bytes) + ", raw data about " +
+                            config::format_duration(raw_est_s) + ", backprojection about " +
+                            config::format_duration(bp_est_s) + " (2-core reference machine)");
+  }
   // Under mpirun the pulses split into one contiguous block a rank (docs/cluster.md): each rank
   // synthesises its rows exactly as one process would, rank 0 gathers them and alone forms the
   // image and writes. The clutter cells above are computed by every rank (setup, not split).
   mpi_work::start();
   const mpi_work::Block block = mpi_work::my_block(p.pulses);
-  const auto t_cl = Clock::now();
-  if (!cells.empty()) {
-    // In ten steps, for the progress lines.
-    const std::size_t n = block.end - block.begin, steps = std::min<std::size_t>(10, n);
-    for (std::size_t k = 0; k < steps; ++k) {
-      rd::synthesise_points(p, cells, block.begin + n * k / steps,
-                            block.begin + n * (k + 1) / steps, raw);
-      progress("terrain echoes: " + std::to_string(100 * (k + 1) / steps) + " % of " +
-               std::to_string(n) + " pulses (" + fmt(std::round(seconds_since(t_cl))) + " s)");
-    }
-  }
-  const double clutter_s = seconds_since(t_cl);
   std::vector<rd::Contribution> out(tracer.max_contributions());
   std::vector<rd::SarEcho> echoes;
   std::vector<glm::dvec3> dirs;
@@ -640,11 +662,7 @@ int run_sar_tool(const SarToolOptions& o) {
   // Pulses [begin, end) of the targets' echoes into the preallocated raw matrix (the clutter's
   // synthesise_points takes the same range): a rank of a scale-out can run its share.
   auto target_pulses = [&](std::size_t begin, std::size_t end) {
-    const std::size_t tenth = std::max<std::size_t>(1, (end - begin) / 10);
     for (std::size_t i = begin; i < end; ++i) {
-      if (i > begin && (i - begin) % tenth == 0)
-        progress("targets and structures: " + std::to_string(100 * (i - begin) / (end - begin)) +
-                 " % of the pulses");
       const double t = rd::sar_pulse_time_s(p, i);
       const auto t0 = Clock::now();
       scene.set_time(t);
@@ -671,11 +689,34 @@ int run_sar_tool(const SarToolOptions& o) {
       echo_s += seconds_since(t1);
     }
   };
-  // Targets of the case, and the database's own structures (conductors: pylons, wires, ...).
-  if (!c.targets.empty() || c.database) {
-    progress("targets and structures: SBR per pulse");
-    target_pulses(block.begin, block.end);
+  // Pulse blocks, each the terrain's echoes then the targets' and the database's own structures
+  // (conductors: pylons, wires, ...): every row is its pulse's alone, so the order changes
+  // nothing, and a stop request (polled between blocks, in one process) leaves the pulses
+  // [block.begin, pulses_done) whole and the rest zero.
+  const bool traced = !c.targets.empty() || c.database;
+  progress(std::string(cells.empty() ? "" : "terrain echoes") +
+           (!cells.empty() && traced ? " and " : "") +
+           (traced ? "targets and structures (SBR)" : "") + " per pulse");
+  const std::size_t n_mine = block.end - block.begin;
+  const std::size_t pulse_step = std::max<std::size_t>(1, n_mine / 200);
+  std::size_t pulses_done = block.begin;
+  double clutter_s = 0.0;
+  for (std::size_t b = block.begin; b < block.end; b += pulse_step) {
+    if (mpi_work::launched_size() <= 1 && o.control.stop_signal() != 0)
+      break;
+    const std::size_t e = std::min(block.end, b + pulse_step);
+    if (!cells.empty()) {
+      const auto t0 = Clock::now();
+      rd::synthesise_points(p, cells, b, e, raw);
+      clutter_s += seconds_since(t0);
+    }
+    if (traced)
+      target_pulses(b, e);
+    pulses_done = e;
+    if (mpi_work::is_root())
+      o.control.report(pulses_done - block.begin, n_mine);
   }
+  const bool interrupted = pulses_done < block.end;
   mpi_work::gather_blocks(std::span(raw.data), raw.samples);
   mpi_work::gather_blocks(std::span(echoes_per_pulse));
   mpi_work::gather_blocks(std::span(rays_per_pulse));
@@ -695,6 +736,8 @@ int run_sar_tool(const SarToolOptions& o) {
   const auto t_bp0 = Clock::now();
   progress(std::string("backprojection onto ") +
            (grid.height_m.empty() ? "the ground plane" : "the DEM"));
+  // Interrupted: the pulses done focus a partial aperture (the rest of the raw rows are zero);
+  // a second Ctrl-C during the backprojection exits at once.
   const rd::SarImage img = rd::backproject(p, rc, grid, {c.theta_rad, c.taper, c.upsample, 0.01});
   const double bp_s = seconds_since(t_bp0);
   const double image_s = seconds_since(t_img0);
@@ -1040,6 +1083,15 @@ int run_sar_tool(const SarToolOptions& o) {
                    {"image_backprojection", bp_s},
                    {"image_ray_tracing", 0.0}};
   j["point_targets"] = jt;
+  if (interrupted) {
+    // The raw rows of pulses [0, pulses_done) are synthesised, the rest zero; the image is
+    // focused from those only (its point-target measurements above are of a partial aperture).
+    j["incomplete"] = true;
+    j["stop_signal"] = config::signal_name(o.control.stop_signal());
+    j["pulses_done"] = pulses_done;
+  } else {
+    j["incomplete"] = false;
+  }
   std::ofstream f(dir / "sar.json");
   f << j.dump(2) << "\n";
   if (!f)
@@ -1062,7 +1114,7 @@ int run_sar_tool(const SarToolOptions& o) {
             t["integrated_energy_dbsm"].get<double>());
     std::printf("  outputs in %s\n", o.out_dir.c_str());
   }
-  return 0;
+  return interrupted ? 128 + o.control.stop_signal() : 0;
 }
 
 }  // namespace radar_emu::tools

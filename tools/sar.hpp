@@ -15,6 +15,8 @@
 
 #include <string>
 
+#include "common/work_control.hpp"
+
 namespace radar_emu::tools {
 
 struct SarToolOptions {
@@ -22,12 +24,18 @@ struct SarToolOptions {
   std::string out_dir = "sar_out";  ///< created if missing
   bool no_raw = false;              ///< skip raw.tif
   bool quiet = false;
+  /// Progress in pulses, the estimate of memory and time before the raw data, and the stop flag
+  /// polled between pulse blocks.
+  common::WorkControl control;
 };
 
 /// Whether this build can write GeoTIFF (GDAL found at configure time).
 [[nodiscard]] bool sar_geotiff_available() noexcept;
 
 /// Runs the case; throws std::invalid_argument / std::runtime_error with a one-line reason.
+/// Returns 0, or 128 + the signal when control.stop ended the raw data early: then the pulses
+/// done are focused (the rest are zero) and every output is written, sar.json saying
+/// "incomplete": true, "pulses_done" and "stop_signal" ("incomplete": false otherwise).
 int run_sar_tool(const SarToolOptions& options);
 
 }  // namespace radar_emu::tools

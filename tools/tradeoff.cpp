@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "common/units.hpp"
+#include "config/progress.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
@@ -813,7 +814,9 @@ void write_plot_png(Plot plot, const std::filesystem::path& path) {
 
 // ---------------------------------------------------------------------------------------------
 
-void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path) {
+// `incomplete`: "" or a last comment line ("# incomplete: ...") for a run stopped early.
+void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path,
+               const std::string& incomplete) {
   FILE* f = std::fopen(path.string().c_str(), "w");
   if (f == nullptr)
     throw std::runtime_error(path.string() + ": cannot open for writing");
@@ -822,6 +825,8 @@ void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path) 
     std::fprintf(f, "%s,%s,%.6g,%.3f,%llu,%s,%.6g,\"%s\",\"%s\"\n", r.case_name.c_str(),
                  r.knob.c_str(), r.value, r.cost_ms, static_cast<unsigned long long>(r.rays),
                  r.metric.c_str(), r.error, r.reference.c_str(), r.validity.c_str());
+  if (!incomplete.empty())
+    std::fprintf(f, "%s\n", incomplete.c_str());
   const bool ok = std::fflush(f) == 0 && std::ferror(f) == 0;  // a full disk shows at flush
   if (std::fclose(f) != 0 || !ok)
     throw std::runtime_error(path.string() + ": write failed");
@@ -909,16 +914,37 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
   const auto t_start = Clock::now();
   std::vector<Row> rows;
   std::vector<std::string> written;
+  // A stop request is heard between cases: the cases done keep their rows and charts, the rest
+  // are left out, and the CSV's last line says so.
+  std::size_t cases_done = 0;
+  std::string stopped_before;  // the first case not run
+  auto run_case = [&](const char* c) {
+    if (!has(c) || !stopped_before.empty())
+      return false;
+    if (o.control.stop_signal() != 0) {
+      stopped_before = c;
+      return false;
+    }
+    return true;
+  };
+  auto case_done = [&] { o.control.report(++cases_done, cases.size()); };
   std::unique_ptr<Vehicle> vehicle;
   if (has("vehicle") || has("profile"))
     vehicle = std::make_unique<Vehicle>();
-  if (has("vehicle"))
+  if (run_case("vehicle")) {
     vehicle_case(*vehicle, o.quick, log, rows);
-  if (has("profile"))
+    case_done();
+  }
+  if (run_case("profile")) {
     profile_case(*vehicle, o.quick, log, rows);
-  if (has("frame"))
+    case_done();
+  }
+  const bool frame_run = run_case("frame");
+  if (frame_run) {
     frame_case(o.quick, log, rows);
-  if (has("sphere")) {
+    case_done();
+  }
+  if (run_case("sphere")) {
     std::vector<double> ka;
     std::array<std::vector<double>, 3> norm;
     std::vector<double> mom_ka, mom_norm;
@@ -934,8 +960,9 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
                 {"method of moments (EFIE)", mom_ka, mom_norm}};
     write_plot_png(p, dir / "tradeoff_sphere.png");
     written.push_back("tradeoff_sphere.png");
+    case_done();
   }
-  if (has("grazing")) {
+  if (run_case("grazing")) {
     std::vector<GrazingCurve> curves;
     grazing_case(o.quick, log, rows, curves);
     Plot p;
@@ -948,8 +975,9 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
           {"one face at " + fmt("%g", c.incidence_deg) + " deg incidence", c.rpw, c.err_db});
     write_plot_png(p, dir / "tradeoff_grazing.png");
     written.push_back("tradeoff_grazing.png");
+    case_done();
   }
-  if (has("iem")) {
+  if (run_case("iem")) {
     namespace cl = radar::clutter;
     const std::array<IemSurface, 2> surfaces{{{"exp_kl3", cl::Correlation::kExponential, 3.0},
                                               {"gauss_kl10", cl::Correlation::kGaussian, 10.0}}};
@@ -982,8 +1010,9 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
     }
     write_plot_png(p, dir / "tradeoff_iem.png");
     written.push_back("tradeoff_iem.png");
+    case_done();
   }
-  if (has("frame")) {
+  if (frame_run) {
     Plot p;
     p.title = "Default-scenario frame: detections missed + added against the reference frame";
     p.x_label = "frame cost: trace + sensor [ms] (wall, 2 threads)";
@@ -1008,7 +1037,13 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
     write_plot_png(p, dir / "tradeoff_frame.png");
     written.push_back("tradeoff_frame.png");
   }
-  write_csv(rows, dir / "tradeoff.csv");
+  std::string incomplete;
+  if (!stopped_before.empty()) {
+    incomplete = "# incomplete: stopped by " + config::signal_name(o.control.stop_signal()) +
+                 " after " + std::to_string(cases_done) + " of " + std::to_string(cases.size()) +
+                 " cases, before " + stopped_before + " (" + std::to_string(rows.size()) + " rows)";
+  }
+  write_csv(rows, dir / "tradeoff.csv", incomplete);
   written.insert(written.begin(), "tradeoff.csv");
   const Plot summary = summary_plot(rows);
   if (!summary.series.empty()) {
@@ -1022,7 +1057,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
       std::printf(" %s", (dir / w).string().c_str());
     std::printf("\n");
   }
-  return 0;
+  return stopped_before.empty() ? 0 : 128 + o.control.stop_signal();
 }
 
 }  // namespace radar_emu::tools

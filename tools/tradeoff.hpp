@@ -21,6 +21,8 @@
 #include <string_view>
 #include <vector>
 
+#include "common/work_control.hpp"
+
 namespace radar_emu::tools {
 
 struct TradeoffOptions {
@@ -28,6 +30,8 @@ struct TradeoffOptions {
   std::vector<std::string> cases;  ///< empty: all
   bool quick = false;              ///< coarse grids (the CI test)
   bool quiet = false;
+  /// Progress in cases, and the stop flag polled between cases.
+  common::WorkControl control;
 };
 
 /// Every case name, in run order: vehicle, profile, frame, sphere, grazing, iem.
@@ -38,7 +42,10 @@ struct TradeoffOptions {
 [[nodiscard]] std::vector<std::string> parse_tradeoff_cases(std::string_view text);
 
 /// Runs the cases and writes the outputs. Throws on bad options (one line, naming the option)
-/// and on I/O failures. Returns the process exit status.
+/// and on I/O failures. Returns the process exit status: 0, or 128 + the signal when
+/// control.stop ended the run between cases: the cases done keep their rows and charts, and
+/// tradeoff.csv ends with "# incomplete: stopped by SIGINT after 2 of 6 cases, before frame
+/// (N rows)".
 int run_tradeoff_tool(const TradeoffOptions& options);
 
 }  // namespace radar_emu::tools
