@@ -90,7 +90,14 @@ OfflineRun::OfflineRun(std::string command, std::string unit, bool quiet)
 
 common::WorkControl OfflineRun::control() {
   common::WorkControl c;
-  c.progress = [this](std::size_t done, std::size_t total) { line_.update(done, total); };
+  c.progress = [this](std::size_t done, std::size_t total) {
+    // Once a stop is heard, the count is kept for the final message but no longer drawn: the
+    // handler's acknowledgement has begun a new line, and that message must start one.
+    if (stop_signal().load(std::memory_order_relaxed) != 0)
+      line_.record(done, total);
+    else
+      line_.update(done, total);
+  };
   if (!quiet_) {
     c.estimate = [this](const std::string& line) {
       std::fprintf(stderr, "%s: estimate: %s\n", command_.c_str(), line.c_str());

@@ -32,6 +32,11 @@ class ProgressLine {
   /// Records (done, total); redraws when 250 ms have passed since the last draw, or at the end
   /// (done == total), which also ends the line.
   void update(std::size_t done, std::size_t total);
+  /// Records (done, total) without drawing (after a stop: the count for the final message).
+  void record(std::size_t done, std::size_t total) noexcept {
+    done_ = done;
+    total_ = total;
+  }
   /// Ends the line (a newline) when one is drawn and not ended; update() may start a new one.
   void finish();
   /// Forgets a drawn line without ending it: something else (the stop handler's acknowledgement)

@@ -53,7 +53,9 @@ def run_on_pty(args, signal_when=None, sig=signal.SIGINT, timeout_s=120.0):
     master, slave = pty.openpty()
     proc = subprocess.Popen(args, cwd=work, stdout=subprocess.PIPE, stderr=slave,
                             stdin=subprocess.DEVNULL)
-    os.close(slave)
+    # The slave stays open here until the child's output is read: when its last descriptor
+    # closes, Linux hangs the terminal up and may drop what the child wrote just before exiting
+    # (its final message was lost about once in three runs under load).
     err, sent = b"", False
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
@@ -83,6 +85,7 @@ def run_on_pty(args, signal_when=None, sig=signal.SIGINT, timeout_s=120.0):
         if not chunk:
             break
         err += chunk
+    os.close(slave)
     os.close(master)
     return proc.returncode, err.decode(errors="replace").replace("\r\n", "\n"), out
 
