@@ -21,6 +21,16 @@ std::uint64_t stop_counting_allocations() noexcept {
   g_counting.store(false);
   return g_count.load();
 }
+std::function<void(std::uint64_t, std::uint64_t)> count_allocations_from_frame(
+    std::uint64_t first_frame) {
+  return [first_frame](std::uint64_t done, std::uint64_t total) {
+    if (done == first_frame)
+      start_counting_allocations();
+    if (done == total)
+      (void)stop_counting_allocations();
+  };
+}
+
 }  // namespace radar_emu::test
 
 void* operator new(std::size_t n) {

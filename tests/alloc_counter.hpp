@@ -5,6 +5,7 @@
 // allocation while counting aborts, so that a debugger shows where it came from.
 
 #include <cstdint>
+#include <functional>
 
 namespace radar_emu::test {
 
@@ -12,5 +13,9 @@ namespace radar_emu::test {
 void start_counting_allocations() noexcept;
 /// Stops counting and returns how many allocations happened since the start.
 std::uint64_t stop_counting_allocations() noexcept;
+/// A closed loop's progress callback (loop::RunOptions::progress) that counts from frame
+/// `first_frame` to the last one; read the count with stop_counting_allocations() after the run.
+std::function<void(std::uint64_t, std::uint64_t)> count_allocations_from_frame(
+    std::uint64_t first_frame);
 
 }  // namespace radar_emu::test

@@ -214,12 +214,7 @@ class ClosedLoopDefault : public ::testing::Test {
     ASSERT_GE(scenario_->frames, 200u);
     loop::RunOptions options;
     // Count heap allocations between frame 5 and the end: the frame path must not allocate.
-    options.progress = [](std::uint64_t done, std::uint64_t total) {
-      if (done == 5)
-        radar_emu::test::start_counting_allocations();
-      if (done == total)
-        (void)radar_emu::test::stop_counting_allocations();
-    };
+    options.progress = radar_emu::test::count_allocations_from_frame(5);
     // The stage timeline too: its buffer is preallocated, so it adds no allocation.
     trace_file_ = temp_dir("default_trace") / "trace.json";
     options.trace_events_file = trace_file_;
@@ -750,12 +745,7 @@ TEST(ClosedLoopWeather, FogLowersEachDetectionsSnrByTheTwoWayLoss) {
   loop::ClosedLoop loop_clear(clear, {});
   const loop::RunResult a = loop_clear.run();
   loop::RunOptions options;
-  options.progress = [](std::uint64_t done, std::uint64_t total) {
-    if (done == 5)
-      radar_emu::test::start_counting_allocations();
-    if (done == total)
-      (void)radar_emu::test::stop_counting_allocations();
-  };
+  options.progress = radar_emu::test::count_allocations_from_frame(5);
   loop::ClosedLoop loop_fog(fog, options);
   const loop::RunResult b = loop_fog.run();
   EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u) << "the fog frame path allocated";

@@ -182,12 +182,7 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
   const loop::RunResult with_rays = loop::ClosedLoop(s, {}).run();
 
   loop::RunOptions options;
-  options.progress = [](std::uint64_t done, std::uint64_t total) {
-    if (done == 5)
-      radar_emu::test::start_counting_allocations();
-    if (done == total)
-      (void)radar_emu::test::stop_counting_allocations();
-  };
+  options.progress = radar_emu::test::count_allocations_from_frame(5);
   loop::ClosedLoop engine_loop(e, options);
   const loop::RunResult with_engine = engine_loop.run();
   const std::uint64_t allocations = radar_emu::test::stop_counting_allocations();
