@@ -116,13 +116,17 @@ src = os.environ.get("RADAR_EMU_SOURCE_DIR",
                      os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 sar_case = os.path.join(src, "examples", "sar_trihedrals.toml")
 with open(sar_case) as f:
-    # Coarse cells (5 m): the split, not the clutter, is under test; a few thousand cells.
-    field = f.read().replace('ground_material = "none"',
-                             'ground_material = "grass"\nclutter_cell_m = 5.0')
+    # The split of the clutter, not the clutter, is under test (the targets' split is the case
+    # above): the field alone, in coarse cells (10 m) over a quarter of the swath (128 gates).
+    field = f.read()
+field = field[:field.index("[[scene.target]]")]
+field = field.replace('ground_material = "none"', 'ground_material = "grass"\nclutter_cell_m = 10.0')
+field = field.replace("\ngates = 512", "\ngates = 128")
 field_case = os.path.join(work, "sar_field.toml")
 with open(field_case, "w") as f:
     f.write(field)
-check(field.count('ground_material = "grass"') == 1, "sar: the field case has clutter")
+check(field.count('ground_material = "grass"') == 1 and "\ngates = 128" in field
+      and "[[scene.target]]" not in field, "sar: the field case is a field alone, 128 gates")
 
 
 def sar_json(d):
