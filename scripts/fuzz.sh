@@ -55,7 +55,8 @@ if [ "$do_build" -eq 1 ]; then
   echo "== build (clang, libFuzzer + ASan + UBSan) in $build =="
   cmake -S "$root" -B "$build" "${gen[@]}" -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
     -DRADAR_EMU_FUZZ=ON -DRADAR_EMU_BUILD_TESTS=OFF -DRADAR_EMU_BUILD_BENCHMARKS=OFF \
-    -DCMAKE_BUILD_TYPE=Debug -DRADAR_EMU_LINE_DEBUG_INFO=ON "${launcher[@]}" >/dev/null
+    -DCMAKE_BUILD_TYPE=Debug -DRADAR_EMU_LINE_DEBUG_INFO=ON -DRADAR_EMU_FUZZ_OPT=-O1 "${launcher[@]}" \
+    >/dev/null
   cmake --build "$build" --target fuzz_all -j "$(nproc)"
 fi
 
