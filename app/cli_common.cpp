@@ -56,6 +56,16 @@ void add_target_options(CLI::App& cmd, SweepText& t, const TargetArgs& a) {
                  "EPS_LOSS) or NAME=EPS_REAL,EPS_LOSS,THICKNESS_M (coating on metal); "
                  "repeatable");
   cmd.add_flag("-q,--quiet", a.quiet, "No progress or summary (warnings are still printed)");
+  cmd.add_option("--edge-order", a.edge_order,
+                 "1: first-order edge currents only; 2 (default): plus the double diffraction "
+                 "of the hard polarisation between parallel edges across a flat face")
+      ->check(CLI::Range(1, 2));
+  cmd.add_option("--edge-turn-deg", a.edge_turn_deg,
+                 "A shared mesh edge diffracts when its faces turn by more than this (default "
+                 "30 deg; open-sheet boundaries always do)");
+  cmd.add_flag("--no-edges{false}", a.edges,
+               "No edge diffraction (default: fringe equivalent edge currents of the mesh's "
+               "wedge edges and sheet boundaries added to PO)");
 }
 
 void check_rays(const CLI::App& cmd, int bounces) {

@@ -53,10 +53,13 @@ struct TargetArgs {
   int& bounces;
   double& rays_per_wavelength;
   bool& quiet;
+  bool& edges;
+  double& edge_turn_deg;
+  int& edge_order;
 };
 
 /// Adds --mesh, --scale, --freq-hz, --freq-sweep-hz, --theta-deg, --phi-deg, --bounces,
-/// --rays-per-wavelength, --material and -q to `cmd`.
+/// --rays-per-wavelength, --material, -q, --edge-order, --edge-turn-deg and --no-edges to `cmd`.
 void add_target_options(CLI::App& cmd, SweepText& t, const TargetArgs& a);
 
 /// --rays-per-wavelength sets the density of the ray tubes of bounces >= 2: with --bounces 1 it

@@ -52,17 +52,8 @@ void add_profile_command(CLI::App& app, Commands& commands) {
   tools::ProfileToolOptions& o = a->opt;
   a->text.pol = "VV";
   add_target_options(*profile, a->text,
-                     {o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.quiet});
-  profile
-      ->add_option("--edge-order", o.edge_order,
-                   "1: first-order edge currents only; 2 (default): plus the double diffraction "
-                   "of the hard polarisation between parallel edges across a flat face")
-      ->check(CLI::Range(1, 2));
-  profile->add_option("--edge-turn-deg", o.edge_turn_deg,
-                      "A shared mesh edge diffracts when its faces turn by more than this (default "
-                      "30 deg; open-sheet boundaries always do)");
-  profile->add_flag("--no-edges{false}", o.edges,
-                    "No edge diffraction (default: fringe equivalent edge currents added to PO)");
+                     {o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.quiet,
+                      o.edges, o.edge_turn_deg, o.edge_order});
   profile->add_option("--pol", a->text.pol, "One polarisation: HH, HV, VH or VV (default VV)");
   profile->add_option("--window", o.window,
                       "none, hann, hamming, blackman or taylor (default hann)");

@@ -65,17 +65,8 @@ void add_rcs_command(CLI::App& app, Commands& commands) {
   tools::RcsToolOptions& o = a->opt;
   a->text.pol = "HH,VV";
   add_target_options(*rcs, a->text,
-                     {o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.quiet});
-  rcs->add_option("--edge-order", o.edge_order,
-                  "1: first-order edge currents only; 2 (default): plus the double diffraction "
-                  "of the hard polarisation between parallel edges across a flat face")
-      ->check(CLI::Range(1, 2));
-  rcs->add_option("--edge-turn-deg", o.edge_turn_deg,
-                  "A shared mesh edge diffracts when its faces turn by more than this (default "
-                  "30 deg; open-sheet boundaries always do)");
-  rcs->add_flag("--no-edges{false}", o.edges,
-                "No edge diffraction (default: fringe equivalent edge currents of the mesh's "
-                "wedge edges and sheet boundaries added to PO)");
+                     {o.mesh, o.scale, o.materials, o.bounces, o.rays_per_wavelength, o.quiet,
+                      o.edges, o.edge_turn_deg, o.edge_order});
   rcs->add_option("--pol", a->text.pol,
                   "Polarisations, receive letter first: HH,HV,VH,VV (default HH,VV)");
   rcs->add_option("--method", o.method,
