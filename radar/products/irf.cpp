@@ -10,6 +10,7 @@
 
 #include "common/units.hpp"
 #include "radar/constants.hpp"
+#include "radar/fftw.hpp"
 
 namespace radar_emu::radar {
 
@@ -132,37 +133,29 @@ IrfResult analyse_point_target(std::span<const std::complex<float>> image, std::
       chip[i * n + j] *=
           std::polar(1.0, -(fx * static_cast<double>(j) + fy * static_cast<double>(i)));
 
-  auto* a = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * n * n));
-  auto* b = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * m * m));
-  require(a != nullptr && b != nullptr, "out of memory");
-  std::unique_ptr<fftw_complex, decltype(&fftw_free)> ga(a, fftw_free), gb(b, fftw_free);
-  for (std::size_t i = 0; i < n * n; ++i) {
-    a[i][0] = chip[i].real();
-    a[i][1] = chip[i].imag();
-  }
-  fftw_plan pf =
-      fftw_plan_dft_2d(static_cast<int>(n), static_cast<int>(n), a, a, FFTW_FORWARD, FFTW_ESTIMATE);
-  fftw_execute(pf);
-  fftw_destroy_plan(pf);
-  std::fill(&b[0][0], &b[0][0] + 2 * m * m, 0.0);
+  fftw::ComplexBuffer a = fftw::complex_buffer(n * n), b = fftw::complex_buffer(m * m);
+  for (std::size_t i = 0; i < n * n; ++i)
+    a[i] = chip[i];
+  fftw::Plan("irf", [&] {
+    return fftw_plan_dft_2d(static_cast<int>(n), static_cast<int>(n), fftw::as_fftw(a.get()),
+                            fftw::as_fftw(a.get()), FFTW_FORWARD, FFTW_ESTIMATE);
+  }).execute();
   const std::size_t h = n / 2;
   auto dst = [&](std::size_t k) { return k < h ? k : m - n + k; };
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) {
       if (i == h || j == h)
         continue;  // the Nyquist row and column: ambiguous, left out
-      const std::size_t d = dst(i) * m + dst(j);
-      b[d][0] = a[i * n + j][0];
-      b[d][1] = a[i * n + j][1];
+      b[dst(i) * m + dst(j)] = a[i * n + j];
     }
-  fftw_plan pb = fftw_plan_dft_2d(static_cast<int>(m), static_cast<int>(m), b, b, FFTW_BACKWARD,
-                                  FFTW_ESTIMATE);
-  fftw_execute(pb);
-  fftw_destroy_plan(pb);
+  fftw::Plan("irf", [&] {
+    return fftw_plan_dft_2d(static_cast<int>(m), static_cast<int>(m), fftw::as_fftw(b.get()),
+                            fftw::as_fftw(b.get()), FFTW_BACKWARD, FFTW_ESTIMATE);
+  }).execute();
   const double norm = 1.0 / static_cast<double>(n * n);
   std::vector<double> power(m * m);
   for (std::size_t i = 0; i < m * m; ++i)
-    power[i] = (b[i][0] * b[i][0] + b[i][1] * b[i][1]) * norm * norm;
+    power[i] = (b[i].real() * b[i].real() + b[i].imag() * b[i].imag()) * norm * norm;
   const std::size_t k =
       static_cast<std::size_t>(std::max_element(power.begin(), power.end()) - power.begin());
   const std::size_t pi = k / m, pj = k % m;

@@ -3,12 +3,12 @@
 #include <fftw3.h>
 
 #include <cmath>
-#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "radar/constants.hpp"
+#include "radar/fftw.hpp"
 
 namespace radar_emu::radar {
 
@@ -27,32 +27,7 @@ void check_grid(const FrequencyGrid& g, std::size_t samples, std::size_t oversam
   require(oversample >= 1 && oversample <= 64, "oversample must be in 1..64");
 }
 
-// FFTW buffers and plans as RAII handles.
-struct FftwFree {
-  void operator()(fftw_complex* p) const noexcept { fftw_free(p); }
-};
-using Buffer = std::unique_ptr<fftw_complex[], FftwFree>;
-Buffer make_buffer(std::size_t n) {
-  auto* p = static_cast<fftw_complex*>(fftw_malloc(sizeof(fftw_complex) * n));
-  if (p == nullptr)
-    throw std::bad_alloc();
-  std::memset(p, 0, sizeof(fftw_complex) * n);
-  return Buffer(p);
-}
-struct Plan {
-  fftw_plan p = nullptr;
-  explicit Plan(fftw_plan plan) : p(plan) {
-    if (p == nullptr)
-      throw std::runtime_error("range profile: FFTW could not plan the transform");
-  }
-  ~Plan() { fftw_destroy_plan(p); }
-  Plan(const Plan&) = delete;
-  Plan& operator=(const Plan&) = delete;
-};
-
-std::complex<double> at(const Buffer& b, std::size_t i) {
-  return {b[i][0], b[i][1]};
-}
+using fftw::as_fftw;
 
 // Sample m of an M-point transform sits at signed index m - M/2 after the shift.
 std::vector<double> axis(std::size_t m, double spacing) {
@@ -79,18 +54,19 @@ RangeProfile range_profile(std::span<const std::complex<double>> samples, const 
   double w_sum = 0.0;
   for (double x : w)
     w_sum += x;
-  Buffer buf = make_buffer(m);
+  fftw::ComplexBuffer buf = fftw::complex_buffer(m);
   for (std::size_t i = 0; i < n; ++i) {
     require(std::isfinite(samples[i].real()) && std::isfinite(samples[i].imag()),
             "sample " + std::to_string(i) + " is not finite");
-    buf[i][0] = w[i] * samples[i].real();
-    buf[i][1] = w[i] * samples[i].imag();
+    buf[i] = {w[i] * samples[i].real(), w[i] * samples[i].imag()};
   }
   {
     // FFTW_BACKWARD computes sum_n x_n exp(+j 2 pi n q / M): the exp(+j 2 k_n R) kernel.
-    Plan plan(
-        fftw_plan_dft_1d(static_cast<int>(m), buf.get(), buf.get(), FFTW_BACKWARD, FFTW_ESTIMATE));
-    fftw_execute(plan.p);
+    const fftw::Plan plan("range profile", [&] {
+      return fftw_plan_dft_1d(static_cast<int>(m), as_fftw(buf.get()), as_fftw(buf.get()),
+                              FFTW_BACKWARD, FFTW_ESTIMATE);
+    });
+    plan.execute();
   }
   RangeProfile p;
   p.resolution_m = kSpeedOfLight_mps / (2.0 * g.step_hz * static_cast<double>(n));
@@ -102,7 +78,7 @@ RangeProfile range_profile(std::span<const std::complex<double>> samples, const 
   for (std::size_t i = 0; i < m; ++i) {
     const std::size_t src = (i + m - m / 2) % m;  // signed index i - M/2, modulo M
     const double carrier = 2.0 * k0 * p.range_m[i];
-    p.amplitude_m[i] = at(buf, src) * std::polar(1.0 / w_sum, carrier);
+    p.amplitude_m[i] = buf[src] * std::polar(1.0 / w_sum, carrier);
   }
   return p;
 }
@@ -123,26 +99,29 @@ IsarImage isar_image(std::span<const std::complex<double>> samples, const Freque
     for (double f : wf)
       w_sum += a * f;
   }
-  Buffer buf = make_buffer(ma * mf);  // [angle][frequency]
+  fftw::ComplexBuffer buf = fftw::complex_buffer(ma * mf);  // [angle][frequency]
   for (std::size_t a = 0; a < na; ++a) {
     for (std::size_t f = 0; f < nf; ++f) {
       const std::complex<double> s = samples[a * nf + f];
       require(std::isfinite(s.real()) && std::isfinite(s.imag()), "a sample is not finite");
-      buf[a * mf + f][0] = wa[a] * wf[f] * s.real();
-      buf[a * mf + f][1] = wa[a] * wf[f] * s.imag();
+      buf[a * mf + f] = {wa[a] * wf[f] * s.real(), wa[a] * wf[f] * s.imag()};
     }
   }
   {
     // Range: exp(+j 2 k_n R) along each row (only the na filled rows need it).
     const int len = static_cast<int>(mf);
-    Plan rows(fftw_plan_many_dft(1, &len, static_cast<int>(na), buf.get(), nullptr, 1, len,
-                                 buf.get(), nullptr, 1, len, FFTW_BACKWARD, FFTW_ESTIMATE));
-    fftw_execute(rows.p);
+    const fftw::Plan rows("ISAR range", [&] {
+      return fftw_plan_many_dft(1, &len, static_cast<int>(na), as_fftw(buf.get()), nullptr, 1, len,
+                                as_fftw(buf.get()), nullptr, 1, len, FFTW_BACKWARD, FFTW_ESTIMATE);
+    });
+    rows.execute();
     // Cross-range: exp(-j 2 k_c dtheta_m y) along each column.
     const int lena = static_cast<int>(ma);
-    Plan cols(fftw_plan_many_dft(1, &lena, len, buf.get(), nullptr, len, 1, buf.get(), nullptr, len,
-                                 1, FFTW_FORWARD, FFTW_ESTIMATE));
-    fftw_execute(cols.p);
+    const fftw::Plan cols("ISAR cross-range", [&] {
+      return fftw_plan_many_dft(1, &lena, len, as_fftw(buf.get()), nullptr, len, 1,
+                                as_fftw(buf.get()), nullptr, len, 1, FFTW_FORWARD, FFTW_ESTIMATE);
+    });
+    cols.execute();
   }
   IsarImage img;
   const double bin_r = kSpeedOfLight_mps / (2.0 * g.step_hz * static_cast<double>(mf));
@@ -165,7 +144,7 @@ IsarImage isar_image(std::span<const std::complex<double>> samples, const Freque
     for (std::size_t c = 0; c < mf; ++c) {
       const std::size_t src_c = (c + mf - mf / 2) % mf;
       const double carrier = 2.0 * k0 * img.range_m[c] + shift;
-      img.pixels_m[r * mf + c] = at(buf, src_r * mf + src_c) * std::polar(1.0 / w_sum, carrier);
+      img.pixels_m[r * mf + c] = buf[src_r * mf + src_c] * std::polar(1.0 / w_sum, carrier);
     }
   }
   return img;

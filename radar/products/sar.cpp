@@ -11,6 +11,7 @@
 #include <string>
 
 #include "radar/constants.hpp"
+#include "radar/fftw.hpp"
 
 namespace radar_emu::radar {
 
@@ -34,30 +35,8 @@ double taper_weight(SarTaper t, double u) noexcept {
   return 0.54 + 0.46 * std::cos(2.0 * kPi * u);
 }
 
-struct FftwFree {
-  void operator()(void* p) const noexcept { fftw_free(p); }
-};
-using Buffer = std::unique_ptr<std::complex<double>[], FftwFree>;
-Buffer make_buffer(std::size_t n) {
-  auto* p = static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n));
-  if (p == nullptr)
-    throw std::bad_alloc();
-  std::fill(p, p + n, std::complex<double>{});
-  return Buffer(p);
-}
-fftw_complex* as_fftw(std::complex<double>* p) {
-  return reinterpret_cast<fftw_complex*>(p);
-}
-struct Plan {
-  fftw_plan p = nullptr;
-  explicit Plan(fftw_plan plan) : p(plan) {
-    if (p == nullptr)
-      throw std::runtime_error("sar: FFTW could not plan the transform");
-  }
-  ~Plan() { fftw_destroy_plan(p); }
-  Plan(const Plan&) = delete;
-  Plan& operator=(const Plan&) = delete;
-};
+using fftw::as_fftw;
+using Buffer = fftw::ComplexBuffer;
 
 // Smallest 2^a 3^b 5^c >= n (FFTW is fastest on these sizes).
 std::size_t fft_size(std::size_t n) {
@@ -299,20 +278,26 @@ SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper tap
   const std::size_t n = fft_size(raw.samples + 2 * m + 1);
   const double fs = p.sample_rate_hz, k_rate = p.bandwidth_hz / p.pulse_duration_s;
   // Replica at circular index (k mod n), k in [-h, h].
-  Buffer ref = make_buffer(n);
+  Buffer ref = fftw::complex_buffer(n);
   for (std::size_t j = 0; j < nc; ++j) {
     const double k = static_cast<double>(j) - static_cast<double>(h);
     const double t = k / fs;
     ref[(j + n - h) % n] = std::polar(envelope(t, p.pulse_duration_s), kPi * k_rate * t * t);
   }
-  Buffer fil = make_buffer(n);
-  Plan fwd_ref(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(ref.get()), as_fftw(ref.get()),
-                                FFTW_FORWARD, FFTW_ESTIMATE));
-  Plan inv_fil(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(fil.get()), as_fftw(fil.get()),
-                                FFTW_BACKWARD, FFTW_ESTIMATE));
-  Plan fwd_fil(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(fil.get()), as_fftw(fil.get()),
-                                FFTW_FORWARD, FFTW_ESTIMATE));
-  fftw_execute(fwd_ref.p);
+  Buffer fil = fftw::complex_buffer(n);
+  const fftw::Plan fwd_ref("sar", [&] {
+    return fftw_plan_dft_1d(static_cast<int>(n), as_fftw(ref.get()), as_fftw(ref.get()),
+                            FFTW_FORWARD, FFTW_ESTIMATE);
+  });
+  const fftw::Plan inv_fil("sar", [&] {
+    return fftw_plan_dft_1d(static_cast<int>(n), as_fftw(fil.get()), as_fftw(fil.get()),
+                            FFTW_BACKWARD, FFTW_ESTIMATE);
+  });
+  const fftw::Plan fwd_fil("sar", [&] {
+    return fftw_plan_dft_1d(static_cast<int>(n), as_fftw(fil.get()), as_fftw(fil.get()),
+                            FFTW_FORWARD, FFTW_ESTIMATE);
+  });
+  fwd_ref.execute();
   // Filter conj(S) W on |f| <= B/2.
   for (std::size_t j = 0; j < n; ++j) {
     const double f = (j < (n + 1) / 2 ? static_cast<double>(j)
@@ -329,7 +314,7 @@ SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper tap
   }
   // Its impulse response, band-limited by a hard edge, rings as 1/k forever: kept to |k| <= m
   // with raised-cosine ends over the outer quarter (Tukey window; header).
-  fftw_execute(inv_fil.p);
+  inv_fil.execute();
   const std::size_t flat = m - m / 4;
   for (std::size_t j = 0; j < n; ++j) {
     const std::size_t k = std::min(j, n - j);  // |lag|
@@ -341,7 +326,7 @@ SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper tap
           (1.0 + std::cos(kPi * static_cast<double>(k - flat) / static_cast<double>(m + 1 - flat)));
     fil[j] *= w;
   }
-  fftw_execute(fwd_fil.p);
+  fwd_fil.execute();
   // Gain: the compressed peak of the replica itself (FFTW's transforms are unnormalised).
   std::vector<std::complex<double>> filter(n);
   double gain = 0.0;
@@ -357,23 +342,27 @@ SarCompressed range_compress(const SarParams& p, const SarRaw& raw, SarTaper tap
   out.pulses = p.pulses;
   out.gates = p.gates;
   out.data.assign(out.pulses * out.gates, std::complex<float>{});
-  Buffer probe = make_buffer(n);
-  Plan fwd(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(probe.get()), as_fftw(probe.get()),
-                            FFTW_FORWARD, FFTW_ESTIMATE));
-  Plan inv(fftw_plan_dft_1d(static_cast<int>(n), as_fftw(probe.get()), as_fftw(probe.get()),
-                            FFTW_BACKWARD, FFTW_ESTIMATE));
+  Buffer probe = fftw::complex_buffer(n);
+  const fftw::Plan fwd("sar", [&] {
+    return fftw_plan_dft_1d(static_cast<int>(n), as_fftw(probe.get()), as_fftw(probe.get()),
+                            FFTW_FORWARD, FFTW_ESTIMATE);
+  });
+  const fftw::Plan inv("sar", [&] {
+    return fftw_plan_dft_1d(static_cast<int>(n), as_fftw(probe.get()), as_fftw(probe.get()),
+                            FFTW_BACKWARD, FFTW_ESTIMATE);
+  });
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.pulses, 8),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      Buffer b = make_buffer(n);
+                      Buffer b = fftw::complex_buffer(n);
                       for (std::size_t i = r.begin(); i != r.end(); ++i) {
                         std::fill(b.get(), b.get() + n, std::complex<double>{});
                         const std::complex<float>* row = &raw.data[i * raw.samples];
                         for (std::size_t s = 0; s < raw.samples; ++s)
                           b[s] = std::complex<double>(row[s]);
-                        fftw_execute_dft(fwd.p, as_fftw(b.get()), as_fftw(b.get()));
+                        fwd.execute(b.get(), b.get());
                         for (std::size_t j = 0; j < n; ++j)
                           b[j] *= filter[j];
-                        fftw_execute_dft(inv.p, as_fftw(b.get()), as_fftw(b.get()));
+                        inv.execute(b.get(), b.get());
                         for (std::size_t g = 0; g < p.gates; ++g)
                           out.data[i * p.gates + g] = std::complex<float>(b[g + h]);
                       }
@@ -406,11 +395,15 @@ SarImage backproject(const SarParams& p, const SarCompressed& rc, const SarImage
   const double sin_half = std::sin(o.integration_angle_rad / 2);
   const glm::dvec3 track = sar_track_dir(p), look = sar_look_dir(p);
 
-  Buffer probe_in = make_buffer(ng), probe_out = make_buffer(nu);
-  Plan fwd(fftw_plan_dft_1d(static_cast<int>(ng), as_fftw(probe_in.get()), as_fftw(probe_in.get()),
-                            FFTW_FORWARD, FFTW_ESTIMATE));
-  Plan inv(fftw_plan_dft_1d(static_cast<int>(nu), as_fftw(probe_out.get()),
-                            as_fftw(probe_out.get()), FFTW_BACKWARD, FFTW_ESTIMATE));
+  Buffer probe_in = fftw::complex_buffer(ng), probe_out = fftw::complex_buffer(nu);
+  const fftw::Plan fwd("sar", [&] {
+    return fftw_plan_dft_1d(static_cast<int>(ng), as_fftw(probe_in.get()), as_fftw(probe_in.get()),
+                            FFTW_FORWARD, FFTW_ESTIMATE);
+  });
+  const fftw::Plan inv("sar", [&] {
+    return fftw_plan_dft_1d(static_cast<int>(nu), as_fftw(probe_out.get()),
+                            as_fftw(probe_out.get()), FFTW_BACKWARD, FFTW_ESTIMATE);
+  });
 
   std::vector<std::complex<double>> acc(grid.rows * grid.cols);
   std::vector<double> wsum(grid.rows * grid.cols, 0.0);
@@ -423,16 +416,16 @@ SarImage backproject(const SarParams& p, const SarCompressed& rc, const SarImage
     const std::size_t b1 = std::min(p.pulses, b0 + kBlock);
     // Upsample the block's pulses (spectrum zero-padded in the middle: baseband data).
     tbb::parallel_for(std::size_t{b0}, b1, [&](std::size_t i) {
-      Buffer a = make_buffer(ng), u = make_buffer(nu);
+      Buffer a = fftw::complex_buffer(ng), u = fftw::complex_buffer(nu);
       for (std::size_t g = 0; g < ng; ++g)
         a[g] = std::complex<double>(rc.data[i * ng + g]);
-      fftw_execute_dft(fwd.p, as_fftw(a.get()), as_fftw(a.get()));
+      fwd.execute(a.get(), a.get());
       const std::size_t pos = (ng + 1) / 2, neg = ng - pos;
       for (std::size_t j = 0; j < pos; ++j)
         u[j] = a[j];
       for (std::size_t j = 0; j < neg; ++j)
         u[nu - neg + j] = a[pos + j];
-      fftw_execute_dft(inv.p, as_fftw(u.get()), as_fftw(u.get()));
+      inv.execute(u.get(), u.get());
       auto& line = lines[i - b0];
       for (std::size_t j = 0; j < nu; ++j)
         line[j] = std::complex<float>(u[j] / static_cast<double>(ng));
