@@ -11,6 +11,12 @@ namespace radar_emu::io {
 inline constexpr std::size_t kCanClassicMaxBytes = 8;
 inline constexpr std::size_t kCanFdMaxBytes = 64;
 
+/// True when `n` bytes is a payload length a CAN FD frame can carry: 0..8, 12, 16, 20, 24, 32, 48
+/// or 64 (the DLC codes 0..15, ISO 11898-1:2015 table 5).
+[[nodiscard]] constexpr bool is_can_fd_length(std::size_t n) noexcept {
+  return n <= 8 || n == 12 || n == 16 || n == 20 || n == 24 || n == 32 || n == 48 || n == 64;
+}
+
 /// One frame. Plain value type; copying it never allocates.
 struct CanFrame {
   std::uint32_t id = 0;       ///< 11-bit (standard) or 29-bit (extended) identifier

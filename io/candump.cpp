@@ -11,10 +11,6 @@ namespace {
 
 constexpr char kHex[] = "0123456789ABCDEF";
 
-bool valid_fd_length(std::size_t n) noexcept {
-  return n <= 8 || n == 12 || n == 16 || n == 20 || n == 24 || n == 32 || n == 48 || n == 64;
-}
-
 int hex_value(char c) noexcept {
   if (c >= '0' && c <= '9')
     return c - '0';
@@ -192,7 +188,7 @@ bool parse_candump(std::string_view line, CandumpLine& out, std::string& error) 
   }
   const std::size_t n = data.size() / 2;
   if (n > (out.frame.fd ? kCanFdMaxBytes : kCanClassicMaxBytes) ||
-      (out.frame.fd && !valid_fd_length(n))) {
+      (out.frame.fd && !is_can_fd_length(n))) {
     error = "data length " + std::to_string(n) + " not allowed";
     return false;
   }

@@ -34,10 +34,6 @@ std::uint32_t get_le32(std::span<const std::uint8_t> in, std::size_t at) noexcep
          (static_cast<std::uint32_t>(in[at + 3]) << 24);
 }
 
-bool valid_fd_length(std::size_t n) noexcept {
-  return n <= 8 || n == 12 || n == 16 || n == 20 || n == 24 || n == 32 || n == 48 || n == 64;
-}
-
 std::string hex32(std::uint32_t v) {
   char buf[16];
   std::snprintf(buf, sizeof buf, "0x%08x", v);
@@ -317,7 +313,7 @@ bool to_gs_usb_frame(const CanFrame& f, std::uint32_t echo_id, std::uint8_t chan
                      GsUsbHostFrame& out) noexcept {
   if (f.id > (f.extended ? CAN_EFF_MASK : CAN_SFF_MASK))
     return false;
-  if (f.fd ? (!fd_mode || !valid_fd_length(f.len)) : f.len > 8)
+  if (f.fd ? (!fd_mode || !is_can_fd_length(f.len)) : f.len > 8)
     return false;
   out = GsUsbHostFrame{};
   out.echo_id = echo_id;

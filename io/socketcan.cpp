@@ -34,10 +34,6 @@ std::string prefix(std::string_view name) {
   throw std::runtime_error(prefix(name) + what);
 }
 
-bool valid_fd_length(std::size_t n) noexcept {
-  return n <= 8 || n == 12 || n == 16 || n == 20 || n == 24 || n == 32 || n == 48 || n == 64;
-}
-
 void set_int_option(int fd, int level, int option, int value, std::string_view name,
                     const char* what) {
   if (::setsockopt(fd, level, option, &value, sizeof value) != 0)
@@ -140,7 +136,7 @@ std::size_t to_kernel_frame(const CanFrame& f, canfd_frame& kf) noexcept {
   kf = canfd_frame{};
   if (f.id > (f.extended ? CAN_EFF_MASK : CAN_SFF_MASK))
     return 0;
-  if (f.fd ? !valid_fd_length(f.len) : f.len > CAN_MAX_DLEN)
+  if (f.fd ? !is_can_fd_length(f.len) : f.len > CAN_MAX_DLEN)
     return 0;
   kf.can_id = f.id | (f.extended ? CAN_EFF_FLAG : 0U);
   kf.len = f.len;
