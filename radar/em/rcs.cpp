@@ -47,6 +47,124 @@ struct PathTerm {
   double step_m;
 };
 
+// Per triangle: +1 / -1 where its part is closed (scene::closed_part_winding) or closed up to
+// T-junctions, 0 elsewhere. Generated and exported meshes often meet a subdivided face with a
+// coarser one (a prism's fanned cap against its subdivided sides): the vertices of the fine side
+// lie on the coarse side's edge, so the topology (scene/mesh/topology.hpp: exact closure, no
+// T-junction leniency) calls both parts open although together they bound a solid. Here the
+// boundary edges of the parts that are open only through boundary edges (no non-manifold or
+// inconsistent edge) are split at every boundary vertex lying on them (within kTJunctionRelative
+// of the extent: 10 weld tolerances, a tenth of the engines' ray offset); parts whose split
+// boundary segments all meet a segment of another such part running the opposite way are joined,
+// and a group whose every segment is so matched is a closed solid, wound outward (+1) when its
+// signed volume (the parts' volumes summed: the divergence theorem over the closed union) is
+// positive. Only the bounce-1 lighting uses this (a facet of a solid facing away from the source
+// is dark, which its samples would find at seven queries each); the edge finder keeps the exact
+// closure.
+constexpr double kTJunctionRelative = 1e-6;
+
+std::vector<std::int8_t> solid_winding(const scene::MeshTopology& topo,
+                                       std::span<const glm::vec3> positions_m) {
+  std::vector<std::int8_t> out = scene::closed_part_winding(topo);
+  const std::size_t n_parts = topo.parts.size();
+  std::vector<std::uint8_t> candidate(n_parts, 0);
+  bool any = false;
+  for (std::size_t p = 0; p < n_parts; ++p) {
+    const scene::MeshPart& part = topo.parts[p];
+    candidate[p] =
+        part.boundary_edges > 0 && part.non_manifold_edges == 0 && part.inconsistent_edges == 0 ? 1
+                                                                                                : 0;
+    any = any || candidate[p] != 0;
+  }
+  if (!any)
+    return out;
+  auto position = [&](std::uint32_t welded) {
+    return glm::dvec3(positions_m[topo.weld.first_input[welded]]);
+  };
+  // The boundary edges of candidate parts, directed as their one triangle runs them.
+  struct Segment {
+    std::uint32_t from, to, part;
+  };
+  std::vector<Segment> segments;
+  std::vector<std::uint32_t> boundary_vertices;
+  for (const scene::MeshEdge& e : topo.edges) {
+    if (!e.boundary())
+      continue;
+    const scene::HalfEdge& h = topo.uses(e)[0];
+    const std::uint32_t part = topo.triangle_part[h.triangle];
+    if (part == scene::kNoIndex || candidate[part] == 0)
+      continue;
+    const std::array<std::uint32_t, 3>& c = topo.corners[h.triangle];
+    segments.push_back({c[h.corner], c[(h.corner + 1u) % 3u], part});
+    boundary_vertices.push_back(e.v0);
+    boundary_vertices.push_back(e.v1);
+  }
+  std::sort(boundary_vertices.begin(), boundary_vertices.end());
+  boundary_vertices.erase(std::unique(boundary_vertices.begin(), boundary_vertices.end()),
+                          boundary_vertices.end());
+  const double tol_m = kTJunctionRelative * topo.weld.extent_m;
+  // Split every segment at the boundary vertices on it; count the directed pieces.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> pieces;
+  std::vector<std::pair<double, std::uint32_t>> on;
+  for (const Segment& sg : segments) {
+    const glm::dvec3 a = position(sg.from), b = position(sg.to), ab = b - a;
+    const double len2 = glm::dot(ab, ab);
+    on.clear();
+    on.push_back({0.0, sg.from});
+    on.push_back({1.0, sg.to});
+    for (const std::uint32_t v : boundary_vertices) {
+      if (v == sg.from || v == sg.to || !(len2 > 0.0))
+        continue;
+      const glm::dvec3 x = position(v);
+      const double t = glm::dot(x - a, ab) / len2;
+      if (t <= 0.0 || t >= 1.0 || glm::length(x - (a + t * ab)) > tol_m)
+        continue;
+      on.push_back({t, v});
+    }
+    std::sort(on.begin(), on.end());
+    for (std::size_t k = 0; k + 1 < on.size(); ++k)
+      pieces[{on[k].second, on[k + 1].second}].push_back(sg.part);
+  }
+  // Join the parts across matched pieces; a part with an unmatched piece is open.
+  std::vector<std::uint32_t> root(n_parts);
+  for (std::uint32_t p = 0; p < n_parts; ++p)
+    root[p] = p;
+  auto find = [&](std::uint32_t p) {
+    while (root[p] != p)
+      p = root[p] = root[root[p]];
+    return p;
+  };
+  std::vector<std::uint8_t> open(n_parts, 0);
+  for (const auto& [key, parts] : pieces) {
+    const auto twin = pieces.find({key.second, key.first});
+    if (parts.size() != 1 || twin == pieces.end() || twin->second.size() != 1) {
+      for (const std::uint32_t p : parts)
+        open[p] = 1;
+      continue;
+    }
+    const std::uint32_t a = find(parts[0]), b = find(twin->second[0]);
+    if (a != b)
+      root[a] = b;
+  }
+  std::vector<double> volume_m3(n_parts, 0.0);
+  std::vector<std::uint8_t> group_open(n_parts, 0);
+  for (std::uint32_t p = 0; p < n_parts; ++p) {
+    if (candidate[p] == 0)
+      continue;
+    volume_m3[find(p)] += topo.parts[p].volume_m3;
+    group_open[find(p)] |= open[p];
+  }
+  for (std::size_t t = 0; t < out.size(); ++t) {
+    const std::uint32_t p = topo.triangle_part[t];
+    if (p == scene::kNoIndex || candidate[p] == 0)
+      continue;
+    const std::uint32_t g = find(p);
+    if (group_open[g] == 0 && volume_m3[g] != 0.0)
+      out[t] = volume_m3[g] > 0.0 ? 1 : -1;
+  }
+  return out;
+}
+
 // The Dirichlet kernel sin(n x / 2) / sin(x / 2) from its two sines and cosines (the limit
 // n cos(n x / 2) / cos(x / 2) where sin(x / 2) vanishes).
 double dirichlet(double sin_n, double cos_n, double sin_1, double cos_1, double n) noexcept {
@@ -105,8 +223,9 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
-    const std::vector<std::int8_t> closed =
-        scene::closed_part_winding(scene::build_topology(mesh.positions_m, mesh.triangles));
+    const scene::MeshTopology topology = scene::build_topology(mesh.positions_m, mesh.triangles);
+    const std::vector<std::int8_t> closed = scene::closed_part_winding(topology);
+    const std::vector<std::int8_t> solid = solid_winding(topology, mesh.positions_m);
     const std::int8_t mirrored = glm::determinant(glm::dmat3(m)) < 0.0 ? -1 : 1;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3 tri = mesh.triangles[t];
@@ -128,6 +247,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       f.centroid = (f.v0 + f.v1 + f.v2) / 3.0;
       f.surface = mesh.triangle_material[t];
       f.outward = static_cast<std::int8_t>(closed[t] * mirrored);
+      f.solid = static_cast<std::int8_t>(solid[t] * mirrored);
       facets_.push_back(f);
       for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
         lo = glm::min(lo, v);
@@ -344,8 +464,9 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         l.light = FacetLight::kDark;
         continue;
       }
-      // The inside of a closed part is never lit (sbr_core.hpp, closed parts).
-      const bool inside = f.outward != 0 && f.outward * glm::dot(f.normal, r_t) <= 0.0;
+      // The inside of a closed part is never lit (sbr_core.hpp, closed parts), nor that of a
+      // part closed up to T-junctions (solid_winding).
+      const bool inside = f.solid != 0 && f.solid * glm::dot(f.normal, r_t) <= 0.0;
       if (!shadowing) {
         l.light = FacetLight::kLit;
       } else if (inside) {
