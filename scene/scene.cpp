@@ -3,6 +3,7 @@
 #include <embree3/rtcore.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -317,6 +318,10 @@ struct Scene::Impl {
   std::size_t triangles = 0;
   std::uint64_t static_builds = 0;
   std::uint64_t embree_commits = 0;
+
+  // The parts of a query after the static BVH (defined with the queries below).
+  bool finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) const noexcept;
+  bool occluded_beyond_static(const Ray& ray, const RTCRay& r) const noexcept;
 
   Impl() = default;
   Impl(const Impl&) = delete;
@@ -691,25 +696,25 @@ bool ray_crosses_box(const Ray& ray, const glm::dvec3& lo, const glm::dvec3& hi)
   return crosses_box(ray, lo, hi, ray.t_near_m, ray.t_far_m);
 }
 
-bool Scene::intersect(const Ray& ray, Hit& hit) const noexcept {
-  const Impl& m = *impl_;
-  RTCRayHit rh{};
-  if (!to_embree(ray, rh.ray))
-    return false;
-  rh.hit.geomID = kInvalidId;
-  rh.hit.primID = kInvalidId;
-  rh.hit.instID[0] = kInvalidId;
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
+namespace {
+
+// Rays per Embree stream call of the batched queries (a stack buffer: no allocation).
+constexpr std::size_t kStreamChunk = 64;
+
+}  // namespace
+
+// The rest of a closest-hit query once the static BVH has been traversed (rh holds its result,
+// tfar = the best hit so far): the levels of detail, the moving objects and the double-precision
+// refit. Shared by the single and the batched query.
+bool Scene::Impl::finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) const noexcept {
+  const Impl& m = *this;
   std::uint32_t object = kInvalidId;
   unsigned prim = kInvalidId;
-  if (m.static_scene) {
-    rtcIntersect1(m.static_scene, &ctx, &rh);
-    if (rh.hit.geomID != kInvalidId && rh.hit.geomID < m.object_of_static_geometry.size()) {
-      object = m.object_of_static_geometry[rh.hit.geomID];
-      prim = rh.hit.primID;
-    }
+  if (rh.hit.geomID != kInvalidId && rh.hit.geomID < m.object_of_static_geometry.size()) {
+    object = m.object_of_static_geometry[rh.hit.geomID];
+    prim = rh.hit.primID;
   }
+  RTCIntersectContext ctx;
   const double origin_offset_m = m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
   const double direction_length = glm::length(ray.direction);
   for (const Impl::LevelBvh& l : m.level_scenes) {
@@ -783,19 +788,60 @@ bool Scene::intersect(const Ray& ray, Hit& hit) const noexcept {
   return true;
 }
 
-bool Scene::occluded(const Ray& ray) const noexcept {
+bool Scene::intersect(const Ray& ray, Hit& hit) const noexcept {
   const Impl& m = *impl_;
-  RTCRay r{};
-  if (!to_embree(ray, r))
+  RTCRayHit rh{};
+  if (!to_embree(ray, rh.ray))
     return false;
-  RTCIntersectContext ctx;
+  rh.hit.geomID = kInvalidId;
+  rh.hit.primID = kInvalidId;
+  rh.hit.instID[0] = kInvalidId;
   if (m.static_scene) {
-    RTCRay rs = r;
+    RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    rtcOccluded1(m.static_scene, &ctx, &rs);
-    if (rs.tfar < 0.0f)  // Embree sets tfar to -inf on a hit
-      return true;
+    rtcIntersect1(m.static_scene, &ctx, &rh);
   }
+  return m.finish_intersect(ray, rh, hit);
+}
+
+void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits,
+                      std::span<std::uint8_t> found) const noexcept {
+  const Impl& m = *impl_;
+  const std::size_t n = std::min({rays.size(), hits.size(), found.size()});
+  std::array<RTCRayHit, kStreamChunk> buf;
+  std::array<std::uint32_t, kStreamChunk> index;
+  for (std::size_t begin = 0; begin < n; begin += kStreamChunk) {
+    const std::size_t count = std::min(kStreamChunk, n - begin);
+    unsigned valid = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      RTCRayHit& rh = buf[valid];
+      if (!to_embree(rays[begin + i], rh.ray)) {
+        found[begin + i] = 0;
+        continue;
+      }
+      rh.hit.geomID = kInvalidId;
+      rh.hit.primID = kInvalidId;
+      rh.hit.instID[0] = kInvalidId;
+      index[valid++] = static_cast<std::uint32_t>(begin + i);
+    }
+    if (m.static_scene && valid > 0) {
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      rtcIntersect1M(m.static_scene, &ctx, buf.data(), valid, sizeof(RTCRayHit));
+    }
+    for (unsigned k = 0; k < valid; ++k) {
+      const std::uint32_t i = index[k];
+      found[i] = m.finish_intersect(rays[i], buf[k], hits[i]) ? 1 : 0;
+    }
+  }
+}
+
+// The rest of an occlusion query once the static BVH has found nothing: the levels of detail
+// and the moving objects. `r` is the ray in Embree's layout.
+bool Scene::Impl::occluded_beyond_static(const Ray& ray, const RTCRay& r) const noexcept {
+  const Impl& m = *this;
+  RTCIntersectContext ctx;
   const double origin_offset_m = m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
   const double direction_length = glm::length(ray.direction);
   for (const Impl::LevelBvh& l : m.level_scenes) {
@@ -821,6 +867,114 @@ bool Scene::occluded(const Ray& ray) const noexcept {
       return true;
   }
   return false;
+}
+
+bool Scene::occluded(const Ray& ray) const noexcept {
+  const Impl& m = *impl_;
+  RTCRay r{};
+  if (!to_embree(ray, r))
+    return false;
+  if (m.static_scene) {
+    RTCRay rs = r;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    rtcOccluded1(m.static_scene, &ctx, &rs);
+    if (rs.tfar < 0.0f)  // Embree sets tfar to -inf on a hit
+      return true;
+  }
+  return m.occluded_beyond_static(ray, r);
+}
+
+void Scene::occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const noexcept {
+  const Impl& m = *impl_;
+  const std::size_t n = std::min(rays.size(), blocked.size());
+  const bool beyond = !m.level_scenes.empty() || !m.movers.empty();
+  std::array<RTCRay, kStreamChunk> buf;
+  std::array<std::uint32_t, kStreamChunk> index;
+  for (std::size_t begin = 0; begin < n; begin += kStreamChunk) {
+    const std::size_t count = std::min(kStreamChunk, n - begin);
+    unsigned valid = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      if (!to_embree(rays[begin + i], buf[valid])) {
+        blocked[begin + i] = 0;
+        continue;
+      }
+      index[valid++] = static_cast<std::uint32_t>(begin + i);
+    }
+    if (m.static_scene && valid > 0) {
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      rtcOccluded1M(m.static_scene, &ctx, buf.data(), valid, sizeof(RTCRay));
+    }
+    for (unsigned k = 0; k < valid; ++k) {
+      const std::uint32_t i = index[k];
+      bool b = m.static_scene && buf[k].tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+      if (!b && beyond) {
+        RTCRay r{};
+        b = to_embree(rays[i], r) && m.occluded_beyond_static(rays[i], r);
+      }
+      blocked[i] = b ? 1 : 0;
+    }
+  }
+}
+
+void Scene::occluded_along(const glm::dvec3& direction, std::span<const glm::dvec3> origins,
+                           std::span<std::uint8_t> blocked) const noexcept {
+  const Impl& m = *impl_;
+  const std::size_t n = std::min(origins.size(), blocked.size());
+  const bool beyond = !m.level_scenes.empty() || !m.movers.empty();
+  if (!finite(direction)) {
+    std::fill_n(blocked.begin(), n, std::uint8_t{0});
+    return;
+  }
+  std::array<RTCRay, kStreamChunk> buf;
+  std::array<std::uint32_t, kStreamChunk> index;
+  for (std::size_t begin = 0; begin < n; begin += kStreamChunk) {
+    const std::size_t count = std::min(kStreamChunk, n - begin);
+    unsigned valid = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const glm::dvec3& o = origins[begin + i];
+      if (!finite(o)) {
+        blocked[begin + i] = 0;
+        continue;
+      }
+      RTCRay& r = buf[valid];
+      r.org_x = static_cast<float>(o.x);
+      r.org_y = static_cast<float>(o.y);
+      r.org_z = static_cast<float>(o.z);
+      r.dir_x = static_cast<float>(direction.x);
+      r.dir_y = static_cast<float>(direction.y);
+      r.dir_z = static_cast<float>(direction.z);
+      r.tnear = 0.0f;
+      r.tfar = std::numeric_limits<float>::infinity();
+      r.time = 0.0f;
+      r.mask = 0xFFFFFFFFu;
+      r.id = 0;
+      r.flags = 0;
+      index[valid++] = static_cast<std::uint32_t>(begin + i);
+    }
+    if (m.static_scene && valid > 0) {
+      RTCIntersectContext ctx;
+      rtcInitIntersectContext(&ctx);
+      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+      rtcOccluded1M(m.static_scene, &ctx, buf.data(), valid, sizeof(RTCRay));
+    }
+    for (unsigned k = 0; k < valid; ++k) {
+      const std::uint32_t i = index[k];
+      bool b = m.static_scene && buf[k].tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+      if (!b && beyond) {
+        Ray ray;
+        ray.origin_m = origins[i];
+        ray.direction = direction;
+        ray.t_near_m = 0.0;
+        ray.t_far_m = std::numeric_limits<double>::infinity();
+        RTCRay r{};
+        b = to_embree(ray, r) && m.occluded_beyond_static(ray, r);
+      }
+      blocked[i] = b ? 1 : 0;
+    }
+  }
 }
 
 void Scene::set_time(double t_s) noexcept {

@@ -76,6 +76,22 @@ class Scene {
   /// True if anything blocks `ray` within [t_near, t_far]. Real-time safe, thread-safe.
   [[nodiscard]] bool occluded(const Ray& ray) const noexcept;
 
+  /// Batched queries for coherent rays (neighbouring origins, similar directions: the samples
+  /// of a facet toward a plane wave, a row of parallel ray tubes): the answers of the single
+  /// queries above, ray by ray, with the static BVH traversed as Embree ray streams marked
+  /// coherent (rtcIntersect1M / rtcOccluded1M, which trace them in SIMD packets; several times
+  /// the single-ray throughput on such rays). Order the rays so that neighbours in the span are
+  /// neighbours in space. found[i] = intersect(rays[i], hits[i]); blocked[i] =
+  /// occluded(rays[i]); only the first min(sizes) rays are answered. Real-time safe (no
+  /// allocation: a fixed stack buffer), thread-safe.
+  void intersect(std::span<const Ray> rays, std::span<Hit> hits,
+                 std::span<std::uint8_t> found) const noexcept;
+  void occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const noexcept;
+  /// The same for parallel rays over [0, infinity) from `origins` along the unit `direction`
+  /// (toward a plane wave's source): blocked[i] = occluded({origins[i], direction, 0, inf}).
+  void occluded_along(const glm::dvec3& direction, std::span<const glm::dvec3> origins,
+                      std::span<std::uint8_t> blocked) const noexcept;
+
   /// Moves every moving object to time `t_s`: constant-velocity objects (LinearMotion) and
   /// trajectories (scene/trajectory.hpp; O(log pieces) each). Only transforms, velocities and
   /// world boxes change: no BVH is rebuilt, no Embree call. Non-finite `t_s` is ignored.

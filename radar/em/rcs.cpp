@@ -47,6 +47,124 @@ struct PathTerm {
   double step_m;
 };
 
+// Per triangle: +1 / -1 where its part is closed (scene::closed_part_winding) or closed up to
+// T-junctions, 0 elsewhere. Generated and exported meshes often meet a subdivided face with a
+// coarser one (a prism's fanned cap against its subdivided sides): the vertices of the fine side
+// lie on the coarse side's edge, so the topology (scene/mesh/topology.hpp: exact closure, no
+// T-junction leniency) calls both parts open although together they bound a solid. Here the
+// boundary edges of the parts that are open only through boundary edges (no non-manifold or
+// inconsistent edge) are split at every boundary vertex lying on them (within kTJunctionRelative
+// of the extent: 10 weld tolerances, a tenth of the engines' ray offset); parts whose split
+// boundary segments all meet a segment of another such part running the opposite way are joined,
+// and a group whose every segment is so matched is a closed solid, wound outward (+1) when its
+// signed volume (the parts' volumes summed: the divergence theorem over the closed union) is
+// positive. Only the bounce-1 lighting uses this (a facet of a solid facing away from the source
+// is dark, which its samples would find at seven queries each); the edge finder keeps the exact
+// closure.
+constexpr double kTJunctionRelative = 1e-6;
+
+std::vector<std::int8_t> solid_winding(const scene::MeshTopology& topo,
+                                       std::span<const glm::vec3> positions_m) {
+  std::vector<std::int8_t> out = scene::closed_part_winding(topo);
+  const std::size_t n_parts = topo.parts.size();
+  std::vector<std::uint8_t> candidate(n_parts, 0);
+  bool any = false;
+  for (std::size_t p = 0; p < n_parts; ++p) {
+    const scene::MeshPart& part = topo.parts[p];
+    candidate[p] =
+        part.boundary_edges > 0 && part.non_manifold_edges == 0 && part.inconsistent_edges == 0 ? 1
+                                                                                                : 0;
+    any = any || candidate[p] != 0;
+  }
+  if (!any)
+    return out;
+  auto position = [&](std::uint32_t welded) {
+    return glm::dvec3(positions_m[topo.weld.first_input[welded]]);
+  };
+  // The boundary edges of candidate parts, directed as their one triangle runs them.
+  struct Segment {
+    std::uint32_t from, to, part;
+  };
+  std::vector<Segment> segments;
+  std::vector<std::uint32_t> boundary_vertices;
+  for (const scene::MeshEdge& e : topo.edges) {
+    if (!e.boundary())
+      continue;
+    const scene::HalfEdge& h = topo.uses(e)[0];
+    const std::uint32_t part = topo.triangle_part[h.triangle];
+    if (part == scene::kNoIndex || candidate[part] == 0)
+      continue;
+    const std::array<std::uint32_t, 3>& c = topo.corners[h.triangle];
+    segments.push_back({c[h.corner], c[(h.corner + 1u) % 3u], part});
+    boundary_vertices.push_back(e.v0);
+    boundary_vertices.push_back(e.v1);
+  }
+  std::sort(boundary_vertices.begin(), boundary_vertices.end());
+  boundary_vertices.erase(std::unique(boundary_vertices.begin(), boundary_vertices.end()),
+                          boundary_vertices.end());
+  const double tol_m = kTJunctionRelative * topo.weld.extent_m;
+  // Split every segment at the boundary vertices on it; count the directed pieces.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> pieces;
+  std::vector<std::pair<double, std::uint32_t>> on;
+  for (const Segment& sg : segments) {
+    const glm::dvec3 a = position(sg.from), b = position(sg.to), ab = b - a;
+    const double len2 = glm::dot(ab, ab);
+    on.clear();
+    on.push_back({0.0, sg.from});
+    on.push_back({1.0, sg.to});
+    for (const std::uint32_t v : boundary_vertices) {
+      if (v == sg.from || v == sg.to || !(len2 > 0.0))
+        continue;
+      const glm::dvec3 x = position(v);
+      const double t = glm::dot(x - a, ab) / len2;
+      if (t <= 0.0 || t >= 1.0 || glm::length(x - (a + t * ab)) > tol_m)
+        continue;
+      on.push_back({t, v});
+    }
+    std::sort(on.begin(), on.end());
+    for (std::size_t k = 0; k + 1 < on.size(); ++k)
+      pieces[{on[k].second, on[k + 1].second}].push_back(sg.part);
+  }
+  // Join the parts across matched pieces; a part with an unmatched piece is open.
+  std::vector<std::uint32_t> root(n_parts);
+  for (std::uint32_t p = 0; p < n_parts; ++p)
+    root[p] = p;
+  auto find = [&](std::uint32_t p) {
+    while (root[p] != p)
+      p = root[p] = root[root[p]];
+    return p;
+  };
+  std::vector<std::uint8_t> open(n_parts, 0);
+  for (const auto& [key, parts] : pieces) {
+    const auto twin = pieces.find({key.second, key.first});
+    if (parts.size() != 1 || twin == pieces.end() || twin->second.size() != 1) {
+      for (const std::uint32_t p : parts)
+        open[p] = 1;
+      continue;
+    }
+    const std::uint32_t a = find(parts[0]), b = find(twin->second[0]);
+    if (a != b)
+      root[a] = b;
+  }
+  std::vector<double> volume_m3(n_parts, 0.0);
+  std::vector<std::uint8_t> group_open(n_parts, 0);
+  for (std::uint32_t p = 0; p < n_parts; ++p) {
+    if (candidate[p] == 0)
+      continue;
+    volume_m3[find(p)] += topo.parts[p].volume_m3;
+    group_open[find(p)] |= open[p];
+  }
+  for (std::size_t t = 0; t < out.size(); ++t) {
+    const std::uint32_t p = topo.triangle_part[t];
+    if (p == scene::kNoIndex || candidate[p] == 0)
+      continue;
+    const std::uint32_t g = find(p);
+    if (group_open[g] == 0 && volume_m3[g] != 0.0)
+      out[t] = volume_m3[g] > 0.0 ? 1 : -1;
+  }
+  return out;
+}
+
 // The Dirichlet kernel sin(n x / 2) / sin(x / 2) from its two sines and cosines (the limit
 // n cos(n x / 2) / cos(x / 2) where sin(x / 2) vanishes).
 double dirichlet(double sin_n, double cos_n, double sin_1, double cos_1, double n) noexcept {
@@ -105,8 +223,9 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
-    const std::vector<std::int8_t> closed =
-        scene::closed_part_winding(scene::build_topology(mesh.positions_m, mesh.triangles));
+    const scene::MeshTopology topology = scene::build_topology(mesh.positions_m, mesh.triangles);
+    const std::vector<std::int8_t> closed = scene::closed_part_winding(topology);
+    const std::vector<std::int8_t> solid = solid_winding(topology, mesh.positions_m);
     const std::int8_t mirrored = glm::determinant(glm::dmat3(m)) < 0.0 ? -1 : 1;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
       const glm::uvec3 tri = mesh.triangles[t];
@@ -128,6 +247,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       f.centroid = (f.v0 + f.v1 + f.v2) / 3.0;
       f.surface = mesh.triangle_material[t];
       f.outward = static_cast<std::int8_t>(closed[t] * mirrored);
+      f.solid = static_cast<std::int8_t>(solid[t] * mirrored);
       facets_.push_back(f);
       for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
         lo = glm::min(lo, v);
@@ -302,84 +422,138 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
   // toward the receiver wherever it is (forward scatter included).
   // Partly lit facets are resolved as finely as the tubes are spaced (sbr_core.hpp).
   const double resolution_m = kSpeedOfLight_mps / f_hi / config_.rays_per_wavelength;
-  std::vector<std::vector<FacetTerm>> facet_terms(facets_.size());
+  // The facets go in fixed blocks (results do not depend on the threading); in each, the
+  // lighting samples of every facet that needs them are answered by one batched query (the
+  // parallel rays toward the transmitter from neighbouring facets are coherent: Embree traces
+  // them in packets), then the sub-triangles of the partly lit ones by a second. The rule and
+  // its answers are facet_light's and for_each_lit_subtriangle's (sbr_core.hpp).
+  constexpr std::size_t kFacetBlock = 256;
+  const std::size_t n_blocks = (facets_.size() + kFacetBlock - 1) / kFacetBlock;
+  std::vector<std::vector<FacetTerm>> block_terms(n_blocks);
   std::atomic<std::uint64_t> lit{0}, partly{0}, shadowed{0}, edge_on{0}, occl{0}, subs{0};
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, facets_.size(), 512),
-      [&](const tbb::blocked_range<std::size_t>& range) {
-        std::uint64_t n_lit = 0, n_partial = 0, n_shadow = 0, n_edge = 0, n_occl = 0, n_subs = 0;
-        auto blocked = [&](const glm::dvec3& p) {
-          ++n_occl;
-          return !clear(p, r_t);
-        };
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          const Facet& f = facets_[i];
-          glm::dvec3 n = f.normal;
-          double cos_i = -glm::dot(n, d_i);
-          if (cos_i < 0.0) {  // two-sided: the face the wave meets
-            n = -n;
-            cos_i = -cos_i;
-          }
-          if (cos_i <= kEdgeOnCos) {
-            ++n_edge;
-            continue;
-          }
-          // The inside of a closed part is never lit (sbr_core.hpp, closed parts).
-          const bool inside = f.outward != 0 && f.outward * glm::dot(f.normal, r_t) <= 0.0;
-          const FacetLight l = !shadowing ? FacetLight::kLit
-                               : inside
-                                   ? FacetLight::kDark
-                                   : facet_light(facet_samples(f.v0, f.v1, f.v2, n, eps), blocked);
-          if (l == FacetLight::kDark) {
-            ++n_shadow;
-            continue;
-          }
-          const SurfaceModel& sm = surfaces_[f.surface];
-          const bool pec = sm.kind == SurfaceModel::Kind::kPec;
-          const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k_ref);
-          const CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
-          const std::array<cplx, 4> c =
-              coefficients(po_source(e_h, d_i, n, s, rc, pec), po_source(e_v, d_i, n, s, rc, pec));
-          auto add = [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
-            FacetTerm t;
-            t.c = c;
-            t.area_m2 = 0.5 * glm::length(glm::cross(b - a, v - a));
-            t.b0_m = glm::dot(w, a);
-            t.b1_m = glm::dot(w, b);
-            t.b2_m = glm::dot(w, v);
-            facet_terms[i].push_back(t);
-          };
-          if (l == FacetLight::kLit) {
-            ++n_lit;
-            add(f.v0, f.v1, f.v2);
-            continue;
-          }
-          ++n_partial;
-          const double longest = std::max(
-              {glm::length(f.v1 - f.v0), glm::length(f.v2 - f.v1), glm::length(f.v0 - f.v2)});
-          const int m = facet_subdivisions(longest, resolution_m);
-          facet_terms[i].reserve(static_cast<std::size_t>(m * m));
-          for_each_lit_subtriangle(
-              f.v0, f.v1, f.v2, n, eps, m, blocked,
-              [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
-                ++n_subs;
-                add(a, b, v);
-              });
-        }
-        lit += n_lit;
-        partly += n_partial;
-        shadowed += n_shadow;
-        edge_on += n_edge;
-        occl += n_occl;
-        subs += n_subs;
-      });
+  tbb::parallel_for(std::size_t{0}, n_blocks, [&](std::size_t bi) {
+    const std::size_t begin = bi * kFacetBlock, end = std::min(facets_.size(), begin + kFacetBlock);
+    std::uint64_t n_lit = 0, n_partial = 0, n_shadow = 0, n_edge = 0, n_subs = 0;
+    // Per facet of the block: how it is lit, its lit normal and the first of its sample rays
+    // (7 in `rays`) and of its sub-triangle rays (m^2 in `sub_rays`).
+    struct Lighting {
+      FacetLight light = FacetLight::kDark;
+      bool tested = false;
+      int m = 0;
+      glm::dvec3 n{0.0};
+      double cos_i = 0.0;
+      std::size_t first = 0, first_sub = 0;
+    };
+    std::array<Lighting, kFacetBlock> lighting{};
+    // Where the rays toward the transmitter start: the samples, the sub-triangles' samples.
+    std::vector<glm::dvec3> rays, sub_rays;
+    std::vector<std::uint8_t> blocked, sub_blocked;
+    for (std::size_t i = begin; i != end; ++i) {
+      const Facet& f = facets_[i];
+      Lighting& l = lighting[i - begin];
+      glm::dvec3 n = f.normal;
+      double cos_i = -glm::dot(n, d_i);
+      if (cos_i < 0.0) {  // two-sided: the face the wave meets
+        n = -n;
+        cos_i = -cos_i;
+      }
+      l.n = n;
+      l.cos_i = cos_i;
+      if (cos_i <= kEdgeOnCos) {
+        ++n_edge;
+        l.light = FacetLight::kDark;
+        continue;
+      }
+      // The inside of a closed part is never lit (sbr_core.hpp, closed parts), nor that of a
+      // part closed up to T-junctions (solid_winding).
+      const bool inside = f.solid != 0 && f.solid * glm::dot(f.normal, r_t) <= 0.0;
+      if (!shadowing) {
+        l.light = FacetLight::kLit;
+      } else if (inside) {
+        l.light = FacetLight::kDark;
+        ++n_shadow;
+      } else {
+        l.tested = true;
+        l.first = rays.size();
+        for (const glm::dvec3& p : facet_samples(f.v0, f.v1, f.v2, n, eps))
+          rays.push_back(p);
+      }
+    }
+    blocked.resize(rays.size());
+    scene_->occluded_along(r_t, rays, blocked);
+    for (std::size_t i = begin; i != end; ++i) {
+      Lighting& l = lighting[i - begin];
+      if (!l.tested)
+        continue;
+      l.light = facet_light(
+          std::span<const std::uint8_t, kFacetSamples>(blocked.data() + l.first, kFacetSamples));
+      if (l.light == FacetLight::kDark) {
+        ++n_shadow;
+      } else if (l.light == FacetLight::kPartial) {
+        // Partly lit facets are resolved as finely as the tubes are spaced (sbr_core.hpp).
+        const Facet& f = facets_[i];
+        const double longest = std::max(
+            {glm::length(f.v1 - f.v0), glm::length(f.v2 - f.v1), glm::length(f.v0 - f.v2)});
+        l.m = facet_subdivisions(longest, resolution_m);
+        l.first_sub = sub_rays.size();
+        for_each_subtriangle(f.v0, f.v1, f.v2, l.m,
+                             [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+                               sub_rays.push_back(subtriangle_sample(a, b, c, l.n, eps));
+                             });
+      }
+    }
+    sub_blocked.resize(sub_rays.size());
+    scene_->occluded_along(r_t, sub_rays, sub_blocked);
+    occl.fetch_add(rays.size() + sub_rays.size(), std::memory_order_relaxed);
+    std::vector<FacetTerm>& terms = block_terms[bi];
+    for (std::size_t i = begin; i != end; ++i) {
+      const Lighting& l = lighting[i - begin];
+      if (l.light == FacetLight::kDark)
+        continue;
+      const Facet& f = facets_[i];
+      const SurfaceModel& sm = surfaces_[f.surface];
+      const bool pec = sm.kind == SurfaceModel::Kind::kPec;
+      const ReflectionCoefficients rc = reflection_coefficients(sm, l.cos_i, k_ref);
+      const CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
+      const std::array<cplx, 4> c =
+          coefficients(po_source(e_h, d_i, l.n, s, rc, pec), po_source(e_v, d_i, l.n, s, rc, pec));
+      auto add = [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
+        FacetTerm t;
+        t.c = c;
+        t.area_m2 = 0.5 * glm::length(glm::cross(b - a, v - a));
+        t.b0_m = glm::dot(w, a);
+        t.b1_m = glm::dot(w, b);
+        t.b2_m = glm::dot(w, v);
+        terms.push_back(t);
+      };
+      if (l.light == FacetLight::kLit) {
+        ++n_lit;
+        add(f.v0, f.v1, f.v2);
+        continue;
+      }
+      ++n_partial;
+      std::size_t k = l.first_sub;
+      for_each_subtriangle(f.v0, f.v1, f.v2, l.m,
+                           [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
+                             if (sub_blocked[k++] == 0) {
+                               ++n_subs;
+                               add(a, b, v);
+                             }
+                           });
+    }
+    lit += n_lit;
+    partly += n_partial;
+    shadowed += n_shadow;
+    edge_on += n_edge;
+    subs += n_subs;
+  });
   std::vector<FacetTerm> facet_list;
   {
     std::size_t total = 0;
-    for (const auto& v : facet_terms)
+    for (const auto& v : block_terms)
       total += v.size();
     facet_list.reserve(total);
-    for (const auto& v : facet_terms)
+    for (const auto& v : block_terms)
       facet_list.insert(facet_list.end(), v.begin(), v.end());
   }
   // --- Edge diffraction: fringe equivalent edge currents (radar/em/edges.hpp). --------------
@@ -603,6 +777,12 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     std::vector<std::vector<PathTerm>> row_terms(rows);
     std::atomic<std::uint64_t> hits{0}, n_paths{0}, grazing{0}, segments{0}, cut{0};
     std::array<std::atomic<std::uint64_t>, kMaxRcsBounces + 1> by_bounce{};
+    // Each row's tubes go in chunks of neighbouring columns, bounce by bounce: the chunk's rays
+    // of one bounce are intersected by one batched query (Scene::intersect over spans: coherent
+    // rays, traced by Embree in packets), then their exit tests by one batched occlusion query,
+    // then the cap tests. What each tube does is what the tube-by-tube loop did; only the order
+    // of the row's terms (chunk, bounce, column) differs.
+    constexpr std::size_t kChunk = 64;
     tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t row) {
       row_terms[row].reserve(static_cast<std::size_t>(cols / 8));
       std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0, l_cut = 0;
@@ -618,122 +798,187 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       };
       std::array<Run, kMaxRcsBounces + 1> runs{};
       const double run_tolerance_m = 1e-9 * glm::length(grid.du_m);
-      for (std::uint64_t col = 0; col < cols; ++col) {
-        std::uint64_t seq_key = 0x9e3779b97f4a7c15ull;  // the facets met so far, hashed
+      // A tube in flight: where it is, its field and its footprint's edges.
+      struct Tube {
+        std::uint64_t col = 0;
+        std::uint64_t seq_key = 0;  // the facets met so far, hashed
+        glm::dvec3 d{0.0}, tube_u{0.0}, tube_v{0.0}, last_hit{0.0};
+        CVec e_h, e_v;
+        double path_m = 0.0;
+      };
+      // What a tube met at this bounce.
+      struct Met {
+        std::uint32_t tube = 0;
+        glm::dvec3 n{0.0};
+        ReflectionCoefficients rc;
+        bool pec = true;
+        bool radiate = false;
+        std::uint32_t exit = 0;  // its exit test's index, when radiate and shadowing
+      };
+      std::vector<Tube> tubes(kChunk);
+      std::vector<std::uint32_t> active(kChunk), next(kChunk);
+      std::vector<scene::Ray> rays(kChunk), exits(kChunk), caps(kChunk);
+      std::vector<scene::Hit> met_hits(kChunk);
+      std::vector<std::uint8_t> found(kChunk), exit_blocked(kChunk), cap_blocked(kChunk);
+      std::vector<Met> met(kChunk);
+      std::vector<PathTerm>& terms = row_terms[row];
+      auto free_ray = [](const glm::dvec3& from, const glm::dvec3& dir) {
         scene::Ray ray;
-        ray.origin_m = row_origin + static_cast<double>(col) * grid.du_m;
-        ray.direction = d_i;
+        ray.origin_m = from;
+        ray.direction = dir;
         ray.t_near_m = 0.0;
         ray.t_far_m = std::numeric_limits<double>::infinity();
-        glm::dvec3 d = d_i, tube_u = tube_u0, tube_v = tube_v0;
-        CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
-        double path_m = glm::dot(d_i, ray.origin_m);  // plane-wave phase path at the origin
-        glm::dvec3 last_hit(0.0);
-        for (int bounce = 1; bounce <= config_.max_bounces; ++bounce) {
-          scene::Hit hit;
-          ++l_segments;
-          if (!scene_->intersect(ray, hit))
-            break;
-          ++l_hits;
-          seq_key = (seq_key ^ ((std::uint64_t{hit.object_id} << 32) | hit.primitive_id)) *
-                    0x100000001b3ull;
-          seq_key ^= seq_key >> 29;
-          hit.position_m =
-              extend_path(bounce == 1, hit.t_m, last_hit, d, hit.position_m, hit.normal, path_m);
-          last_hit = hit.position_m;
-          glm::dvec3 n = hit.normal;
-          double cos_i = -glm::dot(n, d);
-          if (cos_i < 0.0) {
-            n = -n;
-            cos_i = -cos_i;
+        return ray;
+      };
+      for (std::uint64_t col0 = 0; col0 < cols; col0 += kChunk) {
+        const std::size_t n_chunk =
+            static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, cols - col0));
+        std::size_t n_active = n_chunk;
+        for (std::size_t j = 0; j < n_chunk; ++j) {
+          Tube& tb = tubes[j];
+          tb.col = col0 + j;
+          tb.seq_key = 0x9e3779b97f4a7c15ull;
+          tb.d = d_i;
+          tb.tube_u = tube_u0;
+          tb.tube_v = tube_v0;
+          tb.e_h = CVec{tx_h, glm::dvec3(0.0)};
+          tb.e_v = CVec{tx_v, glm::dvec3(0.0)};
+          tb.last_hit = glm::dvec3(0.0);
+          rays[j] = free_ray(row_origin + static_cast<double>(tb.col) * grid.du_m, d_i);
+          tb.path_m = glm::dot(d_i, rays[j].origin_m);  // plane-wave phase path at the origin
+          active[j] = static_cast<std::uint32_t>(j);
+        }
+        for (int bounce = 1; bounce <= config_.max_bounces && n_active > 0; ++bounce) {
+          l_segments += n_active;
+          scene_->intersect(std::span<const scene::Ray>(rays.data(), n_active),
+                            std::span<scene::Hit>(met_hits.data(), n_active),
+                            std::span<std::uint8_t>(found.data(), n_active));
+          // The hits, in column order; exit tests of the footprints that may radiate.
+          std::size_t n_met = 0, n_exits = 0;
+          for (std::size_t a = 0; a < n_active; ++a) {
+            if (found[a] == 0)
+              continue;
+            ++l_hits;
+            Tube& tb = tubes[active[a]];
+            scene::Hit& hit = met_hits[a];
+            tb.seq_key = (tb.seq_key ^ ((std::uint64_t{hit.object_id} << 32) | hit.primitive_id)) *
+                         0x100000001b3ull;
+            tb.seq_key ^= tb.seq_key >> 29;
+            hit.position_m = extend_path(bounce == 1, hit.t_m, tb.last_hit, tb.d, hit.position_m,
+                                         hit.normal, tb.path_m);
+            tb.last_hit = hit.position_m;
+            glm::dvec3 n = hit.normal;
+            double cos_i = -glm::dot(n, tb.d);
+            if (cos_i < 0.0) {
+              n = -n;
+              cos_i = -cos_i;
+            }
+            if (cos_i < kGrazingCos) {
+              ++l_grazing;
+              continue;
+            }
+            Met& mt = met[n_met++];
+            mt.tube = active[a];
+            mt.n = n;
+            const SurfaceModel& sm = surfaces_[hit.material_id];
+            mt.pec = sm.kind == SurfaceModel::Kind::kPec;
+            mt.rc = reflection_coefficients(sm, cos_i, k_ref);
+            // Bounce 1 is the facets' (above). Later hits radiate when the receiver sees the lit
+            // side of the hit (sbr_core.hpp, kGrazingCos) and nothing is in the way.
+            mt.radiate = bounce >= 2 && glm::dot(n, s) >= kGrazingCos;
+            if (mt.radiate && shadowing) {
+              mt.exit = static_cast<std::uint32_t>(n_exits);
+              exits[n_exits++] = free_ray(hit.position_m + eps * n, s);
+            }
           }
-          if (cos_i < kGrazingCos) {
-            ++l_grazing;
-            break;
+          if (n_exits > 0) {
+            l_occl += n_exits;
+            scene_->occluded(std::span<const scene::Ray>(exits.data(), n_exits),
+                             std::span<std::uint8_t>(exit_blocked.data(), n_exits));
           }
-          const SurfaceModel& sm = surfaces_[hit.material_id];
-          const bool pec = sm.kind == SurfaceModel::Kind::kPec;
-          const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k_ref);
-          // Bounce 1 is the facets' (above). Later hits radiate when the receiver sees the lit
-          // side of the hit (sbr_core.hpp, kGrazingCos) and nothing is in the way.
-          bool radiate = bounce >= 2 && glm::dot(n, s) >= kGrazingCos;
-          if (radiate && shadowing) {
-            ++l_occl;
-            radiate = clear(hit.position_m + eps * n, s);
-          }
-          if (radiate) {
-            ++l_paths;
-            ++l_by[static_cast<std::size_t>(bounce)];
-            // The tube's footprint on this facet: its edge vectors projected along d.
-            const TubeFootprint fp = tube_footprint(tube_u, tube_v, d, n, s);
-            PathTerm t;
-            t.c = coefficients(po_source(e_h, d, n, s, rc, pec), po_source(e_v, d, n, s, rc, pec));
-            t.area_m2 = fp.area_m2;
-            t.phase_len_m = path_m - glm::dot(s, hit.position_m);
-            t.taper_u_m = fp.taper_u_m;
-            t.taper_v_m = fp.taper_v_m;
-            t.count = 1;
-            t.step_m = 0.0;
-            std::vector<PathTerm>& terms = row_terms[row];
-            Run& run = runs[static_cast<std::size_t>(bounce)];
-            bool merged = false;
-            if (run.open && run.key == seq_key && run.col + 1 == col) {
-              PathTerm& r = terms[run.term];
-              const double step = t.phase_len_m - run.last_len_m;
-              if (r.c == t.c && r.area_m2 == t.area_m2 && r.taper_u_m == t.taper_u_m &&
-                  r.taper_v_m == t.taper_v_m &&
-                  (r.count == 1 || std::abs(step - r.step_m) <= run_tolerance_m)) {
-                if (r.count == 1)
-                  r.step_m = step;
-                ++r.count;
-                merged = true;
+          std::size_t n_next = 0, n_caps = 0;
+          for (std::size_t q = 0; q < n_met; ++q) {
+            const Met& mt = met[q];
+            Tube& tb = tubes[mt.tube];
+            const glm::dvec3& n = mt.n;
+            const glm::dvec3& hit_m = tb.last_hit;
+            if (mt.radiate && (!shadowing || exit_blocked[mt.exit] == 0)) {
+              ++l_paths;
+              ++l_by[static_cast<std::size_t>(bounce)];
+              // The tube's footprint on this facet: its edge vectors projected along d.
+              const TubeFootprint fp = tube_footprint(tb.tube_u, tb.tube_v, tb.d, n, s);
+              PathTerm t;
+              t.c = coefficients(po_source(tb.e_h, tb.d, n, s, mt.rc, mt.pec),
+                                 po_source(tb.e_v, tb.d, n, s, mt.rc, mt.pec));
+              t.area_m2 = fp.area_m2;
+              t.phase_len_m = tb.path_m - glm::dot(s, hit_m);
+              t.taper_u_m = fp.taper_u_m;
+              t.taper_v_m = fp.taper_v_m;
+              t.count = 1;
+              t.step_m = 0.0;
+              Run& run = runs[static_cast<std::size_t>(bounce)];
+              bool merged = false;
+              if (run.open && run.key == tb.seq_key && run.col + 1 == tb.col) {
+                PathTerm& r = terms[run.term];
+                const double step = t.phase_len_m - run.last_len_m;
+                if (r.c == t.c && r.area_m2 == t.area_m2 && r.taper_u_m == t.taper_u_m &&
+                    r.taper_v_m == t.taper_v_m &&
+                    (r.count == 1 || std::abs(step - r.step_m) <= run_tolerance_m)) {
+                  if (r.count == 1)
+                    r.step_m = step;
+                  ++r.count;
+                  merged = true;
+                }
               }
+              if (!merged) {
+                run.term = terms.size();
+                run.key = tb.seq_key;
+                run.open = true;
+                terms.push_back(t);
+              }
+              run.col = tb.col;
+              run.last_len_m = t.phase_len_m;
             }
-            if (!merged) {
-              run.term = terms.size();
-              run.key = seq_key;
-              run.open = true;
-              terms.push_back(t);
+            // Specular reflection: direction, tube edges and field (law of reflection).
+            const glm::dvec3 d_r = mirror(tb.d, n);
+            if (bounce == config_.max_bounces) {
+              // The cap: is this tube still bouncing (would its reflection meet the target)?
+              caps[n_caps++] = free_ray(hit_m + eps * n, d_r);
+              continue;
             }
-            run.col = col;
-            run.last_len_m = t.phase_len_m;
+            const CVec e_v_r = reflect_field(tb.e_v, tb.d, d_r, n, mt.rc, mt.pec);
+            const CVec e_h_r = reflect_field(tb.e_h, tb.d, d_r, n, mt.rc, mt.pec);
+            if (on_bounce != nullptr) {
+              BounceEvent ev;
+              ev.bounce = bounce;
+              ev.incident = tb.d;
+              ev.normal = n;
+              ev.reflected = d_r;
+              ev.field_before = norm(tb.e_v);
+              ev.field_after = norm(e_v_r);
+              ev.field_h_before = norm(tb.e_h);
+              ev.field_h_after = norm(e_h_r);
+              ev.pec = mt.pec;
+              (*on_bounce)(ev);
+            }
+            tb.e_h = e_h_r;
+            tb.e_v = e_v_r;
+            tb.tube_u = mirror(tb.tube_u, n);
+            tb.tube_v = mirror(tb.tube_v, n);
+            tb.d = d_r;
+            // Lifted to the lit side: no self-hit.
+            rays[n_next] = free_ray(hit_m + eps * n, d_r);
+            next[n_next++] = mt.tube;
           }
-          // Specular reflection: direction, tube edges and field (law of reflection).
-          const glm::dvec3 d_r = mirror(d, n);
-          if (bounce == config_.max_bounces) {
-            // The cap: is this tube still bouncing (would its reflection meet the target)?
-            scene::Ray next;
-            next.origin_m = hit.position_m + eps * n;
-            next.direction = d_r;
-            next.t_near_m = 0.0;
-            next.t_far_m = std::numeric_limits<double>::infinity();
-            ++l_occl;
-            l_cut += scene_->occluded(next) ? 1u : 0u;
-            break;
+          if (n_caps > 0) {
+            l_occl += n_caps;
+            scene_->occluded(std::span<const scene::Ray>(caps.data(), n_caps),
+                             std::span<std::uint8_t>(cap_blocked.data(), n_caps));
+            for (std::size_t q = 0; q < n_caps; ++q)
+              l_cut += cap_blocked[q] != 0 ? 1u : 0u;
           }
-          const CVec e_v_r = reflect_field(e_v, d, d_r, n, rc, pec);
-          const CVec e_h_r = reflect_field(e_h, d, d_r, n, rc, pec);
-          if (on_bounce != nullptr) {
-            BounceEvent ev;
-            ev.bounce = bounce;
-            ev.incident = d;
-            ev.normal = n;
-            ev.reflected = d_r;
-            ev.field_before = norm(e_v);
-            ev.field_after = norm(e_v_r);
-            ev.field_h_before = norm(e_h);
-            ev.field_h_after = norm(e_h_r);
-            ev.pec = pec;
-            (*on_bounce)(ev);
-          }
-          e_h = e_h_r;
-          e_v = e_v_r;
-          tube_u = mirror(tube_u, n);
-          tube_v = mirror(tube_v, n);
-          d = d_r;
-          ray.origin_m = hit.position_m + eps * n;  // lifted to the lit side: no self-hit
-          ray.direction = d;
-          ray.t_near_m = 0.0;
+          std::swap(active, next);
+          n_active = n_next;
         }
       }
       hits += l_hits;

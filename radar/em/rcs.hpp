@@ -217,6 +217,9 @@ class RcsEngine {
     /// +1: `normal` points out of the closed part the facet belongs to, -1: into it, 0: open
     /// part (sbr_core.hpp, closed parts).
     std::int8_t outward;
+    /// The same for the bounce-1 lighting, with parts closed up to T-junctions counted closed
+    /// (rcs.cpp, solid_winding).
+    std::int8_t solid;
   };
   const scene::Scene* scene_;
   std::vector<SurfaceModel> surfaces_;

@@ -222,6 +222,18 @@ template <class Blocked>
   return clear == kFacetSamples ? FacetLight::kLit : FacetLight::kDark;
 }
 
+/// The same rule from the samples' answers found beforehand (blocked[i] != 0: samples[i] does
+/// not see the source), e.g. by a batched query (scene::Scene::occluded over spans).
+[[nodiscard]] inline FacetLight facet_light(
+    std::span<const std::uint8_t, kFacetSamples> blocked) noexcept {
+  std::size_t clear = 0;
+  for (const std::uint8_t b : blocked)
+    clear += b != 0 ? 0u : 1u;
+  return clear == kFacetSamples ? FacetLight::kLit
+         : clear == 0           ? FacetLight::kDark
+                                : FacetLight::kPartial;
+}
+
 /// Sub-triangles per edge of a partly lit facet: its longest edge over the engine's ray spacing
 /// (`resolution_m`: the RCS engine's tube spacing, the tracer's bundle spacing at the target),
 /// rounded up, in 1..kMaxFacetSubdivisions. The shadow boundary across a partly lit facet is
@@ -230,34 +242,49 @@ template <class Blocked>
 inline constexpr int kMaxFacetSubdivisions = 16;
 [[nodiscard]] int facet_subdivisions(double longest_edge_m, double resolution_m) noexcept;
 
-/// Calls lit(a, b, c) for every one of the m x m congruent sub-triangles of (v0, v1, v2) (the
-/// barycentric grid of step 1/m) whose centroid, lifted offset_m along lit_normal, is not
-/// `blocked` (the same test as facet_light). Returns the number of occlusion tests (m^2).
+/// Calls each(a, b, c) for every one of the m x m congruent sub-triangles of (v0, v1, v2) (the
+/// barycentric grid of step 1/m), always in the same order: row i = 0..m-1, then j, the "up"
+/// triangle (i, j), (i + 1, j), (i, j + 1) before the "down" one (i + 1, j), (i + 1, j + 1),
+/// (i, j + 1).
+template <class Each>
+void for_each_subtriangle(const glm::dvec3& v0, const glm::dvec3& v1, const glm::dvec3& v2, int m,
+                          Each&& each) noexcept {
+  const glm::dvec3 e1 = (v1 - v0) / static_cast<double>(m), e2 = (v2 - v0) / static_cast<double>(m);
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; i + j < m; ++j) {
+      const glm::dvec3 p = v0 + static_cast<double>(i) * e1 + static_cast<double>(j) * e2;
+      const glm::dvec3 a = p, b = p + e1, c = p + e2;
+      each(a, b, c);
+      if (i + j + 2 <= m)
+        each(b, p + e1 + e2, c);
+    }
+  }
+}
+
+/// Where the visibility test of sub-triangle (a, b, c) starts: its centroid lifted offset_m
+/// along the unit normal of the lit side (as facet_samples).
+[[nodiscard]] inline glm::dvec3 subtriangle_sample(const glm::dvec3& a, const glm::dvec3& b,
+                                                   const glm::dvec3& c,
+                                                   const glm::dvec3& lit_normal,
+                                                   double offset_m) noexcept {
+  return (a + b + c) / 3.0 + offset_m * lit_normal;
+}
+
+/// Calls lit(a, b, c) for every sub-triangle of for_each_subtriangle whose sample
+/// (subtriangle_sample) is not `blocked` (the same test as facet_light). Returns the number of
+/// occlusion tests (m^2).
 template <class Blocked, class Lit>
 std::size_t for_each_lit_subtriangle(const glm::dvec3& v0, const glm::dvec3& v1,
                                      const glm::dvec3& v2, const glm::dvec3& lit_normal,
                                      double offset_m, int m, Blocked&& blocked,
                                      Lit&& lit) noexcept {
-  const glm::dvec3 e1 = (v1 - v0) / static_cast<double>(m), e2 = (v2 - v0) / static_cast<double>(m);
-  const glm::dvec3 lift = offset_m * lit_normal;
   std::size_t tests = 0;
-  for (int i = 0; i < m; ++i) {
-    for (int j = 0; i + j < m; ++j) {
-      const glm::dvec3 p = v0 + static_cast<double>(i) * e1 + static_cast<double>(j) * e2;
-      // "Up" triangle (i, j), (i + 1, j), (i, j + 1); "down" (i + 1, j), (i + 1, j + 1), (i, j +
-      // 1).
-      const glm::dvec3 a = p, b = p + e1, c = p + e2;
-      ++tests;
-      if (!blocked((a + b + c) / 3.0 + lift))
-        lit(a, b, c);
-      if (i + j + 2 <= m) {
-        const glm::dvec3 d = p + e1 + e2;
-        ++tests;
-        if (!blocked((b + d + c) / 3.0 + lift))
-          lit(b, d, c);
-      }
-    }
-  }
+  for_each_subtriangle(v0, v1, v2, m,
+                       [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+                         ++tests;
+                         if (!blocked(subtriangle_sample(a, b, c, lit_normal, offset_m)))
+                           lit(a, b, c);
+                       });
   return tests;
 }
 

@@ -19,6 +19,7 @@
 #include "radar/constants.hpp"
 #include "radar/products/range_profile.hpp"
 #include "radar/reference/mie.hpp"
+#include "scene/mesh/topology.hpp"
 #include "scene/targets.hpp"
 
 namespace radar_emu::radar {
@@ -647,6 +648,58 @@ TEST(Rcs, LoneTriangleLitAtGrazingIsExactPo) {
     EXPECT_EQ(stats.facets_lit, 1u);
     EXPECT_NEAR(dbsm(sm.vv), db(expected), 0.05);
     EXPECT_NEAR(dbsm(sm.hh), db(expected), 0.05);
+  }
+}
+
+// A box whose top face is split into four quads (centre and edge midpoints) while its other
+// faces are two triangles each: the midpoints are T-junctions on the side faces' top edges, so
+// the exact topology calls every part open (scene::closed_part_winding: all 0), yet the box is
+// a closed solid. The bounce-1 lighting takes it for one (rcs.cpp, solid_winding): the six
+// facets facing away from the transmitter are dark without a query (7 queries for each of the
+// 12 facing it, none for the others), and PO is unchanged. With its bottom removed, it is open:
+// its 4 facets facing away cost 7 queries each again.
+TEST(Rcs, SolidClosedUpToTJunctionsIsDarkWithoutQueries) {
+  auto box = [](bool bottom) {
+    scene::Mesh m;
+    m.positions_m = {{0, 0, 0},    {1, 0, 0},    {1, 1, 0},      {0, 1, 0},    {0, 0, 1},
+                     {1, 0, 1},    {1, 1, 1},    {0, 1, 1},      {0.5f, 0, 1}, {1, 0.5f, 1},
+                     {0.5f, 1, 1}, {0, 0.5f, 1}, {0.5f, 0.5f, 1}};
+    // Outward winding (counter-clockwise seen from outside).
+    m.triangles = {{0, 1, 5},  {0, 5, 4},   {1, 2, 6},    {1, 6, 5},   {2, 3, 7}, {2, 7, 6},
+                   {3, 0, 4},  {3, 4, 7},   {4, 8, 12},   {4, 12, 11}, {8, 5, 9}, {8, 9, 12},
+                   {12, 9, 6}, {12, 6, 10}, {11, 12, 10}, {11, 10, 7}};
+    if (bottom) {
+      m.triangles.push_back({0, 2, 1});
+      m.triangles.push_back({0, 3, 2});
+    }
+    m.triangle_material.assign(m.triangles.size(), 0);
+    return m;
+  };
+  for (const bool bottom : {true, false}) {
+    scene::SceneDescription d;
+    d.materials = {{"metal", {}}};
+    scene::ObjectDesc o{"box", {}, glm::dmat4(1.0), std::nullopt};
+    o.mesh = box(bottom);
+    const std::vector<std::int8_t> exact =
+        scene::closed_part_winding(scene::build_topology(o.mesh.positions_m, o.mesh.triangles));
+    EXPECT_TRUE(std::all_of(exact.begin(), exact.end(), [](std::int8_t w) { return w == 0; }));
+    d.objects = {o};
+    const scene::Scene scene(std::move(d));
+    RcsConfig config;
+    config.max_bounces = 1;
+    const RcsEngine engine(scene, {SurfaceModel{}}, config);
+    const Direction dir{deg(30.0), deg(20.0)};  // sees the top, +x and +y faces
+    ScatteringMatrix sm;
+    RcsStats stats;
+    const double f[1] = {kFreq};
+    engine.compute(dir, dir, f, std::span<ScatteringMatrix>(&sm, 1), stats);
+    const std::uint64_t facing = 12, away = bottom ? 6 : 4;
+    std::cout << (bottom ? "closed" : "open")
+              << " box with T-junctions: " << stats.occlusion_queries << " occlusion queries, "
+              << stats.facets_lit << " lit, " << stats.facets_shadowed << " dark\n";
+    EXPECT_EQ(stats.facets_lit, facing);
+    EXPECT_EQ(stats.facets_shadowed, away);
+    EXPECT_EQ(stats.occlusion_queries, 7 * (bottom ? facing : facing + away));
   }
 }
 

@@ -421,6 +421,60 @@ TEST(SceneThreads, ConcurrentQueriesMatchSerialOnes) {
     EXPECT_EQ(m, 0);
 }
 
+// The batched queries (Embree ray streams) answer as the single ones, ray by ray: parallel rays
+// from a grid (the RCS engine's tubes and lighting samples), scattered ones, rays that reach a
+// moving object (the part after the static BVH), rays with a finite t_far, invalid rays, and a
+// span longer than one stream chunk. Seed 11.
+TEST(SceneBatch, BatchedQueriesAnswerAsSingleOnes) {
+  sc::SceneDescription d = sc::default_scene();
+  for (sc::ObjectDesc& o : triangle_and_moving_box().objects) {
+    if (o.motion)
+      d.objects.push_back(o);
+  }
+  const sc::Scene s(d);
+  std::mt19937 rng(11);
+  std::cout << "seed 11\n";
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<sc::Ray> rays;
+  for (int i = 0; i < 40; ++i) {  // a grid of parallel rays
+    for (int j = 0; j < 25; ++j)
+      rays.push_back(ray({-20.0 + i, -12.0 + j, 150.0}, {0.1, 0.05, -1.0}));
+  }
+  for (int i = 0; i < 1500; ++i) {  // scattered
+    const glm::dvec3 origin{300 * u(rng), 400 + 400 * u(rng), 50.0 + 150.0 * (u(rng) + 1.0)};
+    rays.push_back(
+        ray(origin, {0.5 * u(rng), 0.5 * u(rng), -1.0}, 0.0, 100.0 + 300.0 * (u(rng) + 1.0)));
+  }
+  for (int i = 0; i < 300; ++i)  // toward the moving box at the origin
+    rays.push_back(ray({1.5 * u(rng), 1.5 * u(rng), 40.0}, {-0.01 * u(rng), 0.01 * u(rng), -1.0}));
+  rays[17].origin_m.x = std::numeric_limits<double>::quiet_NaN();  // invalid: no hit, not blocked
+  rays[1203].t_far_m = -1.0;
+  std::vector<sc::Hit> hits(rays.size());
+  std::vector<std::uint8_t> found(rays.size(), 7), blocked(rays.size(), 7);
+  s.intersect(rays, hits, found);
+  s.occluded(rays, blocked);
+  int mismatches = 0, hit_count = 0, mover_hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    sc::Hit h;
+    const bool got = s.intersect(rays[i], h);
+    hit_count += got ? 1 : 0;
+    mover_hits += got && h.object_id + 1 == d.objects.size() ? 1 : 0;
+    if (got != (found[i] != 0) ||
+        (got && (h.t_m != hits[i].t_m || h.object_id != hits[i].object_id ||
+                 h.primitive_id != hits[i].primitive_id || h.normal != hits[i].normal))) {
+      ++mismatches;
+    }
+    if (s.occluded(rays[i]) != (blocked[i] != 0))
+      ++mismatches;
+  }
+  EXPECT_EQ(found[17], 0);
+  EXPECT_EQ(blocked[17], 0);
+  EXPECT_EQ(found[1203], 0);
+  EXPECT_GT(hit_count, 1000);
+  EXPECT_GT(mover_hits, 50);
+  EXPECT_EQ(mismatches, 0);
+}
+
 TEST(SceneValidation, BrokenDescriptionsFailWithContext) {
   auto error_of = [](sc::SceneDescription d) -> std::string {
     try {
