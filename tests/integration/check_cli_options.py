@@ -38,7 +38,8 @@ mesh = os.path.join(d, "t.stl")
 sphere = os.path.join(d, "s.stl")
 for args in (["scene", "target", "trihedral-tri", "--a-m", "0.3", "--out", mesh],
              ["scene", "target", "sphere", "--a-m", "0.05", "--out", sphere],
-             ["scene", "target", "plate", "--out", os.path.join(d, "plate.gltf")]):
+             ["scene", "target", "plate", "--a-m", "1", "--b-m", "1", "--out",
+              os.path.join(d, "plate.gltf")]):
     r = radar_emu(*args)
     if r.returncode != 0:
         sys.exit(f"setup failed: {' '.join(args)}: {r.stderr}")
@@ -122,10 +123,12 @@ BAD = [
     (["replay", log, "--out", a_file + "/replay"], "cannot create the output directory"),
     (["replay", os.path.join(d, "nope.log")], "nope.log"),
     # scene target: dimensions a kind does not read, ranges, the memory limit, the output
-    (["scene", "target", "sphere", "--facet-m", "1e-4", "--out", os.path.join(d, "big.glb")],
+    (["scene", "target", "sphere", "--a-m", "1", "--facet-m", "1e-4", "--out",
+      os.path.join(d, "big.glb")],
      "a sphere would have about 3.95e+09 triangles (about 829 GB of memory), over the limit of "
      "2e+07 triangles (raise it with --max-triangles"),
-    (["scene", "target", "sphere", "--facet-m", "0.01", "--max-triangles", "1000", "--out",
+    (["scene", "target", "sphere", "--a-m", "1", "--facet-m", "0.01", "--max-triangles", "1000",
+      "--out",
       os.path.join(d, "s.glb")], "over the limit of 1e+03 triangles"),
     (["scene", "target", "sphere", "--max-triangles", "0", "--out", os.path.join(d, "s.glb")],
      "--max-triangles: 0 is outside [1, 1.4e+09] triangles"),
