@@ -904,12 +904,17 @@ void check_timeline_and_memory(const Scenario& s, const std::string& origin, std
   }
   const double cells = static_cast<double>(w.range_bins) * static_cast<double>(w.pulses);
   const double bytes = static_cast<double>(beams) * cells * 40.0;
-  if (const auto over = config::over_memory_limit(
-          bytes, std::to_string(beams) + " beam positions x " + std::to_string(w.range_bins) +
-                     " range bins x " + std::to_string(w.pulses) +
-                     " pulses, about 40 B a cell for the range-Doppler maps and the CFAR")) {
-    config::fail(origin, "[radar]", "pulses", "the sensor " + *over);
+  std::optional<std::string> over;
+  try {
+    over = config::over_memory_limit(
+        bytes, std::to_string(beams) + " beam positions x " + std::to_string(w.range_bins) +
+                   " range bins x " + std::to_string(w.pulses) +
+                   " pulses, about 40 B a cell for the range-Doppler maps and the CFAR");
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());  // the variable, not the scenario, is wrong
   }
+  if (over)
+    config::fail(origin, "[radar]", "pulses", "the sensor " + *over);
 }
 
 // The sensor's configuration from the scenario's edge units, once both TOML layers are read.
