@@ -255,7 +255,7 @@ EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std
   if (const auto over = config::over_memory_limit(plan.bytes, plan.what)) {
     throw std::runtime_error("image: the EV image " + *over +
                              ": fewer --looks, a smaller --optical-scale, or a coarser "
-                             "[antenna] beam_spacing_deg");
+                             "[antenna] azimuth_cell_deg");
   }
   control.tell_estimate(plan.what + ": memory about " + config::format_bytes(plan.bytes) +
                         ", about " + config::format_duration(plan.seconds) +
