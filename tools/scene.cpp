@@ -107,13 +107,12 @@ int run_scene_gen(const SceneGenOptions& o) {
     throw std::invalid_argument("unknown scene kind '" + o.kind + "' (known: terrain|airport)");
   }
   const double gen_s = seconds_since(t0);
-  // A stop heard during the generation: the database is whole, so it is written before exiting.
-  const int stopped = o.control.stop_signal();
   o.control.report(1, 2);
   const auto t1 = std::chrono::steady_clock::now();
   scene::write_gltf(desc, out);
   const double write_s = seconds_since(t1);
-  if (stopped != 0)
+  // A stop heard during the generation or the writing: the database is whole, and written.
+  if (const int stopped = o.control.stop_signal(); stopped != 0)
     return 128 + stopped;
   o.control.report(2, 2);
   if (!o.quiet) {
