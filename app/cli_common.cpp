@@ -113,6 +113,11 @@ common::WorkControl OfflineRun::control() {
       std::fprintf(stderr, "%s: estimate: %s\n", command_.c_str(), line.c_str());
     };
   }
+  c.note = [this](const std::string& text) {
+    if (stop_signal().load(std::memory_order_relaxed) != 0)
+      line_.abandon();  // the handler's acknowledgement began a new line: no redraw
+    line_.print_above(text);
+  };
   c.stop = &stop_signal();
   return c;
 }

@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 
+#include "app/cli_common.hpp"
 #include "app/cmd.hpp"
 #include "config/cli_checks.hpp"
 #include "tools/image.hpp"
@@ -34,12 +35,16 @@ void add_image_command(CLI::App& app, Commands& commands) {
   image->add_option("--out", o.out_dir, "Output directory (default ./image)")
       ->check(config::output_dir());
   image->add_flag("--plot", o.plot, "Also write image.png (radar and optical side by side)");
-  image->add_flag("-q,--quiet", o.quiet, "No summary");
+  image->add_flag("-q,--quiet", o.quiet, "No progress line, estimate or summary");
   commands.push_back({image, [a] {
                         tools::ImageToolOptions options = a->options;
                         if (!a->seed_text.empty())
                           options.seed = tools::parse_seed(a->seed_text, "--seed");
-                        return tools::run_image_tool(options);
+                        OfflineRun run("image", "columns", options.quiet);
+                        options.control = run.control();
+                        return run.finish(tools::run_image_tool(options),
+                                          "the columns done are in " + options.out_dir +
+                                              "/image.csv, marked incomplete (image.json too)");
                       }});
 }
 

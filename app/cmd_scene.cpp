@@ -3,6 +3,7 @@
 
 #include <memory>
 
+#include "app/cli_common.hpp"
 #include "app/cmd.hpp"
 #include "config/cli_checks.hpp"
 #include "tools/scene.hpp"
@@ -76,7 +77,11 @@ void add_scene_import_command(CLI::App& scene, Commands& commands) {
   commands.push_back({cmd, [o] {
                         if (!o->dry_run && o->out.empty())
                           throw std::invalid_argument("--out: required (unless --dry-run)");
-                        return tools::run_scene_import(*o);
+                        OfflineRun run("scene import", "rows", o->quiet);
+                        o->control = run.control();
+                        return run.finish(tools::run_scene_import(*o),
+                                          "the tiles done are in " + o->out +
+                                              ", marked incomplete (scene info shows it)");
                       }});
 }
 
@@ -124,7 +129,13 @@ void add_scene_commands(CLI::App& app, Commands& commands) {
       ->check(CLI::Range(1, 16384));
   preview->add_flag("-q,--quiet", p.quiet, "No summary (warnings are still printed)");
   add_scene_import_command(*scene, commands);
-  commands.push_back({gen, [gen_options] { return tools::run_scene_gen(*gen_options); }});
+  commands.push_back({gen, [gen_options] {
+                        OfflineRun run("scene gen", "stages", gen_options->quiet);
+                        gen_options->control = run.control();
+                        return run.finish(
+                            tools::run_scene_gen(*gen_options),
+                            "the scene was generated whole and is written to " + gen_options->out);
+                      }});
   commands.push_back({info, [info_options] { return tools::run_scene_info(*info_options); }});
   commands.push_back(
       {preview, [preview_options] { return tools::run_scene_preview(*preview_options); }});

@@ -14,23 +14,6 @@
 namespace radar_emu::app {
 namespace {
 
-// The dimensions a target kind reads (scene/targets.hpp): 1 (a), 2 (a, b) or 3 (a, b, c).
-int target_dimensions(radar_emu::scene::TargetKind kind) {
-  using radar_emu::scene::TargetKind;
-  switch (kind) {
-    case TargetKind::kTrihedralSquare:
-    case TargetKind::kTrihedralTriangular:
-    case TargetKind::kSphere:
-      return 1;
-    case TargetKind::kPlate:
-    case TargetKind::kDihedral:
-    case TargetKind::kCylinder:
-      return 2;
-    default:
-      return 3;
-  }
-}
-
 // Default of `scene target --max-triangles` (README): about 4 GB at the measured 210 bytes a
 // triangle (scene/targets.hpp kTargetBytesPerTriangle).
 constexpr double kDefaultMaxTargetTriangles = 20e6;
@@ -44,13 +27,27 @@ int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec sp
                              ")");
   }
   spec.kind = *kind;
-  // A dimension the kind does not read is refused, not silently ignored.
-  const int dims = target_dimensions(*kind);
+  // The kind's dimensions and default size: the table a scenario's [[target]] reads too.
+  const sc::TargetKindSize size = sc::target_kind_size(*kind);
+  const int dims = size.dims;
   const char* takes = dims == 1 ? "--a-m only" : dims == 2 ? "--a-m and --b-m only" : "";
+  static const std::string kOption[3] = {"--a-m", "--b-m", "--c-m"};
   for (int d = dims; d < 3; ++d) {
-    const std::string name = d == 1 ? "--b-m" : "--c-m";
-    if (cmd.count(name) > 0)
-      throw std::invalid_argument(name + ": a " + kind_name + " takes " + takes);
+    if (cmd.count(kOption[d]) > 0)  // a dimension the kind does not read: refused, not ignored
+      throw std::invalid_argument(kOption[d] + ": a " + kind_name + " takes " + takes);
+  }
+  double* dim[3] = {&spec.a_m, &spec.b_m, &spec.c_m};
+  for (int d = 0; d < dims; ++d) {
+    if (cmd.count(kOption[d]) > 0)
+      continue;
+    if (!size.default_m) {
+      std::string need = "--a-m";
+      if (dims > 1)
+        need += dims == 2 ? " and --b-m" : ", --b-m and --c-m";
+      throw std::invalid_argument(kOption[d] + ": a " + kind_name + " has no default size: give " +
+                                  need + " " + std::string(size.meaning) + " in metres");
+    }
+    *dim[d] = (*size.default_m)[static_cast<std::size_t>(d)];
   }
   // Refuse a mesh past the memory limit before making it, with the estimate.
   const double triangles = sc::target_triangle_estimate(spec);
@@ -65,7 +62,7 @@ int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec sp
     throw std::invalid_argument(text);
   }
   const std::size_t written = tools::write_scene_target(spec, out);
-  std::printf("%s: %s, %zu triangles\n", out.c_str(), kind_name.c_str(), written);
+  std::printf("%s: %s, %zu triangles\n", out.c_str(), sc::target_size_text(spec).c_str(), written);
   return 0;
 }
 
@@ -82,8 +79,11 @@ void add_scene_target_command(CLI::App& scene, Commands& commands) {
   auto a = std::make_shared<Args>();
   target->add_option("kind", a->kind, radar_emu::scene::target_names())->required();
   target
-      ->add_option("--a-m", a->spec.a_m,
-                   "First dimension [m]: plate/box x, fold length, trihedral edge, radius")
+      ->add_option(
+          "--a-m", a->spec.a_m,
+          "First dimension [m]: plate/box x, fold length, trihedral edge, radius, vehicle or "
+          "aircraft length (default: the vehicles' and aircraft's sizes of "
+          "scene/targets.hpp, as [[target]]; the shapes have none)")
       ->check(config::in_range(0.0, 1e5, "m", true));
   target
       ->add_option("--b-m", a->spec.b_m,

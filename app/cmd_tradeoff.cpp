@@ -21,9 +21,9 @@ int tradeoff_command(TradeoffArgs& a) {
   check_default_dir(a.out, a.opt.out_dir);
   if (!a.cases.empty())
     a.opt.cases = tools::parse_tradeoff_cases(a.cases);
-  // No progress line: the per-knob lines on stderr (unless -q) show how far it is; the stop
-  // flag is heard between cases.
-  OfflineRun run("tradeoff", "cases", true);
+  // The progress line in cases, the per-knob lines printed above it (unless -q); the stop flag
+  // is heard between cases.
+  OfflineRun run("tradeoff", "cases", a.opt.quiet);
   a.opt.control = run.control();
   return run.finish(tools::run_tradeoff_tool(a.opt),
                     "the cases done are in " + a.opt.out_dir + "/tradeoff.csv, marked incomplete");

@@ -12,6 +12,7 @@
 
 #include "app/cmd.hpp"
 #include "loop/outputs/report.hpp"
+#include "scene/targets.hpp"
 
 namespace radar_emu::app {
 
@@ -39,6 +40,14 @@ int execute_loop(const loop::Scenario& scenario, loop::RunOptions options, const
           std::fputc('\n', stderr);
       }
     };
+  }
+  if (!quiet) {
+    // The size of each built-in [[target]] (given or its kind's default, the table `scene
+    // target` reads): a default is never a surprise.
+    for (const scene::TargetPlacement& t : scenario.targets) {
+      if (t.builtin)
+        std::printf("target %s: %s\n", t.name.c_str(), scene::target_size_text(*t.builtin).c_str());
+    }
   }
   loop::ClosedLoop loop(scenario, options);
   for (const auto& w : loop.setup_warnings())

@@ -19,6 +19,9 @@ struct WorkControl {
   /// Receives the estimate of time and memory computed before the work starts, one line
   /// without the command's name ("4096 pulses x 2048 gates: raw 67 MB, ..."); may be empty.
   std::function<void(const std::string& line)> estimate;
+  /// Receives a line of the computation's own log (with its newline), to be printed on stderr
+  /// above the progress line; empty: the computation prints it on stderr itself.
+  std::function<void(const std::string& line)> note;
   /// Non-zero (the signal number) once a stop was requested; null: never stops early.
   const std::atomic<int>* stop = nullptr;
 

@@ -68,8 +68,14 @@ void ProgressLine::update(std::size_t done, std::size_t total) {
   const auto now = std::chrono::steady_clock::now();
   if (drawn_ && done < total && now - last_ < std::chrono::milliseconds(250))
     return;
+  draw(now);
+  if (done >= total)
+    finish();
+}
+
+void ProgressLine::draw(std::chrono::steady_clock::time_point now) {
   last_ = now;
-  const std::string line = format_progress(command_, unit_, done, total,
+  const std::string line = format_progress(command_, unit_, done_, total_,
                                            std::chrono::duration<double>(now - start_).count());
   // Padded over the previous line's tail (no terminal escapes: any terminal shows it right).
   const std::size_t pad = width_ > line.size() ? width_ - line.size() : 0;
@@ -77,8 +83,18 @@ void ProgressLine::update(std::size_t done, std::size_t total) {
   std::fflush(stderr);
   width_ = line.size();
   drawn_ = true;
-  if (done >= total)
-    finish();
+}
+
+void ProgressLine::print_above(const std::string& text) {
+  if (!drawn_) {
+    std::fputs(text.c_str(), stderr);
+    std::fflush(stderr);
+    return;
+  }
+  // Blank the drawn line, print the text from its start, draw the line again below.
+  std::fprintf(stderr, "\r%*s\r%s", static_cast<int>(width_), "", text.c_str());
+  width_ = 0;
+  draw(std::chrono::steady_clock::now());
 }
 
 void ProgressLine::finish() {

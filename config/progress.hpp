@@ -37,6 +37,9 @@ class ProgressLine {
     done_ = done;
     total_ = total;
   }
+  /// Prints `text` (whole lines, ending with a newline) on stderr above the progress line: the
+  /// drawn line is cleared, the text printed and the line drawn again below it.
+  void print_above(const std::string& text);
   /// Ends the line (a newline) when one is drawn and not ended; update() may start a new one.
   void finish();
   /// Forgets a drawn line without ending it: something else (the stop handler's acknowledgement)
@@ -51,6 +54,7 @@ class ProgressLine {
   std::string command_, unit_;
   bool enabled_;
   bool drawn_ = false;
+  void draw(std::chrono::steady_clock::time_point now);
   std::size_t done_ = 0, total_ = 0, width_ = 0;
   std::chrono::steady_clock::time_point start_, last_;
 };

@@ -440,6 +440,10 @@ struct ClosedLoop::Impl {
     outcome.emplace(association_gate(s, sensor.sensor), scene.truth_objects,
                     s.sensor.max_detections, scene.truth_objects.size());
     warn_targets_never_in_beam(s, scene.scene, warnings);
+    if (!scene.scene.incomplete().empty()) {  // a `scene import` stopped early
+      warnings.push_back((s.scene_file.empty() ? std::string("the scene") : s.scene_file.string()) +
+                         ": an incomplete scene database (" + scene.scene.incomplete() + ")");
+    }
     if (!o.out_dir.empty())
       outputs.stream = open_output_stream(scenario, o, scene.scene, scene.truth_objects);
     if (!o.serve.empty())

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <numbers>
@@ -12,6 +13,7 @@
 
 #include "common/polarisation.hpp"
 #include "common/units.hpp"
+#include "config/memory_limit.hpp"
 #include "config/toml_reader.hpp"
 #include "radar/em/surfaces.hpp"
 #include "radar/sensor/waveform.hpp"
@@ -248,43 +250,6 @@ std::string show(double v) {
   return os.str();
 }
 
-// Dimensions each built-in kind reads from size_m (scene/targets.hpp: a, b, c), their meaning
-// for messages, and the default size of the vehicles and aircraft (the examples of targets.hpp).
-struct KindSize {
-  std::size_t dims;
-  const char* meaning;
-  std::optional<std::array<double, 3>> default_m;
-};
-KindSize kind_size(scene::TargetKind k) {
-  using K = scene::TargetKind;
-  switch (k) {
-    case K::kSphere:
-      return {1, "[radius]", std::nullopt};
-    case K::kTrihedralSquare:
-    case K::kTrihedralTriangular:
-      return {1, "[edge]", std::nullopt};
-    case K::kPlate:
-      return {2, "[length x, width y]", std::nullopt};
-    case K::kDihedral:
-      return {2, "[fold length, face width]", std::nullopt};
-    case K::kCylinder:
-      return {2, "[radius, length]", std::nullopt};
-    case K::kBox:
-      return {3, "[length, width, height]", std::nullopt};
-    case K::kVehicle:
-      return {3, "[length, width, height]", std::array{7.0, 3.5, 2.5}};
-    case K::kTruck:
-      return {3, "[length, width, height]", std::array{8.0, 2.5, 3.4}};
-    case K::kJeep:
-      return {3, "[length, width, height]", std::array{4.0, 1.8, 1.9}};
-    case K::kHelicopter:
-      return {3, "[length, rotor diameter, height]", std::array{12.7, 14.6, 4.4}};
-    case K::kTransportAircraft:
-      return {3, "[length, wing span, height]", std::array{37.6, 35.8, 11.8}};
-  }
-  return {3, "[a, b, c]", std::nullopt};
-}
-
 constexpr std::array<std::string_view, 18> kTargetKeys{
     "name",          "builtin",         "size_m",       "facet_m",   "mesh_file",
     "mesh_scale",    "mesh_front_axis", "mesh_up_axis", "material",  "position_enu_m",
@@ -306,21 +271,24 @@ void read_target_builtin(const Table& r, const std::string& builtin, scene::Targ
     r.unknown_value("builtin", builtin, scene::target_names());
   scene::TargetSpec spec;
   spec.kind = *kind;
-  const KindSize ks = kind_size(*kind);
+  // The kind's dimensions and default size: the one table `scene target` reads too.
+  const scene::TargetKindSize ks = scene::target_kind_size(*kind);
+  const auto dims = static_cast<std::size_t>(ks.dims);
   std::vector<double> size;
   if (std::optional<std::vector<double>> given = r.numbers("size_m")) {
     size = std::move(*given);
-    if (size.size() != ks.dims) {
-      r.fail("size_m", "a " + builtin + " takes " + std::to_string(ks.dims) + " dimension" +
-                           (ks.dims > 1 ? "s " : " ") + ks.meaning + " in metres, got " +
+    if (size.size() != dims) {
+      r.fail("size_m", "a " + builtin + " takes " + std::to_string(dims) + " dimension" +
+                           (dims > 1 ? "s " : " ") + std::string(ks.meaning) + " in metres, got " +
                            std::to_string(size.size()));
     }
     for (double v : size)
       r.check("size_m", v, {0.0, 1e4, true});
   } else if (ks.default_m) {
-    size.assign(ks.default_m->begin(), ks.default_m->end());
+    size.assign(ks.default_m->begin(), ks.default_m->begin() + ks.dims);
   } else {
-    r.fail("size_m", "is required for a " + builtin + ": " + ks.meaning + " in metres");
+    r.fail("size_m",
+           "is required for a " + builtin + ": " + std::string(ks.meaning) + " in metres");
   }
   spec.a_m = size[0];
   spec.b_m = size.size() > 1 ? size[1] : 1.0;
@@ -906,6 +874,49 @@ void read_pattern_csv(const std::filesystem::path& path, const std::string& orig
   }
 }
 
+// "25.6 ms", "5.12 s": a duration for the timeline's message.
+std::string show_duration(double seconds) {
+  char buf[32];
+  if (seconds < 1.0)
+    std::snprintf(buf, sizeof buf, "%.4g ms", seconds * 1e3);
+  else
+    std::snprintf(buf, sizeof buf, "%.4g s", seconds);
+  return buf;
+}
+
+// The radar's timeline must fit its frame: every beam position of the scan dwells `pulses` PRIs,
+// one scan a frame. A longer one would be computed as if it fitted (each frame simulating more
+// radar time than passes), so it is refused with its numbers. Then the sensor's range-Doppler
+// workspaces, one per beam, are estimated before any is allocated: per cell the complex image
+// (16 B), the clutter and power maps (8 B each) and the CFAR's running sums (8 B).
+void check_timeline_and_memory(const Scenario& s, const std::string& origin, std::size_t beams) {
+  const radar::Waveform& w = s.sensor.processing.waveform;
+  const double timeline_s = static_cast<double>(beams) * static_cast<double>(w.pulses) * w.pri_s;
+  const double frame_s = 1.0 / s.rate_hz;
+  if (timeline_s > frame_s * (1.0 + 1e-9)) {
+    config::fail(origin, "[radar]", "pulses",
+                 "the radar timeline, " + std::to_string(beams) + " beam positions x " +
+                     std::to_string(w.pulses) + " pulses x " + show_duration(w.pri_s) +
+                     " PRI = " + show_duration(timeline_s) +
+                     ", is longer than the frame period 1 / [run] rate_hz " + show(s.rate_hz) +
+                     " Hz = " + show_duration(frame_s) +
+                     ": fewer pulses or beam positions, a higher prf_hz or a lower rate_hz");
+  }
+  const double cells = static_cast<double>(w.range_bins) * static_cast<double>(w.pulses);
+  const double bytes = static_cast<double>(beams) * cells * 40.0;
+  std::optional<std::string> over;
+  try {
+    over = config::over_memory_limit(
+        bytes, std::to_string(beams) + " beam positions x " + std::to_string(w.range_bins) +
+                   " range bins x " + std::to_string(w.pulses) +
+                   " pulses, about 40 B a cell for the range-Doppler maps and the CFAR");
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(e.what());  // the variable, not the scenario, is wrong
+  }
+  if (over)
+    config::fail(origin, "[radar]", "pulses", "the sensor " + *over);
+}
+
 // The sensor's configuration from the scenario's edge units, once both TOML layers are read.
 void derive_sensor(Scenario& s, const std::string& origin) {
   radar::SensorConfig& c = s.sensor;
@@ -984,6 +995,7 @@ void derive_sensor(Scenario& s, const std::string& origin) {
   } catch (const std::invalid_argument& e) {
     config::fail(origin, "[antenna]", "", e.what());
   }
+  check_timeline_and_memory(s, origin, beams);
 }
 
 Scenario parse_impl(std::string_view toml_text, const std::string& origin,

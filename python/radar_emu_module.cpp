@@ -491,18 +491,35 @@ py::list objects_of(const sc::SceneDescription& d) {
 }
 
 // `radar-emu scene target`: writes a canonical target (.glb/.gltf/.obj/.stl by extension).
-std::size_t write_target(const std::string& kind_name, const std::filesystem::path& out, double a_m,
-                         double b_m, double c_m, double facet_m) {
+std::size_t write_target(const std::string& kind_name, const std::filesystem::path& out,
+                         std::optional<double> a_m, std::optional<double> b_m,
+                         std::optional<double> c_m, double facet_m) {
   const auto kind = sc::target_kind_from_name(kind_name);
   if (!kind) {
     throw std::invalid_argument("unknown target '" + kind_name + "' (known: " + sc::target_names() +
                                 ")");
   }
+  // The kind's default size (the table `scene target` and [[target]] read); none for shapes.
+  const sc::TargetKindSize size = sc::target_kind_size(*kind);
   sc::TargetSpec spec;
   spec.kind = *kind;
-  spec.a_m = a_m;
-  spec.b_m = b_m;
-  spec.c_m = c_m;
+  const std::optional<double> given[3] = {a_m, b_m, c_m};
+  double* dim[3] = {&spec.a_m, &spec.b_m, &spec.c_m};
+  static const char* const kName[3] = {"a_m", "b_m", "c_m"};
+  for (int d = 0; d < 3; ++d) {
+    if (given[d] && d >= size.dims)
+      throw std::invalid_argument(std::string(kName[d]) + ": a " + kind_name + " takes " +
+                                  std::to_string(size.dims) + " dimension(s) " +
+                                  std::string(size.meaning));
+    if (given[d])
+      *dim[d] = *given[d];
+    else if (d < size.dims && size.default_m)
+      *dim[d] = (*size.default_m)[static_cast<std::size_t>(d)];
+    else if (d < size.dims)
+      throw std::invalid_argument(std::string(kName[d]) + ": a " + kind_name +
+                                  " has no default size: give " + std::string(size.meaning) +
+                                  " in metres");
+  }
   spec.facet_m = facet_m;
   const sc::SceneDescription desc = sc::make_target(spec);
   const std::string ext = out.extension().string();
@@ -808,8 +825,8 @@ PYBIND11_MODULE(radar_emu, m) {
       start = bar + 1;
     }
   });
-  m.def("write_target", &write_target, py::arg("kind"), py::arg("out"), py::arg("a_m") = 1.0,
-        py::arg("b_m") = 1.0, py::arg("c_m") = 1.0, py::arg("facet_m") = 0.0,
+  m.def("write_target", &write_target, py::arg("kind"), py::arg("out"), py::arg("a_m") = py::none(),
+        py::arg("b_m") = py::none(), py::arg("c_m") = py::none(), py::arg("facet_m") = 0.0,
         "Writes a canonical target (radar-emu scene target KIND --out OUT ...); returns its "
         "triangle count.");
   m.def("scene_info", &scene_info, py::arg("file"),

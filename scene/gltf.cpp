@@ -229,7 +229,7 @@ constexpr std::array<std::string_view, 7> kNodeExtras{
 constexpr std::array<std::string_view, 6> kTrajectoryExtras{
     "waypoints_m", "speed_mps", "turn_radius_m", "turn_rate_rad_s", "loop", "bank"};
 constexpr std::array<std::string_view, 1> kMaterialExtras{"radar_material"};
-constexpr std::array<std::string_view, 1> kSceneExtras{"anchor_deg_m"};
+constexpr std::array<std::string_view, 2> kSceneExtras{"anchor_deg_m", "incomplete"};
 
 std::string known_list(std::span<const std::string_view> keys) {
   std::string s;
@@ -739,6 +739,10 @@ SceneDescription load_gltf(const std::filesystem::path& path, std::vector<std::s
         fail(path, "scene extras radar_emu.anchor_deg_m: latitude beyond +-90 deg");
       desc.anchor = {common::radians(anchor.x), common::radians(anchor.y), anchor.z};
     }
+    (void)read_string(radar_extras(model.scenes[s].extras, "incomplete"), desc.incomplete, path,
+                      "scene extras radar_emu.incomplete");
+    if (!desc.incomplete.empty() && warnings != nullptr)
+      warnings->push_back(path.string() + ": an incomplete scene: " + desc.incomplete);
   }
   if (desc.objects.empty())
     fail(path, "no triangle meshes in the scene");
@@ -916,6 +920,8 @@ void write_gltf(const SceneDescription& d, const std::filesystem::path& path) {
   anchor["anchor_deg_m"] =
       number_array({d.anchor.latitude_rad / common::kRadPerDeg,
                     d.anchor.longitude_rad / common::kRadPerDeg, d.anchor.height_m});
+  if (!d.incomplete.empty())
+    anchor["incomplete"] = tinygltf::Value(d.incomplete);
   tinygltf::Value::Object se;
   se["radar_emu"] = tinygltf::Value(std::move(anchor));
   scene.extras = tinygltf::Value(std::move(se));

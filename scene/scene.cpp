@@ -1100,6 +1100,10 @@ std::span<const ObjectState> Scene::objects() const noexcept {
 const GeoAnchor& Scene::anchor() const noexcept {
   return impl_->desc.anchor;
 }
+
+const std::string& Scene::incomplete() const noexcept {
+  return impl_->desc.incomplete;
+}
 const SceneDescription& Scene::description() const noexcept {
   return impl_->desc;
 }

@@ -128,6 +128,8 @@ class Scene {
   [[nodiscard]] std::span<const Material> materials() const noexcept;
   [[nodiscard]] std::span<const ObjectState> objects() const noexcept;
   [[nodiscard]] const GeoAnchor& anchor() const noexcept;
+  /// SceneDescription::incomplete of the database it was built from ("": whole).
+  [[nodiscard]] const std::string& incomplete() const noexcept;
   /// The description the scene was built from (bodies in body frames).
   [[nodiscard]] const SceneDescription& description() const noexcept;
   [[nodiscard]] std::size_t triangle_count() const noexcept;

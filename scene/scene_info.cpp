@@ -59,6 +59,7 @@ SceneInfo scene_info(const SceneDescription& d) {
   info.objects = d.objects.size();
   info.materials = d.materials.size();
   info.anchor = d.anchor;
+  info.incomplete = d.incomplete;
   std::vector<std::size_t> per_material(d.materials.size(), 0);
   std::size_t unknown_material = 0;
   std::map<int, std::size_t> per_level;

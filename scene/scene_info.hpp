@@ -41,6 +41,7 @@ struct SceneInfo {
   glm::dvec3 extent_min_m{0.0};
   glm::dvec3 extent_max_m{0.0};
   GeoAnchor anchor{};
+  std::string incomplete;  ///< SceneDescription::incomplete (empty: whole)
 };
 
 /// The kind of an object from its name (rule in SceneInfo::objects_by_kind).

@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "common/units.hpp"
@@ -639,6 +641,49 @@ std::string target_names() {
   for (const auto& [k, n] : kNames)
     s += (s.empty() ? "" : "|") + std::string(n);
   return s;
+}
+
+TargetKindSize target_kind_size(TargetKind k) noexcept {
+  using K = TargetKind;
+  using Size = std::array<double, 3>;
+  switch (k) {
+    case K::kSphere:
+      return {1, "[radius]", std::nullopt};
+    case K::kTrihedralSquare:
+    case K::kTrihedralTriangular:
+      return {1, "[edge]", std::nullopt};
+    case K::kPlate:
+      return {2, "[length x, width y]", std::nullopt};
+    case K::kDihedral:
+      return {2, "[fold length, face width]", std::nullopt};
+    case K::kCylinder:
+      return {2, "[radius, length]", std::nullopt};
+    case K::kBox:
+      return {3, "[length, width, height]", std::nullopt};
+    case K::kVehicle:
+      return {3, "[length, width, height]", Size{7.0, 3.5, 2.5}};
+    case K::kTruck:
+      return {3, "[length, width, height]", Size{8.0, 2.5, 3.4}};
+    case K::kJeep:
+      return {3, "[length, width, height]", Size{4.0, 1.8, 1.9}};
+    case K::kHelicopter:
+      return {3, "[length, rotor diameter, height]", Size{12.7, 14.6, 4.4}};
+    case K::kTransportAircraft:
+      return {3, "[length, wing span, height]", Size{37.6, 35.8, 11.8}};
+  }
+  return {3, "[a, b, c]", std::nullopt};
+}
+
+std::string target_size_text(const TargetSpec& spec) {
+  const TargetKindSize s = target_kind_size(spec.kind);
+  std::string text(target_name(spec.kind));
+  const double d[3] = {spec.a_m, spec.b_m, spec.c_m};
+  for (int i = 0; i < s.dims; ++i) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%s%g", i == 0 ? " " : " x ", d[i]);
+    text += buf;
+  }
+  return text + " m " + std::string(s.meaning);
 }
 
 SceneDescription make_target(const TargetSpec& t) {

@@ -45,6 +45,7 @@
 // sqrt(2) facet_m; 0: the coarsest mesh that is exact for flat targets, 32 segments around for
 // curved ones).
 
+#include <array>
 #include <optional>
 #include <span>
 #include <string>
@@ -79,6 +80,21 @@ struct TargetSpec {
   double c_m = 1.0;      ///< third dimension [m]
   double facet_m = 0.0;  ///< longest facet edge [m] (see above); 0: the kind's default
 };
+
+/// The dimensions a kind reads and its default size: the one table behind `radar-emu scene
+/// target KIND` (--a-m, --b-m, --c-m left out) and a scenario's `[[target]] builtin = KIND`
+/// (size_m left out). The vehicles and aircraft default to the example sizes above (a truck is
+/// 8 x 2.5 x 3.4 m); the canonical shapes have none (their size is the whole of their radar
+/// cross section): both refuse to guess it. Both print the size they used (target_size_text).
+struct TargetKindSize {
+  int dims = 3;                                    ///< 1 (a), 2 (a, b) or 3 (a, b, c)
+  std::string_view meaning;                        ///< "[length, width, height]", "[radius]", ...
+  std::optional<std::array<double, 3>> default_m;  ///< a, b, c [m]; none: to be given
+};
+[[nodiscard]] TargetKindSize target_kind_size(TargetKind kind) noexcept;
+/// "truck 8 x 2.5 x 3.4 m [length, width, height]": the kind, the dimensions it reads [m] and
+/// what they are, for the line both `scene target` and a scenario's setup print.
+[[nodiscard]] std::string target_size_text(const TargetSpec& spec);
 
 /// Names as on the command line: plate, dihedral, trihedral-square, trihedral-tri, sphere,
 /// cylinder, box, vehicle, truck, jeep, helicopter, transport_aircraft.

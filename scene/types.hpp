@@ -91,6 +91,9 @@ struct SceneDescription {
   std::vector<Material> materials;
   std::vector<ObjectDesc> objects;
   GeoAnchor anchor{};
+  /// Empty, or why the database is not whole ("import stopped by SIGINT: ..."): written to and
+  /// read from glTF (scene extras radar_emu.incomplete); loading such a scene warns.
+  std::string incomplete;
 };
 
 /// A ray in the world frame. Double precision in the API; scene/ converts for the tracer and

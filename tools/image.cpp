@@ -7,15 +7,19 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "common/units.hpp"
+#include "config/memory_limit.hpp"
 #include "config/output_paths.hpp"
+#include "config/progress.hpp"
 #include "loop/closed_loop.hpp"
 #include "loop/ownship.hpp"
 #include "plot/charts.hpp"
@@ -124,6 +128,10 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
   std::snprintf(title, sizeof title, "%.0f GHz radar, %d looks, %.0f dB range (top %.1f dBsm)",
                 p.carrier_hz * 1e-9, p.config.looks, kRangeDb, top_db);
   radar_map.title = title;
+  if (p.columns_done < im.columns) {
+    radar_map.title += ", INCOMPLETE: " + std::to_string(p.columns_done) + " of " +
+                       std::to_string(im.columns) + " columns";
+  }
   radar_map.value_label = "pixel [dBsm]";
   radar_map.grey = true;
   radar_map.value_max = top_db;
@@ -149,10 +157,55 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
   join_panels(panels).write_png(path);
 }
 
+// The strips of columns the image is formed in, and the estimate checked before any work.
+struct StripPlan {
+  int strip_columns = 8;
+  double bytes = 0.0;    ///< peak memory [bytes]
+  double seconds = 0.0;  ///< rough wall time on the reference machine
+  std::string what;      ///< "200 x 66 pixels, 10 looks, 25 strips of 8 columns, ..."
+};
+
+// Rates measured on the 2-core reference machine with examples/ev_radar_94ghz.toml, 200 x 66
+// pixels, 10 looks, optical scale 4: the trace (0.5 s, 300 k rays), forming per pixel and look
+// (3.3 s for 132 k, the terrain engine's patches), the optical preview per optical pixel (0.1 s
+// for 211 k). Rough: the forming scales with the terrain under the view, not only the pixels.
+constexpr double kImageTraceS = 0.5;
+constexpr double kImageFormSPerPixelLook = 2.5e-5;
+constexpr double kImageOpticalSPerPixel = 5e-7;
+
+StripPlan plan_strips(int columns, int rows, int looks, int optical_scale,
+                      std::size_t max_contributions) {
+  StripPlan plan;
+  // Blocks of 8 columns (the terrain engine's parallel unit): three a thread so that the threads
+  // stay busy to the strip's end, but no more than an eighth of the image (the progress and the
+  // stop's granularity), and no less than a 25th.
+  const auto threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  const int blocks = (columns + 7) / 8;
+  plan.strip_columns =
+      8 * std::max((blocks + 24) / 25, std::min(3 * threads, std::max(1, (blocks + 7) / 8)));
+  const double cells = static_cast<double>(columns) * rows;
+  const double strip_cells = static_cast<double>(std::min(plan.strip_columns, columns)) * rows;
+  const double optical = static_cast<double>(optical_scale) * optical_scale * cells;
+  // The contributions, the image (two float maps and the range edges), a strip's work (per
+  // pixel and look two complex fields and a look power, plus the mean maps), the optical preview
+  // (RGB and the renderer's per-pixel rays and hits).
+  plan.bytes = static_cast<double>(max_contributions) * sizeof(radar::Contribution) + cells * 16.0 +
+               strip_cells * (looks * 36.0 + 64.0) + optical * 32.0;
+  plan.seconds =
+      kImageTraceS + kImageFormSPerPixelLook * cells * looks + kImageOpticalSPerPixel * optical;
+  const int strips = (columns + plan.strip_columns - 1) / plan.strip_columns;
+  plan.what = std::to_string(columns) + " x " + std::to_string(rows) + " pixels, " +
+              std::to_string(looks) + " looks, " + std::to_string(strips) + " strips of " +
+              std::to_string(std::min(plan.strip_columns, columns)) + " columns, optical " +
+              std::to_string(columns * optical_scale) + " x " +
+              std::to_string(rows * optical_scale);
+  return plan;
+}
+
 }  // namespace
 
 EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std::uint64_t seed,
-                                int optical_scale) {
+                                int optical_scale, const common::WorkControl& control) {
   if (!std::isfinite(time_s) || time_s < 0.0)
     throw std::runtime_error("--time-s: must be finite and >= 0");
   if (looks < 1 || looks > 1000)
@@ -188,12 +241,26 @@ EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std
                   time_s, p.pose.position_m.z, g.ground_height_m);
     throw std::runtime_error(buf);
   }
+  int columns = 0, rows = 0;
   try {
-    (void)radar::ev_image_rows(g);
+    columns = radar::ev_image_columns(g);
+    rows = radar::ev_image_rows(g);
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(std::string("scenario [antenna]: ") + e.what());
   }
   p.weather_one_way_db_per_m = weather_db_per_m(s);
+  const StripPlan plan =
+      plan_strips(columns, rows, looks, optical_scale, tracer.max_contributions());
+  p.estimate_bytes = plan.bytes;
+  if (const auto over = config::over_memory_limit(plan.bytes, plan.what)) {
+    throw std::runtime_error("image: the EV image " + *over +
+                             ": fewer --looks, a smaller --optical-scale, or a coarser "
+                             "[antenna] azimuth_cell_deg");
+  }
+  control.tell_estimate(plan.what + ": memory about " + config::format_bytes(plan.bytes) +
+                        ", about " + config::format_duration(plan.seconds) +
+                        " (rough: scaled from examples/ev_radar_94ghz.toml on the "
+                        "2-core reference machine)");
 
   auto t = std::chrono::steady_clock::now();
   std::vector<radar::Contribution> contributions(tracer.max_contributions());
@@ -220,11 +287,63 @@ EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std
     p.terrain_engine = true;
     p.terrain_facets = engine->facets().size();
   }
-  p.image = radar::form_ev_image(contributions, p.pose, g, terrain);
+  // In strips of whole columns (each strip the same image as the whole would give there: the
+  // column grid, range edges and speckle streams do not depend on the strip), so that a stop
+  // request is heard between strips and the columns done are kept.
+  radar::EvImage& im = p.image;
+  im.columns = columns;
+  im.rows = rows;
+  const auto cells = static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows);
+  im.intensity_m2.assign(cells, 0.0f);
+  im.mean_m2.assign(cells, 0.0f);
+  im.range_edges_m.assign(static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows + 1),
+                          std::numeric_limits<double>::infinity());
+  std::uint64_t placed = 0;  // contributions in a strip's columns (used or counted there)
+  control.report(0, static_cast<std::size_t>(columns));
+  for (int c0 = 0; c0 < columns; c0 += plan.strip_columns) {
+    if ((p.stop_signal = control.stop_signal()) != 0)
+      break;
+    const int nc = std::min(plan.strip_columns, columns - c0);
+    radar::EvImageConfig strip = g;
+    strip.azimuth_min_rad = g.azimuth_min_rad + c0 * g.pixel_rad;
+    strip.azimuth_max_rad = g.azimuth_min_rad + (c0 + nc) * g.pixel_rad;
+    const radar::EvImage part = radar::form_ev_image(contributions, p.pose, strip, terrain);
+    if (part.columns != nc || part.rows != rows)
+      throw std::logic_error("image: a strip of " + std::to_string(nc) + " columns came out " +
+                             std::to_string(part.columns) + " x " + std::to_string(part.rows));
+    for (int r = 0; r < rows; ++r) {
+      const auto from = static_cast<std::size_t>(r) * static_cast<std::size_t>(nc);
+      const auto to = static_cast<std::size_t>(r) * static_cast<std::size_t>(columns) +
+                      static_cast<std::size_t>(c0);
+      std::copy_n(part.intensity_m2.begin() + static_cast<std::ptrdiff_t>(from), nc,
+                  im.intensity_m2.begin() + static_cast<std::ptrdiff_t>(to));
+      std::copy_n(part.mean_m2.begin() + static_cast<std::ptrdiff_t>(from), nc,
+                  im.mean_m2.begin() + static_cast<std::ptrdiff_t>(to));
+    }
+    std::copy(
+        part.range_edges_m.begin(), part.range_edges_m.end(),
+        im.range_edges_m.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(c0) *
+                                                               static_cast<std::size_t>(rows + 1)));
+    im.contributions_used += part.contributions_used;
+    im.nearer_than_field += part.nearer_than_field;
+    im.farther_than_field += part.farther_than_field;
+    im.no_ground += part.no_ground;
+    placed +=
+        part.contributions_used + part.nearer_than_field + part.farther_than_field + part.no_ground;
+    p.columns_done = c0 + nc;
+    control.report(static_cast<std::size_t>(p.columns_done), static_cast<std::size_t>(columns));
+  }
+  // Outside the field's azimuths: the contributions no strip placed (with the terrain engine,
+  // the tracer's diffuse returns are not considered).
+  std::uint64_t considered = 0;
+  for (const radar::Contribution& q : contributions)
+    considered += engine && !q.coherent ? 0u : 1u;
+  if (p.columns_done == columns)
+    im.outside_columns = considered - placed;
   p.terrain = terrain.stats;
   p.form_s = seconds_since(t);
 
-  if (optical_scale > 0) {
+  if (optical_scale > 0 && p.stop_signal == 0) {
     t = std::chrono::steady_clock::now();
     scene::AngularCamera cam;
     cam.position_m = p.pose.position_m;
@@ -248,7 +367,9 @@ int run_image_tool(const ImageToolOptions& o) {
                          : load_scenario(o.scenario);
   const std::filesystem::path dir(o.out_dir);
   check_output_dir(o.out_dir, "--out");
-  const EvImageProduct p = compute_ev_image(s, o.time_s, o.looks, o.seed, o.optical_scale);
+  const EvImageProduct p =
+      compute_ev_image(s, o.time_s, o.looks, o.seed, o.optical_scale, o.control);
+  const bool incomplete = p.columns_done < p.image.columns;
   std::filesystem::create_directories(dir);
   const radar::EvImage& im = p.image;
   const radar::EvImageConfig& g = p.config;
@@ -257,8 +378,9 @@ int run_image_tool(const ImageToolOptions& o) {
     f << "row,column,azimuth_deg,elevation_deg,range_near_m,range_far_m,intensity_dbsm,"
          "mean_dbsm\n";
     char line[200];
+    std::size_t written = 0;
     for (int r = 0; r < im.rows; ++r) {
-      for (int col = 0; col < im.columns; ++col) {
+      for (int col = 0; col < p.columns_done; ++col) {  // all of them unless stopped early
         const std::size_t i = static_cast<std::size_t>(r * im.columns + col);
         const double* e = im.range_edges_m.data() + static_cast<std::size_t>(col * (im.rows + 1));
         std::snprintf(line, sizeof line, "%d,%d,%.4f,%.4f,%.2f,%.2f,%.3f,%.3f\n", r, col,
@@ -267,7 +389,12 @@ int run_image_tool(const ImageToolOptions& o) {
                       db(static_cast<double>(im.intensity_m2[i])),
                       db(static_cast<double>(im.mean_m2[i])));
         f << line;
+        ++written;
       }
+    }
+    if (incomplete) {
+      f << "# incomplete: stopped by " << config::signal_name(p.stop_signal) << " after "
+        << p.columns_done << " of " << im.columns << " columns (" << written << " rows)\n";
     }
     if (!f)
       throw std::runtime_error((dir / "image.csv").string() + ": write failed");
@@ -312,6 +439,13 @@ int run_image_tool(const ImageToolOptions& o) {
                   {"patches_lit", p.terrain.patches_lit},
                   {"patches_shadowed", p.terrain.patches_shadowed},
                   {"budget_cut", p.terrain.budget_cut}};
+  j["incomplete"] = incomplete;
+  if (incomplete) {
+    j["stop_signal"] = config::signal_name(p.stop_signal);
+    j["columns_done"] = p.columns_done;
+    j["optical_preview"] = "not rendered (stopped)";
+  }
+  j["memory_estimate_bytes"] = p.estimate_bytes;
   j["timing_s"] = {
       {"trace", p.trace_s}, {"form", p.form_s}, {"optical", p.optical_s}, {"total", p.total_s}};
   {
@@ -322,6 +456,8 @@ int run_image_tool(const ImageToolOptions& o) {
   }
   if (o.plot)
     write_png(p, dir / "image.png");
+  if (incomplete)
+    return 128 + p.stop_signal;
   if (!o.quiet) {
     std::printf(
         "EV image %d x %d pixels of %.3g deg, %d looks (speckle seed %llu), ownship (%.1f, %.1f, "

@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <string>
 
+#include "common/work_control.hpp"
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/products/ev_image.hpp"
@@ -32,6 +33,9 @@ struct ImageToolOptions {
   std::string out_dir = "image";
   bool plot = false;
   bool quiet = false;
+  /// Progress in image columns, the estimate before the work, and the stop flag polled between
+  /// strips of columns (app/cmd_image.cpp draws and sets them).
+  common::WorkControl control;
 };
 
 /// Everything the image command computes, without I/O (tests and benchmarks call this).
@@ -51,17 +55,31 @@ struct EvImageProduct {
   radar::clutter::TerrainStats terrain{};
   std::size_t terrain_facets = 0;
   double trace_s = 0.0, form_s = 0.0, optical_s = 0.0, total_s = 0.0;  ///< wall times
+  /// Columns formed: image.columns unless a stop request ended the work early (the columns
+  /// [0, columns_done) are whole, the rest zero, and no optical preview is rendered).
+  int columns_done = 0;
+  int stop_signal = 0;          ///< 0, or the signal that stopped it
+  double estimate_bytes = 0.0;  ///< the memory estimate checked before the work [bytes]
 };
 
 /// Forms the image of `scenario` at `time_s` (ownship start + velocity t, the scenario's
-/// attitude and antenna depression). Terrain comes from the terrain engine, targets and metal
-/// structures (masts, lights) from the tracer's coherent returns. The reference ground plane is the
-/// first non-target surface straight below the antenna (0 when there is none). `optical_scale` 0:
-/// no optical preview. Throws std::runtime_error with context for a bad scenario or option.
+/// attitude and antenna depression), in strips of columns: `control` hears of the estimate
+/// (memory, and time scaled from the reference 2-core machine) before any large allocation, of
+/// the columns done after each strip, and its stop flag ends the work between strips. The memory
+/// estimate past config::memory_limit_bytes() (RADAR_EMU_MAX_MEMORY_MIB) is refused. Terrain comes
+/// from the terrain engine, targets and metal structures (masts, lights) from the tracer's coherent
+/// returns. The reference ground plane is the first non-target surface straight below the antenna
+/// (0 when there is none). `optical_scale` 0: no optical preview. Throws std::runtime_error with
+/// context for a bad scenario or option.
 [[nodiscard]] EvImageProduct compute_ev_image(const loop::Scenario& scenario, double time_s,
-                                              int looks, std::uint64_t seed, int optical_scale);
+                                              int looks, std::uint64_t seed, int optical_scale,
+                                              const common::WorkControl& control = {});
 
-/// Loads the scenario, computes, writes the outputs and prints a summary. Returns 0.
+/// Loads the scenario, computes, writes the outputs and prints a summary. Returns 0, or 128 +
+/// the signal when options.control's stop flag ended the work early: image.csv then holds the
+/// pixels of the columns done and ends "# incomplete: stopped by SIGINT after K of N columns (R
+/// rows)", image.json says "incomplete": true, "stop_signal" and "columns_done", image.png (with
+/// --plot) shows the columns done.
 int run_image_tool(const ImageToolOptions& options);
 
 }  // namespace radar_emu::tools

@@ -13,6 +13,7 @@
 
 #include "common/units.hpp"
 #include "config/cli_args.hpp"
+#include "config/memory_limit.hpp"
 #include "config/progress.hpp"
 #include "plot/charts.hpp"
 #include "radar/constants.hpp"
@@ -332,6 +333,13 @@ double sweep_mom(const RcsToolOptions& o, const std::optional<std::pair<double, 
                             "unknowns, where the near-pair integrals dominate), " +
                             std::to_string(nf) + " frequencies: about " +
                             config::format_duration(per_freq_s * static_cast<double>(nf)));
+    // The matrix (complex double, factored in place) is allocated at the first frequency.
+    if (const auto over = config::over_memory_limit(
+            16.0 * n * n, std::to_string(mi.unknowns) + " unknowns: the " +
+                              std::to_string(mi.unknowns) + "^2 complex matrix")) {
+      throw std::invalid_argument("--method mom: the method of moments " + *over +
+                                  ": a coarser mesh or a smaller target");
+    }
   }
   std::vector<radar::Direction> tx(nt * np), rx(nt * np);
   for (std::size_t it = 0; it < nt; ++it) {

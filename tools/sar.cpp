@@ -28,6 +28,7 @@
 
 #include "common/polarisation.hpp"
 #include "common/units.hpp"
+#include "config/memory_limit.hpp"
 #include "config/progress.hpp"
 #include "config/toml_reader.hpp"
 #include "loop/closed_loop.hpp"
@@ -621,16 +622,16 @@ int run_sar_tool(const SarToolOptions& o) {
   }
 
   // --- raw data: clutter cells, then the tracer's coherent returns per pulse.
-  rd::SarRaw raw = rd::make_raw(p);
   {
+    const auto samples = static_cast<double>(rd::sar_raw_samples(p));
     // Before the long part: the arrays (complex floats: the raw rows, the range-compressed gates
     // upsampled, the image) and a time scaled from the reference 2-core machine (rates of
     // docs/performance.md's SAR cases); the progress line then measures the real pace.
     const double pulses = static_cast<double>(p.pulses);
-    const double bytes = 8.0 * (pulses * static_cast<double>(raw.samples) +
-                                pulses * static_cast<double>(p.gates * c.upsample) +
-                                static_cast<double>(grid.rows * grid.cols)) +
-                         64.0 * static_cast<double>(cells.size());
+    const double bytes =
+        8.0 * (pulses * samples + pulses * static_cast<double>(p.gates * c.upsample) +
+               static_cast<double>(grid.rows * grid.cols)) +
+        64.0 * static_cast<double>(cells.size());
     const double raw_est_s = kSarClutterS * pulses * static_cast<double>(cells.size()) +
                              (c.targets.empty() && !c.database ? 0.0 : kSarTraceS * pulses);
     // Each pixel sums the pulses of its synthetic aperture, about far range x the synthetic
@@ -639,13 +640,23 @@ int run_sar_tool(const SarToolOptions& o) {
         std::min(pulses, far * c.theta_rad * p.prf_hz / std::max(c.speed_mps, 1e-3));
     const double bp_est_s =
         kSarBackprojectionS * static_cast<double>(grid.rows * grid.cols) * aperture_pulses;
-    o.control.tell_estimate(std::to_string(p.pulses) + " pulses x " + std::to_string(raw.samples) +
-                            " samples, image " + std::to_string(grid.rows) + " x " +
-                            std::to_string(grid.cols) + ": memory about " +
-                            config::format_bytes(bytes) + ", raw data about " +
+    o.control.tell_estimate(std::to_string(p.pulses) + " pulses x " +
+                            std::to_string(rd::sar_raw_samples(p)) + " samples, image " +
+                            std::to_string(grid.rows) + " x " + std::to_string(grid.cols) +
+                            ": memory about " + config::format_bytes(bytes) + ", raw data about " +
                             config::format_duration(raw_est_s) + ", backprojection about " +
                             config::format_duration(bp_est_s) + " (2-core reference machine)");
+    // Refused past the memory limit before the raw matrix is allocated.
+    if (const auto over = config::over_memory_limit(
+            bytes, std::to_string(p.pulses) + " pulses x " +
+                       std::to_string(rd::sar_raw_samples(p)) + " samples, image " +
+                       std::to_string(grid.rows) + " x " + std::to_string(grid.cols))) {
+      throw std::runtime_error("sar: " + *over +
+                               ": a shorter aperture (fewer pulses), a smaller image or a "
+                               "coarser pixel");
+    }
   }
+  rd::SarRaw raw = rd::make_raw(p);
   // Under mpirun the pulses split into one contiguous block a rank (docs/cluster.md): each rank
   // synthesises its rows exactly as one process would, rank 0 gathers them and alone forms the
   // image and writes. The clutter cells above are computed by every rank (setup, not split).

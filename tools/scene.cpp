@@ -94,6 +94,7 @@ int run_scene_gen(const SceneGenOptions& o) {
     throw std::invalid_argument("--out: '" + o.out + "' is not a .glb or .gltf file");
   const auto t0 = std::chrono::steady_clock::now();
   scene::SceneDescription desc;
+  o.control.report(0, 2);
   if (o.kind == "terrain") {
     scene::TerrainSpec spec;
     spec.seed = seed;
@@ -106,9 +107,14 @@ int run_scene_gen(const SceneGenOptions& o) {
     throw std::invalid_argument("unknown scene kind '" + o.kind + "' (known: terrain|airport)");
   }
   const double gen_s = seconds_since(t0);
+  o.control.report(1, 2);
   const auto t1 = std::chrono::steady_clock::now();
   scene::write_gltf(desc, out);
   const double write_s = seconds_since(t1);
+  // A stop heard during the generation or the writing: the database is whole, and written.
+  if (const int stopped = o.control.stop_signal(); stopped != 0)
+    return 128 + stopped;
+  o.control.report(2, 2);
   if (!o.quiet) {
     const scene::SceneInfo info = scene::scene_info(desc);
     std::string areas;
@@ -165,6 +171,8 @@ std::string scene_info_json(const scene::SceneInfo& info, const std::string& fil
   j["anchor_deg_m"] = {info.anchor.latitude_rad / common::kRadPerDeg,
                        info.anchor.longitude_rad / common::kRadPerDeg, info.anchor.height_m};
   j["load_warnings"] = load_warnings;
+  if (!info.incomplete.empty())
+    j["incomplete"] = info.incomplete;
   return j.dump(2) + "\n";
 }
 
@@ -173,6 +181,8 @@ std::string scene_info_text(const scene::SceneInfo& info, const std::string& fil
   std::ostringstream s;
   char line[256];
   s << "scene " << file << "\n";
+  if (!info.incomplete.empty())
+    s << "  INCOMPLETE        " << info.incomplete << "\n";
   std::snprintf(line, sizeof line, "  anchor            %.6f deg N, %.6f deg E, %.1f m\n",
                 info.anchor.latitude_rad / common::kRadPerDeg,
                 info.anchor.longitude_rad / common::kRadPerDeg, info.anchor.height_m);

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "common/work_control.hpp"
 #include "scene/scene_info.hpp"
 #include "scene/targets.hpp"
 
@@ -22,6 +23,9 @@ struct SceneGenOptions {
   std::string seed = "1";  ///< decimal 0 .. 2^64-1 (text, so that errors name --seed)
   std::string out;         ///< .glb (binary) or .gltf
   bool quiet = false;
+  /// Progress in stages (generate, write) and the stop flag, heard after the writing (each stage
+  /// takes about a second): the scene generated is written whole all the same.
+  common::WorkControl control;
 };
 
 struct SceneInfoOptions {
@@ -44,8 +48,10 @@ struct ScenePreviewOptions {
 /// "OPTION: 'TEXT' is not ...".
 [[nodiscard]] std::uint64_t parse_seed(const std::string& text, const std::string& option);
 
-/// Generates the database and writes it; prints counts and the time taken. Returns 0; throws on
-/// bad options (unknown kind, bad seed, output not .glb/.gltf) and I/O failure.
+/// Generates the database and writes it; prints counts and the time taken. Returns 0, or 128 +
+/// the signal when options.control's stop flag was raised meanwhile (the database, whole, is
+/// written first); throws on bad options (unknown kind, bad seed, output not
+/// .glb/.gltf) and I/O failure.
 int run_scene_gen(const SceneGenOptions& options);
 /// Loads the file and prints its summary (table, or with `json` one JSON object). Returns 0.
 int run_scene_info(const SceneInfoOptions& options);

@@ -49,7 +49,13 @@ int run_scene_import(const SceneImportOptions& o) {
   g.datum = o.datum;
   g.max_memory_bytes = static_cast<std::uint64_t>(o.max_memory_mib * 1048576.0);
   scene::geodata::ImportSpec spec = loop::import_spec(g);
-  spec.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  spec.progress = [&o](const std::string& line) {
+    if (o.control.note)
+      o.control.note(line + "\n");  // above the progress line
+    else
+      std::fprintf(stderr, "%s\n", line.c_str());
+  };
+  spec.control = o.control;
 
   const scene::geodata::ImportEstimate e = scene::geodata::estimate_import(spec);
   std::printf(
@@ -65,7 +71,7 @@ int run_scene_import(const SceneImportOptions& o) {
   scene::geodata::ImportReport report;
   const scene::SceneDescription d = scene::geodata::import_geodata(spec, report);
   const auto t0 = std::chrono::steady_clock::now();
-  std::fprintf(stderr, "import: writing %s\n", o.out.c_str());
+  spec.progress("import: writing " + o.out + (d.incomplete.empty() ? "" : " (incomplete)"));
   scene::write_gltf(d, o.out);
   const double write_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -73,10 +79,11 @@ int run_scene_import(const SceneImportOptions& o) {
     std::printf("%s", scene::geodata::report_text(report).c_str());
     std::error_code ec;
     const auto bytes = std::filesystem::file_size(o.out, ec);
-    std::printf("%s: %zu objects, written in %.2f s (%.1f MB)\n", o.out.c_str(), d.objects.size(),
-                write_s, ec ? 0.0 : static_cast<double>(bytes) / 1e6);
+    std::printf("%s: %zu objects, written in %.2f s (%.1f MB)%s%s\n", o.out.c_str(),
+                d.objects.size(), write_s, ec ? 0.0 : static_cast<double>(bytes) / 1e6,
+                d.incomplete.empty() ? "" : "; INCOMPLETE: ", d.incomplete.c_str());
   }
-  return 0;
+  return d.incomplete.empty() ? 0 : 128 + o.control.stop_signal();
 }
 
 #else

@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include "common/work_control.hpp"
+
 namespace radar_emu::tools {
 
 struct SceneImportOptions {
@@ -30,10 +32,16 @@ struct SceneImportOptions {
   std::string out;       ///< .glb / .gltf
   bool dry_run = false;  ///< estimate only
   bool quiet = false;
+  /// Progress in rows (height rows, then rows of tiles), the stage lines (note) and the stop
+  /// flag (app/cmd_scene.cpp draws and sets them).
+  common::WorkControl control;
 };
 
 /// Estimates, refuses past the memory limit, imports (progress on stderr), writes `out` and
-/// prints the report. Returns 0; throws on bad options, bad input, I/O failure.
+/// prints the report. Returns 0; throws on bad options, bad input, I/O failure. A stop request
+/// (options.control) ends the import with what is whole (scene/geodata/import.hpp): the scene is
+/// written all the same, marked incomplete (glTF scene extras radar_emu.incomplete, shown by
+/// `scene info` and warned of when loaded), and 128 + the signal is returned.
 int run_scene_import(const SceneImportOptions& options);
 
 }  // namespace radar_emu::tools

@@ -81,19 +81,27 @@ struct Row {
 
 class Log {
  public:
-  explicit Log(bool quiet) : quiet_(quiet) {}
+  /// Lines go through `control.note` (above the progress line) when it is set, else to stderr.
+  Log(bool quiet, const common::WorkControl& control) : quiet_(quiet), control_(control) {}
   __attribute__((format(printf, 2, 3))) void operator()(const char* format, ...) const {
     if (quiet_)
       return;
+    char buf[512];
     va_list args;
     va_start(args, format);
-    std::vfprintf(stderr, format, args);
+    std::vsnprintf(buf, sizeof buf, format, args);
     va_end(args);
-    std::fflush(stderr);
+    if (control_.note) {
+      control_.note(buf);
+    } else {
+      std::fputs(buf, stderr);
+      std::fflush(stderr);
+    }
   }
 
  private:
   bool quiet_;
+  const common::WorkControl& control_;
 };
 
 __attribute__((format(printf, 1, 2))) std::string fmt(const char* format, ...) {
@@ -909,7 +917,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir))
     throw std::runtime_error("--out: cannot create directory " + o.out_dir);
-  const Log log(o.quiet);
+  const Log log(o.quiet, o.control);
   auto has = [&](const char* c) { return std::find(cases.begin(), cases.end(), c) != cases.end(); };
   const auto t_start = Clock::now();
   std::vector<Row> rows;
@@ -928,6 +936,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
     return true;
   };
   auto case_done = [&] { o.control.report(++cases_done, cases.size()); };
+  o.control.report(0, cases.size());
   std::unique_ptr<Vehicle> vehicle;
   if (has("vehicle") || has("profile"))
     vehicle = std::make_unique<Vehicle>();

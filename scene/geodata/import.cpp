@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <limits>
 #include <optional>
@@ -44,6 +45,7 @@ struct Grid {
   std::vector<float> z_m;                // (nx + 1) (ny + 1) node heights, ENU
   std::vector<std::uint16_t> material;   // nx ny level-0 cell materials
   std::vector<std::int64_t> cell_class;  // nx ny land-cover class (or kNoClass)
+  int rows_sampled = 0;                  // node rows 0 .. rows_sampled - 1 have heights
 
   [[nodiscard]] double x(int i) const { return x0_m + cell_m * i; }
   [[nodiscard]] double y(int j) const { return y0_m + cell_m * j; }
@@ -226,14 +228,37 @@ void progress(const ImportSpec& s, const std::string& line) {
     s.progress(line);
 }
 
+std::string signal_text(int signal) {
+  return signal == SIGINT    ? "SIGINT"
+         : signal == SIGTERM ? "SIGTERM"
+                             : "signal " + std::to_string(signal);
+}
+
+// The import's rows of work (height-grid node rows, then rows of tiles) for the progress line,
+// and the stop flag polled between them.
+struct Steps {
+  const common::WorkControl& control;
+  std::size_t done = 0, total = 0;
+  int stopped = 0;  // the signal that stopped the import, 0 while it runs
+  bool stop() {
+    if (stopped == 0)
+      stopped = control.stop_signal();
+    return stopped != 0;
+  }
+  void step() { control.report(++done, total); }
+};
+
 // Node heights of a grid (two passes per node, see import.hpp).
 void sample_grid(Grid& g, const Heights& heights, const wgs84::EnuFrame& frame,
-                 const ImportSpec& spec, const char* label) {
+                 const ImportSpec& spec, const char* label, Steps& steps) {
   g.z_m.assign(sz(g.nx + 1) * sz(g.ny + 1), 0.0f);
+  g.rows_sampled = 0;
   const std::size_t n = static_cast<std::size_t>(g.nx) + 1;
   std::vector<double> lat(n), lon(n), h(n), col, row, z(n, 0.0);
   int next_report = 1;
   for (int j = 0; j <= g.ny; ++j) {
+    if (steps.stop())
+      return;
     std::fill(z.begin(), z.end(), 0.0);
     for (int pass = 0; pass < 2; ++pass) {
       for (int i = 0; i <= g.nx; ++i) {
@@ -256,6 +281,8 @@ void sample_grid(Grid& g, const Heights& heights, const wgs84::EnuFrame& frame,
     }
     for (int i = 0; i <= g.nx; ++i)
       g.z_m[g.node(i, j)] = static_cast<float>(z[sz(i)]);
+    g.rows_sampled = j + 1;
+    steps.step();
     if (j * 10 >= next_report * g.ny) {
       progress(spec, std::string("import: ") + label + " heights " +
                          std::to_string(next_report * 10) + " %");
@@ -324,9 +351,21 @@ void classify_grid(Grid& g, const GeoRaster* landcover, const ClassTable& table,
 }
 
 // Tiles of a grid as LOD objects.
-void build_tiles(const Grid& g, const ImportSpec& spec, const char* prefix, const char* area,
-                 std::int32_t& next_group, SceneDescription& d) {
+// Rows of tiles of a grid.
+int tile_rows(const Grid& g, const ImportSpec& spec) {
+  return (g.ny + spec.tile_cells - 1) / spec.tile_cells;
+}
+
+// The tiles of the grid's rows of tiles whose every node has its height (all of them unless the
+// import was stopped while sampling): meshing the heights is quick, so a stop heard later (while
+// the OpenStreetMap file is read) still keeps every height sampled. Returns the rows built.
+int build_tiles(const Grid& g, const ImportSpec& spec, const char* prefix, const char* area,
+                std::int32_t& next_group, SceneDescription& d, Steps& steps) {
+  int built = 0;
   for (int tj = 0; tj * spec.tile_cells < g.ny; ++tj) {
+    if (std::min(g.ny, (tj + 1) * spec.tile_cells) >= g.rows_sampled)
+      break;
+    ++built;
     for (int ti = 0; ti * spec.tile_cells < g.nx; ++ti) {
       const int i0 = ti * spec.tile_cells, i1 = std::min(g.nx, i0 + spec.tile_cells);
       const int j0 = tj * spec.tile_cells, j1 = std::min(g.ny, j0 + spec.tile_cells);
@@ -369,7 +408,9 @@ void build_tiles(const Grid& g, const ImportSpec& spec, const char* prefix, cons
           d.objects.push_back(std::move(o));
       }
     }
+    steps.step();
   }
+  return built;
 }
 
 // ---- OSM features -------------------------------------------------------------------------
@@ -869,12 +910,19 @@ SceneDescription import_geodata(const ImportSpec& spec, ImportReport& report) {
 
   // Grids: heights.
   Grid central = central_grid(spec);
-  sample_grid(central, central_heights, frame, spec, "central");
   std::optional<Grid> surround;
-  if (spec.surround_side_m > 0.0) {
+  if (spec.surround_side_m > 0.0)
     surround = surround_grid(spec, central);
+  Steps steps{spec.control};
+  for (const Grid* g : {&central, surround ? &*surround : nullptr}) {
+    if (g != nullptr)
+      steps.total += static_cast<std::size_t>(g->ny + 1 + tile_rows(*g, spec));
+  }
+  steps.control.report(0, steps.total);
+  sample_grid(central, central_heights, frame, spec, "central", steps);
+  if (surround) {
     sample_grid(*surround, surround_heights ? *surround_heights : central_heights, frame, spec,
-                "surround");
+                "surround", steps);
   }
 
   // Grids: land cover, then OSM areas over it.
@@ -894,7 +942,7 @@ SceneDescription import_geodata(const ImportSpec& spec, ImportReport& report) {
   Features features(spec, frame, central_heights, surround_heights ? &*surround_heights : nullptr,
                     terrain, materials, d, report);
   std::optional<OsmData> osm;
-  if (!spec.osm.empty()) {
+  if (!spec.osm.empty() && !steps.stop()) {
     progress(spec, "import: OpenStreetMap features");
     osm = read_osm(spec.osm);
     report.osm_broken_ways = osm->broken_ways;
@@ -968,9 +1016,37 @@ SceneDescription import_geodata(const ImportSpec& spec, ImportReport& report) {
 
   progress(spec, "import: tiles");
   std::int32_t group = 0;
-  build_tiles(central, spec, "terrain", "central", group, d);
-  if (surround)
-    build_tiles(*surround, spec, "surround", "surround", group, d);
+  const int central_rows = build_tiles(central, spec, "terrain", "central", group, d, steps);
+  const int surround_rows =
+      surround ? build_tiles(*surround, spec, "surround", "surround", group, d, steps) : 0;
+
+  if (steps.stop()) {
+    // What is whole is kept; the scene says what is missing (the glTF carries it).
+    std::ostringstream os;
+    os << "import stopped by " << signal_text(steps.stopped) << ": central " << central_rows
+       << " of " << tile_rows(central, spec) << " rows of tiles (heights of "
+       << central.rows_sampled << " of " << central.ny + 1 << " node rows)";
+    if (surround) {
+      os << ", surround " << surround_rows << " of " << tile_rows(*surround, spec)
+         << " rows of tiles (heights of " << surround->rows_sampled << " of " << surround->ny + 1
+         << " node rows)";
+    }
+    os << ", no OpenStreetMap features";
+    d.incomplete = os.str();
+    if (d.objects.empty()) {
+      // glTF needs a mesh: the anchor's ground cell stands for the empty terrain.
+      ObjectDesc o;
+      o.name = "terrain_stopped_before_any_tile";
+      o.area = "central";
+      const auto c = static_cast<float>(central.cell_m / 2.0);
+      o.mesh.positions_m = {{-c, -c, 0.0f}, {c, -c, 0.0f}, {c, c, 0.0f}, {-c, c, 0.0f}};
+      o.mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+      o.mesh.triangle_material = {default_material, default_material};
+      d.objects.push_back(std::move(o));
+    }
+    report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return d;
+  }
 
   if (osm) {
     for (const OsmWay& w : osm->ways)

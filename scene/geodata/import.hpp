@@ -60,6 +60,7 @@
 #include <string>
 #include <vector>
 
+#include "common/work_control.hpp"
 #include "scene/geodata/raster.hpp"
 #include "scene/types.hpp"
 
@@ -108,6 +109,12 @@ struct ImportSpec {
   std::uint64_t max_memory_bytes = 8ull << 30;
   /// Progress lines (stderr in the CLI); may be empty.
   std::function<void(const std::string&)> progress;
+  /// Progress in rows (the height grids' node rows, then the rows of tiles) and the stop flag,
+  /// polled between height rows and before the OpenStreetMap stages. A stop ends the import
+  /// with what is whole: the rows of tiles whose every node has its height, no OpenStreetMap
+  /// areas or features once stopped before them; SceneDescription::incomplete then says what is
+  /// missing. Empty: never stops early.
+  common::WorkControl control;
 };
 
 /// Size of the terrain before building it (exact for the grids; OSM features not included).

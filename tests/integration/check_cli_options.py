@@ -6,7 +6,8 @@ range (the message in the unit the option is given in), conflicting options, unk
 scenario keys and glTF extras, an output path that cannot be written (refused before any work:
 each row would otherwise run for minutes), a mesh past the memory limit (refused with its
 estimate). Each row of QUIET runs with -q and must exit 0 with the warning still on stderr and
-nothing on stdout (-q silences progress and the summary only).
+nothing on stdout (-q silences progress and the summary only). ISSUE32 is the table of every
+silent case issue 32 names, each now an error or a line the user sees.
 Usage: check_cli_options.py RADAR_EMU SOURCE_DIR WORK_DIR"""
 import json
 import os
@@ -38,7 +39,8 @@ mesh = os.path.join(d, "t.stl")
 sphere = os.path.join(d, "s.stl")
 for args in (["scene", "target", "trihedral-tri", "--a-m", "0.3", "--out", mesh],
              ["scene", "target", "sphere", "--a-m", "0.05", "--out", sphere],
-             ["scene", "target", "plate", "--out", os.path.join(d, "plate.gltf")]):
+             ["scene", "target", "plate", "--a-m", "1", "--b-m", "1", "--out",
+              os.path.join(d, "plate.gltf")]):
     r = radar_emu(*args)
     if r.returncode != 0:
         sys.exit(f"setup failed: {' '.join(args)}: {r.stderr}")
@@ -122,10 +124,12 @@ BAD = [
     (["replay", log, "--out", a_file + "/replay"], "cannot create the output directory"),
     (["replay", os.path.join(d, "nope.log")], "nope.log"),
     # scene target: dimensions a kind does not read, ranges, the memory limit, the output
-    (["scene", "target", "sphere", "--facet-m", "1e-4", "--out", os.path.join(d, "big.glb")],
+    (["scene", "target", "sphere", "--a-m", "1", "--facet-m", "1e-4", "--out",
+      os.path.join(d, "big.glb")],
      "a sphere would have about 3.95e+09 triangles (about 829 GB of memory), over the limit of "
      "2e+07 triangles (raise it with --max-triangles"),
-    (["scene", "target", "sphere", "--facet-m", "0.01", "--max-triangles", "1000", "--out",
+    (["scene", "target", "sphere", "--a-m", "1", "--facet-m", "0.01", "--max-triangles", "1000",
+      "--out",
       os.path.join(d, "s.glb")], "over the limit of 1e+03 triangles"),
     (["scene", "target", "sphere", "--max-triangles", "0", "--out", os.path.join(d, "s.glb")],
      "--max-triangles: 0 is outside [1, 1.4e+09] triangles"),
@@ -299,6 +303,82 @@ QUIET = [
      "radar-emu replay: warning: log starts at 1000000000.000000 s"),
 ]
 
+# Issue 32's silent surprises, each now a clear error (exit non-zero, the fragment in the one
+# "radar-emu: error:" line; an estimate line may come before it) or a line the user sees
+# (exit 0, the fragment on stdout or stderr). Rows: (the case as the issue names it, command
+# line, extra environment, "error" | "stdout" | "stderr", fragment).
+with open(os.path.join(d, "plate.gltf")) as f:
+    incomplete = json.load(f)
+incomplete["scenes"][0].setdefault("extras", {}).setdefault("radar_emu", {})["incomplete"] = \
+    "import stopped by SIGINT: test"
+incomplete_glb = write("incomplete.gltf", json.dumps(incomplete))
+sc32 = {k: write(k + ".toml", v) for k, v in {
+    "timeline": '[radar]\npulses = 6250\n',
+    "cube": '[run]\nrate_hz = 2.0\n[radar]\npulses = 512\n',
+    "truck": '[[target]]\nbuiltin = "truck"\nposition_enu_m = [60.0, 150.0, 0.0]\n',
+    "incomplete": f'[scene]\nfile = "{incomplete_glb}"\n',
+}.items()}
+small = {"RADAR_EMU_MAX_MEMORY_MIB": "100"}
+ISSUE32 = [
+    ("a radar timeline of 5 s per 50 ms frame was accepted and ran (7 GB)",
+     ["run", sc32["timeline"], "--frames", "1"], {}, "error",
+     "timeline.toml: [radar] pulses: the radar timeline, 16 beam positions x 6250 pulses x 0.05 ms "
+     "PRI = 5 s, is longer than the frame period 1 / [run] rate_hz 20 Hz = 50 ms"),
+    ("the sensor's cube allocated whatever its size",
+     ["run", sc32["cube"], "--frames", "1"], small, "error",
+     "cube.toml: [radar] pulses: the sensor needs about 492 MB of memory (16 beam positions x "
+     "1502 range bins x 512 pulses, about 40 B a cell for the range-Doppler maps and the CFAR), "
+     "over the limit of 105 MB (RADAR_EMU_MAX_MEMORY_MIB=100; set it higher to allow more)"),
+    ("the EV image's looks allocated whatever their size",
+     ["image", "--out", os.path.join(d, "im32")], small, "error",
+     "image: the EV image needs about 162 MB of memory (16 x 8 pixels, 10 looks"),
+    ("the MoM matrix allocated whatever its size",
+     ["rcs", "--mesh", sphere, "--method", "mom", "--freq-hz", "1e9", "--out",
+      os.path.join(d, "mom32.csv")], {"RADAR_EMU_MAX_MEMORY_MIB": "1"}, "error",
+     "--method mom: the method of moments needs about 33 MB of memory (1440 unknowns"),
+    ("a SAR run's raw data allocated whatever its size",
+     ["sar", write("sar32.toml", ""), "--out", os.path.join(d, "sar32")],
+     {"RADAR_EMU_MAX_MEMORY_MIB": "1"}, "error",
+     "sar: needs about 882 MB of memory (4021 pulses x 830 samples, image 1017 x 535)"),
+    ("a memory limit that is not a number",
+     ["image", "--out", os.path.join(d, "im32")], {"RADAR_EMU_MAX_MEMORY_MIB": "lots"}, "error",
+     "RADAR_EMU_MAX_MEMORY_MIB: 'lots' is not a number of MiB > 0"),
+    ("scene target made a canonical shape of a size nobody gave",
+     ["scene", "target", "sphere", "--out", os.path.join(d, "s32.stl")], {}, "error",
+     "--a-m: a sphere has no default size: give --a-m [radius] in metres"),
+    ("scene target truck wrote a 1 x 1 x 1 m truck and did not say its size",
+     ["scene", "target", "truck", "--out", os.path.join(d, "truck32.glb")], {}, "stdout",
+     "truck32.glb: truck 8 x 2.5 x 3.4 m [length, width, height], 436 triangles"),
+    ("[[target]] builtin = \"truck\" did not say its size",
+     ["run", sc32["truck"], "--frames", "1"], {}, "stdout",
+     "target target_1: truck 8 x 2.5 x 3.4 m [length, width, height]"),
+    ("a long command silent until its end (sar ran 3 minutes with nothing on stderr)",
+     ["image", "--out", os.path.join(d, "im32")], {}, "stderr",
+     "image: estimate: 16 x 8 pixels, 10 looks, 2 strips of 8 columns, optical 64 x 32: memory "
+     "about 162 MB"),
+    ("a scene whose import was stopped loaded as if whole",
+     ["run", sc32["incomplete"], "--frames", "1"], {}, "stderr",
+     "radar-emu: warning: " + incomplete_glb + ": an incomplete scene database (import stopped "
+     "by SIGINT: test)"),
+    ("scene info of a stopped import",
+     ["scene", "info", incomplete_glb], {}, "stdout",
+     "  INCOMPLETE        import stopped by SIGINT: test"),
+]
+
+for case, args, env, kind, fragment in ISSUE32:
+    r = subprocess.run([exe, *args], capture_output=True, text=True, timeout=300,
+                       env={**os.environ, **env})
+    what = f"{case}: radar-emu {' '.join(args)}"
+    if kind == "error":
+        errors = [l for l in r.stderr.splitlines() if l.startswith("radar-emu: error:")]
+        check(r.returncode != 0, f"{what}: exited 0")
+        check(len(errors) == 1 and fragment in errors[0],
+              f"{what}: one error line with {fragment!r}: {r.stderr!r}")
+    else:
+        check(r.returncode == 0, f"{what}: exited {r.returncode}: {r.stderr[-300:]!r}")
+        text = r.stdout if kind == "stdout" else r.stderr
+        check(fragment in text, f"{what}: {kind} lacks {fragment!r}: {text[-400:]!r}")
+
 for args, fragment in BAD:
     t0 = time.monotonic()
     r = radar_emu(*args)
@@ -317,5 +397,6 @@ for args, fragment in QUIET:
     check(fragment in r.stderr, f"{what}: -q hid the warning {fragment!r}: stderr {r.stderr!r}")
     check(r.stdout == "", f"{what}: -q printed on stdout: {r.stdout!r}")
 
-print(f"{len(BAD)} bad command lines refused, {len(QUIET)} warnings kept under -q")
+print(f"{len(BAD)} bad command lines refused, {len(QUIET)} warnings kept under -q, "
+      f"{len(ISSUE32)} silent cases of issue 32 now said")
 finish()

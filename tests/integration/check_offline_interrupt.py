@@ -20,7 +20,18 @@
    the finished CSV has no incomplete mark.
 5. `tradeoff --quick --cases sphere,grazing,iem`, SIGINT during the sphere case: status 130,
    the one line, tradeoff.csv holds the sphere rows only and ends "# incomplete: stopped by
-   SIGINT after 1 of 3 cases, before grazing (N rows)" with N its row count.
+   SIGINT after 1 of 3 cases, before grazing (N rows)" with N its row count. On a terminal its
+   progress line "tradeoff: 100 % (1/1 cases)" ends a short run, the case's lines above it.
+6. `image examples/ev_radar_94ghz.toml` (200 x 66 pixels) on a pseudo-terminal: the estimate
+   line, the progress line in columns; SIGINT once a strip of columns is done: status 130, the
+   one line "... after K of 200 columns; ...", image.csv holds the K x 66 pixels of columns
+   0..K-1 and ends "# incomplete: stopped by SIGINT after K of 200 columns (R rows)" with R its
+   row count, image.json says incomplete, SIGINT, columns_done K.
+7. `scene import` of the Olinda DEM at 4 m cells, SIGINT once the progress line passed 20 %:
+   status 130, the one line in rows, the glTF is written and marked (`scene info --json` shows
+   "incomplete" naming K of T rows of central tiles, K < T), and its central tiles are exactly
+   the rows terrain_r00 .. r(K-1). `scene gen terrain` on a terminal: SIGINT during the
+   generation leaves the whole scene written (it loads), status 130 and the one line.
 
 The moment to signal is read from the progress line itself, never guessed with a sleep.
 
@@ -95,10 +106,10 @@ def one_message(err, command):
     return lines
 
 
-# The mesh: the built-in truck (436 triangles), fast per direction.
+# The mesh: the built-in truck (436 triangles) scaled to 1 x 1 x 1 m, fast per direction.
 mesh = os.path.join(work, "truck.obj")
-subprocess.run([exe, "scene", "target", "truck", "--out", mesh], check=True,
-               stdout=subprocess.DEVNULL)
+subprocess.run([exe, "scene", "target", "truck", "--a-m", "1", "--b-m", "1", "--c-m", "1",
+                "--out", mesh], check=True, stdout=subprocess.DEVNULL)
 PROGRESS = re.compile(r"rcs: (\d+) % \((\d+)/3000 directions\), [\d.]+ s elapsed")
 
 
@@ -268,6 +279,90 @@ m = re.match(r"# incomplete: stopped by SIGINT after 1 of 3 cases, before grazin
 check(m is not None and int(m.group(1)) == len(rows) > 0,
       f"tradeoff.csv: the mark counts its {len(rows)} rows: {lines[-1]}")
 check(all(r.startswith("sphere,") for r in rows), "tradeoff.csv: the sphere case's rows only")
+
+# 5a: tradeoff's progress line on a terminal, the case's lines printed above it.
+code, err, _ = run_on_pty([exe, "tradeoff", "--quick", "--cases", "iem", "--out",
+                           os.path.join(work, "tradeoff_pty")])
+check(code == 0 and "tradeoff: 100 % (1/1 cases)" in err,
+      f"tradeoff on a terminal: the progress line reaches 100 %: {err[-300:]!r}")
+# Each case line starts a line of its own (the progress line blanked by "\r...\r" before it)
+# and ends one, the progress line drawn again below it.
+check(re.search(r"\r {10,}\r  iem \S+ ks [\d.]+: IEM [^\r\n]*\n\rtradeoff: \d+ %", err)
+      is not None, "tradeoff on a terminal: the case's lines above the progress line")
+
+# 6: image, stopped between strips of columns.
+img_out = os.path.join(work, "image_int")
+code, err, _ = run_on_pty(
+    [exe, "image", os.path.join(src, "examples", "ev_radar_94ghz.toml"), "--out", img_out],
+    lambda e: re.search(r"image: ([1-9]\d*) % \(\d+/200 columns\)", e) is not None)
+check(code == 130, f"image: exit status {code} (want 130)")
+check(re.search(r"image: estimate: 200 x 66 pixels, 10 looks, \d+ strips of \d+ columns, "
+                r"optical 800 x 264: memory about [\d.]+ [kMG]B, about", err) is not None,
+      "image: the estimate before the work")
+msgs = one_message(err, "image")
+m = re.match(r"radar-emu: image: interrupted by SIGINT after (\d+) of 200 columns; the columns "
+             r"done are in .*image.csv, marked incomplete", msgs[0] if len(msgs) == 1 else "")
+check(m is not None, f"image: one message with the columns: {msgs}")
+with open(os.path.join(img_out, "image.csv")) as f:
+    lines = f.read().splitlines()
+rows = [l for l in lines[1:] if not l.startswith("#")]
+mark = re.match(r"# incomplete: stopped by SIGINT after (\d+) of 200 columns \((\d+) rows\)$",
+                lines[-1])
+check(mark is not None and int(mark.group(2)) == len(rows), f"image.csv: the mark: {lines[-1]}")
+if m is not None and mark is not None:
+    k = int(m.group(1))
+    columns = {int(r.split(",")[1]) for r in rows}
+    check(int(mark.group(1)) == k and 0 < k < 200 and len(rows) == 66 * k and
+          columns == set(range(k)), f"image.csv: {len(rows)} rows = 66 x {k} columns 0..{k - 1}")
+    with open(os.path.join(img_out, "image.json")) as f:
+        meta = json.load(f)
+    check(meta.get("incomplete") is True and meta.get("stop_signal") == "SIGINT" and
+          meta.get("columns_done") == k, "image.json: incomplete, SIGINT, columns_done")
+
+# 7: scene import, stopped while sampling heights; scene gen stopped while generating.
+geo = os.path.join(src, "examples", "geodata")
+glb = os.path.join(work, "olinda_int.glb")
+PROG = re.compile(r"scene import: (\d+) % \(\d+/\d+ rows\)")
+code, err, _ = run_on_pty(
+    [exe, "scene", "import", "--dem", os.path.join(geo, "olinda_dem_utm25s.tif"), "--osm",
+     os.path.join(geo, "olinda_airstrip.osm"), "--anchor=-8.005,-34.878", "--central",
+     "4000,4000", "--cell-m", "4", "--surround-m", "7500", "--surround-cell-m", "45", "--out", glb],
+    lambda e: any(int(p) >= 20 for p in PROG.findall(e)))
+if code == 1 and "built without GDAL" in err:
+    print("skip scene import: this radar-emu was built without GDAL and PROJ")
+else:
+    check(code == 130, f"scene import: exit status {code} (want 130): {err[-300:]!r}")
+    msgs = one_message(err, "scene import")
+    check(len(msgs) == 1 and re.match(r"radar-emu: scene import: interrupted by SIGINT after "
+                                      r"\d+ of \d+ rows; the tiles done are in ", msgs[0]),
+          f"scene import: one message: {msgs}")
+    info = subprocess.run([exe, "scene", "info", "--json", glb], capture_output=True, text=True)
+    check(info.returncode == 0, f"scene info of the partial scene: {info.stderr}")
+    meta = json.loads(info.stdout) if info.returncode == 0 else {}
+    m = re.match(r"import stopped by SIGINT: central (\d+) of (\d+) rows of tiles",
+                 meta.get("incomplete", ""))
+    check(m is not None, f"scene info: the incomplete mark: {meta.get('incomplete')!r}")
+    if m is not None:
+        k, total = int(m.group(1)), int(m.group(2))
+        with open(glb, "rb") as f:
+            blob = f.read()
+        tile_rows = {int(x) for x in re.findall(rb"terrain_r(\d\d)_c\d\d_lod0", blob)}
+        check(k < total and tile_rows == set(range(k)),
+              f"scene import: central tiles of rows 0..{k - 1} only ({sorted(tile_rows)[-3:]}), "
+              f"{k} of {total}")
+gen = os.path.join(work, "terrain_int.glb")
+code, err, _ = run_on_pty([exe, "scene", "gen", "terrain", "--out", gen],
+                          lambda e: "scene gen: 0 % (0/2 stages)" in e)
+info = subprocess.run([exe, "scene", "info", "--json", gen], capture_output=True, text=True)
+check(info.returncode == 0 and "incomplete" not in json.loads(info.stdout or "{}"),
+      "scene gen: the scene written is whole and loads")
+if code == 0:
+    print("note: scene gen ended before the signal arrived (a fast machine); only the whole "
+          "scene was checked")
+else:
+    msgs = one_message(err, "scene gen")
+    check(code == 130 and len(msgs) == 1 and "the scene was generated whole and is written to"
+          in msgs[0], f"scene gen: status {code}, one message: {msgs}")
 
 if failures:
     print(f"{len(failures)} check(s) failed")

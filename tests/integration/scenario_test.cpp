@@ -179,7 +179,44 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
                 .find("test.toml: [radar] range_bins x pulses = 1502 x 65536 cells per beam "
                       "exceeds 16777216"),
             std::string::npos);
-  EXPECT_EQ(error_of("[radar]\npulses = 8192\n"), "");  // 12.3 M cells: allowed
+  // 12.3 M cells: allowed (in a frame long enough for the 6.55 s timeline, under a limit that
+  // admits its 7.9 GB whatever the machine's memory).
+  ASSERT_EQ(setenv("RADAR_EMU_MAX_MEMORY_MIB", "1000000", 1), 0);
+  EXPECT_EQ(error_of("[run]\nrate_hz = 0.1\n[radar]\npulses = 8192\n"), "");
+  ASSERT_EQ(unsetenv("RADAR_EMU_MAX_MEMORY_MIB"), 0);
+}
+
+// Issue 32: the radar's timeline, beam positions x pulses x PRI, must fit the frame period.
+// The default scan: 16 beam positions at 20 kHz (PRI 50 us) in 50 ms frames (20 Hz), so 62
+// pulses (49.6 ms) fit and 63 (50.4 ms) do not; 5 s per 50 ms frame (6250 pulses) was accepted.
+TEST(Scenario, RadarTimelineLongerThanTheFrameIsRefusedWithItsNumbers) {
+  EXPECT_EQ(error_of("[radar]\npulses = 62\n"), "");
+  EXPECT_EQ(
+      error_of("[radar]\npulses = 63\n"),
+      "test.toml: [radar] pulses: the radar timeline, 16 beam positions x 63 pulses x 0.05 ms "
+      "PRI = 50.4 ms, is longer than the frame period 1 / [run] rate_hz 20 Hz = 50 ms: fewer "
+      "pulses or beam positions, a higher prf_hz or a lower rate_hz");
+  EXPECT_EQ(error_of("[run]\nrate_hz = 19.0\n[radar]\npulses = 63\n"), "");  // 52.6 ms frames
+  EXPECT_NE(error_of("[radar]\npulses = 6250\n").find("= 5 s, is longer than the frame period"),
+            std::string::npos);
+}
+
+// Issue 32: the sensor's workspaces (one range-Doppler map a beam position, 40 B a cell) are
+// estimated before they are allocated and refused past the limit: 16 x 1502 x 512 cells x 40 B
+// = 492 175 360 B over 100 MiB = 104 857 600 B.
+TEST(Scenario, SensorMemoryPastTheLimitIsRefusedWithItsEstimate) {
+  ASSERT_EQ(setenv("RADAR_EMU_MAX_MEMORY_MIB", "100", 1), 0);
+  const std::string cube = "[run]\nrate_hz = 2.0\n[radar]\npulses = 512\n";
+  EXPECT_EQ(error_of(cube),
+            "test.toml: [radar] pulses: the sensor needs about 492 MB of memory (16 beam positions "
+            "x 1502 range bins x 512 pulses, about 40 B a cell for the range-Doppler maps and the "
+            "CFAR), over the limit of 105 MB (RADAR_EMU_MAX_MEMORY_MIB=100; set it higher to allow "
+            "more)");
+  ASSERT_EQ(setenv("RADAR_EMU_MAX_MEMORY_MIB", "470", 1), 0);  // 492.8 MB: just over
+  EXPECT_EQ(error_of(cube), "");
+  ASSERT_EQ(setenv("RADAR_EMU_MAX_MEMORY_MIB", "-5", 1), 0);
+  EXPECT_EQ(error_of(cube), "RADAR_EMU_MAX_MEMORY_MIB: '-5' is not a number of MiB > 0");
+  ASSERT_EQ(unsetenv("RADAR_EMU_MAX_MEMORY_MIB"), 0);
 }
 
 TEST(Scenario, MissingFileNamesThePath) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <filesystem>
@@ -129,6 +130,27 @@ glm::dvec3 world(const sc::ObjectDesc& o, glm::vec3 body) {
 }
 
 }  // namespace
+
+// A scene whose import was stopped (issue 32) says so in its scene extras: the mark survives the
+// round trip and loading it warns, naming the file.
+TEST(Gltf, IncompleteMarkRoundTripsAndWarnsOnLoad) {
+  sc::SceneDescription d = sc::default_scene();
+  d.incomplete = "import stopped by SIGINT: central 4 of 16 rows of tiles";
+  const fs::path p = tmp("partial.glb");
+  sc::write_gltf(d, p);
+  std::vector<std::string> warnings;
+  const sc::SceneDescription r = sc::load_gltf(p, &warnings);
+  EXPECT_EQ(r.incomplete, d.incomplete);
+  EXPECT_NE(std::find(warnings.begin(), warnings.end(),
+                      p.string() + ": an incomplete scene: " + d.incomplete),
+            warnings.end());
+  const fs::path whole = tmp("whole.glb");
+  sc::write_gltf(sc::default_scene(), whole);
+  warnings.clear();
+  EXPECT_TRUE(sc::load_gltf(whole, &warnings).incomplete.empty());
+  for (const std::string& w : warnings)
+    EXPECT_EQ(w.find("incomplete"), std::string::npos) << w;
+}
 
 TEST(Gltf, HandEncodedFixtureLoadsInEnu) {
   const fs::path p = write_fixture("fixture.gltf", make_fixture());
@@ -356,8 +378,9 @@ TEST(Gltf, UnknownRadarEmuExtrasKeysAreErrorsNamingTheKey) {
                    "material 0 extras radar_emu: unknown key 'material' (known: radar_material)");
   j = make_fixture();
   j["scenes"][0]["extras"] = json::parse(R"({"radar_emu": {"anchor_deg": [43, 1, 0]}})");
-  expect_key_error(j, "unknown_scene_key.gltf",
-                   "scene 0 extras radar_emu: unknown key 'anchor_deg' (known: anchor_deg_m)");
+  expect_key_error(
+      j, "unknown_scene_key.gltf",
+      "scene 0 extras radar_emu: unknown key 'anchor_deg' (known: anchor_deg_m, incomplete)");
   j = make_fixture();
   j["nodes"][0]["extras"] = json::parse(R"({"radar_emu": [1, 2]})");
   expect_key_error(j, "radar_emu_not_object.gltf", "node 0 extras radar_emu must be an object");
