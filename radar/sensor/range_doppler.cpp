@@ -359,6 +359,45 @@ void RangeDopplerProcessor::synthesize_cube(std::span<const PointScatterer> scat
   }
 }
 
+std::size_t RangeDopplerProcessor::echo(const PointScatterer& s,
+                                        std::span<std::complex<double>> fast, std::size_t& first,
+                                        std::span<std::complex<double>> slow) const noexcept {
+  first = 0;
+  if (slow.size() < n_pulses_ || fast.empty() ||
+      !position_of(s.range_m, s.radial_velocity_mps).in_swath)
+    return 0;
+  const double fd = -2.0 * s.radial_velocity_mps / lambda_m_;
+  for (std::size_t m = 0; m < n_pulses_; ++m) {
+    const double tm = (static_cast<double>(m) - 0.5 * static_cast<double>(n_pulses_ - 1)) * pri_s_;
+    slow[m] = s.amplitude * std::polar(1.0, 2.0 * kPi * fd * tm);
+  }
+  const double tau = 2.0 * s.range_m / kSpeedOfLight_mps;
+  std::size_t count = 0;
+  if (pulsed_) {
+    // As synthesize_cube: samples at t0 + (n + 1/2) / fs inside the pulse [tau, tau + T).
+    const double t_pulse = config_.waveform.pulse_width_s;
+    const double t0 = 2.0 * first_range_m_ / kSpeedOfLight_mps;
+    const double tau_f = std::fmod(tau, pri_s_);
+    const double n_lo = std::ceil((tau_f - t0) * fs_hz_ - 0.5) - 1.0;
+    for (auto n = static_cast<std::size_t>(std::max(0.0, n_lo)); n < n_fast_; ++n) {
+      const double te = t0 + (static_cast<double>(n) + 0.5) / fs_hz_ - tau_f;
+      if (te < 0.0)
+        continue;
+      if (te >= t_pulse || count >= fast.size())
+        break;
+      if (count == 0)
+        first = n;
+      const double x = te - 0.5 * t_pulse;
+      fast[count++] = std::polar(1.0, kPi * chirp_rate_ * x * x + 2.0 * kPi * fd * x);
+    }
+    return count;
+  }
+  const double f_beat = fd - chirp_rate_ * tau;
+  for (std::size_t n = 0; n < n_fast_ && count < fast.size(); ++n)
+    fast[count++] = std::polar(1.0, 2.0 * kPi * f_beat * static_cast<double>(n) / fs_hz_);
+  return count;
+}
+
 void RangeDopplerProcessor::process_cube(std::span<const std::complex<double>> cube,
                                          std::span<std::complex<double>> image) noexcept {
   if (cube.size() < cube_samples() || image.size() < image_cells())

@@ -78,6 +78,10 @@ class RangeDopplerProcessor {
   [[nodiscard]] std::size_t cube_fast_samples() const noexcept { return n_fast_; }
   [[nodiscard]] std::size_t cube_samples() const noexcept { return n_fast_ * n_pulses_; }
 
+  /// The range taper (the matched filter's reference weights, pulsed; the beat samples', FMCW)
+  /// and the Doppler taper (one weight a pulse), as the processing applies them.
+  [[nodiscard]] std::span<const double> range_weights() const noexcept { return w_range_; }
+  [[nodiscard]] std::span<const double> doppler_weights() const noexcept { return w_doppler_; }
   [[nodiscard]] double range_of_bin(double bin) const noexcept;
   [[nodiscard]] double velocity_of_bin(double bin) const noexcept;
   /// Peak SNR gain of the processing for an on-grid scatterer: |peak|^2 / |a|^2 =
@@ -89,6 +93,14 @@ class RangeDopplerProcessor {
   /// Exact path, step 1: adds the scatterers' echoes to a raw cube [pulse][fast sample].
   void synthesize_cube(std::span<const PointScatterer> scatterers,
                        std::span<std::complex<double>> cube) const noexcept;
+  /// Exact path, separable: one scatterer's echo as the fast-time samples of a pulse (`fast`,
+  /// the samples from `first` on that the echo reaches) times one complex factor a pulse
+  /// (`slow`, velocity_bins() values: the amplitude and the Doppler phase), the delay taken at
+  /// the centre of the CPI (the range walk neglected, as the direct path does). Returns the
+  /// number of fast samples written (0: outside the swath or `slow` too short); at most
+  /// fast.size(). Real-time safe.
+  std::size_t echo(const PointScatterer& s, std::span<std::complex<double>> fast,
+                   std::size_t& first, std::span<std::complex<double>> slow) const noexcept;
   /// Exact path, step 2: range compression and Doppler FFT of a raw cube into an image. Uses this
   /// object's scratch buffers: one call at a time per object. Real-time safe.
   void process_cube(std::span<const std::complex<double>> cube,
