@@ -244,7 +244,11 @@ CubeWriter::CubeWriter(CubeWriterConfig config) : config_(std::move(config)) {
 
   // Slots and the writer's buffers: everything the frames need, now.
   const std::size_t beams = shape_.beams;
-  for (std::size_t i = 0; i < std::max<std::size_t>(config_.slots, 1); ++i) {
+  const std::size_t n_slots = config_.slots > 0 ? config_.slots
+                              : config_.wait_when_full
+                                  ? 2
+                                  : static_cast<std::size_t>(std::min<std::uint64_t>(n_frames, 4));
+  for (std::size_t i = 0; i < n_slots; ++i) {
     auto s = std::make_unique<Slot>();
     s->image.resize(shape_.image_values());
     s->power.resize(shape_.image_values());
@@ -262,7 +266,7 @@ CubeWriter::CubeWriter(CubeWriterConfig config) : config_(std::move(config)) {
     slots_.push_back(std::move(s));
   }
   raw_.resize(shape_.raw_values());
-  scratch_.resize(sensor.raw_scratch_size());
+  raw_workspace_ = sensor.make_raw_workspace();
   written_frames_.reserve(n_frames);
   writer_ = std::thread([this] { writer_main(); });
 }
@@ -335,7 +339,7 @@ void CubeWriter::writer_main() noexcept {
 void CubeWriter::write_slot(Slot& s) noexcept {
   const radar::Sensor& sensor = *config_.sensor;
   sensor.complete_image(s.capture);
-  sensor.synthesise_raw(s.capture, raw_, scratch_);
+  sensor.synthesise_raw(s.capture, raw_, *raw_workspace_);
   written_.capture_dropped += s.capture.dropped;
   Hdf5& h = *h5_;
   const std::uint64_t index = s.record.frame_index;

@@ -38,7 +38,10 @@ struct CubeWriterConfig {
   std::uint64_t run_frames = 1;           ///< the run's frames: the range is clipped to them
   const radar::Sensor* sensor = nullptr;  ///< must outlive the writer
   std::string scenario_name;
-  std::size_t slots = 2;       ///< frames in flight between the frame thread and the writer
+  /// Frames in flight between the frame thread and the writer: 0 picks 2 on the simulated
+  /// clock (the loop waits), and in real time one a frame of the range up to 4 (a captured
+  /// frame costs the writer a few frame periods; more frames than slots may be dropped).
+  std::size_t slots = 0;
   bool wait_when_full = true;  ///< simulated clock: wait for a slot; real time: drop, count
   std::size_t max_returns = std::size_t{1} << 17;  ///< per frame (beyond: counted, not in raw)
   std::size_t max_false_alarms_per_beam = 256;
@@ -106,7 +109,7 @@ class CubeWriter {
   Slot* armed_ = nullptr;       ///< frame thread: the slot of the frame in flight
   // The writer's own buffers (allocated at setup).
   std::vector<std::complex<float>> raw_;
-  std::vector<std::complex<double>> scratch_;
+  std::unique_ptr<radar::Sensor::RawWorkspace> raw_workspace_;
   std::vector<std::uint64_t> written_frames_;
   std::atomic<std::uint32_t> wake_{0};  ///< bumped (and notified) when a slot is ready or on stop
   std::atomic<bool> stop_{false};

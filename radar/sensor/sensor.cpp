@@ -40,6 +40,8 @@ constexpr std::uint64_t kChannelSum = 0, kChannelDeltaAz = 1, kChannelDeltaEl = 
 // image's cells the sensor did not synthesise, the speckle of diffuse returns in the raw samples,
 // and the raw samples' receiver noise (one stream per channel from kChannelRawNoise on).
 constexpr std::uint64_t kChannelFileNoise = 5, kChannelRawSpeckle = 6, kChannelRawNoise = 7;
+// The raw samples of a diffuse return: points across its range extent, one a half bin, at most.
+constexpr int kRawPointsPerDiffuse = 4;
 
 // Spans of `in` widened by mr range bins and mv velocity rows (wrapping), one bounding span a
 // row, clipped to nr bins.
@@ -877,9 +879,17 @@ CaptureShape Sensor::capture_shape() const noexcept {
   return shape;
 }
 
-std::size_t Sensor::raw_scratch_size() const noexcept {
-  const RangeDopplerProcessor& proc = *processor_;
-  return antenna_.beams() * (proc.cube_fast_samples() + proc.velocity_bins());
+std::unique_ptr<Sensor::RawWorkspace> Sensor::make_raw_workspace() const {
+  const CaptureShape shape = capture_shape();
+  auto ws = std::make_unique<RawWorkspace>();
+  const std::size_t n =
+      std::clamp<std::size_t>(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1,
+                              std::min<std::size_t>(shape.beams, 4));
+  for (std::size_t w = 0; w < n; ++w)
+    ws->synthesisers.push_back(
+        std::make_unique<RangeDopplerProcessor::RawSynthesiser>(*processor_, shape.channels));
+  ws->scratch.resize(n * (shape.fast_samples + shape.pulses));
+  return ws;
 }
 
 void Sensor::capture_beam(std::size_t beam, const Workspace& ws, std::size_t n_alarms) noexcept {
@@ -949,58 +959,79 @@ void Sensor::complete_image(SensorCapture& c) const noexcept {
 }
 
 void Sensor::synthesise_raw(const SensorCapture& c, std::span<std::complex<float>> raw,
-                            std::span<std::complex<double>> scratch) const noexcept {
+                            RawWorkspace& ws) const noexcept {
   const CaptureShape shape = capture_shape();
-  if (!c.filled || raw.size() < shape.raw_values() || scratch.size() < raw_scratch_size())
+  const std::size_t n_workers = ws.synthesisers.size();
+  if (!c.filled || raw.size() < shape.raw_values() || n_workers == 0 ||
+      ws.scratch.size() < n_workers * (shape.fast_samples + shape.pulses))
     return;
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t nf = shape.fast_samples, np = shape.pulses, nc = shape.channels;
   const double bin_m = range_cell_m();
   const std::uint64_t seed = config_.noise_seed;
-  // Beams are independent (each has its own slice of `raw` and `scratch`).
-  tbb::parallel_for(std::size_t{0}, shape.beams, [&](std::size_t b) {
-    std::complex<float>* cube = raw.data() + b * nc * np * nf;
-    std::fill(cube, cube + nc * np * nf, std::complex<float>{0.0f, 0.0f});
-    const std::span<std::complex<double>> fast = scratch.subspan(b * (nf + np), nf);
-    const std::span<std::complex<double>> slow = scratch.subspan(b * (nf + np) + nf, np);
-    for (std::size_t i = 0; i < c.return_count && i < c.returns.size(); ++i) {
-      const CapturedReturn& r = c.returns[i];
-      Gains g;
-      if (!gains_at(r.azimuth_rad, r.sum_el, r.delta_el, b, g))
-        continue;
-      const double gains[3] = {g.sum, g.daz, g.del};
-      // A diffuse return: points across its range extent, each an independent complex Gaussian
-      // of an equal share of its mean power (the same draws in every beam: one patch).
-      const int n_sub =
-          r.coherent ? 1 : std::clamp(static_cast<int>(std::ceil(2.0 * r.half_bins)), 1, 8);
-      for (int sub = 0; sub < n_sub; ++sub) {
-        PointScatterer p{r.amplitude, r.range_m, r.radial_velocity_mps};
-        if (!r.coherent) {
-          NoiseRng rng(stream_key(seed, c.noise_frame, kChannelRawSpeckle, i,
-                                  static_cast<std::uint64_t>(sub)));
-          p.amplitude *= rng.complex_normal() / std::sqrt(static_cast<double>(n_sub));
-          p.range_m += ((sub + 0.5) / static_cast<double>(n_sub) - 0.5) * 2.0 * r.half_bins * bin_m;
-        }
-        std::size_t first = 0;
-        const std::size_t n = proc.echo(p, fast, first, slow);
-        for (std::size_t ch = 0; ch < nc; ++ch) {
-          for (std::size_t m = 0; m < np && n > 0; ++m) {
-            const std::complex<double> f = slow[m] * gains[ch];
-            std::complex<float>* row = cube + (ch * np + m) * nf + first;
-            for (std::size_t k = 0; k < n && first + k < nf; ++k)
-              row[k] += std::complex<float>(f * fast[k]);
+  // Worker w synthesises beams w, w + W, ... into their own slices of `raw`.
+  tbb::parallel_for(std::size_t{0}, n_workers, [&](std::size_t w) {
+    RangeDopplerProcessor::RawSynthesiser& synth = *ws.synthesisers[w];
+    const std::span<std::complex<double>> fast = std::span(ws.scratch).subspan(w * (nf + np), nf);
+    const std::span<std::complex<double>> slow =
+        std::span(ws.scratch).subspan(w * (nf + np) + nf, np);
+    for (std::size_t b = w; b < shape.beams; b += n_workers) {
+      std::complex<float>* cube = raw.data() + b * nc * np * nf;
+      std::fill(cube, cube + nc * np * nf, std::complex<float>{0.0f, 0.0f});
+      synth.clear();
+      for (std::size_t i = 0; i < c.return_count && i < c.returns.size(); ++i) {
+        const CapturedReturn& r = c.returns[i];
+        Gains g;
+        if (!gains_at(r.azimuth_rad, r.sum_el, r.delta_el, b, g))
+          continue;
+        const double gains[3] = {g.sum, g.daz, g.del};
+        // A diffuse return: points across its range extent, each an independent complex
+        // Gaussian of an equal share of its mean power (the same draws in every beam: one
+        // patch).
+        const int n_sub = r.coherent ? 1
+                                     : std::clamp(static_cast<int>(std::ceil(2.0 * r.half_bins)), 1,
+                                                  kRawPointsPerDiffuse);
+        for (int sub = 0; sub < n_sub; ++sub) {
+          PointScatterer p{r.amplitude, r.range_m, r.radial_velocity_mps};
+          if (!r.coherent) {
+            NoiseRng rng(stream_key(seed, c.noise_frame, kChannelRawSpeckle, i,
+                                    static_cast<std::uint64_t>(sub)));
+            p.amplitude *= rng.complex_normal() / std::sqrt(static_cast<double>(n_sub));
+            p.range_m +=
+                ((sub + 0.5) / static_cast<double>(n_sub) - 0.5) * 2.0 * r.half_bins * bin_m;
+          }
+          if (synth.supported()) {
+            synth.add(p, std::span<const double>(gains, nc));
+            continue;
+          }
+          std::size_t first = 0;
+          const std::size_t n = proc.echo(p, fast, first, slow);
+          const std::size_t len = std::min(n, nf - std::min(first, nf));
+          for (std::size_t ch = 0; ch < nc; ++ch) {
+            for (std::size_t m = 0; m < np && len > 0; ++m) {
+              // The outer product slow x fast, written out (no complex-multiply NaN branches).
+              const double fr = slow[m].real() * gains[ch], fi = slow[m].imag() * gains[ch];
+              std::complex<float>* row = cube + (ch * np + m) * nf + first;
+              for (std::size_t k = 0; k < len; ++k) {
+                const double xr = fast[k].real(), xi = fast[k].imag();
+                row[k] = {row[k].real() + static_cast<float>(fr * xr - fi * xi),
+                          row[k].imag() + static_cast<float>(fr * xi + fi * xr)};
+              }
+            }
           }
         }
       }
-    }
-    if (!config_.thermal_noise)
-      return;
-    for (std::size_t ch = 0; ch < nc; ++ch) {
-      for (std::size_t m = 0; m < np; ++m) {
-        NoiseRng rng(stream_key(seed, c.noise_frame, kChannelRawNoise + ch, b, m));
-        std::complex<float>* row = cube + (ch * np + m) * nf;
-        for (std::size_t n = 0; n < nf; ++n)
-          row[n] += std::complex<float>(rng.complex_normal());
+      if (synth.supported())
+        synth.render(std::span(cube, nc * np * nf));
+      if (!config_.thermal_noise)
+        continue;
+      for (std::size_t ch = 0; ch < nc; ++ch) {
+        for (std::size_t m = 0; m < np; ++m) {
+          NoiseRng rng(stream_key(seed, c.noise_frame, kChannelRawNoise + ch, b, m));
+          std::complex<float>* row = cube + (ch * np + m) * nf;
+          for (std::size_t n = 0; n < nf; ++n)
+            row[n] += std::complex<float>(rng.complex_normal());
+        }
       }
     }
   });

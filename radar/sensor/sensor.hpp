@@ -167,16 +167,22 @@ class Sensor {
   /// false alarms the sensor drew there (with their neighbours) get the powers it drew.
   /// Thread-safe against process() (reads setup state only); no allocation.
   void complete_image(SensorCapture& capture) const noexcept;
+  /// What synthesise_raw() works in: one synthesiser and scratch per thread it uses.
+  struct RawWorkspace {
+    std::vector<std::unique_ptr<RangeDopplerProcessor::RawSynthesiser>> synthesisers;
+    std::vector<std::complex<double>> scratch;  ///< FMCW: fast + slow values per thread
+  };
+  /// Setup for synthesise_raw(): allocates and plans (throws on failure).
+  [[nodiscard]] std::unique_ptr<RawWorkspace> make_raw_workspace() const;
   /// The raw samples of the frame `capture` holds: [beam][channel][pulse][fast sample]
   /// (capture_shape().raw_values()), in units of the receiver noise's standard deviation of one
-  /// fast-time sample. Every return is synthesised sample by sample (the exact path,
-  /// RangeDopplerProcessor::echo) with its beam's channel gains; a diffuse return as up to 8
-  /// points across its range extent with complex Gaussian amplitudes; plus receiver noise of
-  /// unit variance, drawn for the file. `scratch`: raw_scratch_size() values. Thread-safe
-  /// against process(); no allocation.
+  /// fast-time sample. Every return with its beam's channel gains (pulsed LFM: through
+  /// RangeDopplerProcessor::RawSynthesiser, delays to 1/8 sample; FMCW: sample by sample,
+  /// RangeDopplerProcessor::echo); a diffuse return as up to 4 points across its range extent
+  /// with complex Gaussian amplitudes; plus receiver noise of unit variance, drawn for the file.
+  /// Thread-safe against process(); no allocation.
   void synthesise_raw(const SensorCapture& capture, std::span<std::complex<float>> raw,
-                      std::span<std::complex<double>> scratch) const noexcept;
-  [[nodiscard]] std::size_t raw_scratch_size() const noexcept;
+                      RawWorkspace& workspace) const noexcept;
   [[nodiscard]] const SensorConfig& config() const noexcept { return config_; }
   [[nodiscard]] const Antenna& antenna() const noexcept { return antenna_; }
   [[nodiscard]] const RangeDopplerProcessor& processor() const noexcept { return *processor_; }
