@@ -2,6 +2,7 @@
 // Run: build/bench/bench_frame --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
 #include <complex>
 #include <cstdint>
@@ -196,30 +197,39 @@ struct CaptureStorage {
   radar::SensorCapture capture;
 };
 
-// The frame path's share of a captured frame: the sensor on the traced runway frame without (0)
-// and with (1) a capture armed (it copies the synthesised cells, the drawn false alarms and the
-// returns into the slot; the rest is the writer's, below).
+// The frame path's share of a captured frame, on one thread (so that CPU time counts all the
+// work): the traced runway frame through the sensor (argument 0, 1) or traced and sensed (2, 3),
+// without (0, 2) and with (1, 3) a capture armed. The sensor then copies its synthesised cells,
+// drawn false alarms and returns into the slot; the rest is the writer's (BM_CubeCompletion).
 void BM_SensorCapture(benchmark::State& state) {
+  const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Fixture& f = fixture();
   radar::TraceStats ts;
-  const std::size_t n = f.tracer.trace(f.pose, f.contributions, ts);
+  std::size_t n = f.tracer.trace(f.pose, f.contributions, ts);
   radar::Sensor sensor(f.s.sensor);
   CaptureStorage storage(sensor);
   radar::SensorStats ss;
+  const bool capture = state.range(0) % 2 == 1, trace = state.range(0) >= 2;
   for (auto _ : state) {
     ss = {};
-    if (state.range(0) == 1)
+    if (trace) {
+      ts = {};
+      n = f.tracer.trace(f.pose, f.contributions, ts);
+    }
+    if (capture)
       sensor.capture_next(&storage.capture);
     benchmark::DoNotOptimize(sensor.process(
         std::span<const radar::Contribution>(f.contributions.data(), n), f.detections, ss));
   }
   state.counters["returns_captured"] = static_cast<double>(storage.capture.return_count);
 }
-BENCHMARK(BM_SensorCapture)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SensorCapture)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
 
-// The cube writer's work for one captured frame, off the frame path (its own thread): the image
-// completed (0) and the raw samples synthesised (1), on the traced runway frame.
+// The cube writer's work for one captured frame, off the frame path (its own thread; measured
+// here on one thread): the image completed (0) and the raw samples synthesised (1), on the
+// traced runway frame.
 void BM_CubeCompletion(benchmark::State& state) {
+  const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
   Fixture& f = fixture();
   radar::TraceStats ts;
   const std::size_t n = f.tracer.trace(f.pose, f.contributions, ts);
@@ -238,7 +248,7 @@ void BM_CubeCompletion(benchmark::State& state) {
   }
   state.counters["returns"] = static_cast<double>(storage.capture.return_count);
 }
-BENCHMARK(BM_CubeCompletion)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CubeCompletion)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 // Whole default-scenario frames without (0) and with (1) `--cube` on every frame (20 frames an
 // iteration, the file in /tmp): p50 of the frame stage (the frame path, copies included; the

@@ -266,7 +266,9 @@ CubeWriter::CubeWriter(CubeWriterConfig config) : config_(std::move(config)) {
     slots_.push_back(std::move(s));
   }
   raw_.resize(shape_.raw_values());
-  raw_workspace_ = sensor.make_raw_workspace();
+  // Real time: the writer synthesises on its own thread only, leaving the other cores to the
+  // frames; on the simulated clock the loop waits for it, so it takes what TBB has.
+  raw_workspace_ = sensor.make_raw_workspace(config_.wait_when_full ? 4 : 1);
   written_frames_.reserve(n_frames);
   writer_ = std::thread([this] { writer_main(); });
 }

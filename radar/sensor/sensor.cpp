@@ -879,12 +879,12 @@ CaptureShape Sensor::capture_shape() const noexcept {
   return shape;
 }
 
-std::unique_ptr<Sensor::RawWorkspace> Sensor::make_raw_workspace() const {
+std::unique_ptr<Sensor::RawWorkspace> Sensor::make_raw_workspace(std::size_t max_threads) const {
   const CaptureShape shape = capture_shape();
   auto ws = std::make_unique<RawWorkspace>();
   const std::size_t n =
       std::clamp<std::size_t>(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1,
-                              std::min<std::size_t>(shape.beams, 4));
+                              std::min<std::size_t>({shape.beams, max_threads, std::size_t{4}}));
   for (std::size_t w = 0; w < n; ++w)
     ws->synthesisers.push_back(
         std::make_unique<RangeDopplerProcessor::RawSynthesiser>(*processor_, shape.channels));

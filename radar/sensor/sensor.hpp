@@ -172,8 +172,9 @@ class Sensor {
     std::vector<std::unique_ptr<RangeDopplerProcessor::RawSynthesiser>> synthesisers;
     std::vector<std::complex<double>> scratch;  ///< FMCW: fast + slow values per thread
   };
-  /// Setup for synthesise_raw(): allocates and plans (throws on failure).
-  [[nodiscard]] std::unique_ptr<RawWorkspace> make_raw_workspace() const;
+  /// Setup for synthesise_raw(): allocates and plans (throws on failure) for at most
+  /// `max_threads` threads (and no more than TBB may run, 4, or the beams).
+  [[nodiscard]] std::unique_ptr<RawWorkspace> make_raw_workspace(std::size_t max_threads = 4) const;
   /// The raw samples of the frame `capture` holds: [beam][channel][pulse][fast sample]
   /// (capture_shape().raw_values()), in units of the receiver noise's standard deviation of one
   /// fast-time sample. Every return with its beam's channel gains (pulsed LFM: through
