@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <thread>
 #include <utility>
@@ -21,6 +22,42 @@ loop::Scenario load_scenario_or_default(const std::string& scenario_file) {
              ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
              : loop::load_scenario(scenario_file);
 }
+
+namespace {
+
+// --cube: what the file holds; its losses as a warning whatever -q says.
+void print_cube_line(const loop::ClosedLoop& loop, bool quiet) {
+  const std::optional<loop::CubeCounters> c = loop.cube_counters();
+  if (!c)
+    return;
+  if (!quiet) {
+    std::printf("cube: %llu frames (%llu..%llu) in %s, %.1f MiB\n",
+                static_cast<unsigned long long>(c->frames_written),
+                static_cast<unsigned long long>(c->first_frame),
+                static_cast<unsigned long long>(c->last_frame), c->file.c_str(),
+                static_cast<double>(c->bytes_written) / (1024.0 * 1024.0));
+  }
+  if (c->write_errors > 0)
+    std::fprintf(stderr, "radar-emu: warning: cube: %llu HDF5 write errors (first: %s)\n",
+                 static_cast<unsigned long long>(c->write_errors), c->first_error.c_str());
+  if (c->frames_dropped > 0)
+    std::fprintf(stderr,
+                 "radar-emu: warning: cube: %llu frames dropped (the writer had no free "
+                 "slot in time)\n",
+                 static_cast<unsigned long long>(c->frames_dropped));
+  if (c->frames_without_state > 0)
+    std::fprintf(stderr,
+                 "radar-emu: warning: cube: %llu frames of the range had no ownship "
+                 "state (nothing sensed, not in the file)\n",
+                 static_cast<unsigned long long>(c->frames_without_state));
+  if (c->capture_dropped > 0)
+    std::fprintf(stderr,
+                 "radar-emu: warning: cube: %llu returns or false alarms found no room "
+                 "in the capture (not in the raw samples)\n",
+                 static_cast<unsigned long long>(c->capture_dropped));
+}
+
+}  // namespace
 
 int execute_loop(const loop::Scenario& scenario, loop::RunOptions options, const std::string& out,
                  bool quiet, double linger_s, double view_wait_s, double view_linger_s) {
@@ -82,6 +119,7 @@ int execute_loop(const loop::Scenario& scenario, loop::RunOptions options, const
   loop.write_trace_events();
   if (!quiet)
     loop::print_summary(loop.report(result), stdout);
+  print_cube_line(loop, quiet);
   if (!modbus.empty() && linger_s > 0.0 && !result.interrupted) {
     std::fprintf(stderr, "radar-emu: run complete; serving the final table on %s for %.1f s\n",
                  modbus.c_str(), linger_s);

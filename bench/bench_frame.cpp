@@ -2,7 +2,11 @@
 // Run: build/bench/bench_frame --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 
 #include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
 
+#include <complex>
+#include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -161,6 +165,123 @@ void BM_Sensor(benchmark::State& state) {
   state.counters["merged"] = static_cast<double>(ss.merged_returns);
 }
 BENCHMARK(BM_Sensor)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Data cubes out (`run --cube`, docs/cube.md): storage for one captured frame, as
+// loop/outputs/cube_writer.cpp allocates a slot.
+struct CaptureStorage {
+  explicit CaptureStorage(const radar::Sensor& sensor) {
+    const radar::CaptureShape shape = sensor.capture_shape();
+    image.resize(shape.image_values());
+    power.resize(shape.image_values());
+    synthesised.resize(shape.beams * shape.velocity_bins);
+    alarms.resize(shape.beams * 256);
+    alarm_count.resize(shape.beams);
+    returns.resize(std::size_t{1} << 17);
+    raw.resize(shape.raw_values());
+    workspace = sensor.make_raw_workspace();
+    capture.image = image;
+    capture.power = power;
+    capture.synthesised = synthesised;
+    capture.false_alarms = alarms;
+    capture.false_alarm_count = alarm_count;
+    capture.returns = returns;
+  }
+  std::vector<std::complex<float>> image;
+  std::vector<float> power;
+  std::vector<radar::RowSpan> synthesised;
+  std::vector<radar::FalseAlarm> alarms;
+  std::vector<std::uint32_t> alarm_count;
+  std::vector<radar::CapturedReturn> returns;
+  std::vector<std::complex<float>> raw;
+  std::unique_ptr<radar::Sensor::RawWorkspace> workspace;
+  radar::SensorCapture capture;
+};
+
+// The frame path's share of a captured frame, on one thread (so that CPU time counts all the
+// work): the traced runway frame through the sensor (argument 0, 1) or traced and sensed (2, 3),
+// without (0, 2) and with (1, 3) a capture armed. The sensor then copies its synthesised cells,
+// drawn false alarms and returns into the slot; the rest is the writer's (BM_CubeCompletion).
+void BM_SensorCapture(benchmark::State& state) {
+  const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Fixture& f = fixture();
+  radar::TraceStats ts;
+  std::size_t n = f.tracer.trace(f.pose, f.contributions, ts);
+  radar::Sensor sensor(f.s.sensor);
+  CaptureStorage storage(sensor);
+  radar::SensorStats ss;
+  const bool capture = state.range(0) % 2 == 1, trace = state.range(0) >= 2;
+  for (auto _ : state) {
+    ss = {};
+    if (trace) {
+      ts = {};
+      n = f.tracer.trace(f.pose, f.contributions, ts);
+    }
+    if (capture)
+      sensor.capture_next(&storage.capture);
+    benchmark::DoNotOptimize(sensor.process(
+        std::span<const radar::Contribution>(f.contributions.data(), n), f.detections, ss));
+  }
+  state.counters["returns_captured"] = static_cast<double>(storage.capture.return_count);
+}
+BENCHMARK(BM_SensorCapture)->DenseRange(0, 3)->Unit(benchmark::kMillisecond);
+
+// The cube writer's work for one captured frame, off the frame path (its own thread; measured
+// here on one thread): the image completed (0) and the raw samples synthesised (1), on the
+// traced runway frame.
+void BM_CubeCompletion(benchmark::State& state) {
+  const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  Fixture& f = fixture();
+  radar::TraceStats ts;
+  const std::size_t n = f.tracer.trace(f.pose, f.contributions, ts);
+  radar::Sensor sensor(f.s.sensor);
+  CaptureStorage storage(sensor);
+  radar::SensorStats ss;
+  sensor.capture_next(&storage.capture);
+  (void)sensor.process(std::span<const radar::Contribution>(f.contributions.data(), n),
+                       f.detections, ss);
+  for (auto _ : state) {
+    if (state.range(0) == 0)
+      sensor.complete_image(storage.capture);
+    else
+      sensor.synthesise_raw(storage.capture, storage.raw, *storage.workspace);
+    benchmark::DoNotOptimize(storage.raw.data());
+  }
+  state.counters["returns"] = static_cast<double>(storage.capture.return_count);
+}
+BENCHMARK(BM_CubeCompletion)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// Whole default-scenario frames without (0) and with (1) `--cube` on every frame (20 frames an
+// iteration, the file in /tmp): p50 of the frame stage (the frame path, copies included; the
+// wait for a free slot is between frames) and the run's wall time per frame (waits included: on
+// the simulated clock the loop waits for the writer).
+void BM_FrameCube(benchmark::State& state) {
+  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
+  s.frames = 20;
+  loop::RunOptions o;
+  if (state.range(0) == 1) {
+    o.cube_file = "/tmp/radar_emu_bench_cube.h5";
+    o.cube_first_frame = 0;
+    o.cube_last_frame = s.frames - 1;
+  }
+  loop::RunResult r;
+  for (auto _ : state) {
+    state.PauseTiming();
+    loop::ClosedLoop loop(s, o);
+    state.ResumeTiming();
+    r = loop.run();
+  }
+  const auto& frame = r.stages[static_cast<std::size_t>(radar_emu::timing::Stage::kFrame)];
+  const auto& sensor = r.stages[static_cast<std::size_t>(radar_emu::timing::Stage::kSensor)];
+  state.counters["frame_p50_ms"] = frame.p50_s * 1e3;
+  state.counters["sensor_p50_ms"] = sensor.p50_s * 1e3;
+  state.counters["wall_ms_per_frame"] = r.wall_time_s * 1e3 / static_cast<double>(r.frames);
+}
+BENCHMARK(BM_FrameCube)
+    ->Arg(0)
+    ->Arg(1)
+    ->Iterations(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // Sensor time against the number of returns (the default scenario's sensor, 16 beams x 1502 x 32
 // cells): N point returns of random phase spread over the field of view, the swath and +-10 m/s

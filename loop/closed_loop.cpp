@@ -204,6 +204,21 @@ std::unique_ptr<OutputStream> open_output_stream(const Scenario& s, const RunOpt
   return std::make_unique<OutputStream>(std::move(c));
 }
 
+// The cube file (loop/outputs/cube_writer.hpp): checked and created now. Real-time runs drop
+// the frames the writer has no slot for (counted); simulated-clock runs wait for it.
+std::unique_ptr<CubeWriter> open_cube_writer(const Scenario& s, const RunOptions& o,
+                                             const radar::Sensor& sensor) {
+  CubeWriterConfig c;
+  c.file = o.cube_file;
+  c.first_frame = o.cube_first_frame;
+  c.last_frame = o.cube_last_frame;
+  c.run_frames = s.frames;
+  c.sensor = &sensor;
+  c.scenario_name = s.name;
+  c.wait_when_full = !o.realtime;
+  return std::make_unique<CubeWriter>(std::move(c));
+}
+
 // The live view (loop/outputs/live_view.hpp): binds its server now, so that a bad address or a
 // port in use is an error before the run.
 std::unique_ptr<LiveView> open_live_view(const Scenario& s, const RunOptions& o,
@@ -448,6 +463,8 @@ struct ClosedLoop::Impl {
       outputs.stream = open_output_stream(scenario, o, scene.scene, scene.truth_objects);
     if (!o.serve.empty())
       outputs.view = open_live_view(scenario, o, scene.scene, scene.frame_truth.size());
+    if (!o.cube_file.empty())
+      cube = open_cube_writer(scenario, o, sensor.sensor);
   }
 
   // The ownship source, once: CANaerospace (the default), the register map played on the
@@ -487,6 +504,7 @@ struct ClosedLoop::Impl {
   Accounting accounting;
   RunOutputs outputs;
   std::optional<OutcomeTally> outcome;  ///< built once the truth objects are known
+  std::unique_ptr<CubeWriter> cube;     ///< RunOptions::cube_file; stopped before the sensor goes
   std::vector<std::string> warnings;    ///< from backend setup and the beam check
 };
 
@@ -511,6 +529,8 @@ bool ClosedLoop::Impl::wait_or_stop(Frame& f) {
   f.tick = rs.scheduler->wait_next();
   if (stop_requested(rs.r))
     return false;
+  if (cube)  // a frame of the cube's range: the sensor copies its cells into a free slot
+    sensor.sensor.capture_next(cube->begin_frame(f.tick.period_index));
   f.start_wall_ns = rs.wall.now_ns();
   accounting.profiler.set_frame(rs.done);
   f.since_start_ns = f.tick.deadline_ns - rs.start_ns;
@@ -715,6 +735,12 @@ std::optional<LiveViewCounters> ClosedLoop::live_view_counters() const {
   return impl_->outputs.view->counters();
 }
 
+std::optional<CubeCounters> ClosedLoop::cube_counters() const {
+  if (!impl_->cube)
+    return std::nullopt;
+  return impl_->cube->counters();
+}
+
 std::string ClosedLoop::modbus_server_address() const {
   const io::modbus::ModbusServer* server = impl_->bus.table_server();
   return server != nullptr ? server->address() : std::string();
@@ -762,6 +788,11 @@ bool ClosedLoop::step(FrameOutput& out, const OwnshipInput* ownship) {
   m.trace(f);
   m.sense(f);
   m.send(f);
+  if (m.cube) {  // the captured frame to the cube's writer (loop/outputs/cube_writer.hpp)
+    m.sensor.sensor.capture_next(nullptr);
+    m.cube->end_frame(f.record,
+                      std::span<const radar::Detection>(m.sensor.detections.data(), f.detections));
+  }
   FrameProducts products;
   products.detections =
       std::span<const io::icd::Detection>(m.sensor.icd_detections.data(), f.detections);
@@ -793,6 +824,8 @@ RunResult ClosedLoop::finish() {
   rs.finished = true;
   if (m.outputs.view)
     m.outputs.view->end();
+  if (m.cube)
+    m.cube->finish();
   RunResult& r = rs.r;
   m.accounting.finish(r);
   r.outcome = m.outcome->totals();

@@ -18,6 +18,7 @@
 #include "io/detection_icd.hpp"
 #include "loop/frame_record.hpp"
 #include "loop/governor.hpp"
+#include "loop/outputs/cube_writer.hpp"
 #include "loop/outputs/live_view.hpp"
 #include "loop/outputs/report.hpp"
 #include "loop/scenario.hpp"
@@ -77,6 +78,13 @@ struct RunOptions {
   /// (127.0.0.1; port 0 picks a free one, see live_view_address()); "" = off. The server is
   /// bound at setup and serves the last frame until the ClosedLoop is destroyed.
   std::string serve;
+  /// Data cubes (loop/outputs/cube_writer.hpp, docs/cube.md): an HDF5 file of the raw samples
+  /// and the range-Doppler-beam image of the frames cube_first_frame..cube_last_frame (frame
+  /// indices, inclusive; clipped to the run), created at setup; "" = none. Setup refuses a range
+  /// past the run or whose estimated size exceeds loop::kCubeMaxBytes.
+  std::filesystem::path cube_file;
+  std::uint64_t cube_first_frame = 0;
+  std::uint64_t cube_last_frame = 3;
 };
 
 /// The ownship state of a stepped frame (ClosedLoop::step), given by the caller instead of the
@@ -144,6 +152,9 @@ class ClosedLoop {
   /// write_outputs() writes to report.json and `radar-emu run` prints. Points into this loop
   /// and `result` (both must outlive it). Setup-side: allocates.
   [[nodiscard]] RunReport report(const RunResult& result) const;
+  /// What the cube file (RunOptions::cube_file) got and lost, complete once finish() has run;
+  /// nullopt without one.
+  [[nodiscard]] std::optional<CubeCounters> cube_counters() const;
   /// What the streamed outputs wrote and lost (complete once write_outputs() has run).
   [[nodiscard]] OutputCounters output_counters() const;
   /// Writes the stage timeline as Chrome trace-event JSON ({"traceEvents": [...]}, "X" complete

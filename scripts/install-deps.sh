@@ -9,6 +9,8 @@ PACKAGES=(
   # libraries (design.md: Debian packages only)
   libembree-dev libglm-dev libtinygltf-dev nlohmann-json3-dev libstb-dev libtbb-dev
   libusb-1.0-0-dev libsocketcan-dev libmodbus-dev libfftw3-dev libtomlplusplus-dev libcli11-dev
+  # `run --cube` (loop/outputs/cube_writer.cpp: HDF5's C API) and its test (h5py)
+  libhdf5-dev python3-h5py
   libgtest-dev libgmock-dev libbenchmark-dev
   # dense LU of `rcs --method mom` (radar/em/mom.hpp): LAPACK as OpenBLAS builds it
   libopenblas-dev
@@ -32,7 +34,7 @@ PACKAGES=(
 )
 # Not installed here, needed only to regenerate the full-wave table tests/data/openems_plate
 # (scripts/openems_rcs.py; the tests read the checked-in table):
-#   openems python3-openems python3-h5py python3-scipy
+#   openems python3-openems python3-scipy
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -70,6 +70,8 @@ class RangeDopplerProcessor {
   RangeDopplerProcessor(const RangeDopplerProcessor&) = delete;
   RangeDopplerProcessor& operator=(const RangeDopplerProcessor&) = delete;
 
+  class RawSynthesiser;
+
   [[nodiscard]] const ProcessingConfig& config() const noexcept { return config_; }
   [[nodiscard]] std::size_t range_bins() const noexcept { return n_range_; }
   [[nodiscard]] std::size_t velocity_bins() const noexcept { return n_pulses_; }
@@ -78,6 +80,10 @@ class RangeDopplerProcessor {
   [[nodiscard]] std::size_t cube_fast_samples() const noexcept { return n_fast_; }
   [[nodiscard]] std::size_t cube_samples() const noexcept { return n_fast_ * n_pulses_; }
 
+  /// The range taper (the matched filter's reference weights, pulsed; the beat samples', FMCW)
+  /// and the Doppler taper (one weight a pulse), as the processing applies them.
+  [[nodiscard]] std::span<const double> range_weights() const noexcept { return w_range_; }
+  [[nodiscard]] std::span<const double> doppler_weights() const noexcept { return w_doppler_; }
   [[nodiscard]] double range_of_bin(double bin) const noexcept;
   [[nodiscard]] double velocity_of_bin(double bin) const noexcept;
   /// Peak SNR gain of the processing for an on-grid scatterer: |peak|^2 / |a|^2 =
@@ -89,6 +95,14 @@ class RangeDopplerProcessor {
   /// Exact path, step 1: adds the scatterers' echoes to a raw cube [pulse][fast sample].
   void synthesize_cube(std::span<const PointScatterer> scatterers,
                        std::span<std::complex<double>> cube) const noexcept;
+  /// Exact path, separable: one scatterer's echo as the fast-time samples of a pulse (`fast`,
+  /// the samples from `first` on that the echo reaches) times one complex factor a pulse
+  /// (`slow`, velocity_bins() values: the amplitude and the Doppler phase), the delay taken at
+  /// the centre of the CPI (the range walk neglected, as the direct path does). Returns the
+  /// number of fast samples written (0: outside the swath or `slow` too short); at most
+  /// fast.size(). Real-time safe.
+  std::size_t echo(const PointScatterer& s, std::span<std::complex<double>> fast,
+                   std::size_t& first, std::span<std::complex<double>> slow) const noexcept;
   /// Exact path, step 2: range compression and Doppler FFT of a raw cube into an image. Uses this
   /// object's scratch buffers: one call at a time per object. Real-time safe.
   void process_cube(std::span<const std::complex<double>> cube,
@@ -157,6 +171,41 @@ class RangeDopplerProcessor {
   std::complex<double> velocity_kernel(double x) const noexcept;
   std::complex<double> range_kernel(double x, double fd_hz) const noexcept;
   std::complex<double> pulse_mf_exact(double x, double fd_hz) const noexcept;
+};
+
+/// Raw samples of many point echoes at once, pulsed LFM (the data cubes of docs/cube.md): each
+/// echo's delay, with the range-Doppler coupling (tau - f_d / k), is rounded to 1/kPhases of a
+/// fast-time sample; echoes in the same sample and phase add their slow-time factors (amplitude
+/// and Doppler phase a pulse), and each phase's sum is convolved with the pulse sampled at that
+/// phase (FFT). The delay at the centre of the CPI (no range walk, as the direct path). One
+/// object a thread: setup allocates and plans; clear(), add() and render() do neither.
+class RangeDopplerProcessor::RawSynthesiser {
+ public:
+  static constexpr std::size_t kPhases = 8;
+  RawSynthesiser(const RangeDopplerProcessor& processor, std::size_t channels);
+  ~RawSynthesiser();
+  RawSynthesiser(const RawSynthesiser&) = delete;
+  RawSynthesiser& operator=(const RawSynthesiser&) = delete;
+
+  /// False for FMCW (the caller synthesises those echoes one by one, RangeDopplerProcessor::echo).
+  [[nodiscard]] bool supported() const noexcept { return supported_; }
+  void clear() noexcept;
+  /// Adds one echo to every channel with its gain (gains.size() >= channels). Outside the swath:
+  /// nothing.
+  void add(const PointScatterer& s, std::span<const double> gains) noexcept;
+  /// Adds the echoes added since clear() to `cube` [channel][pulse][fast sample]
+  /// (channels x velocity_bins() x cube_fast_samples() values).
+  void render(std::span<std::complex<float>> cube) noexcept;
+
+ private:
+  struct Fft;
+  const RangeDopplerProcessor& p_;
+  std::size_t channels_ = 1, taps_ = 0, len_ = 0, n_fft_ = 0;
+  bool supported_ = false;
+  std::vector<std::complex<float>> acc_;         ///< [channel][phase][pulse][len_]
+  std::vector<std::uint8_t> used_;               ///< [channel][phase]: rows written since clear()
+  std::vector<std::complex<double>> templates_;  ///< [phase][n_fft_]: FFT of the pulse
+  std::unique_ptr<Fft> fft_;
 };
 
 }  // namespace radar_emu::radar

@@ -36,6 +36,12 @@ double vertex(double pm, double p0, double pp) noexcept {
 
 constexpr std::uint64_t kChannelSum = 0, kChannelDeltaAz = 1, kChannelDeltaEl = 2,
                         kChannelSpeckle = 3, kChannelFalseAlarm = 4;
+// Drawn for a captured frame's files only (Sensor::complete_image, Sensor::synthesise_raw): the
+// image's cells the sensor did not synthesise, the speckle of diffuse returns in the raw samples,
+// and the raw samples' receiver noise (one stream per channel from kChannelRawNoise on).
+constexpr std::uint64_t kChannelFileNoise = 5, kChannelRawSpeckle = 6, kChannelRawNoise = 7;
+// The raw samples of a diffuse return: points across its range extent, one a half bin, at most.
+constexpr int kRawPointsPerDiffuse = 4;
 
 // Spans of `in` widened by mr range bins and mv velocity rows (wrapping), one bounding span a
 // row, clipped to nr bins.
@@ -162,6 +168,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     beam_first_[b] = b * per_beam_capacity_;
   order_.reserve(candidates_.size());
   kept_power_.resize(c.max_detections);
+  capture_dropped_.resize(antenna_.beams());
   // Radar equation per fast-time sample (Richards 2014, eq. 2.84):
   // SNR = Pt G^2 lambda^2 sigma / ((4 pi)^3 R^4 L k T0 F fs); amplitude_scale_^2 is its value
   // for sigma = 1 m^2 at R = 1 m on boresight.
@@ -209,18 +216,23 @@ double Sensor::two_way_gain(double az_off_rad, double el_off_rad) const noexcept
 }
 
 bool Sensor::gains_of(const Item& item, std::size_t beam, Gains& g) const noexcept {
-  const double off_az = item.azimuth_rad - config_.antenna.beam_azimuth_rad[beam];
+  return gains_at(item.azimuth_rad, item.sum_el, item.delta_el, beam, g);
+}
+
+bool Sensor::gains_at(double azimuth_rad, double sum_el, double delta_el, std::size_t beam,
+                      Gains& g) const noexcept {
+  const double off_az = azimuth_rad - config_.antenna.beam_azimuth_rad[beam];
   if (std::abs(off_az) > az_extent_rad_)
     return false;
   double s_az = 0.0, d_az = 0.0;
   antenna_.channels_az(off_az, s_az, d_az);
-  const double tx = s_az * item.sum_el;  // transmit on the sum beam, receive on each channel
+  const double tx = s_az * sum_el;  // transmit on the sum beam, receive on each channel
   const double two_way = tx * tx;
   if (!(two_way * two_way >= gain_floor_))
     return false;
   g.sum = two_way;
-  g.daz = tx * d_az * item.sum_el;
-  g.del = tx * s_az * item.delta_el;
+  g.daz = tx * d_az * sum_el;
+  g.del = tx * s_az * delta_el;
   return true;
 }
 
@@ -424,11 +436,11 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
   }
 
   // 4. The noise-only cells: their false alarms, drawn (Cfar2d::draw_false_alarms).
+  std::size_t n_fa = 0;
   if (config_.thermal_noise) {
     NoiseRng rng(stream_key(config_.noise_seed, frame_, kChannelFalseAlarm, beam));
     std::uint64_t crossings = 0, fa_overflow = 0;
-    const std::size_t n_fa =
-        ws.cfar.draw_false_alarms(rng, ws.cuts, ws.alarms, crossings, fa_overflow);
+    n_fa = ws.cfar.draw_false_alarms(rng, ws.cuts, ws.alarms, crossings, fa_overflow);
     ws.crossings += crossings;
     ws.overflowed += fa_overflow;
     for (std::size_t i = 0; i < n_fa && n_cand < per_beam_capacity_; ++i) {
@@ -447,6 +459,8 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
     }
   }
   beam_count_[beam] = n_cand;
+  if (capturing_)
+    capture_beam(beam, ws, n_fa);
 
   // 5. Leave the image and the clutter rows zero for the next frame: clear what was written.
   for (std::size_t j = 0; j < nv; ++j) {
@@ -629,6 +643,17 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t n_beams = antenna_.beams();
   const std::size_t nr = proc.range_bins();
+  // A capture armed by capture_next() covers this call only, and only storage of the right shape.
+  capturing_ = false;
+  if (capture_ != nullptr) {
+    const CaptureShape shape = capture_shape();
+    SensorCapture& c = *capture_;
+    c.filled = false;
+    capturing_ = c.image.size() >= shape.image_values() && c.power.size() >= shape.image_values() &&
+                 c.synthesised.size() >= n_beams * shape.velocity_bins &&
+                 c.false_alarm_count.size() >= n_beams;
+    std::fill(capture_dropped_.begin(), capture_dropped_.end(), 0);
+  }
   if (contributions.size() > items_.size()) {
     stats.dropped_input += contributions.size() - items_.size();
     contributions = contributions.first(items_.size());
@@ -698,6 +723,24 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   for (std::size_t b = range_start_.size() - 1; b > 0; --b)  // restore the starts
     range_start_[b] = range_start_[b - 1];
   range_start_[0] = 0;
+  if (capturing_) {  // the returns the raw samples are synthesised from (off the frame path)
+    SensorCapture& c = *capture_;
+    c.return_count = 0;
+    c.dropped = 0;
+    c.noise_frame = frame_;
+    for (std::size_t i = 0; i < item_count_; ++i) {
+      const Item& it = items_[i];
+      if (!it.usable)
+        continue;
+      if (c.return_count >= c.returns.size()) {
+        ++c.dropped;
+        continue;
+      }
+      c.returns[c.return_count++] = {it.amplitude,   it.range_m, it.radial_velocity_mps,
+                                     it.azimuth_rad, it.sum_el,  it.delta_el,
+                                     it.half_bins,   it.coherent};
+    }
+  }
 
   for (auto& ws : workspaces_)
     ws->crossings = ws->overflowed = ws->synthesised = 0;
@@ -711,6 +754,13 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     stats.cells_synthesised += ws->synthesised;
   }
   stats.cells_touched += n_beams * proc.image_cells();
+  if (capturing_) {
+    for (std::uint64_t d : capture_dropped_)
+      capture_->dropped += d;
+    capture_->filled = true;
+    capturing_ = false;
+  }
+  capture_ = nullptr;
 
   // Group across adjacent beams: strongest first; a peak within one range and one velocity bin
   // of a stronger kept peak in the next beam is the same return seen by that beam's skirt.
@@ -813,6 +863,178 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   stats.detections += n_out;
   ++frame_;
   return n_out;
+}
+
+// ---- capture (SensorCapture): the frame path copies; the rest runs on the caller's thread ----
+
+CaptureShape Sensor::capture_shape() const noexcept {
+  const RangeDopplerProcessor& proc = *processor_;
+  CaptureShape shape;
+  shape.beams = antenna_.beams();
+  shape.channels = config_.antenna.monopulse ? 3 : 1;
+  shape.pulses = proc.velocity_bins();
+  shape.fast_samples = proc.cube_fast_samples();
+  shape.velocity_bins = proc.velocity_bins();
+  shape.range_bins = proc.range_bins();
+  return shape;
+}
+
+std::unique_ptr<Sensor::RawWorkspace> Sensor::make_raw_workspace(std::size_t max_threads) const {
+  const CaptureShape shape = capture_shape();
+  auto ws = std::make_unique<RawWorkspace>();
+  const std::size_t n =
+      std::clamp<std::size_t>(static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1,
+                              std::min<std::size_t>({shape.beams, max_threads, std::size_t{4}}));
+  for (std::size_t w = 0; w < n; ++w)
+    ws->synthesisers.push_back(
+        std::make_unique<RangeDopplerProcessor::RawSynthesiser>(*processor_, shape.channels));
+  ws->scratch.resize(n * (shape.fast_samples + shape.pulses));
+  return ws;
+}
+
+void Sensor::capture_beam(std::size_t beam, const Workspace& ws, std::size_t n_alarms) noexcept {
+  SensorCapture& c = *capture_;
+  const std::size_t nr = processor_->range_bins(), nv = processor_->velocity_bins();
+  for (std::size_t j = 0; j < nv; ++j) {
+    const RowSpan sp = ws.synth[j];
+    c.synthesised[beam * nv + j] = sp;
+    const std::size_t src = j * nr, dst = (beam * nv + j) * nr;
+    for (std::uint32_t l = sp.begin; l < sp.end; ++l) {
+      c.image[dst + l] = std::complex<float>(ws.image[src + l]);
+      c.power[dst + l] = static_cast<float>(ws.power[src + l]);
+    }
+  }
+  const std::size_t room = c.false_alarms.size() / antenna_.beams();
+  const std::size_t kept = std::min(n_alarms, room);
+  std::copy(ws.alarms.begin(), ws.alarms.begin() + static_cast<long>(kept),
+            c.false_alarms.begin() + static_cast<long>(beam * room));
+  c.false_alarm_count[beam] = static_cast<std::uint32_t>(kept);
+  capture_dropped_[beam] = n_alarms - kept;
+}
+
+void Sensor::complete_image(SensorCapture& c) const noexcept {
+  if (!c.filled)
+    return;
+  const std::size_t nr = processor_->range_bins(), nv = processor_->velocity_bins();
+  const std::size_t n_beams = antenna_.beams();
+  const std::uint64_t seed = config_.noise_seed;
+  // The phase the sensor gives a cell whose power alone it drew (detect_beam, steps 3 and 4).
+  auto speckle = [&](std::size_t beam, std::size_t j, std::size_t l, double power) {
+    NoiseRng phase(stream_key(seed, c.noise_frame, kChannelSpeckle, beam, j * nr + l));
+    return std::complex<float>(std::polar(std::sqrt(power), 2.0 * kPi * phase.uniform()));
+  };
+  for (std::size_t b = 0; b < n_beams; ++b) {
+    for (std::size_t j = 0; j < nv; ++j) {
+      const RowSpan sp = c.synthesised[b * nv + j];
+      const std::size_t row = (b * nv + j) * nr;
+      NoiseRng noise(stream_key(seed, c.noise_frame, kChannelFileNoise, b, j));
+      for (std::size_t l = 0; l < nr; ++l) {
+        std::complex<float>& v = c.image[row + l];
+        if (l >= sp.begin && l < sp.end) {
+          if (v == std::complex<float>{0.0f, 0.0f} && c.power[row + l] > 0.0f)
+            v = speckle(b, j, l, c.power[row + l]);
+        } else {
+          v = config_.thermal_noise ? std::complex<float>(noise.complex_normal())
+                                    : std::complex<float>{0.0f, 0.0f};
+        }
+      }
+    }
+    // The false alarms drawn in this beam's noise-only cells, with their neighbours' powers.
+    const std::size_t room = c.false_alarms.size() / n_beams;
+    for (std::size_t k = 0; k < c.false_alarm_count[b] && k < room; ++k) {
+      const FalseAlarm& fa = c.false_alarms[b * room + k];
+      const std::size_t l = fa.hit.range_bin, j = fa.hit.velocity_bin;
+      auto put = [&](std::size_t jj, std::size_t ll, double power) {
+        c.image[(b * nv + jj) * nr + ll] = speckle(b, jj, ll, power);
+      };
+      put(j, l, fa.hit.power);
+      if (l > 0)
+        put(j, l - 1, fa.range_minus);
+      if (l + 1 < nr)
+        put(j, l + 1, fa.range_plus);
+      put((j + nv - 1) % nv, l, fa.velocity_minus);
+      put((j + 1) % nv, l, fa.velocity_plus);
+    }
+  }
+}
+
+void Sensor::synthesise_raw(const SensorCapture& c, std::span<std::complex<float>> raw,
+                            RawWorkspace& ws) const noexcept {
+  const CaptureShape shape = capture_shape();
+  const std::size_t n_workers = ws.synthesisers.size();
+  if (!c.filled || raw.size() < shape.raw_values() || n_workers == 0 ||
+      ws.scratch.size() < n_workers * (shape.fast_samples + shape.pulses))
+    return;
+  const RangeDopplerProcessor& proc = *processor_;
+  const std::size_t nf = shape.fast_samples, np = shape.pulses, nc = shape.channels;
+  const double bin_m = range_cell_m();
+  const std::uint64_t seed = config_.noise_seed;
+  // Worker w synthesises beams w, w + W, ... into their own slices of `raw`.
+  tbb::parallel_for(std::size_t{0}, n_workers, [&](std::size_t w) {
+    RangeDopplerProcessor::RawSynthesiser& synth = *ws.synthesisers[w];
+    const std::span<std::complex<double>> fast = std::span(ws.scratch).subspan(w * (nf + np), nf);
+    const std::span<std::complex<double>> slow =
+        std::span(ws.scratch).subspan(w * (nf + np) + nf, np);
+    for (std::size_t b = w; b < shape.beams; b += n_workers) {
+      std::complex<float>* cube = raw.data() + b * nc * np * nf;
+      std::fill(cube, cube + nc * np * nf, std::complex<float>{0.0f, 0.0f});
+      synth.clear();
+      for (std::size_t i = 0; i < c.return_count && i < c.returns.size(); ++i) {
+        const CapturedReturn& r = c.returns[i];
+        Gains g;
+        if (!gains_at(r.azimuth_rad, r.sum_el, r.delta_el, b, g))
+          continue;
+        const double gains[3] = {g.sum, g.daz, g.del};
+        // A diffuse return: points across its range extent, each an independent complex
+        // Gaussian of an equal share of its mean power (the same draws in every beam: one
+        // patch).
+        const int n_sub = r.coherent ? 1
+                                     : std::clamp(static_cast<int>(std::ceil(2.0 * r.half_bins)), 1,
+                                                  kRawPointsPerDiffuse);
+        for (int sub = 0; sub < n_sub; ++sub) {
+          PointScatterer p{r.amplitude, r.range_m, r.radial_velocity_mps};
+          if (!r.coherent) {
+            NoiseRng rng(stream_key(seed, c.noise_frame, kChannelRawSpeckle, i,
+                                    static_cast<std::uint64_t>(sub)));
+            p.amplitude *= rng.complex_normal() / std::sqrt(static_cast<double>(n_sub));
+            p.range_m +=
+                ((sub + 0.5) / static_cast<double>(n_sub) - 0.5) * 2.0 * r.half_bins * bin_m;
+          }
+          if (synth.supported()) {
+            synth.add(p, std::span<const double>(gains, nc));
+            continue;
+          }
+          std::size_t first = 0;
+          const std::size_t n = proc.echo(p, fast, first, slow);
+          const std::size_t len = std::min(n, nf - std::min(first, nf));
+          for (std::size_t ch = 0; ch < nc; ++ch) {
+            for (std::size_t m = 0; m < np && len > 0; ++m) {
+              // The outer product slow x fast, written out (no complex-multiply NaN branches).
+              const double fr = slow[m].real() * gains[ch], fi = slow[m].imag() * gains[ch];
+              std::complex<float>* row = cube + (ch * np + m) * nf + first;
+              for (std::size_t k = 0; k < len; ++k) {
+                const double xr = fast[k].real(), xi = fast[k].imag();
+                row[k] = {row[k].real() + static_cast<float>(fr * xr - fi * xi),
+                          row[k].imag() + static_cast<float>(fr * xi + fi * xr)};
+              }
+            }
+          }
+        }
+      }
+      if (synth.supported())
+        synth.render(std::span(cube, nc * np * nf));
+      if (!config_.thermal_noise)
+        continue;
+      for (std::size_t ch = 0; ch < nc; ++ch) {
+        for (std::size_t m = 0; m < np; ++m) {
+          NoiseRng rng(stream_key(seed, c.noise_frame, kChannelRawNoise + ch, b, m));
+          std::complex<float>* row = cube + (ch * np + m) * nf;
+          for (std::size_t n = 0; n < nf; ++n)
+            row[n] += std::complex<float>(rng.complex_normal());
+        }
+      }
+    }
+  });
 }
 
 }  // namespace radar_emu::radar

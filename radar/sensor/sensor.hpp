@@ -97,6 +97,54 @@ struct SensorStats {
   std::uint64_t merged_returns = 0;   ///< coherent returns summed into another (merge_step_bins)
 };
 
+/// One return of a captured frame as the sensor saw it (after merging): what the frame's raw
+/// samples are synthesised from (Sensor::synthesise_raw).
+struct CapturedReturn {
+  std::complex<double> amplitude{0.0, 0.0};  ///< at the receiver, noise units, before patterns
+  double range_m = 0.0;
+  double radial_velocity_mps = 0.0;
+  double azimuth_rad = 0.0;
+  double sum_el = 0.0, delta_el = 0.0;  ///< elevation pattern factors (sum, difference)
+  double half_bins = 0.0;               ///< diffuse: half its extent along range [bins]
+  bool coherent = true;
+};
+
+/// The shape of a captured frame's cubes.
+struct CaptureShape {
+  std::size_t beams = 0;
+  std::size_t channels = 0;  ///< raw: Sigma, Delta-az, Delta-el (Sigma alone without monopulse)
+  std::size_t pulses = 0;
+  std::size_t fast_samples = 0;  ///< raw samples a pulse
+  std::size_t velocity_bins = 0;
+  std::size_t range_bins = 0;
+  [[nodiscard]] std::size_t raw_values() const noexcept {
+    return beams * channels * pulses * fast_samples;
+  }
+  [[nodiscard]] std::size_t image_values() const noexcept {
+    return beams * velocity_bins * range_bins;
+  }
+};
+
+/// Caller-provided storage for one captured frame (Sensor::capture_next), sized at setup from
+/// Sensor::capture_shape(). process() fills it without allocating: the image cells it
+/// synthesised, the false alarms it drew for the others, and the frame's returns. The rest
+/// (every other cell of the image, the raw samples) is completed off the frame path by
+/// Sensor::complete_image and Sensor::synthesise_raw.
+struct SensorCapture {
+  std::span<std::complex<float>> image;  ///< [beam][velocity bin][range bin], image_values()
+  std::span<float> power;                ///< same shape: |cell|^2 of the synthesised cells
+  std::span<RowSpan> synthesised;        ///< [beam][velocity bin]: the cells synthesised
+  /// [beam][k]: room for the false alarms drawn in each beam, k = false_alarms.size() / beams
+  std::span<FalseAlarm> false_alarms;
+  std::span<std::uint32_t> false_alarm_count;  ///< [beam]: how many (filled by process())
+  std::span<CapturedReturn> returns;           ///< room for the frame's returns
+  // Filled by process():
+  std::size_t return_count = 0;
+  std::uint64_t dropped = 0;      ///< returns and false alarms that found no room (counted)
+  std::uint64_t noise_frame = 0;  ///< the sensor's frame counter: the key of its noise streams
+  bool filled = false;
+};
+
 class Sensor {
  public:
   /// Setup: validates (throws std::invalid_argument naming the field), plans and allocates.
@@ -108,6 +156,34 @@ class Sensor {
   [[nodiscard]] std::size_t process(std::span<const Contribution> contributions,
                                     std::span<Detection> out, SensorStats& stats) noexcept;
 
+  /// Capture: the next process() call (one frame) also fills `capture` (nullptr: none). The
+  /// storage must match capture_shape() (process() skips a capture that does not) and stay
+  /// valid until that call returns. Real-time safe.
+  void capture_next(SensorCapture* capture) noexcept { capture_ = capture; }
+  [[nodiscard]] CaptureShape capture_shape() const noexcept;
+  /// After process() filled `capture`: every image cell as the CFAR saw it. The synthesised
+  /// cells keep their value (where no return added signal, the phase is the one the sensor
+  /// gives a detection there); every other cell gets receiver noise drawn for the file, and the
+  /// false alarms the sensor drew there (with their neighbours) get the powers it drew.
+  /// Thread-safe against process() (reads setup state only); no allocation.
+  void complete_image(SensorCapture& capture) const noexcept;
+  /// What synthesise_raw() works in: one synthesiser and scratch per thread it uses.
+  struct RawWorkspace {
+    std::vector<std::unique_ptr<RangeDopplerProcessor::RawSynthesiser>> synthesisers;
+    std::vector<std::complex<double>> scratch;  ///< FMCW: fast + slow values per thread
+  };
+  /// Setup for synthesise_raw(): allocates and plans (throws on failure) for at most
+  /// `max_threads` threads (and no more than TBB may run, 4, or the beams).
+  [[nodiscard]] std::unique_ptr<RawWorkspace> make_raw_workspace(std::size_t max_threads = 4) const;
+  /// The raw samples of the frame `capture` holds: [beam][channel][pulse][fast sample]
+  /// (capture_shape().raw_values()), in units of the receiver noise's standard deviation of one
+  /// fast-time sample. Every return with its beam's channel gains (pulsed LFM: through
+  /// RangeDopplerProcessor::RawSynthesiser, delays to 1/8 sample; FMCW: sample by sample,
+  /// RangeDopplerProcessor::echo); a diffuse return as up to 4 points across its range extent
+  /// with complex Gaussian amplitudes; plus receiver noise of unit variance, drawn for the file.
+  /// Thread-safe against process(); no allocation.
+  void synthesise_raw(const SensorCapture& capture, std::span<std::complex<float>> raw,
+                      RawWorkspace& workspace) const noexcept;
   [[nodiscard]] const SensorConfig& config() const noexcept { return config_; }
   [[nodiscard]] const Antenna& antenna() const noexcept { return antenna_; }
   [[nodiscard]] const RangeDopplerProcessor& processor() const noexcept { return *processor_; }
@@ -151,6 +227,11 @@ class Sensor {
     double sum = 0, daz = 0, del = 0;  ///< two-way amplitude factors of the three channels
   };
   bool gains_of(const Item& item, std::size_t beam, Gains& g) const noexcept;
+  bool gains_at(double azimuth_rad, double sum_el, double delta_el, std::size_t beam,
+                Gains& g) const noexcept;
+  /// Capture: copies beam `beam`'s synthesised cells and false alarms (detect_beam).
+  void capture_beam(std::size_t beam, const Workspace& ws, std::size_t n_alarms) noexcept;
+
   /// Sums coherent returns that share a merge cell (SensorConfig::merge_step_bins).
   void merge_returns(SensorStats& stats) noexcept;
   struct MergeKey {
@@ -203,6 +284,9 @@ class Sensor {
   bool beams_ascending_ = false;
   double range_energy_ = 1.0;
   std::uint64_t frame_ = 0;
+  SensorCapture* capture_ = nullptr;            ///< armed by capture_next() for one process() call
+  bool capturing_ = false;                      ///< this frame fills capture_
+  std::vector<std::uint64_t> capture_dropped_;  ///< per beam: false alarms without room
 };
 
 }  // namespace radar_emu::radar
