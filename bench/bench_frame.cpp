@@ -6,6 +6,7 @@
 
 #include <complex>
 #include <cstdint>
+#include <ctime>
 #include <memory>
 #include <optional>
 #include <span>
@@ -322,7 +323,9 @@ BENCHMARK(BM_SensorReturns)
 
 // Terrain clutter on the same frame, two ways (issue 28 item 2, issue 29's first lever): the
 // trace with the tracer's terrain rays (argument 1 = 0, [radar] terrain = "rays") against the
-// trace without them plus the terrain engine's cells (1, terrain = "engine"), both from the
+// trace without them plus the terrain engine's cells (1, terrain = "engine": shadows by the
+// horizon sweep; 4: by one occlusion query per patch; 5: as 1 in columns of 0.25 deg, a quarter
+// beamwidth, instead of the scenario's 0.5; 3: no shadows; 2: no terrain), all from the
 // scenario's first pose. Argument 0: the default scenario (0) or examples/terrain_movers.toml
 // (1, the 207k-polygon terrain). Counters: the rays shot, the returns handed to the sensor, the
 // engine's patches (evaluated, lit).
@@ -345,13 +348,21 @@ void BM_TraceTerrain(benchmark::State& state) {
       Case(loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml"))};
   Case& c = cases[state.range(0)];
   const long mode = state.range(1);
-  const bool engine = mode == 1 || mode == 3;
+  // Argument 2 = 1: one thread (TBB limited to it), so that the CPU time of the benchmark's
+  // thread is the frame's whole work, however loaded the machine (no spinning workers counted).
+  std::optional<tbb::global_control> serial;
+  if (state.range(2) == 1)
+    serial.emplace(tbb::global_control::max_allowed_parallelism, 1);
+  const bool engine = mode == 1 || mode == 3 || mode == 4 || mode == 5;
   radar::SbrConfig cfg = c.s.sbr;
   cfg.terrain_rays = mode == 0;
   radar::SbrTracer tracer(c.scene, cfg);
   std::optional<radar::TerrainReturns> terrain;
   radar::TerrainReturnsConfig tc = loop::terrain_returns_config(c.s);
   tc.shadowing = mode != 3;
+  tc.horizon = mode != 4;
+  if (mode == 5)
+    tc.azimuth_cell_rad = 0.25 * 3.14159265358979323846 / 180.0;  // the former 0.25 deg columns
   if (engine)
     terrain.emplace(c.scene, tracer, tc);
   std::vector<radar::Contribution> out(tracer.max_contributions() +
@@ -360,26 +371,46 @@ void BM_TraceTerrain(benchmark::State& state) {
   radar::clutter::TerrainStats es;
   std::uint64_t dropped = 0;
   std::size_t n = 0;
+  double engine_cpu_s = 0.0;  // the engine's share: its thread's CPU time (one thread only)
+  auto thread_cpu_s = [] {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  };
   for (auto _ : state) {
     ts = {};
     es = {};
     n = tracer.trace(c.pose, out, ts);
-    if (terrain)
+    if (terrain) {
+      const double t0 = thread_cpu_s();
       n += terrain->compute(c.pose, std::span(out).subspan(n), es, dropped);
+      engine_cpu_s += thread_cpu_s() - t0;
+    }
     benchmark::DoNotOptimize(n);
   }
+  if (serial)
+    state.counters["engine_cpu_ms"] =
+        1e3 * engine_cpu_s /
+        static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
   state.counters["rays"] = static_cast<double>(ts.rays);
   state.counters["returns"] = static_cast<double>(n);
   state.counters["patches"] = static_cast<double>(es.patches);
   state.counters["patches_lit"] = static_cast<double>(es.patches_lit);
   state.counters["facets"] = terrain ? static_cast<double>(terrain->engine().facets().size()) : 0.0;
   state.counters["facets_considered"] = static_cast<double>(es.facets_considered);
-  static constexpr const char* kModes[] = {", rays", ", engine", ", no terrain",
-                                           ", engine without shadowing"};
-  state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") + kModes[mode]);
+  state.counters["horizon_patches"] = static_cast<double>(es.horizon_patches);
+  state.counters["queries"] = static_cast<double>(es.occlusion_queries);
+  static constexpr const char* kModes[] = {", rays",
+                                           ", engine",
+                                           ", no terrain",
+                                           ", engine without shadowing",
+                                           ", engine, a ray per patch",
+                                           ", engine, 0.25 deg columns"};
+  state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") + kModes[mode] +
+                 (serial ? ", 1 thread" : ""));
 }
 BENCHMARK(BM_TraceTerrain)
-    ->ArgsProduct({{0, 1}, {0, 1, 2, 3}})
+    ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -359,6 +359,7 @@ struct Frame {
   bool valid = false;                          ///< a fresh ownship state (or the caller's)
   const GovernorDecision* decision = nullptr;  ///< null: nothing traced
   std::uint64_t rays_before = 0, cells_before = 0, truncated_before = 0;
+  std::uint64_t terrain_patches = 0, terrain_returns = 0;  ///< the engine's, this frame
   std::size_t contributions = 0, detections = 0, truth = 0;
   FrameRecord record{};
 };
@@ -614,7 +615,10 @@ void ClosedLoop::Impl::trace(Frame& f) {
     if (tracer.terrain) {  // terrain clutter per cell after the tracer's returns
       const std::span<radar::Contribution> rest =
           std::span(tracer.contributions).subspan(f.contributions);
-      f.contributions += tracer.terrain->compute(f.pose, rest, r.terrain, r.terrain_dropped);
+      const std::uint64_t patches_before = r.terrain.patches;
+      f.terrain_returns = tracer.terrain->compute(f.pose, rest, r.terrain, r.terrain_dropped);
+      f.terrain_patches = r.terrain.patches - patches_before;
+      f.contributions += f.terrain_returns;
     }
   }
   // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
@@ -640,7 +644,8 @@ void ClosedLoop::Impl::sense(Frame& f) {
     governor.observe(static_cast<double>(p.last_ns(timing::Stage::kTrace)) * 1e-6,
                      static_cast<double>(p.last_ns(timing::Stage::kSensor)) * 1e-6,
                      r.trace.rays - f.rays_before, f.contributions,
-                     r.sensor.cells_synthesised - f.cells_before);
+                     r.sensor.cells_synthesised - f.cells_before, f.terrain_patches,
+                     f.terrain_returns);
     ++r.governor.level_frames[static_cast<std::size_t>(d->level)];
     r.governor.frames_degraded += d->degraded ? 1 : 0;
     r.governor.frames_predicted_late += d->over_deadline ? 1 : 0;

@@ -46,6 +46,8 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
           "sensor_ns_per_cell", "must be >= 0");
   require(std::isfinite(config.sensor_ns_per_return) && config.sensor_ns_per_return >= 0.0,
           "sensor_ns_per_return", "must be >= 0");
+  require(std::isfinite(config.terrain_ns_per_patch) && config.terrain_ns_per_patch >= 0.0,
+          "terrain_ns_per_patch", "must be >= 0");
   require(config.max_level >= 0 && config.max_level <= kMaxLevel, "max_level", "must be in 0..16");
   require(std::isfinite(frame_period_s) && frame_period_s > 0.0, "frame period", "must be > 0");
   deadline_ms_ = config.compute_fraction * frame_period_s * 1e3;
@@ -83,16 +85,25 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
   decision_.knobs.target_ray_spacing_m = spacing_m_;
 }
 
+double FidelityGovernor::model_trace_ms(double rays) const noexcept {
+  // The rays, and the terrain engine's patches (as many as the previous frame's: the engine
+  // does not follow the level).
+  return 1e-6 *
+         (config_.trace_ns_per_ray * rays + config_.terrain_ns_per_patch * prev_terrain_patches_);
+}
+
+double FidelityGovernor::model_sensor_ms(double rays) const noexcept {
+  // The sensor's work follows the previous frame's: its cells (set by the clutter's extent, not
+  // by the rays), its ray returns (in proportion to the rays) and the engine's returns.
+  const double ray_returns = std::max(0.0, prev_returns_ - prev_terrain_returns_);
+  const double returns =
+      (prev_rays_ > 0.0 ? ray_returns * rays / prev_rays_ : 0.0) + prev_terrain_returns_;
+  return 1e-6 * (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
+}
+
 double FidelityGovernor::predict_ms(std::size_t rays) const noexcept {
   const auto r = static_cast<double>(rays);
-  const double trace_ms = trace_factor_ * config_.trace_ns_per_ray * r * 1e-6;
-  // The sensor's work follows the previous frame's: its cells (set by the clutter's extent, not
-  // by the rays) and its returns (in proportion to the rays).
-  const double returns = prev_rays_ > 0.0 ? prev_returns_ * r / prev_rays_ : 0.0;
-  const double sensor_ms =
-      sensor_factor_ * 1e-6 *
-      (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
-  return trace_ms + sensor_ms;
+  return trace_factor_ * model_trace_ms(r) + sensor_factor_ * model_sensor_ms(r);
 }
 
 void FidelityGovernor::knobs_for(int level) noexcept {
@@ -187,15 +198,15 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
   d.estimated_snr_error_db =
       kLevelSnrError_db[static_cast<std::size_t>(std::min(level, kMaxLevel))];
   const auto r = static_cast<double>(rays);
-  last_predicted_trace_ms_ = config_.trace_ns_per_ray * r * 1e-6;
-  const double returns = prev_rays_ > 0.0 ? prev_returns_ * r / prev_rays_ : 0.0;
-  last_predicted_sensor_ms_ =
-      1e-6 * (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
+  last_predicted_trace_ms_ = model_trace_ms(r);
+  last_predicted_sensor_ms_ = model_sensor_ms(r);
   return d;
 }
 
 void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t rays,
-                               std::uint64_t returns, std::uint64_t cells_synthesised) noexcept {
+                               std::uint64_t returns, std::uint64_t cells_synthesised,
+                               std::uint64_t terrain_patches,
+                               std::uint64_t terrain_returns) noexcept {
   if (config_.mode == GovernorConfig::Mode::kMeasured) {
     // Factors of measured over modelled cost: up at once, down by an exponential average (a
     // tenth a frame), bounded so one odd frame cannot stall the governor.
@@ -211,6 +222,8 @@ void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t 
   prev_rays_ = static_cast<double>(rays);
   prev_returns_ = static_cast<double>(returns);
   prev_cells_ = static_cast<double>(cells_synthesised);
+  prev_terrain_patches_ = static_cast<double>(terrain_patches);
+  prev_terrain_returns_ = static_cast<double>(std::min(terrain_returns, returns));
 }
 
 }  // namespace radar_emu::loop

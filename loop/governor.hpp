@@ -22,8 +22,11 @@
 //
 // Cost model. predicted = trace + sensor, with
 //   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
+//          + terrain_ns_per_patch x the terrain engine's patches of the previous frame
+//            ([radar] terrain = "engine": the engine's cost does not follow the level)
 //   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
-//          + sensor_ns_per_return x returns of the previous frame x (rays / its rays)
+//          + sensor_ns_per_return x (the previous frame's ray returns x (rays / its rays)
+//                                    + its terrain engine returns)
 // The frame takes the finest level whose prediction is within the deadline (compute_fraction of
 // the frame period); if none is, the finest level within 5 % of the deadline of the coarsest
 // level's cost (degrading further would buy less than that). In "model" mode the coefficients are
@@ -65,7 +68,10 @@ struct GovernorConfig {
   double trace_ns_per_ray = 180.0;      ///< wall time of the frame's tracing per ray [ns]
   double sensor_ns_per_cell = 18.0;     ///< sensor wall time per cell synthesised [ns]
   double sensor_ns_per_return = 110.0;  ///< sensor wall time per return (contribution) [ns]
-  int max_level = 12;                   ///< coarsest level allowed (0..kMaxLevel)
+  /// Wall time of the terrain engine ([radar] terrain = "engine") per patch it evaluates [ns]
+  /// (its horizon sweep and queries included).
+  double terrain_ns_per_patch = 110.0;
+  int max_level = 12;  ///< coarsest level allowed (0..kMaxLevel)
 };
 
 /// What the governor chose for one frame.
@@ -104,9 +110,12 @@ class FidelityGovernor {
   /// The same at a given level (clamped to 0..kMaxLevel), whatever it costs: for measuring what
   /// a level gives (radar-emu tradeoff, tests).
   [[nodiscard]] const GovernorDecision& decide_at(const radar::RadarPose& pose, int level) noexcept;
-  /// What the frame decided last cost: stage wall times [ms] and what it processed.
+  /// What the frame decided last cost: stage wall times [ms] and what it processed (`returns`
+  /// all of them, `terrain_returns` of those the terrain engine's, `terrain_patches` the
+  /// engine's patches; both 0 without the engine).
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
-               std::uint64_t cells_synthesised) noexcept;
+               std::uint64_t cells_synthesised, std::uint64_t terrain_patches = 0,
+               std::uint64_t terrain_returns = 0) noexcept;
 
   [[nodiscard]] const GovernorConfig& config() const noexcept { return config_; }
   /// Cost factors of measured mode (1 in model mode).
@@ -132,6 +141,10 @@ class FidelityGovernor {
   GovernorDecision decision_{};
   // The previous frame, for the sensor term.
   double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;
+  double prev_terrain_patches_ = 0.0, prev_terrain_returns_ = 0.0;
+  /// The model's trace and sensor terms [ms] at `rays` (factors not applied).
+  [[nodiscard]] double model_trace_ms(double rays) const noexcept;
+  [[nodiscard]] double model_sensor_ms(double rays) const noexcept;
   double trace_factor_ = 1.0, sensor_factor_ = 1.0;
   double last_predicted_trace_ms_ = 0.0, last_predicted_sensor_ms_ = 0.0;
 };

@@ -152,6 +152,7 @@ mode = "auto"               # auto (measured with --realtime, else model) | mode
 trace_ns_per_ray = 180.0    # cost model, measured on the project's 2-core machine
 sensor_ns_per_cell = 18.0
 sensor_ns_per_return = 110.0
+terrain_ns_per_patch = 110.0 # the terrain engine ([radar] terrain = "engine"), per patch
 max_level = 12              # coarsest: target rays / 64, terrain grid spacing x 8
 
 # [weather]                   # no table: free space. With one, every return loses the two-way
@@ -224,7 +225,7 @@ void apply_governor(Scenario& s, const Table& root) {
   GovernorConfig& g = s.governor;
   const Table t = root.table("governor");
   t.refuse_unknown({"enabled", "compute_fraction", "mode", "trace_ns_per_ray", "sensor_ns_per_cell",
-                    "sensor_ns_per_return", "max_level"});
+                    "sensor_ns_per_return", "terrain_ns_per_patch", "max_level"});
   t.boolean("enabled", g.enabled);
   t.number("compute_fraction", g.compute_fraction, {0.01, 1.0});
   std::string mode;
@@ -238,6 +239,7 @@ void apply_governor(Scenario& s, const Table& root) {
   t.number("trace_ns_per_ray", g.trace_ns_per_ray, {1e-3, 1e6});
   t.number("sensor_ns_per_cell", g.sensor_ns_per_cell, {0.0, 1e6});
   t.number("sensor_ns_per_return", g.sensor_ns_per_return, {0.0, 1e6});
+  t.number("terrain_ns_per_patch", g.terrain_ns_per_patch, {0.0, 1e6});
   t.integer("max_level", g.max_level, 0, FidelityGovernor::kMaxLevel);
 }
 

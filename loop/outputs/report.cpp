@@ -397,6 +397,8 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                     {"patches", r.terrain.patches},
                     {"patches_lit", r.terrain.patches_lit},
                     {"patches_shadowed", r.terrain.patches_shadowed},
+                    {"horizon_patches", r.terrain.horizon_patches},
+                    {"occlusion_queries", r.terrain.occlusion_queries},
                     {"budget_cut", r.terrain.budget_cut},
                     {"dropped_returns", r.terrain_dropped}};
   const radar::Waveform& wf = s.sensor.processing.waveform;

@@ -184,8 +184,11 @@ TerrainEngine::TerrainEngine(const scene::Scene& scene, TerrainMaterials materia
       }
     }
   }
-  if (!facets_.empty())
+  if (!facets_.empty()) {
     build_tiles();
+    collect_occluders(structures);
+    mark_layers();
+  }
   if (facets_.empty()) {
     std::string names;
     for (std::size_t m = 0; m < materials_.names.size(); ++m)
@@ -244,6 +247,111 @@ void TerrainEngine::build_tiles() {
   tile_first_.push_back(static_cast<std::uint32_t>(tile_facets_.size()));
 }
 
+void TerrainEngine::collect_occluders(std::span<const std::uint8_t> structures) {
+  // Static triangles outside the engine (structures, targets, triangles without a sigma0 row),
+  // grouped per square of side kSquare_m by their centroid; each group's vertex box gives a
+  // sphere. Small squares keep a low object's sphere low (a runway light stays a light).
+  constexpr double kSquare_m = 10.0;
+  struct Box {
+    glm::dvec3 lo{std::numeric_limits<double>::infinity()}, hi{-lo};
+  };
+  std::vector<std::pair<std::int64_t, Box>> boxes;  // (square key, box), then sorted and merged
+  const scene::SceneDescription& d = scene_->description();
+  for (std::uint32_t id = 0; id < d.objects.size(); ++id) {
+    const scene::ObjectDesc& o = d.objects[id];
+    if (o.motion || o.trajectory) {
+      dynamic_occluders_.push_back(id);
+      continue;
+    }
+    if (o.lod_group >= 0 && o.lod_level != 0)
+      continue;  // a coarser level of terrain the engine holds at level 0
+    const bool structure = id < structures.size() && structures[id] != 0;
+    const glm::dmat4 w = scene_->world_from_body(id);
+    for (std::size_t t = 0; t < o.mesh.triangles.size(); ++t) {
+      const std::uint16_t mat = o.mesh.triangle_material[t];
+      const int row = mat < materials_.sigma0_row.size() ? materials_.sigma0_row[mat] : -1;
+      if (!structure && row >= 0)
+        continue;  // terrain: the horizon holds it
+      Box b;
+      for (int v = 0; v < 3; ++v) {
+        const glm::dvec3 p(w *
+                           glm::dvec4(glm::dvec3(o.mesh.positions_m[o.mesh.triangles[t][v]]), 1.0));
+        b.lo = glm::min(b.lo, p);
+        b.hi = glm::max(b.hi, p);
+      }
+      const glm::dvec3 c = 0.5 * (b.lo + b.hi);
+      const auto ix = static_cast<std::int64_t>(std::floor(c.x / kSquare_m));
+      const auto iy = static_cast<std::int64_t>(std::floor(c.y / kSquare_m));
+      boxes.emplace_back((ix << 32) ^ (iy & 0xffffffff), b);
+    }
+  }
+  std::sort(boxes.begin(), boxes.end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
+  for (std::size_t i = 0; i < boxes.size();) {
+    Box b = boxes[i].second;
+    std::size_t j = i + 1;
+    for (; j < boxes.size() && boxes[j].first == boxes[i].first; ++j) {
+      b.lo = glm::min(b.lo, boxes[j].second.lo);
+      b.hi = glm::max(b.hi, boxes[j].second.hi);
+    }
+    occluders_.push_back({0.5 * (b.lo + b.hi), 0.5 * glm::length(b.hi - b.lo)});
+    i = j;
+  }
+}
+
+void TerrainEngine::mark_layers() {
+  // Facets of different objects whose horizontal boxes overlap (by more than a centimetre: not
+  // neighbours sharing an edge): the one that does not lie wholly above the other is marked.
+  // Candidates meet in squares of side max_facet_m (each facet in every square its box touches:
+  // at most four).
+  bool several = false;
+  for (const TerrainFacet& f : facets_)
+    several = several || f.object != facets_.front().object;
+  if (!several)
+    return;
+  constexpr double kGap_m = 0.01;
+  const double side = spec_.max_facet_m;
+  auto lo_of = [](const TerrainFacet& f) { return glm::min(glm::min(f.a_m, f.b_m), f.c_m); };
+  auto hi_of = [](const TerrainFacet& f) { return glm::max(glm::max(f.a_m, f.b_m), f.c_m); };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> entries;  // (square, facet)
+  for (std::uint32_t i = 0; i < facets_.size(); ++i) {
+    const glm::dvec3 lo = lo_of(facets_[i]), hi = hi_of(facets_[i]);
+    const auto x0 = static_cast<std::int64_t>(std::floor(lo.x / side));
+    const auto x1 = static_cast<std::int64_t>(std::floor(hi.x / side));
+    const auto y0 = static_cast<std::int64_t>(std::floor(lo.y / side));
+    const auto y1 = static_cast<std::int64_t>(std::floor(hi.y / side));
+    for (std::int64_t x = x0; x <= x1; ++x)
+      for (std::int64_t y = y0; y <= y1; ++y)
+        entries.emplace_back(
+            (static_cast<std::uint64_t>(x) << 32) ^ (static_cast<std::uint64_t>(y) & 0xffffffffull),
+            i);
+  }
+  std::sort(entries.begin(), entries.end());
+  for (std::size_t s0 = 0; s0 < entries.size();) {
+    std::size_t s1 = s0 + 1;
+    while (s1 < entries.size() && entries[s1].first == entries[s0].first)
+      ++s1;
+    for (std::size_t p = s0; p < s1; ++p) {
+      TerrainFacet& a = facets_[entries[p].second];
+      const glm::dvec3 alo = lo_of(a), ahi = hi_of(a);
+      for (std::size_t q = p + 1; q < s1; ++q) {
+        TerrainFacet& b = facets_[entries[q].second];
+        if (a.object == b.object)
+          continue;
+        const glm::dvec3 blo = lo_of(b), bhi = hi_of(b);
+        if (std::min(ahi.x, bhi.x) - std::max(alo.x, blo.x) <= kGap_m ||
+            std::min(ahi.y, bhi.y) - std::max(alo.y, blo.y) <= kGap_m)
+          continue;
+        if (bhi.z > alo.z + kGap_m)
+          a.layered = true;  // b reaches above a's lowest point: may cover it
+        if (ahi.z > blo.z + kGap_m)
+          b.layered = true;
+      }
+    }
+    s0 = s1;
+  }
+}
+
 double TerrainEngine::sigma0(const TerrainFacet& f, double cos_incidence) const noexcept {
   return static_cast<double>(materials_.table.lookup(f.sigma0_row, spec_.channel, cos_incidence));
 }
@@ -269,9 +377,71 @@ bool TerrainEngine::clear(const glm::dvec3& from_m, const glm::dvec3& normal,
   return !scene_->occluded(ray);
 }
 
+namespace {
+
+// The horizon's layout for a grid and a view: columns of col_step_rad from az0_rad (the grid's
+// azimuths with one column of margin each side), bins of rho_step_m from rho = 0 to the grid's
+// last range edge.
+struct HorizonShape {
+  double az0_rad = 0.0, col_step_rad = 0.0, rho_step_m = 0.0;
+  std::size_t columns = 0, bins = 0;
+};
+
+HorizonShape horizon_shape(const CellGrid& grid, const TerrainView& view, double r_max) {
+  HorizonShape h;
+  h.col_step_rad =
+      view.horizon_azimuth_rad > 0.0 ? view.horizon_azimuth_rad : 0.5 * grid.azimuth_step_rad;
+  h.rho_step_m = view.horizon_rho_m > 0.0 ? view.horizon_rho_m : view.patch_min_m;
+  if (!(h.col_step_rad > 0.0) || !(h.rho_step_m > 0.0) || !std::isfinite(r_max) || !(r_max > 0.0))
+    return {};
+  const double span = grid.azimuth_step_rad * static_cast<double>(grid.columns);
+  h.columns = static_cast<std::size_t>(std::ceil(span / h.col_step_rad - 1e-9)) + 2;
+  h.az0_rad = grid.azimuth_min_rad - h.col_step_rad;
+  h.bins = static_cast<std::size_t>(std::ceil(r_max / h.rho_step_m)) + 1;
+  return h;
+}
+
+double last_edge(const CellGrid& grid) {
+  double r_max = 0.0;
+  for (std::size_t c = 0; c < (grid.per_column_edges ? grid.columns : 1); ++c)
+    r_max = std::max(r_max, grid.range_edges_m[c * (grid.bins + 1) + grid.bins]);
+  return r_max;
+}
+
+// Calls fn(centre, k) for patch k of facet f cut n ways, k ascending: the same centres as
+// facet_patch(f, ., n, k), row by row (row i from vertex a toward b: 2 (n - i) - 1 triangles,
+// "up" ones at even positions), without the square root that finds the row of a single k.
+template <class Fn>
+void for_each_patch(const TerrainFacet& f, std::uint32_t n, Fn&& fn) {
+  const glm::dvec3 eb = (f.b_m - f.a_m), ec = (f.c_m - f.a_m);
+  std::uint32_t k = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const std::uint32_t row = 2 * (n - i) - 1;
+    for (std::uint32_t r = 0; r < row; ++r, ++k) {
+      const double third = r % 2 == 0 ? 1.0 / 3.0 : 2.0 / 3.0;
+      const double u = (static_cast<double>(i) + third) / n;
+      const double v = (static_cast<double>(r / 2) + third) / n;
+      fn(f.a_m + u * eb + v * ec, k);
+    }
+  }
+}
+
+}  // namespace
+
+std::size_t TerrainEngine::horizon_scratch_size(const CellGrid& grid,
+                                                const TerrainView& view) noexcept {
+  const std::size_t edges_needed = (grid.per_column_edges ? grid.columns : 1) * (grid.bins + 1);
+  if (grid.columns == 0 || grid.bins == 0 || grid.range_edges_m.size() < edges_needed ||
+      !(grid.azimuth_step_rad > 0.0))
+    return 0;
+  const HorizonShape h = horizon_shape(grid, view, last_edge(grid));
+  return 2 * h.columns * h.bins + 2 * h.columns;  // two maps, the centres' cosines and sines
+}
+
 TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& grid,
                                       std::span<std::complex<double>> field, std::span<double> mean,
-                                      std::span<double> elevation_power) const noexcept {
+                                      std::span<double> elevation_power,
+                                      std::span<double> horizon) const noexcept {
   TerrainStats st;
   const std::size_t cells = grid.columns * grid.bins;
   const std::size_t looks = std::max<std::size_t>(view.looks, 1);
@@ -292,99 +462,320 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
   const double az_max =
       grid.azimuth_min_rad + grid.azimuth_step_rad * static_cast<double>(grid.columns);
   const double k2 = 4.0 * kPi / view.wavelength_m;
+  const double sin_el_min = std::sin(std::max(grid.elevation_min_rad, -0.5 * kPi));
+  const double sin_el_max = std::sin(std::min(grid.elevation_max_rad, 0.5 * kPi));
+  // Uniform range edges (one set for every column): the bin by a division.
+  const double* e0 = grid.range_edges_m.data();
+  const double edge_step = (e0[grid.bins] - e0[0]) / static_cast<double>(grid.bins);
+  bool uniform = !grid.per_column_edges && std::isfinite(edge_step) && edge_step > 0.0;
+  for (std::size_t b = 0; uniform && b <= grid.bins; ++b)
+    uniform =
+        std::abs(e0[b] - (e0[0] + static_cast<double>(b) * edge_step)) <= 1e-9 * e0[grid.bins];
+  const double inv_edge_step = uniform ? 1.0 / edge_step : 0.0;
 
-  // Whether a sphere (centre, radius) can meet the grid: range, then angles; its distance
-  // from the radar in rc.
-  auto sphere_meets_grid = [&](const glm::dvec3& centre_m, double radius_m, double& rc) {
+  // Whether a sphere (centre, radius) can meet the window [r_lo, r_hi] x [az_lo, az_hi] x
+  // [el_lo, el_hi]: range, then angles; its distance from the radar in rc.
+  auto sphere_meets = [&](const glm::dvec3& centre_m, double radius_m, double r_lo, double r_hi,
+                          double az_lo, double az_hi, double el_lo, double el_hi, double& rc) {
     const glm::dvec3 dc = centre_m - view.position_m;
     rc = glm::length(dc);
-    if (std::max(0.0, rc - radius_m) > r_max || rc + radius_m < r_min)
+    if (std::max(0.0, rc - radius_m) > r_hi || rc + radius_m < r_lo)
       return false;
-    if (rc > radius_m) {  // angular bounds of the sphere against the grid's
+    if (rc > radius_m) {  // angular bounds of the sphere against the window's
       const glm::dvec3 a = antenna_from_world * (dc / rc);
       const double az = std::atan2(a.y, a.x);
-      const double el = std::atan2(-a.z, std::hypot(a.x, a.y));
+      const double el = std::atan2(-a.z, std::sqrt(a.x * a.x + a.y * a.y));
       const double ang = std::asin(std::min(1.0, radius_m / rc));
-      if (az + ang < grid.azimuth_min_rad || az - ang > az_max ||
-          el + ang < grid.elevation_min_rad || el - ang > grid.elevation_max_rad)
+      if (az + ang < az_lo || az - ang > az_hi || el + ang < el_lo || el - ang > el_hi)
         return false;
     }
     return true;
   };
+  auto divisions = [&](const TerrainFacet& f, double rc) {
+    const double r_near = std::max(0.0, rc - f.radius_m);
+    return patch_divisions(f, std::max(view.patch_min_m, r_near * view.patch_angle_rad));
+  };
 
+  // ---- Pass 1 (kHorizon): the terrain's horizon and the occluders' map, per column and bin.
+  HorizonShape hz;
+  const bool use_horizon = view.shadowing && view.shadow_method == TerrainView::Shadow::kHorizon;
+  double* terrain_hz = nullptr;  // columns x bins, column-major in bins: max sin(el), then running
+  double* occluder_hz = nullptr;
+  const double* centre_cos = nullptr;  // per column: cos and sin of its centre's azimuth
+  const double* centre_sin = nullptr;
+  if (use_horizon) {
+    hz = horizon_shape(grid, view, r_max);
+    const std::size_t maps = horizon.size() >= 2 * hz.columns ? horizon.size() - 2 * hz.columns : 0;
+    if (hz.columns > 0 && maps / 2 < hz.columns * hz.bins && maps / 2 >= 2 * hz.columns) {
+      // Widen the bins to fit the scratch.
+      hz.bins = maps / 2 / hz.columns;
+      hz.rho_step_m = r_max / static_cast<double>(hz.bins - 1);
+      st.horizon_coarsened = 1;
+    }
+    if (hz.columns > 0 && maps / 2 >= hz.columns * hz.bins) {
+      terrain_hz = horizon.data();
+      occluder_hz = horizon.data() + hz.columns * hz.bins;
+      std::fill(terrain_hz, terrain_hz + 2 * hz.columns * hz.bins, -2.0);
+      double* cs = horizon.data() + 2 * hz.columns * hz.bins;
+      for (std::size_t c = 0; c < hz.columns; ++c) {
+        const double az_c = hz.az0_rad + (static_cast<double>(c) + 0.5) * hz.col_step_rad;
+        cs[c] = std::cos(az_c);
+        cs[hz.columns + c] = std::sin(az_c);
+      }
+      centre_cos = cs;
+      centre_sin = cs + hz.columns;
+    }
+  }
+  const double inv_col_step = terrain_hz ? 1.0 / hz.col_step_rad : 0.0;
+  const double inv_rho_step = terrain_hz ? 1.0 / hz.rho_step_m : 0.0;
+  const double hz_az_max = hz.az0_rad + hz.col_step_rad * static_cast<double>(hz.columns);
+  auto hz_index = [&](double az, double rho, std::size_t& index, std::size_t& bin) {
+    const double cf = (az - hz.az0_rad) * inv_col_step;
+    if (!(cf >= 0.0 && cf < static_cast<double>(hz.columns)))
+      return false;
+    bin = std::min(hz.bins - 1, static_cast<std::size_t>(rho * inv_rho_step));
+    index = static_cast<std::size_t>(cf) * hz.bins + bin;
+    return true;
+  };
+  if (terrain_hz) {
+    for (std::size_t t = 0; t < tiles_.size(); ++t) {
+      double rt = 0.0;
+      if (!sphere_meets(tiles_[t].centre_m, tiles_[t].radius_m, 0.0, r_max, hz.az0_rad, hz_az_max,
+                        grid.elevation_min_rad, 0.5 * kPi, rt))
+        continue;
+      for (std::uint32_t j = tile_first_[t]; j < tile_first_[t + 1]; ++j) {
+        const TerrainFacet& f = facets_[tile_facets_[j]];
+        if (glm::length(f.centroid_m - view.position_m) - f.radius_m > r_max)
+          continue;  // beyond the grid (the angles by the vertices below)
+        // The facet's profile in each column's centre plane (azimuth az_c: the plane through
+        // the radar holding the antenna's z axis, normal (-sin az_c, cos az_c, 0)): the segment
+        // where the plane cuts the triangle. Along a straight segment the elevation seen from
+        // the radar is monotone, so its two ends carry the profile's extremes; in between lies
+        // this facet alone (layers apart), which cannot shadow itself unless it faces away, and
+        // then its near end, written first along rho, shadows the rest.
+        const glm::dvec3 v[3] = {antenna_from_world * (f.a_m - view.position_m),
+                                 antenna_from_world * (f.b_m - view.position_m),
+                                 antenna_from_world * (f.c_m - view.position_m)};
+        double az_lo = std::numeric_limits<double>::infinity(), az_hi = -az_lo;
+        double sin_el_top = -1.0;  // a planar facet's highest elevation is at a vertex
+        bool around_axis = false;
+        for (const glm::dvec3& p : v) {
+          const double rho_p = std::sqrt(p.x * p.x + p.y * p.y);
+          if (!(rho_p > 1e-9 * (1.0 + std::abs(p.z))))
+            around_axis = true;
+          const double az = std::atan2(p.y, p.x);
+          az_lo = std::min(az_lo, az);
+          az_hi = std::max(az_hi, az);
+          sin_el_top = std::max(sin_el_top, -p.z / std::sqrt(rho_p * rho_p + p.z * p.z));
+        }
+        if (around_axis || az_hi - az_lo > kPi)
+          continue;  // a facet around the antenna's axis or behind it: no profile in the columns
+        if (sin_el_top < sin_el_min)
+          continue;  // wholly below the grid's elevations: it shadows none of its patches
+        // Centre c at az0 + (c + 1/2) step: the centres in [az_lo, az_hi].
+        const double c_lo = std::ceil((az_lo - hz.az0_rad) * inv_col_step - 0.5);
+        const double c_hi = std::floor((az_hi - hz.az0_rad) * inv_col_step - 0.5);
+        const double c_first = std::max(0.0, c_lo);
+        const double c_last = std::min(static_cast<double>(hz.columns) - 1.0, c_hi);
+        for (double cd = c_first; cd <= c_last; cd += 1.0) {
+          const auto col = static_cast<std::size_t>(cd);
+          const double sn = centre_sin[col], cs = centre_cos[col];
+          double sd[3];
+          for (int q = 0; q < 3; ++q)
+            sd[q] = cs * v[q].y - sn * v[q].x;
+          int ends = 0;
+          for (int q = 0; q < 3 && ends < 2; ++q) {
+            const int r = (q + 1) % 3;
+            if ((sd[q] > 0.0) == (sd[r] > 0.0))
+              continue;
+            const double u = sd[q] / (sd[q] - sd[r]);
+            const glm::dvec3 p = v[q] + u * (v[r] - v[q]);
+            ++ends;
+            ++st.horizon_patches;
+            const double rho = std::sqrt(p.x * p.x + p.y * p.y);
+            const double range = std::sqrt(rho * rho + p.z * p.z);
+            if (!(range > 0.0) || cs * p.x + sn * p.y < 0.0)
+              continue;  // the plane's other half, behind the axis
+            const auto bin = std::min(hz.bins - 1, static_cast<std::size_t>(rho * inv_rho_step));
+            double& h = terrain_hz[col * hz.bins + bin];
+            h = std::max(h, -p.z / range);
+          }
+        }
+      }
+    }
+    // What is not terrain: each sphere's highest sin(el), from its nearest rho on, over the
+    // columns its cap spans (a cap of angular radius alpha around (az, el) spans azimuths
+    // az +- asin(sin alpha / cos el) while |el| + alpha < pi/2).
+    auto add_occluder = [&](const glm::dvec3& centre_m, double radius_m) {
+      const glm::dvec3 dc = centre_m - view.position_m;
+      const double dist = glm::length(dc);
+      if (dist - radius_m > r_max)
+        return;
+      std::size_t c0 = 0, c1 = hz.columns;
+      double top = 2.0, rho_near = 0.0;
+      if (dist > radius_m) {
+        const glm::dvec3 a = antenna_from_world * (dc / dist);
+        const double el = std::asin(std::clamp(-a.z, -1.0, 1.0));
+        const double alpha = std::asin(radius_m / dist);
+        if (el + alpha < grid.elevation_min_rad)
+          return;  // below every patch's line of sight
+        top = std::sin(std::min(el + alpha, 0.5 * kPi));
+        rho_near = std::max(0.0, std::sqrt(a.x * a.x + a.y * a.y) * dist - radius_m);
+        if (std::abs(el) + alpha < 0.5 * kPi - 1e-6) {
+          const double az = std::atan2(a.y, a.x);
+          const double half = std::asin(std::min(1.0, std::sin(alpha) / std::cos(el)));
+          const double lo = (az - half - hz.az0_rad) * inv_col_step;
+          const double hi = (az + half - hz.az0_rad) * inv_col_step;
+          if (hi < 0.0 || lo >= static_cast<double>(hz.columns))
+            return;
+          c0 = static_cast<std::size_t>(std::max(0.0, lo));
+          c1 = std::min(hz.columns, static_cast<std::size_t>(hi) + 1);
+        }
+      }
+      const auto bin = std::min(hz.bins - 1, static_cast<std::size_t>(rho_near * inv_rho_step));
+      for (std::size_t c = c0; c < c1; ++c)
+        occluder_hz[c * hz.bins + bin] = std::max(occluder_hz[c * hz.bins + bin], top);
+    };
+    for (const Occluder& o : occluders_)
+      add_occluder(o.centre_m, o.radius_m);
+    const auto states = scene_->objects();
+    for (std::uint32_t id : dynamic_occluders_) {
+      const scene::ObjectState& o = states[id];
+      add_occluder(0.5 * (o.bounds_min_m + o.bounds_max_m),
+                   0.5 * glm::length(o.bounds_max_m - o.bounds_min_m));
+    }
+    // Running maxima outward: bin b then holds the horizon of bins 0..b.
+    for (std::size_t c = 0; c < hz.columns; ++c)
+      for (std::size_t b = 1; b < hz.bins; ++b) {
+        const std::size_t i = c * hz.bins + b;
+        terrain_hz[i] = std::max(terrain_hz[i], terrain_hz[i - 1]);
+        occluder_hz[i] = std::max(occluder_hz[i], occluder_hz[i - 1]);
+      }
+  }
+
+  // ---- Pass 2: the patches of the grid's cells.
   for (std::size_t t = 0; t < tiles_.size(); ++t) {
     double rt = 0.0;
-    if (!sphere_meets_grid(tiles_[t].centre_m, tiles_[t].radius_m, rt))
+    if (!sphere_meets(tiles_[t].centre_m, tiles_[t].radius_m, r_min, r_max, grid.azimuth_min_rad,
+                      az_max, grid.elevation_min_rad, grid.elevation_max_rad, rt))
       continue;
     for (std::uint32_t j = tile_first_[t]; j < tile_first_[t + 1]; ++j) {
       const std::uint32_t fi = tile_facets_[j];
       const TerrainFacet& f = facets_[fi];
       double rc = 0.0;
-      if (!sphere_meets_grid(f.centroid_m, f.radius_m, rc))
+      if (!sphere_meets(f.centroid_m, f.radius_m, r_min, r_max, grid.azimuth_min_rad, az_max,
+                        grid.elevation_min_rad, grid.elevation_max_rad, rc))
         continue;
-      const double r_near = std::max(0.0, rc - f.radius_m);
       ++st.facets_considered;
-      const std::uint32_t n =
-          patch_divisions(f, std::max(view.patch_min_m, r_near * view.patch_angle_rad));
+      const std::uint32_t n = divisions(f, rc);
       const std::uint64_t count = static_cast<std::uint64_t>(n) * n;
       if (st.patches + count > view.max_patches) {
         ++st.budget_cut;
         continue;
       }
-      for (std::uint32_t k = 0; k < count; ++k) {
-        const TerrainPatch p = facet_patch(f, fi, n, k);
-        ++st.patches;
-        const glm::dvec3 d = p.centre_m - view.position_m;
+      const double patch_area_m2 = f.area_m2 / static_cast<double>(count);
+      const std::uint64_t key0 = mix64((static_cast<std::uint64_t>(fi) << 20) ^ n);
+      st.patches += count;
+      for_each_patch(f, n, [&](const glm::dvec3& centre, std::uint32_t k) {
+        const glm::dvec3 d = centre - view.position_m;
         const double range = glm::length(d);
         if (!(range > 0.0)) {
           ++st.patches_outside;
-          continue;
+          return;
         }
         const glm::dvec3 u = d / range;
         const glm::dvec3 a = antenna_from_world * u;
         const double az = std::atan2(a.y, a.x);
         const double col_f = (az - grid.azimuth_min_rad) / grid.azimuth_step_rad;
-        const double el = std::atan2(-a.z, std::hypot(a.x, a.y));
-        if (!(col_f >= 0.0 && col_f < static_cast<double>(grid.columns)) ||
-            el < grid.elevation_min_rad || el > grid.elevation_max_rad) {
+        const double sin_el = -a.z;
+        if (!(col_f >= 0.0 && col_f < static_cast<double>(grid.columns)) || sin_el < sin_el_min ||
+            sin_el > sin_el_max) {
           ++st.patches_outside;
-          continue;
+          return;
         }
         const auto col = static_cast<std::size_t>(col_f);
-        const double* e =
-            grid.range_edges_m.data() + (grid.per_column_edges ? col * (grid.bins + 1) : 0);
-        const double* it = std::upper_bound(e, e + grid.bins + 1, range);
-        if (it == e || it == e + grid.bins + 1) {
-          ++st.patches_outside;
-          continue;
+        const double* e = e0 + (grid.per_column_edges ? col * (grid.bins + 1) : 0);
+        std::size_t bin = 0;
+        if (uniform) {
+          const double bf = (range - e[0]) * inv_edge_step;
+          if (!(bf >= 0.0 && bf < static_cast<double>(grid.bins) + 1.0)) {
+            ++st.patches_outside;
+            return;
+          }
+          bin = static_cast<std::size_t>(bf);
+          // Rounding at an edge: the bin with e[bin] <= range < e[bin + 1], as upper_bound.
+          if (bin > 0 && range < e[bin])
+            --bin;
+          else if (bin < grid.bins && range >= e[bin + 1])
+            ++bin;
+          if (bin >= grid.bins || range < e[bin]) {
+            ++st.patches_outside;
+            return;
+          }
+        } else {
+          const double* it = std::upper_bound(e, e + grid.bins + 1, range);
+          if (it == e || it == e + grid.bins + 1) {
+            ++st.patches_outside;
+            return;
+          }
+          bin = static_cast<std::size_t>(it - e - 1);
         }
-        const auto bin = static_cast<std::size_t>(it - e - 1);
         const double cos_inc = std::abs(glm::dot(f.normal, u));
         if (!(cos_inc > 1e-9)) {
           ++st.patches_grazing;
-          continue;
+          return;
         }
-        if (view.shadowing && !clear(p.centre_m, f.normal, view.position_m)) {
-          ++st.patches_shadowed;
-          continue;
+        if (view.shadowing) {
+          bool query = true;
+          if (terrain_hz) {
+            std::size_t index = 0, hb = 0;
+            const double rho = range * std::sqrt(a.x * a.x + a.y * a.y);
+            if (hz_index(az, rho, index, hb)) {
+              if (hb > 0) {
+                // The horizon at the patch's azimuth: between the profiles of the two nearest
+                // column centres, linearly (one alone where the other holds no terrain).
+                const double x = (az - hz.az0_rad) * inv_col_step - 0.5;
+                const auto c0 = static_cast<std::size_t>(std::max(0.0, std::floor(x)));
+                const std::size_t c1 = std::min(c0 + 1, hz.columns - 1);
+                const double w = std::clamp(x - static_cast<double>(c0), 0.0, 1.0);
+                const double h0 = terrain_hz[c0 * hz.bins + hb - 1];
+                const double h1 = terrain_hz[c1 * hz.bins + hb - 1];
+                const double h = h0 < -1.5 ? h1 : (h1 < -1.5 ? h0 : h0 + w * (h1 - h0));
+                if (sin_el < h) {
+                  ++st.patches_shadowed;  // below the horizon of the nearer terrain
+                  return;
+                }
+              }
+              // Behind something that is not terrain, or a layer under another terrain object.
+              query = f.layered || sin_el < occluder_hz[index];
+            }
+          }
+          if (query) {
+            ++st.occlusion_queries;
+            if (!clear(centre, f.normal, view.position_m)) {
+              ++st.patches_shadowed;
+              return;
+            }
+          }
         }
-        double power = sigma0(f, cos_inc) * p.area_m2;
+        double power = sigma0(f, cos_inc) * patch_area_m2;
         if (view.one_way_loss_db_per_m > 0.0)
           power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
         const std::size_t cell = bin * grid.columns + col;
         mean[cell] += power;
         if (!elevation_power.empty())
-          elevation_power[cell] += power * el;
+          elevation_power[cell] += power * sin_el;
         ++st.patches_lit;
         if (field.empty())
-          continue;
+          return;
         const double path = -k2 * range;
+        const TerrainPatch p{centre, patch_area_m2, key0 + k};
         for (std::size_t l = 0; l < looks; ++l) {
           const SpeckleSample s = speckle(p, l);
           field[l * cells + cell] += std::polar(std::sqrt(power * static_cast<double>(s.intensity)),
                                                 static_cast<double>(s.phase_rad) + path);
         }
-      }
+      });
     }
   }
   return st;

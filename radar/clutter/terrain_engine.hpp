@@ -20,10 +20,41 @@
 // Microwave Radar and Radiometric Remote Sensing, 2014, eq. 5.35 for the distributed target),
 // its single-look field sum a_k: with many patches per cell the sum is circular Gaussian, its
 // intensity exponential with that mean (Oliver & Quegan, Understanding SAR Images, 2004, ch. 4).
-// Shadowing: a patch counts only when the segment from it to the radar is clear (one occlusion
-// query against the whole scene, structures included: buildings shadow the ground). Layover is
+// Shadowing, two ways (TerrainView::shadow_method). kRays: a patch counts only when the segment
+// from it to the radar is clear (one occlusion query against the whole scene, structures
+// included: buildings shadow the ground). kHorizon: a horizon sweep per azimuth column (below)
+// for the terrain's own shadows, and an occlusion query only for the patches that lie behind
+// something that is not terrain (a structure, a target, a moving object). Layover is
 // what the cell mapping makes of it: every patch goes to the cell of its own range and
 // direction, so patches at different heights sharing a range add in one cell.
+//
+// The horizon sweep (kHorizon). In the antenna frame, a plane of constant azimuth contains the
+// radar and the antenna's z axis; while that axis is near the vertical (|tilt| < 90 deg minus the
+// steepest terrain slope: the loop's depression and roll), the terrain cuts each such plane along
+// a curve that is a graph over the distance from the z axis, rho = R cos(el), ground below it.
+// A point P of that curve is hidden exactly when some point Q of the curve nearer the axis
+// (rho_Q < rho_P) lies above P's line of sight (el_Q > el_P): the curve from Q to P then crosses
+// the line of sight before P, or reaches P from above it (P is seen from below the ground). This
+// is the horizon (or "line of sight by maximum elevation angle") rule of viewshed analysis
+// (Franklin & Ray, "Higher isn't necessarily better: visibility algorithms and experiments",
+// 6th Int. Symposium on Spatial Data Handling, 1994; De Floriani & Magillo, "Algorithms for
+// visibility computation on terrains: a survey", Environment and Planning B 30(5), 2003). The
+// engine samples it on its own subdivision: pass 1 writes, per column of horizon_azimuth_rad and
+// per bin of horizon_rho_m, the largest sin(el) of the patches' vertices there (the facets' own
+// vertices and points along their edges among them, where a crest of the piecewise-planar
+// surface lies; every facet of the columns, nearer than the grid's first range too, above its
+// elevation window too: both can shadow it);
+// a running maximum outward along rho makes each bin the horizon of the nearer ones; pass 2
+// takes a patch as shadowed when its sin(el) is below the horizon of the bins nearer than its
+// own. Error: at most one horizon bin plus a patch along rho at a shadow's edge, and a column's
+// width across. Where terrain objects overlap (a runway laid 0.1 m over the ground that goes on
+// under it), the lower layer's facets are marked at setup and take the occlusion query: no
+// sampling of the upper layer finds a step of centimetres. What is not terrain (objects left to the
+// rays, moving objects, static triangles without a sigma0 row) is bounded by spheres (setup: static
+// ones grouped in squares; per frame: the scene's world boxes of moving objects and structures): a
+// second map holds, per column and bin, the largest sin(el) any of them reaches from that rho on; a
+// patch below it gets the exact occlusion query (the sphere only says it may be behind one), any
+// other patch is lit.
 //
 // Costs. Setup (the constructor) allocates and throws std::invalid_argument with context. The
 // per-frame evaluation (integrate) allocates nothing and does not throw: patches come from the
@@ -82,6 +113,10 @@ struct TerrainFacet {
   std::uint32_t sigma0_row = 0;
   std::uint16_t material = 0;  ///< scene material index
   std::uint32_t object = 0;    ///< scene object id
+  /// A facet of another terrain object lies over part of it (layers: pavement laid on the
+  /// ground): the horizon sweep cannot tell which layer is on top, so with kHorizon its patches
+  /// take the occlusion query.
+  bool layered = false;
 };
 
 /// One patch (see the header): centroid, area, and its speckle key.
@@ -124,7 +159,15 @@ struct TerrainView {
   double patch_min_m = 0.5;            ///< patch size near the radar [m], > 0
   /// Patch size at range R: max(patch_min_m, R patch_angle_rad) (a fraction of the angular cell).
   double patch_angle_rad = 0.0;
-  bool shadowing = true;  ///< occlusion query per patch
+  bool shadowing = true;  ///< patches hidden from the radar are left out (shadow_method)
+  enum class Shadow : std::uint8_t {
+    kRays,     ///< one occlusion query per patch
+    kHorizon,  ///< the horizon sweep, queries only behind what is not terrain (header)
+  };
+  /// kHorizon needs the caller's scratch (integrate's `horizon`); without it, kRays.
+  Shadow shadow_method = Shadow::kRays;
+  double horizon_azimuth_rad = 0.0;  ///< horizon column width; 0: half the grid's column
+  double horizon_rho_m = 0.0;        ///< horizon bin along rho = R cos(el); 0: patch_min_m
   /// Atmospheric loss, one way [dB/m] >= 0: each patch's power times 10^(-2 L R / 10)
   /// (radar/propagation/path.hpp's two-way loss, applied per patch at its own range).
   double one_way_loss_db_per_m = 0.0;
@@ -140,6 +183,9 @@ struct TerrainStats {
   std::uint64_t patches_grazing = 0;    ///< line of sight in the facet's plane
   std::uint64_t patches_outside = 0;    ///< in no cell
   std::uint64_t budget_cut = 0;         ///< facets skipped when max_patches ran out
+  std::uint64_t horizon_patches = 0;    ///< kHorizon: points of pass 1 (the horizon's samples)
+  std::uint64_t occlusion_queries = 0;  ///< Embree occlusion queries made
+  std::uint64_t horizon_coarsened = 0;  ///< kHorizon: scratch too small, bins widened
 };
 
 class TerrainEngine {
@@ -173,14 +219,23 @@ class TerrainEngine {
   /// Adds the terrain of every cell of `grid` seen from `view`: mean[cell] += sum sigma_k,
   /// field[l * cells + cell] += sum a_k (look l's speckle), cells = grid.columns * grid.bins.
   /// `mean` must hold cells values, `field` looks * cells (or be empty: mean only).
-  /// `elevation_power`, when not empty (cells values), gets elevation_power[cell] += sigma_k el_k
-  /// [m^2 rad] (el_k the patch's elevation in the antenna frame): divided by mean, the cell's
-  /// power-weighted elevation. Real-time safe: no allocation, no exception; an unusable grid or
-  /// view adds nothing and returns all-zero statistics.
+  /// `elevation_power`, when not empty (cells values), gets elevation_power[cell] +=
+  /// sigma_k sin(el_k) [m^2] (el_k the patch's elevation in the antenna frame): divided by mean,
+  /// the sine of the cell's power-weighted elevation. `horizon`: the scratch of the horizon
+  /// sweep (view.shadow_method kHorizon), horizon_scratch_size(grid, view) values or more (fewer:
+  /// its bins are widened to fit, counted in horizon_coarsened). Real-time safe: no allocation,
+  /// no exception; an unusable grid or view adds nothing and returns all-zero statistics.
   [[nodiscard]] TerrainStats integrate(const TerrainView& view, const CellGrid& grid,
                                        std::span<std::complex<double>> field,
                                        std::span<double> mean,
-                                       std::span<double> elevation_power = {}) const noexcept;
+                                       std::span<double> elevation_power = {},
+                                       std::span<double> horizon = {}) const noexcept;
+  /// Scratch values integrate() needs for the horizon sweep of `grid` from `view` (its columns
+  /// and its bins out to the grid's last range edge). Real-time safe.
+  [[nodiscard]] static std::size_t horizon_scratch_size(const CellGrid& grid,
+                                                        const TerrainView& view) noexcept;
+  /// The static occluders that are not terrain (bounding spheres, world). Diagnostics.
+  [[nodiscard]] std::size_t static_occluders() const noexcept { return occluders_.size(); }
 
  private:
   const scene::Scene* scene_;
@@ -200,6 +255,17 @@ class TerrainEngine {
   std::vector<std::uint32_t> tile_first_;
   std::vector<std::uint32_t> tile_facets_;
   void build_tiles();
+  /// What is not terrain but can shadow it (kHorizon): static triangles outside the engine,
+  /// grouped per square of the horizontal plane, as bounding spheres; and the objects whose world
+  /// box is read per frame (moving objects, structures).
+  struct Occluder {
+    glm::dvec3 centre_m{0.0};
+    double radius_m = 0.0;
+  };
+  std::vector<Occluder> occluders_;
+  std::vector<std::uint32_t> dynamic_occluders_;  ///< object ids
+  void collect_occluders(std::span<const std::uint8_t> structures);
+  void mark_layers();
 };
 
 /// The materials of a resolved SurfaceSet-like description: per scene material its sigma0 row

@@ -198,6 +198,7 @@ EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPo
       terrain.stats.patches += b.patches;
       terrain.stats.patches_lit += b.patches_lit;
       terrain.stats.patches_shadowed += b.patches_shadowed;
+      terrain.stats.occlusion_queries += b.occlusion_queries;
       terrain.stats.patches_grazing += b.patches_grazing;
       terrain.stats.patches_outside += b.patches_outside;
       terrain.stats.budget_cut += b.budget_cut;

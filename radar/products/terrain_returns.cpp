@@ -77,6 +77,8 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
     first += sl.columns;
     sl.mean.assign(sl.columns * bins_, 0.0);
     sl.elevation_power.assign(sl.columns * bins_, 0.0);
+    if (c.shadowing && c.horizon)
+      sl.horizon.assign(clutter::TerrainEngine::horizon_scratch_size(slice_grid(sl), view()), 0.0);
   }
   // The object holding most of the terrain area labels the returns (Contribution::object_id).
   std::vector<double> area(scene.objects().size(), 0.0);
@@ -86,31 +88,48 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
       static_cast<std::uint32_t>(std::max_element(area.begin(), area.end()) - area.begin());
 }
 
+clutter::TerrainView TerrainReturns::view() const noexcept {
+  const TerrainReturnsConfig& c = config_;
+  clutter::TerrainView v;
+  v.wavelength_m = kSpeedOfLight_mps / c.carrier_hz;
+  v.patch_min_m = c.range_cell_m * c.patch_fraction;
+  v.patch_angle_rad = c.azimuth_cell_rad * c.patch_fraction;
+  v.shadowing = c.shadowing;
+  v.shadow_method =
+      c.horizon ? clutter::TerrainView::Shadow::kHorizon : clutter::TerrainView::Shadow::kRays;
+  // The horizon: columns of half a cell, bins of half a range cell along rho.
+  v.horizon_azimuth_rad = 0.5 * c.azimuth_cell_rad;
+  v.horizon_rho_m = 0.5 * c.range_cell_m;
+  v.max_patches =
+      std::max<std::uint64_t>(1, c.max_patches / std::max<std::size_t>(1, slices_.size()));
+  return v;
+}
+
+clutter::CellGrid TerrainReturns::slice_grid(const Slice& sl) const noexcept {
+  const TerrainReturnsConfig& c = config_;
+  clutter::CellGrid grid;
+  grid.azimuth_step_rad = c.azimuth_cell_rad;
+  grid.azimuth_min_rad =
+      c.azimuth_min_rad + static_cast<double>(sl.first_column) * c.azimuth_cell_rad;
+  grid.columns = sl.columns;
+  grid.elevation_min_rad = c.elevation_min_rad;
+  grid.elevation_max_rad = c.elevation_max_rad;
+  grid.bins = bins_;
+  grid.range_edges_m = edges_m_;
+  return grid;
+}
+
 std::size_t TerrainReturns::compute(const RadarPose& pose, std::span<Contribution> out,
                                     clutter::TerrainStats& stats, std::uint64_t& dropped) noexcept {
   const TerrainReturnsConfig& c = config_;
-  clutter::TerrainView view;
-  view.position_m = pose.position_m;
-  view.world_from_antenna = pose.world_from_antenna;
-  view.wavelength_m = kSpeedOfLight_mps / c.carrier_hz;
-  view.patch_min_m = c.range_cell_m * c.patch_fraction;
-  view.patch_angle_rad = c.azimuth_cell_rad * c.patch_fraction;
-  view.shadowing = c.shadowing;
-  view.max_patches = std::max<std::uint64_t>(1, c.max_patches / slices_.size());
+  clutter::TerrainView v = view();
+  v.position_m = pose.position_m;
+  v.world_from_antenna = pose.world_from_antenna;
   tbb::parallel_for(std::size_t{0}, slices_.size(), [&](std::size_t s) {
     Slice& sl = slices_[s];
     std::fill(sl.mean.begin(), sl.mean.end(), 0.0);
     std::fill(sl.elevation_power.begin(), sl.elevation_power.end(), 0.0);
-    clutter::CellGrid grid;
-    grid.azimuth_step_rad = c.azimuth_cell_rad;
-    grid.azimuth_min_rad =
-        c.azimuth_min_rad + static_cast<double>(sl.first_column) * c.azimuth_cell_rad;
-    grid.columns = sl.columns;
-    grid.elevation_min_rad = c.elevation_min_rad;
-    grid.elevation_max_rad = c.elevation_max_rad;
-    grid.bins = bins_;
-    grid.range_edges_m = edges_m_;
-    sl.stats = engine_.integrate(view, grid, {}, sl.mean, sl.elevation_power);
+    sl.stats = engine_.integrate(v, slice_grid(sl), {}, sl.mean, sl.elevation_power, sl.horizon);
   });
   const glm::dmat3& r = pose.world_from_antenna;
   std::size_t n = 0;
@@ -122,6 +141,9 @@ std::size_t TerrainReturns::compute(const RadarPose& pose, std::span<Contributio
     stats.patches_grazing += sl.stats.patches_grazing;
     stats.patches_outside += sl.stats.patches_outside;
     stats.budget_cut += sl.stats.budget_cut;
+    stats.horizon_patches += sl.stats.horizon_patches;
+    stats.occlusion_queries += sl.stats.occlusion_queries;
+    stats.horizon_coarsened += sl.stats.horizon_coarsened;
     for (std::size_t b = 0; b < bins_; ++b) {
       for (std::size_t col = 0; col < sl.columns; ++col) {
         const std::size_t cell = b * sl.columns + col;

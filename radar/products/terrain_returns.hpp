@@ -8,9 +8,10 @@
 // Cells. Columns of azimuth_cell_rad across [azimuth_min_rad, azimuth_max_rad) (antenna frame),
 // range bins of range_cell_m from range_min_m to range_max_m. The engine integrates
 // sigma0(local incidence) dA over the terrain patches seen from the antenna (shadowing on,
-// structures shadow the ground) whose elevation lies in [elevation_min_rad, elevation_max_rad]:
-// the discretised integral of sigma0 over the cell's illuminated surface (Ulaby & Long,
-// Microwave Radar and Radiometric Remote Sensing, 2014, eq. 5.35). A lit cell's return:
+// structures shadow the ground; the terrain's own shadows by the engine's horizon sweep) whose
+// elevation lies in [elevation_min_rad, elevation_max_rad]: the discretised integral of sigma0 over
+// the cell's illuminated surface (Ulaby & Long, Microwave Radar and Radiometric Remote Sensing,
+// 2014, eq. 5.35). A lit cell's return:
 //   |A|^2          = sum_k sigma_k over the cell's patches [m^2] (mean power: the sensor draws
 //                    the speckle, as it does for a terrain ray's footprint);
 //   range_m        = the cell's centre, range_spread_m its width (the sensor spreads the power
@@ -53,7 +54,10 @@ struct TerrainReturnsConfig {
   /// Patch size as a fraction of the cell's smaller extent (range bin, R x column), (0, 1].
   double patch_fraction = 1.0;
   double carrier_hz = 94e9;  ///< the path phase of the engine's field (not used for the mean)
-  bool shadowing = true;     ///< one occlusion query per patch
+  bool shadowing = true;     ///< patches hidden from the radar are left out
+  /// Shadows by the engine's horizon sweep per azimuth column (queries only behind what is not
+  /// terrain; radar/clutter/terrain_engine.hpp); false: one occlusion query per patch.
+  bool horizon = true;
   /// Patches per frame, all slices together (counted in TerrainStats::budget_cut when it cuts).
   std::uint64_t max_patches = 20'000'000;
   std::size_t max_cells = 4'000'000;  ///< setup refuses more columns x bins
@@ -85,8 +89,11 @@ class TerrainReturns {
   struct Slice {
     std::size_t first_column = 0, columns = 0;
     std::vector<double> mean, elevation_power;  ///< bins x columns of the slice
+    std::vector<double> horizon;                ///< the engine's horizon scratch
     clutter::TerrainStats stats;
   };
+  [[nodiscard]] clutter::TerrainView view() const noexcept;  ///< the pose left at its default
+  [[nodiscard]] clutter::CellGrid slice_grid(const Slice& sl) const noexcept;
   TerrainReturnsConfig config_;
   clutter::TerrainEngine engine_;
   std::size_t columns_ = 0, bins_ = 0;

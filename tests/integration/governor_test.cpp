@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <vector>
 
 #include "io/detection_icd.hpp"
@@ -210,6 +211,35 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
   (void)fixed.decide(f.pose);
   fixed.observe(100.0, 100.0, 1000, 500, 1000);
   EXPECT_EQ(fixed.trace_factor(), 1.0);
+}
+
+TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
+  // [radar] terrain = "engine": the engine's time (terrain_ns_per_patch x its patches) and its
+  // returns (sensor_ns_per_return each, not scaled with the rays) join the prediction at every
+  // level, by the closed form of the cost model (loop/governor.hpp).
+  DefaultFrame& f = default_frame();
+  loop::GovernorConfig g = f.s.governor;
+  g.mode = loop::GovernorConfig::Mode::kModel;
+  loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
+  constexpr std::uint64_t kCells = 300'000, kRays = 100'000, kReturns = 20'000;
+  (void)gov.decide_at(f.pose, 0);
+  gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+  const loop::GovernorDecision rays_only = gov.decide_at(f.pose, 0);
+  constexpr std::uint64_t kPatches = 150'000, kEngineReturns = 30'000;
+  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns);
+  const loop::GovernorDecision with_engine = gov.decide_at(f.pose, 0);
+  const double expected_extra_ms =
+      1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) +
+              g.sensor_ns_per_return * static_cast<double>(kEngineReturns));
+  std::cout << "level 0: " << rays_only.predicted_ms << " ms with rays only, "
+            << with_engine.predicted_ms << " ms with the engine's " << kPatches << " patches\n";
+  EXPECT_NEAR(with_engine.predicted_ms - rays_only.predicted_ms, expected_extra_ms, 1e-9);
+  // At a coarser level the engine's share stays whole (it does not follow the level).
+  gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+  const loop::GovernorDecision coarse_rays = gov.decide_at(f.pose, 6);
+  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns);
+  const loop::GovernorDecision coarse_engine = gov.decide_at(f.pose, 6);
+  EXPECT_NEAR(coarse_engine.predicted_ms - coarse_rays.predicted_ms, expected_extra_ms, 1e-9);
 }
 
 TEST(Governor, InvalidSettingsFailAtSetupNamingTheField) {

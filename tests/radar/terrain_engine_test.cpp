@@ -155,6 +155,181 @@ TEST(TerrainEngine, HomogeneousFieldCellMeanAndExponentialIntensity) {
   const cl::TerrainStats again = eng.integrate(view, grid, field, mean);
   EXPECT_EQ(test::stop_counting_allocations(), 0u);
   EXPECT_EQ(again.patches_lit, st.patches_lit);
+
+  // The horizon sweep over a flat field: nothing shadowed, no query, the same cells.
+  cl::TerrainView hv = view;
+  hv.shadow_method = cl::TerrainView::Shadow::kHorizon;
+  std::vector<double> scratch(cl::TerrainEngine::horizon_scratch_size(grid, hv));
+  std::vector<double> mean_h(cells, 0.0);
+  test::start_counting_allocations();
+  const cl::TerrainStats sh = eng.integrate(hv, grid, {}, mean_h, {}, scratch);
+  EXPECT_EQ(test::stop_counting_allocations(), 0u);
+  EXPECT_EQ(sh.patches_shadowed, 0u);
+  EXPECT_EQ(sh.occlusion_queries, 0u);
+  EXPECT_EQ(sh.horizon_coarsened, 0u);
+  EXPECT_GT(sh.horizon_patches, 0u);
+  EXPECT_EQ(sh.patches_lit, st.patches_lit);
+  for (std::size_t c = 0; c < cells; ++c)
+    EXPECT_NEAR(mean_h[c], mean[c], 1e-9 * mean[c]);
+}
+
+// ------------------------------------------------------------------ the horizon sweep
+
+// A level antenna at height H over the origin looking north (x north, y east, z down), cells of
+// 1 deg x 2 m from 100 to 1000 m.
+struct NorthGrid {
+  static constexpr double kH = 100.0, kF = 35e9, kBin_m = 2.0, kR0_m = 100.0;
+  cl::TerrainView view;
+  cl::CellGrid grid;
+  std::vector<double> edges;
+  NorthGrid() {
+    view.position_m = {0.0, 0.0, kH};
+    view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
+    view.wavelength_m = kC / kF;
+    view.patch_min_m = 2.0;
+    grid.azimuth_min_rad = -5.0 * kPi / 180.0;
+    grid.azimuth_step_rad = 1.0 * kPi / 180.0;
+    grid.columns = 10;
+    grid.bins = 450;
+    for (std::size_t b = 0; b <= grid.bins; ++b)
+      edges.push_back(kR0_m + kBin_m * static_cast<double>(b));
+    grid.range_edges_m = edges;
+  }
+  // Cell means with the given shadowing; the statistics in `st`.
+  std::vector<double> means(const cl::TerrainEngine& eng, cl::TerrainView::Shadow how,
+                            cl::TerrainStats& st) const {
+    cl::TerrainView v = view;
+    v.shadow_method = how;
+    std::vector<double> scratch(cl::TerrainEngine::horizon_scratch_size(grid, v));
+    std::vector<double> mean(grid.columns * grid.bins, 0.0);
+    st = eng.integrate(v, grid, {}, mean, {}, scratch);
+    return mean;
+  }
+  // Slant range of the near edge of the first bin of `column` after the last unlit bin beyond
+  // range r_from_m (where a shadow ends); -1 when every bin is lit.
+  double shadow_end_m(const std::vector<double>& mean, std::size_t column, double r_from_m) const {
+    double end = -1.0;
+    for (std::size_t b = 0; b < grid.bins; ++b)
+      if (edges[b] > r_from_m && !(mean[b * grid.columns + column] > 0.0))
+        end = edges[b + 1];
+    return end;
+  }
+};
+
+TEST(TerrainEngineHorizon, RidgeShadowEndsWhereTheLineOverTheCrestMeetsTheGround) {
+  // A ridge along x: front foot at y = gc - 20, crest h = 20 m at gc = 600 m, back foot at
+  // gc + 10 (63 deg, steeper than the line of sight); flat ground from 50 to 1000 m. Seen from
+  // H = 100 m at azimuth phi, the line over the crest (ground distance gc / cos phi) meets the
+  // ground at rho = (gc / cos phi) H / (H - h): slant range sqrt(rho^2 + H^2).
+  const double gc = 600.0, h = 20.0, H = NorthGrid::kH;
+  scene::SceneDescription d;
+  d.materials = {{"grass", {}}};
+  scene::ObjectDesc o;
+  o.name = "ground";
+  const double x0 = -100.0, x1 = 100.0;
+  quad(o.mesh, {x0, 50, 0}, {x1, 50, 0}, {x1, gc - 20, 0}, {x0, gc - 20, 0}, 0);
+  quad(o.mesh, {x0, gc - 20, 0}, {x1, gc - 20, 0}, {x1, gc, h}, {x0, gc, h}, 0);
+  quad(o.mesh, {x0, gc, h}, {x1, gc, h}, {x1, gc + 10, 0}, {x0, gc + 10, 0}, 0);
+  quad(o.mesh, {x0, gc + 10, 0}, {x1, gc + 10, 0}, {x1, 1000, 0}, {x0, 1000, 0}, 0);
+  d.objects.push_back(o);
+  const scene::Scene s(d);
+  const SurfaceSet set = resolve_surfaces(s.materials(), {NorthGrid::kF, Polarisation::kVV, {}});
+  cl::TerrainEngineSpec spec;
+  spec.max_facet_m = 20.0;
+  const cl::TerrainEngine eng = engine_of(s, set, spec);
+  const NorthGrid ng;
+  cl::TerrainStats sh, sr;
+  const std::vector<double> horizon = ng.means(eng, cl::TerrainView::Shadow::kHorizon, sh);
+  const std::vector<double> rays = ng.means(eng, cl::TerrainView::Shadow::kRays, sr);
+  EXPECT_EQ(sh.occlusion_queries, 0u);  // terrain only: no query
+  EXPECT_EQ(sh.horizon_coarsened, 0u);
+  EXPECT_GT(sh.patches_shadowed, 0u);
+  const double r_crest = std::hypot(gc, H - h);
+  for (std::size_t c = 0; c < ng.grid.columns; ++c) {
+    // The column's far azimuth edge: the shadow's last point in it.
+    const auto edge = [&](std::size_t k) {
+      return std::abs(ng.grid.azimuth_min_rad + ng.grid.azimuth_step_rad * static_cast<double>(k));
+    };
+    const double phi = std::max(edge(c), edge(c + 1));
+    const double rho_end = gc / std::cos(phi) * H / (H - h);
+    const double expected = std::hypot(rho_end, H);
+    const double by_horizon = ng.shadow_end_m(horizon, c, r_crest);
+    const double by_rays = ng.shadow_end_m(rays, c, r_crest);
+    std::cout << "column " << c << ": shadow ends at " << by_horizon << " m (horizon), " << by_rays
+              << " m (rays), geometry " << expected << " m\n";
+    // Within one range bin plus a patch (2 m each) of the geometry and of the rays.
+    EXPECT_NEAR(by_horizon, expected, 2.0 * NorthGrid::kBin_m);
+    EXPECT_NEAR(by_horizon, by_rays, 2.0 * NorthGrid::kBin_m);
+  }
+  std::cout << "ridge: " << sh.patches_shadowed << " patches shadowed by the horizon, "
+            << sr.patches_shadowed << " by rays (" << sr.occlusion_queries << " queries)\n";
+  // The back face (10 m of it here) in the crest's own horizon bin is not behind a nearer bin:
+  // lit by the horizon, hidden by the queries (a crest's bin: 2 m of every back face).
+  EXPECT_LE(sh.patches_shadowed, sr.patches_shadowed);
+  EXPECT_NEAR(static_cast<double>(sh.patches_shadowed), static_cast<double>(sr.patches_shadowed),
+              0.05 * static_cast<double>(sr.patches_shadowed));
+}
+
+TEST(TerrainEngineHorizon, MetalBoxShadowsTheGroundBehindItByItsQueries) {
+  // A metal box (no sigma0: not terrain) 10 m wide, 10 m deep, h = 15 m tall, its near face at
+  // y = 400 m straight ahead, on flat grass: along phi = 0 the ground is hidden from its far
+  // face's foot to where the line over its far top edge meets the ground, 410 H / (H - h).
+  const double H = NorthGrid::kH, h = 15.0;
+  scene::SceneDescription d;
+  d.materials = {{"grass", {}}, {"metal", {}}};
+  scene::ObjectDesc g;
+  g.name = "ground";
+  quad(g.mesh, {-100, 50, 0}, {100, 50, 0}, {100, 1000, 0}, {-100, 1000, 0}, 0);
+  d.objects.push_back(g);
+  scene::ObjectDesc b;
+  b.name = "box";
+  const double xa = -5, xb = 5, ya = 400, yb = 410;
+  quad(b.mesh, {xa, ya, 0}, {xb, ya, 0}, {xb, ya, h}, {xa, ya, h}, 1);
+  quad(b.mesh, {xa, ya, h}, {xb, ya, h}, {xb, yb, h}, {xa, yb, h}, 1);
+  quad(b.mesh, {xb, yb, 0}, {xa, yb, 0}, {xa, yb, h}, {xb, yb, h}, 1);
+  quad(b.mesh, {xa, ya, 0}, {xa, ya, h}, {xa, yb, h}, {xa, yb, 0}, 1);
+  quad(b.mesh, {xb, ya, 0}, {xb, yb, 0}, {xb, yb, h}, {xb, ya, h}, 1);
+  d.objects.push_back(b);
+  const scene::Scene s(d);
+  const SurfaceSet set = resolve_surfaces(s.materials(), {NorthGrid::kF, Polarisation::kVV, {}});
+  cl::TerrainEngineSpec spec;
+  spec.max_facet_m = 20.0;
+  const cl::TerrainEngine eng = engine_of(s, set, spec);
+  EXPECT_GE(eng.static_occluders(), 1u);
+  const NorthGrid ng;
+  cl::TerrainStats sh, sr;
+  const std::vector<double> horizon = ng.means(eng, cl::TerrainView::Shadow::kHorizon, sh);
+  const std::vector<double> rays = ng.means(eng, cl::TerrainView::Shadow::kRays, sr);
+  // Column 5 holds azimuths [0, 1 deg): at 410-480 m the box (x in [-5, 5]) covers [0, 0.7 deg)
+  // of it; its cells over the ground from 420 m to 10 m short of rho_end (482 m).
+  const double rho_end = 410.0 * H / (H - h);
+  std::size_t dark = 0, lit_after = 0, checked = 0;
+  for (std::size_t bn = 0; bn < ng.grid.bins; ++bn) {
+    const double r = 0.5 * (ng.edges[bn] + ng.edges[bn + 1]);
+    const double rho = std::sqrt(r * r - H * H);
+    const double m = horizon[bn * ng.grid.columns + 5];
+    if (rho > 420.0 && rho < rho_end - 10.0) {
+      ++checked;
+      // Partly hidden (the box spans 0.7 of the column's 1 deg): under 0.6 of the open
+      // ground's level at the same range (column 7, [2, 3) deg).
+      dark += m < 0.6 * horizon[bn * ng.grid.columns + 7];
+    }
+    if (rho > rho_end + 5.0 && rho < rho_end + 100.0)
+      lit_after += m > 0.0;
+  }
+  std::cout << "box: " << dark << " of " << checked << " cells behind it darkened; "
+            << sh.occlusion_queries << " queries of " << sh.patches
+            << " patches (rays: " << sr.occlusion_queries << "); shadowed " << sh.patches_shadowed
+            << " vs " << sr.patches_shadowed << "\n";
+  EXPECT_GT(checked, 20u);
+  EXPECT_EQ(dark, checked);
+  EXPECT_GT(lit_after, 40u);
+  // The same patches hidden as by a query per patch, the queries only near the box's shadow.
+  EXPECT_EQ(sh.patches_shadowed, sr.patches_shadowed);
+  EXPECT_EQ(sh.patches_lit, sr.patches_lit);
+  EXPECT_LT(sh.occlusion_queries, sh.patches / 20);
+  for (std::size_t c = 0; c < horizon.size(); ++c)
+    EXPECT_DOUBLE_EQ(horizon[c], rays[c]);
 }
 
 // ------------------------------------------------------------------ SAR geometry over the engine
