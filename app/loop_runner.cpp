@@ -145,10 +145,15 @@ int execute_loop(const loop::Scenario& scenario, loop::RunOptions options, const
     }
   }
   if (result.interrupted) {
+    // What was kept: the outputs under --out, and the cube file when there is one.
+    std::string kept = out.empty() ? "" : " to " + out;
+    if (const std::optional<loop::CubeCounters> c = loop.cube_counters())
+      kept += (kept.empty() ? " (" : " and ") + c->file + (out.empty() ? ")" : "");
+    if (kept.empty())
+      kept = " (none: no --out)";
     std::fprintf(stderr, "radar-emu: interrupted after %llu of %llu frames; outputs written%s\n",
                  static_cast<unsigned long long>(result.frames),
-                 static_cast<unsigned long long>(result.frames_planned),
-                 out.empty() ? " (none: no --out)" : (" to " + out).c_str());
+                 static_cast<unsigned long long>(result.frames_planned), kept.c_str());
     return 128 + result.stop_signal;
   }
   // A navigation source that never answered: the run happened (outputs written) but could

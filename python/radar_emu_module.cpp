@@ -809,6 +809,21 @@ PYBIND11_MODULE(radar_emu, m) {
       "radar-emu from Python: RCS, range profiles, sigma0, ITU attenuation and the closed loop, "
       "through the same C++ code as the radar-emu CLI, in its units (docs/python.md)";
   m.attr("__version__") = "0.1.0";
+  m.attr("built_for_python") = RADAR_EMU_PYTHON_EXECUTABLE;
+
+  // NumPy at import, with the interpreter to use when it is missing: the module is built for
+  // one interpreter (CMake's Python3_EXECUTABLE, Debian's /usr/bin/python3 by default, which
+  // has python3-numpy), and another one on PATH (a pyenv or venv build) may lack NumPy, which
+  // would otherwise surface later as a bare "No module named 'numpy'" from the first array.
+  try {
+    py::module_::import("numpy");
+  } catch (py::error_already_set& e) {
+    const std::string here = py::str(py::module_::import("sys").attr("executable"));
+    throw py::import_error("radar_emu: this interpreter (" + here + ") cannot import NumPy (" +
+                           std::string(e.what()) +
+                           "); the module was built for " RADAR_EMU_PYTHON_EXECUTABLE
+                           ": run it with that interpreter, or install NumPy for this one");
+  }
 
   // Errors: std::invalid_argument -> ValueError, std::runtime_error -> RuntimeError (pybind11's
   // defaults), with the CLI's one-line messages.

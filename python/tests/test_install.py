@@ -42,3 +42,23 @@ def test_install_tree(tmp_path):
     p = subprocess.run([str(prefix / "bin" / "radar-emu"), "--version"], capture_output=True,
                        text=True)
     assert p.returncode == 0 and "radar-emu" in p.stdout
+
+
+def test_another_interpreter_without_numpy_is_told_which_one_to_use():
+    """An interpreter that cannot import NumPy (here the build's own with -S: no site-packages,
+    so no Debian NumPy) gets one ImportError naming the interpreter the module was built for,
+    not a bare missing-module error from the first array."""
+    build_py = os.path.join(os.environ["RADAR_EMU_BUILD_DIR"], "python")
+    code = ("import sys; sys.path.insert(0, sys.argv[1])\n"
+            "try:\n    import numpy\nexcept ImportError:\n    pass\n"
+            "else:\n    sys.exit(77)\n"
+            "import radar_emu\n")
+    p = subprocess.run([sys.executable, "-S", "-c", code, build_py], capture_output=True,
+                       text=True, env={"PATH": os.environ.get("PATH", "/usr/bin:/bin")})
+    if p.returncode == 77:
+        import pytest
+        pytest.skip(f"{sys.executable} -S still imports NumPy: no interpreter without it here")
+    assert p.returncode != 0
+    last = p.stderr.strip().splitlines()[-1]
+    assert last.startswith("ImportError: radar_emu: this interpreter"), p.stderr
+    assert "cannot import NumPy" in last and "the module was built for /" in last, last
