@@ -932,7 +932,7 @@ void Sensor::complete_image(SensorCapture& c) const noexcept {
         std::complex<float>& v = c.image[row + l];
         if (l >= sp.begin && l < sp.end) {
           if (v == std::complex<float>{0.0f, 0.0f} && c.power[row + l] > 0.0f)
-            v = speckle(b, j, l, c.power[row + l]);
+            v = speckle(b, j, l, static_cast<double>(c.power[row + l]));
         } else {
           v = config_.thermal_noise ? std::complex<float>(noise.complex_normal())
                                     : std::complex<float>{0.0f, 0.0f};
