@@ -53,6 +53,7 @@ using ComplexBuffer = std::unique_ptr<std::complex<double>[], Free>;
 /// destroyed under it. Throws std::runtime_error naming `what` when FFTW cannot plan.
 class Plan {
  public:
+  Plan() = default;  ///< no plan (execute() must not be called)
   template <class MakePlan>
   Plan(const char* what, MakePlan&& make) {
     {

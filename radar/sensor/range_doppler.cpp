@@ -4,28 +4,20 @@
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
 
 #include "radar/constants.hpp"
+#include "radar/fftw.hpp"
 
 namespace radar_emu::radar {
 
 namespace {
 
+using fftw::as_fftw;
+
 constexpr int kSteps = 64;  // table entries a bin
-
-// FFTW's planner is not thread-safe; setup may run on several threads (tests, tools).
-std::mutex& planner_mutex() {
-  static std::mutex m;
-  return m;
-}
-
-fftw_complex* as_fftw(std::complex<double>* p) {
-  return reinterpret_cast<fftw_complex*>(p);
-}
 
 // Smallest 2^a 3^b 5^c 7^d >= n: sizes FFTW transforms fastest.
 std::size_t good_fft_size(std::size_t n) {
@@ -45,20 +37,12 @@ std::complex<double> lerp(const std::complex<double>& a, const std::complex<doub
 
 }  // namespace
 
+// FFTW buffers and plans (radar/fftw.hpp: made and destroyed under the one planner lock).
 struct RangeDopplerProcessor::Plans {
-  std::complex<double>* fast = nullptr;    // n_fft
-  std::complex<double>* filter = nullptr;  // n_fft, conj(FFT(h)) / n_fft (pulsed)
-  std::complex<double>* slow = nullptr;    // M x N_r, [pulse][range]
-  fftw_plan fast_forward = nullptr, fast_backward = nullptr, doppler = nullptr;
-  ~Plans() {
-    std::lock_guard lock(planner_mutex());
-    for (fftw_plan p : {fast_forward, fast_backward, doppler})
-      if (p)
-        fftw_destroy_plan(p);
-    for (auto* b : {fast, filter, slow})
-      if (b)
-        fftw_free(b);
-  }
+  fftw::ComplexBuffer fast;    // n_fft
+  fftw::ComplexBuffer filter;  // n_fft, conj(FFT(h)) / n_fft (pulsed)
+  fftw::ComplexBuffer slow;    // M x N_r, [pulse][range]
+  fftw::Plan fast_forward, fast_backward, doppler;
 };
 
 RangeDopplerProcessor::RangeDopplerProcessor(const ProcessingConfig& config) : config_(config) {
@@ -124,39 +108,36 @@ RangeDopplerProcessor::RangeDopplerProcessor(const ProcessingConfig& config) : c
   out_scale_ = pulsed_ ? noise_norm / static_cast<double>(n_fft_) : noise_norm;
 
   plans_ = std::make_unique<Plans>();
+  plans_->fast = fftw::complex_buffer(n_fft_);
+  plans_->filter = fftw::complex_buffer(n_fft_);
+  plans_->slow = fftw::complex_buffer(n_pulses_ * n_range_);
   {
-    std::lock_guard lock(planner_mutex());
-    plans_->fast =
-        static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n_fft_));
-    plans_->filter =
-        static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n_fft_));
-    plans_->slow = static_cast<std::complex<double>*>(
-        fftw_malloc(sizeof(std::complex<double>) * n_pulses_ * n_range_));
-    if (!plans_->fast || !plans_->filter || !plans_->slow)
-      throw std::runtime_error("processing: out of memory for FFT buffers");
     const int nfft = static_cast<int>(n_fft_);
-    plans_->fast_forward = fftw_plan_dft_1d(nfft, as_fftw(plans_->fast), as_fftw(plans_->fast),
-                                            FFTW_FORWARD, FFTW_ESTIMATE);
-    plans_->fast_backward = fftw_plan_dft_1d(nfft, as_fftw(plans_->fast), as_fftw(plans_->fast),
-                                             FFTW_BACKWARD, FFTW_ESTIMATE);
+    std::complex<double>* fast = plans_->fast.get();
+    plans_->fast_forward = fftw::Plan("processing", [&] {
+      return fftw_plan_dft_1d(nfft, as_fftw(fast), as_fftw(fast), FFTW_FORWARD, FFTW_ESTIMATE);
+    });
+    plans_->fast_backward = fftw::Plan("processing", [&] {
+      return fftw_plan_dft_1d(nfft, as_fftw(fast), as_fftw(fast), FFTW_BACKWARD, FFTW_ESTIMATE);
+    });
     // Doppler: one length-M transform per range bin, stride N_r, in place on `slow`.
     const int m = static_cast<int>(n_pulses_);
     const int howmany = static_cast<int>(n_range_);
-    plans_->doppler = fftw_plan_many_dft(1, &m, howmany, as_fftw(plans_->slow), nullptr, howmany, 1,
-                                         as_fftw(plans_->slow), nullptr, howmany, 1, FFTW_BACKWARD,
-                                         FFTW_ESTIMATE);
-    if (!plans_->fast_forward || !plans_->fast_backward || !plans_->doppler)
-      throw std::runtime_error("processing: FFTW could not plan the transforms");
+    std::complex<double>* slow = plans_->slow.get();
+    plans_->doppler = fftw::Plan("processing", [&] {
+      return fftw_plan_many_dft(1, &m, howmany, as_fftw(slow), nullptr, howmany, 1, as_fftw(slow),
+                                nullptr, howmany, 1, FFTW_BACKWARD, FFTW_ESTIMATE);
+    });
   }
   if (pulsed_) {
     // Matched filter reference h[i] = w_r[i] u(i / fs); store conj(FFT(h)).
-    std::fill(plans_->fast, plans_->fast + n_fft_, std::complex<double>{0.0, 0.0});
+    std::fill(plans_->fast.get(), plans_->fast.get() + n_fft_, std::complex<double>{0.0, 0.0});
     const double t_pulse = w.pulse_width_s;
     for (std::size_t i = 0; i < n_pulse_samples_; ++i) {
       const double x = (static_cast<double>(i) + 0.5) / fs_hz_ - 0.5 * t_pulse;
       plans_->fast[i] = w_range_[i] * std::polar(1.0, kPi * chirp_rate_ * x * x);
     }
-    fftw_execute(plans_->fast_forward);
+    plans_->fast_forward.execute();
     for (std::size_t i = 0; i < n_fft_; ++i)
       plans_->filter[i] = std::conj(plans_->fast[i]);
   }
@@ -168,21 +149,17 @@ RangeDopplerProcessor::RangeDopplerProcessor(const ProcessingConfig& config) : c
   auto periodic_table = [](const std::vector<double>& taper, std::size_t period, double scale) {
     const std::size_t n = period * kSteps;
     std::vector<std::complex<double>> table(n + 1);
-    std::lock_guard lock(planner_mutex());
-    auto* buf = static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n));
-    if (!buf)
-      throw std::runtime_error("processing: out of memory for kernel tables");
-    fftw_plan p = fftw_plan_dft_1d(static_cast<int>(n), as_fftw(buf), as_fftw(buf), FFTW_BACKWARD,
-                                   FFTW_ESTIMATE);
-    std::fill(buf, buf + n, std::complex<double>{0.0, 0.0});
+    fftw::ComplexBuffer buf = fftw::complex_buffer(n);
+    const fftw::Plan plan("processing", [&] {
+      return fftw_plan_dft_1d(static_cast<int>(n), as_fftw(buf.get()), as_fftw(buf.get()),
+                              FFTW_BACKWARD, FFTW_ESTIMATE);
+    });
     for (std::size_t i = 0; i < taper.size(); ++i)
       buf[i] = taper[i];
-    fftw_execute(p);
+    plan.execute();
     for (std::size_t i = 0; i < n; ++i)
       table[i] = buf[i] * scale;
     table[n] = table[0];  // closes the period for interpolation
-    fftw_destroy_plan(p);
-    fftw_free(buf);
     return table;
   };
   table_v_ = periodic_table(w_doppler_, n_pulses_, nd);
@@ -406,28 +383,29 @@ void RangeDopplerProcessor::process_cube(std::span<const std::complex<double>> c
   for (std::size_t m = 0; m < n_pulses_; ++m) {
     const std::complex<double>* row = cube.data() + m * n_fast_;
     if (pulsed_) {
-      std::copy(row, row + n_fast_, p.fast);
-      std::fill(p.fast + n_fast_, p.fast + n_fft_, std::complex<double>{0.0, 0.0});
-      fftw_execute(p.fast_forward);
+      std::copy(row, row + n_fast_, p.fast.get());
+      std::fill(p.fast.get() + n_fast_, p.fast.get() + n_fft_, std::complex<double>{0.0, 0.0});
+      p.fast_forward.execute();
       for (std::size_t i = 0; i < n_fft_; ++i)
         p.fast[i] *= p.filter[i];
-      fftw_execute(p.fast_backward);  // correlation: y[l] = sum_i x[l + i] conj(h[i]) * n_fft
+      p.fast_backward.execute();  // correlation: y[l] = sum_i x[l + i] conj(h[i]) * n_fft
     } else {
       for (std::size_t n = 0; n < n_fast_; ++n)
         p.fast[n] = row[n] * w_range_[n];
-      fftw_execute(p.fast_backward);
+      p.fast_backward.execute();
     }
     const double wd = w_doppler_[m] * out_scale_;
-    std::complex<double>* slow_row = p.slow + m * n_range_;
+    std::complex<double>* slow_row = p.slow.get() + m * n_range_;
     for (std::size_t l = 0; l < n_range_; ++l)
       slow_row[l] = p.fast[l] * wd;
   }
-  fftw_execute(p.doppler);
+  p.doppler.execute();
   // FFT bin k holds velocity k dv (mod M); image row j = (k + M/2) mod M.
   const std::size_t half = n_pulses_ / 2;
   for (std::size_t k = 0; k < n_pulses_; ++k) {
     const std::size_t j = (k + half) % n_pulses_;
-    std::copy(p.slow + k * n_range_, p.slow + (k + 1) * n_range_, image.data() + j * n_range_);
+    std::copy(p.slow.get() + k * n_range_, p.slow.get() + (k + 1) * n_range_,
+              image.data() + j * n_range_);
   }
 }
 
@@ -606,17 +584,9 @@ double RangeDopplerProcessor::straddle_gain(double range_offset_bins,
 // ---- RawSynthesiser ----
 
 struct RangeDopplerProcessor::RawSynthesiser::Fft {
-  std::complex<double>* buf = nullptr;  // n_fft
-  std::complex<double>* sum = nullptr;  // n_fft
-  fftw_plan forward = nullptr, backward = nullptr;
-  ~Fft() {
-    std::lock_guard lock(planner_mutex());
-    for (fftw_plan p : {forward, backward})
-      if (p)
-        fftw_destroy_plan(p);
-    fftw_free(buf);
-    fftw_free(sum);
-  }
+  fftw::ComplexBuffer buf;  // n_fft
+  fftw::ComplexBuffer sum;  // n_fft
+  fftw::Plan forward, backward;
 };
 
 RangeDopplerProcessor::RawSynthesiser::RawSynthesiser(const RangeDopplerProcessor& processor,
@@ -632,27 +602,23 @@ RangeDopplerProcessor::RawSynthesiser::RawSynthesiser(const RangeDopplerProcesso
   used_.assign(channels_ * kPhases, 0);
   templates_.assign(kPhases * n_fft_, std::complex<double>{});
   fft_ = std::make_unique<Fft>();
+  fft_->buf = fftw::complex_buffer(n_fft_);
+  fft_->sum = fftw::complex_buffer(n_fft_);
   {
-    std::lock_guard lock(planner_mutex());
-    fft_->buf =
-        static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n_fft_));
-    fft_->sum =
-        static_cast<std::complex<double>*>(fftw_malloc(sizeof(std::complex<double>) * n_fft_));
-    if (!fft_->buf || !fft_->sum)
-      throw std::runtime_error("raw synthesis: out of memory for FFT buffers");
     const int n = static_cast<int>(n_fft_);
-    fft_->forward =
-        fftw_plan_dft_1d(n, as_fftw(fft_->buf), as_fftw(fft_->buf), FFTW_FORWARD, FFTW_ESTIMATE);
-    fft_->backward =
-        fftw_plan_dft_1d(n, as_fftw(fft_->buf), as_fftw(fft_->buf), FFTW_BACKWARD, FFTW_ESTIMATE);
-    if (!fft_->forward || !fft_->backward)
-      throw std::runtime_error("raw synthesis: FFTW could not plan the transforms");
+    std::complex<double>* buf = fft_->buf.get();
+    fft_->forward = fftw::Plan("raw synthesis", [&] {
+      return fftw_plan_dft_1d(n, as_fftw(buf), as_fftw(buf), FFTW_FORWARD, FFTW_ESTIMATE);
+    });
+    fft_->backward = fftw::Plan("raw synthesis", [&] {
+      return fftw_plan_dft_1d(n, as_fftw(buf), as_fftw(buf), FFTW_BACKWARD, FFTW_ESTIMATE);
+    });
   }
   // The pulse at phase q: an echo whose delay is (n0 + q / kPhases) samples after the first
   // sample's time reaches sample n0 + i at t_e = (i + 1/2 - q / kPhases) / fs into the pulse.
   const double t_pulse = p_.config_.waveform.pulse_width_s;
   for (std::size_t q = 0; q < kPhases; ++q) {
-    std::fill(fft_->buf, fft_->buf + n_fft_, std::complex<double>{});
+    std::fill(fft_->buf.get(), fft_->buf.get() + n_fft_, std::complex<double>{});
     for (std::size_t i = 0; i < taps_; ++i) {
       const double te =
           (static_cast<double>(i) + 0.5 - static_cast<double>(q) / static_cast<double>(kPhases)) /
@@ -662,8 +628,9 @@ RangeDopplerProcessor::RawSynthesiser::RawSynthesiser(const RangeDopplerProcesso
       const double x = te - 0.5 * t_pulse;
       fft_->buf[i] = std::polar(1.0, kPi * p_.chirp_rate_ * x * x);
     }
-    fftw_execute(fft_->forward);
-    std::copy(fft_->buf, fft_->buf + n_fft_, templates_.begin() + static_cast<long>(q * n_fft_));
+    fft_->forward.execute();
+    std::copy(fft_->buf.get(), fft_->buf.get() + n_fft_,
+              templates_.begin() + static_cast<long>(q * n_fft_));
   }
 }
 
@@ -732,15 +699,15 @@ void RangeDopplerProcessor::RawSynthesiser::render(std::span<std::complex<float>
     if (!any)
       continue;
     for (std::size_t m = 0; m < np; ++m) {
-      std::fill(fft_->sum, fft_->sum + n_fft_, std::complex<double>{});
+      std::fill(fft_->sum.get(), fft_->sum.get() + n_fft_, std::complex<double>{});
       for (std::size_t q = 0; q < kPhases; ++q) {
         if (used_[ch * kPhases + q] == 0)
           continue;
         const std::complex<float>* in = acc_.data() + (ch * kPhases + q) * row + m * len_;
         for (std::size_t i = 0; i < len_; ++i)
           fft_->buf[i] = std::complex<double>(in[i]);
-        std::fill(fft_->buf + len_, fft_->buf + n_fft_, std::complex<double>{});
-        fftw_execute(fft_->forward);
+        std::fill(fft_->buf.get() + len_, fft_->buf.get() + n_fft_, std::complex<double>{});
+        fft_->forward.execute();
         const std::complex<double>* h = templates_.data() + q * n_fft_;
         for (std::size_t i = 0; i < n_fft_; ++i) {  // written out: no NaN branches
           const double br = fft_->buf[i].real(), bi = fft_->buf[i].imag();
@@ -748,8 +715,8 @@ void RangeDopplerProcessor::RawSynthesiser::render(std::span<std::complex<float>
           fft_->sum[i] += std::complex<double>(br * hr - bi * hi, br * hi + bi * hr);
         }
       }
-      std::copy(fft_->sum, fft_->sum + n_fft_, fft_->buf);
-      fftw_execute(fft_->backward);
+      std::copy(fft_->sum.get(), fft_->sum.get() + n_fft_, fft_->buf.get());
+      fft_->backward.execute();
       // Sample n of the pulse is the convolution's output n + taps_.
       std::complex<float>* out = cube.data() + (ch * np + m) * nf;
       for (std::size_t n = 0; n < nf; ++n)
