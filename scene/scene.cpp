@@ -322,6 +322,11 @@ struct Scene::Impl {
   // The parts of a query after the static BVH (defined with the queries below).
   bool finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) const noexcept;
   bool occluded_beyond_static(const Ray& ray, const RTCRay& r) const noexcept;
+  // Batched occlusion of n rays, ray_at(i) the i-th: the static BVH as coherent streams of
+  // kStreamChunk rays, then per ray what lies beyond it (levels of detail, movers).
+  template <class RayAt>
+  void occluded_batch(std::size_t n, const RayAt& ray_at,
+                      std::span<std::uint8_t> blocked) const noexcept;
 
   Impl() = default;
   Impl(const Impl&) = delete;
@@ -885,96 +890,57 @@ bool Scene::occluded(const Ray& ray) const noexcept {
   return m.occluded_beyond_static(ray, r);
 }
 
-void Scene::occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const noexcept {
-  const Impl& m = *impl_;
-  const std::size_t n = std::min(rays.size(), blocked.size());
-  const bool beyond = !m.level_scenes.empty() || !m.movers.empty();
+template <class RayAt>
+void Scene::Impl::occluded_batch(std::size_t n, const RayAt& ray_at,
+                                 std::span<std::uint8_t> blocked) const noexcept {
+  const bool beyond = !level_scenes.empty() || !movers.empty();
   std::array<RTCRay, kStreamChunk> buf;
   std::array<std::uint32_t, kStreamChunk> index;
   for (std::size_t begin = 0; begin < n; begin += kStreamChunk) {
     const std::size_t count = std::min(kStreamChunk, n - begin);
     unsigned valid = 0;
     for (std::size_t i = 0; i < count; ++i) {
-      if (!to_embree(rays[begin + i], buf[valid])) {
+      if (!to_embree(ray_at(begin + i), buf[valid])) {
         blocked[begin + i] = 0;
         continue;
       }
       index[valid++] = static_cast<std::uint32_t>(begin + i);
     }
-    if (m.static_scene && valid > 0) {
+    if (static_scene && valid > 0) {
       RTCIntersectContext ctx;
       rtcInitIntersectContext(&ctx);
       ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-      rtcOccluded1M(m.static_scene, &ctx, buf.data(), valid, sizeof(RTCRay));
+      rtcOccluded1M(static_scene, &ctx, buf.data(), valid, sizeof(RTCRay));
     }
     for (unsigned k = 0; k < valid; ++k) {
       const std::uint32_t i = index[k];
-      bool b = m.static_scene && buf[k].tfar < 0.0f;  // Embree sets tfar to -inf on a hit
+      bool b = static_scene && buf[k].tfar < 0.0f;  // Embree sets tfar to -inf on a hit
       if (!b && beyond) {
+        const Ray ray = ray_at(i);
         RTCRay r{};
-        b = to_embree(rays[i], r) && m.occluded_beyond_static(rays[i], r);
+        b = to_embree(ray, r) && occluded_beyond_static(ray, r);
       }
       blocked[i] = b ? 1 : 0;
     }
   }
 }
 
+void Scene::occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const noexcept {
+  const std::size_t n = std::min(rays.size(), blocked.size());
+  impl_->occluded_batch(
+      n, [&](std::size_t i) -> const Ray& { return rays[i]; }, blocked);
+}
+
 void Scene::occluded_along(const glm::dvec3& direction, std::span<const glm::dvec3> origins,
                            std::span<std::uint8_t> blocked) const noexcept {
-  const Impl& m = *impl_;
   const std::size_t n = std::min(origins.size(), blocked.size());
-  const bool beyond = !m.level_scenes.empty() || !m.movers.empty();
-  if (!finite(direction)) {
-    std::fill_n(blocked.begin(), n, std::uint8_t{0});
-    return;
-  }
-  std::array<RTCRay, kStreamChunk> buf;
-  std::array<std::uint32_t, kStreamChunk> index;
-  for (std::size_t begin = 0; begin < n; begin += kStreamChunk) {
-    const std::size_t count = std::min(kStreamChunk, n - begin);
-    unsigned valid = 0;
-    for (std::size_t i = 0; i < count; ++i) {
-      const glm::dvec3& o = origins[begin + i];
-      if (!finite(o)) {
-        blocked[begin + i] = 0;
-        continue;
-      }
-      RTCRay& r = buf[valid];
-      r.org_x = static_cast<float>(o.x);
-      r.org_y = static_cast<float>(o.y);
-      r.org_z = static_cast<float>(o.z);
-      r.dir_x = static_cast<float>(direction.x);
-      r.dir_y = static_cast<float>(direction.y);
-      r.dir_z = static_cast<float>(direction.z);
-      r.tnear = 0.0f;
-      r.tfar = std::numeric_limits<float>::infinity();
-      r.time = 0.0f;
-      r.mask = 0xFFFFFFFFu;
-      r.id = 0;
-      r.flags = 0;
-      index[valid++] = static_cast<std::uint32_t>(begin + i);
-    }
-    if (m.static_scene && valid > 0) {
-      RTCIntersectContext ctx;
-      rtcInitIntersectContext(&ctx);
-      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-      rtcOccluded1M(m.static_scene, &ctx, buf.data(), valid, sizeof(RTCRay));
-    }
-    for (unsigned k = 0; k < valid; ++k) {
-      const std::uint32_t i = index[k];
-      bool b = m.static_scene && buf[k].tfar < 0.0f;  // Embree sets tfar to -inf on a hit
-      if (!b && beyond) {
-        Ray ray;
-        ray.origin_m = origins[i];
-        ray.direction = direction;
-        ray.t_near_m = 0.0;
-        ray.t_far_m = std::numeric_limits<double>::infinity();
-        RTCRay r{};
-        b = to_embree(ray, r) && m.occluded_beyond_static(ray, r);
-      }
-      blocked[i] = b ? 1 : 0;
-    }
-  }
+  // Rays from 0 to infinity (to_embree refuses a non-finite origin or direction: not blocked).
+  impl_->occluded_batch(
+      n,
+      [&](std::size_t i) {
+        return Ray{origins[i], direction, 0.0, std::numeric_limits<double>::infinity()};
+      },
+      blocked);
 }
 
 void Scene::set_time(double t_s) noexcept {
