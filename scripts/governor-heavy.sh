@@ -8,7 +8,8 @@
 # up to hold the period can be read beside whether it held it.
 #
 # usage: scripts/governor-heavy.sh [FRAMES] [RATE_HZ]
-# environment: RADAR_EMU (default build/app/radar-emu), OUT (default out/governor-heavy)
+# environment: RADAR_EMU (default build/app/radar-emu), OUT (default out/governor-heavy), PULSES
+# (pulses per beam position; default the most whose timeline fits the period)
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 frames="${1:-200}"
@@ -22,11 +23,17 @@ fi
 [ -x "$exe" ] || { echo "governor-heavy: $exe not found: build first (scripts/build.sh)" >&2; exit 2; }
 mkdir -p "$out"
 scenario="$out/terrain_movers_${rate}hz.toml"
+pulses="${PULSES:-$(/usr/bin/python3 -c "print(min(32, int(1000.0 / $rate / (16 * 0.05) + 1e-9)))")}"
 {
   cat "$root/examples/terrain_movers.toml"
-  printf '\n[run]\nrate_hz = %s\n\n[governor]\nenabled = true\n' "$rate"
+  # The radar's timeline (beams x pulses x PRI) must fit the period, or the run is refused
+  # with its numbers: the default's 16 beams x 32 pulses x 0.05 ms (25.6 ms) take PULSES per
+  # beam (default: the most that fit, 12 at 100 Hz: 9.6 ms and a 2.7 m/s velocity bin); the
+  # scene, the scan, the beam and the physics stay the scenario's.
+  printf '\n[run]\nrate_hz = %s\n\n[radar]\npulses = %s\n\n[governor]\nenabled = true\n' \
+    "$rate" "$pulses"
 } >"$scenario"
-echo "governor-heavy: $frames frames of examples/terrain_movers.toml at $rate Hz, governor on ($(nproc) cores)"
+echo "governor-heavy: $frames frames of examples/terrain_movers.toml at $rate Hz ($pulses pulses per beam), governor on ($(nproc) cores)"
 "$exe" run "$scenario" --frames "$frames" --out "$out/run" | grep -E "budget|governor|frame  |trace|sensor" || true
 /usr/bin/python3 - "$out/run/report.json" "$scenario" <<'PY'
 import json, sys, tomllib
