@@ -61,7 +61,7 @@ int target_command(const std::string& kind_name, radar_emu::scene::TargetSpec sp
                   si_bytes(triangles * sc::kTargetBytesPerTriangle).c_str(), max_triangles);
     throw std::invalid_argument(text);
   }
-  const std::size_t written = tools::write_scene_target(spec, out);
+  const std::size_t written = sc::write_target_file(spec, out);
   std::printf("%s: %s, %zu triangles\n", out.c_str(), sc::target_size_text(spec).c_str(), written);
   return 0;
 }

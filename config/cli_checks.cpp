@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/path.hpp"
 #include "config/cli_args.hpp"
 
 namespace radar_emu::config {
@@ -16,12 +17,6 @@ namespace radar_emu::config {
 namespace fs = std::filesystem;
 
 namespace {
-
-std::string lower(std::string s) {
-  for (char& c : s)
-    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 bool writable_directory(const fs::path& dir) {
   std::error_code ec;
@@ -51,7 +46,7 @@ void check_output_file(const std::string& path, const std::string& option,
     throw std::invalid_argument(option + ": expected a file name");
   const fs::path p(path);
   if (!extensions.empty()) {
-    const std::string ext = lower(p.extension().string());
+    const std::string ext = common::lower_extension(p);
     if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {
       std::string list;
       for (const std::string& e : extensions)

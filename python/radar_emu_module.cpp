@@ -521,13 +521,7 @@ std::size_t write_target(const std::string& kind_name, const std::filesystem::pa
                                   " in metres");
   }
   spec.facet_m = facet_m;
-  const sc::SceneDescription desc = sc::make_target(spec);
-  const std::string ext = out.extension().string();
-  if (ext == ".glb" || ext == ".gltf")
-    sc::write_gltf(desc, out);
-  else
-    sc::write_mesh_file(desc.objects[0].mesh, desc.materials, out);
-  return desc.objects[0].mesh.triangles.size();
+  return sc::write_target_file(spec, out);
 }
 
 // ---- the closed loop -------------------------------------------------------------------------

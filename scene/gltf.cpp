@@ -18,6 +18,7 @@
 #include <string>
 #include <string_view>
 
+#include "common/path.hpp"
 #include "common/units.hpp"
 #include "scene/mesh_check.hpp"
 #include "scene/trajectory.hpp"
@@ -55,13 +56,6 @@ bool finite(const glm::dmat4& m) {
     }
   }
   return true;
-}
-
-std::string lower_extension(const std::filesystem::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
 }
 
 // Local transform of a node: its matrix, or T * R * S (glTF 2.0 spec, 5.25 "node").
@@ -693,7 +687,7 @@ SceneDescription load_gltf(const std::filesystem::path& path, std::vector<std::s
                         nullptr);
   tinygltf::Model model;
   std::string err, warn;
-  const bool binary = starts_with_glb_magic(path) || lower_extension(path) == ".glb";
+  const bool binary = starts_with_glb_magic(path) || common::lower_extension(path) == ".glb";
   if (binary)
     check_glb_container(path);
   bool ok = false;
@@ -932,7 +926,7 @@ void write_gltf(const SceneDescription& d, const std::filesystem::path& path) {
   b.data = std::move(buffer);
   model.buffers.push_back(std::move(b));
   tinygltf::TinyGLTF writer;
-  const bool binary = lower_extension(path) == ".glb";
+  const bool binary = common::lower_extension(path) == ".glb";
   bool ok = false;
   try {
     ok = writer.WriteGltfSceneToFile(&model, path.string(), /*embedImages=*/true,

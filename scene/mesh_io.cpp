@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/path.hpp"
 #include "scene/mesh_check.hpp"
 
 namespace radar_emu::scene {
@@ -18,13 +19,6 @@ namespace {
 
 [[noreturn]] void fail(const std::filesystem::path& p, std::size_t line, const std::string& what) {
   throw std::runtime_error(p.string() + (line ? ":" + std::to_string(line) : "") + ": " + what);
-}
-
-std::string lower_ext(const std::filesystem::path& p) {
-  std::string e = p.extension().string();
-  for (auto& c : e)
-    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return e;
 }
 
 struct Builder {
@@ -235,7 +229,7 @@ SceneDescription load_mesh_file(const std::filesystem::path& path, const MeshFil
     fail(path, 0, "scale must be a positive number");
   Builder b;
   b.obj.name = path.stem().string();
-  const std::string ext = lower_ext(path);
+  const std::string ext = common::lower_extension(path);
   if (ext == ".obj") {
     load_obj(path, o, b);
   } else if (ext == ".stl") {
@@ -254,7 +248,7 @@ SceneDescription load_mesh_file(const std::filesystem::path& path, const MeshFil
 
 void write_mesh_file(const Mesh& mesh, const std::vector<Material>& materials,
                      const std::filesystem::path& path) {
-  const std::string ext = lower_ext(path);
+  const std::string ext = common::lower_extension(path);
   std::ofstream out(path, std::ios::binary);
   if (!out)
     fail(path, 0, "cannot open for writing");

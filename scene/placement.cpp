@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "common/path.hpp"
 #include "scene/gltf.hpp"
 #include "scene/mesh_io.hpp"
 #include "scene/trajectory.hpp"
@@ -51,13 +52,6 @@ double enu_yaw(double compass_rad) {
   return std::numbers::pi / 2.0 - compass_rad;
 }
 
-std::string lower_extension(const std::filesystem::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
-
 // The target's mesh in its body frame (x forward, y left, z up) and its materials.
 SceneDescription target_mesh(const TargetPlacement& t) {
   SceneDescription d;
@@ -72,7 +66,7 @@ SceneDescription target_mesh(const TargetPlacement& t) {
   } else {
     if (!(std::isfinite(t.mesh_scale) && t.mesh_scale > 0.0))
       fail(t, "mesh_scale must be > 0");
-    const std::string ext = lower_extension(t.mesh_file);
+    const std::string ext = common::lower_extension(t.mesh_file);
     const bool gltf = ext == ".glb" || ext == ".gltf";
     if (!gltf && ext != ".obj" && ext != ".stl") {
       fail(t, "mesh_file " + t.mesh_file.string() + ": unknown format '" + ext +

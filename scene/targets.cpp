@@ -9,7 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "common/path.hpp"
 #include "common/units.hpp"
+#include "scene/gltf.hpp"
+#include "scene/mesh_io.hpp"
 
 namespace radar_emu::scene {
 
@@ -850,6 +853,16 @@ double target_triangle_estimate(const TargetSpec& t) {
       return lofted(896.0, 0.71, f);
   }
   return 0.0;
+}
+
+std::size_t write_target_file(const TargetSpec& spec, const std::filesystem::path& path) {
+  const SceneDescription desc = make_target(spec);
+  const std::string ext = common::lower_extension(path);
+  if (ext == ".glb" || ext == ".gltf")
+    write_gltf(desc, path);
+  else
+    write_mesh_file(desc.objects[0].mesh, desc.materials, path);
+  return desc.objects[0].mesh.triangles.size();
 }
 
 }  // namespace radar_emu::scene

@@ -46,6 +46,7 @@
 // curved ones).
 
 #include <array>
+#include <filesystem>
 #include <optional>
 #include <span>
 #include <string>
@@ -105,6 +106,11 @@ struct TargetKindSize {
 /// The target as a one-object scene (material "metal"). Throws std::invalid_argument naming the
 /// dimension when one is not a positive finite number (or facet_m is negative).
 [[nodiscard]] SceneDescription make_target(const TargetSpec& spec);
+
+/// Makes the target and writes it: glTF for a .glb / .gltf path (any case), otherwise the mesh
+/// file its extension names (write_mesh_file: .obj, .stl ...). Returns the triangles written.
+/// `scene target` and the Python module's make_target write through this one function.
+std::size_t write_target_file(const TargetSpec& spec, const std::filesystem::path& path);
 
 /// Triangles make_target(spec) would make, without making them: exact for plate, dihedral,
 /// trihedrals, sphere, cylinder and box; for the vehicles and aircraft a fit (coarse count plus a

@@ -11,6 +11,7 @@
 #include <optional>
 #include <stdexcept>
 
+#include "common/path.hpp"
 #include "common/units.hpp"
 #include "config/cli_args.hpp"
 #include "config/memory_limit.hpp"
@@ -391,9 +392,7 @@ LoadedTarget load_target(const std::string& mesh_path, double scale,
     throw std::invalid_argument("--scale must be a positive number");
   LoadedTarget t;
   const std::filesystem::path path(mesh_path);
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = common::lower_extension(path);
   if (ext == ".glb" || ext == ".gltf") {
     t.description = scene::load_gltf(path, &t.warnings);
     if (scale != 1.0) {

@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/path.hpp"
 #include "common/units.hpp"
 #include "scene/airport_gen.hpp"
 #include "scene/gltf.hpp"
@@ -27,13 +28,6 @@ namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::string lower_extension(const std::filesystem::path& p) {
-  std::string e = p.extension().string();
-  for (char& c : e)
-    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return e;
 }
 
 // "E,N,U" in metres.
@@ -89,7 +83,7 @@ std::uint64_t parse_seed(const std::string& text, const std::string& option) {
 int run_scene_gen(const SceneGenOptions& o) {
   const std::uint64_t seed = parse_seed(o.seed, "--seed");
   const std::filesystem::path out(o.out);
-  const std::string ext = lower_extension(out);
+  const std::string ext = common::lower_extension(out);
   if (ext != ".glb" && ext != ".gltf")
     throw std::invalid_argument("--out: '" + o.out + "' is not a .glb or .gltf file");
   const auto t0 = std::chrono::steady_clock::now();
@@ -276,17 +270,6 @@ int run_scene_preview(const ScenePreviewOptions& o) {
         cam.vertical_fov_rad / common::kRadPerDeg, seconds_since(t0));
   }
   return 0;
-}
-
-std::size_t write_scene_target(const scene::TargetSpec& spec, const std::filesystem::path& out) {
-  const scene::SceneDescription desc = scene::make_target(spec);
-  const std::string ext = out.extension().string();
-  if (ext == ".glb" || ext == ".gltf") {
-    scene::write_gltf(desc, out);
-  } else {
-    scene::write_mesh_file(desc.objects[0].mesh, desc.materials, out);
-  }
-  return desc.objects[0].mesh.triangles.size();
 }
 
 }  // namespace radar_emu::tools

@@ -57,10 +57,6 @@ int run_scene_gen(const SceneGenOptions& options);
 int run_scene_info(const SceneInfoOptions& options);
 /// Loads the file, renders it (scene/preview.hpp) and writes an RGB PNG. Returns 0.
 int run_scene_preview(const ScenePreviewOptions& options);
-/// Makes the canonical target `spec` (scene/targets.hpp) and writes it to `out`: glTF for a
-/// .glb / .gltf name, else the mesh format of its extension (scene/mesh_io.hpp). Returns the
-/// mesh's triangle count; throws on I/O failure.
-std::size_t write_scene_target(const scene::TargetSpec& spec, const std::filesystem::path& out);
 
 /// The JSON form of `info` (one object; keys in scene_tool.cpp's order): polygons_total (every
 /// LOD level), polygons_full_detail, polygons_by_lod_level ("none", "0", "1", ...),

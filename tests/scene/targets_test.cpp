@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include <tuple>
 #include <vector>
 
+#include "scene/gltf.hpp"
 #include "scene/mesh_check.hpp"
 #include "scene/mesh_io.hpp"
 #include "scene/scene.hpp"
@@ -454,6 +456,33 @@ TEST(MeshFiles, ObjAndStlRoundTrip) {
   // Unit scaling: the same file read as millimetres is 1000 times smaller.
   const sc::SceneDescription mm = sc::load_mesh_file(tmp("cyl.stl"), {0.001, "metal"});
   EXPECT_NEAR(area(mm.objects[0].mesh), area(m) * 1e-6, 1e-9);
+}
+
+// The extension picks the format whatever its case: "BOX.GLB" is glTF (binary: its magic
+// "glTF", glTF 2.0 spec 4.4.3), "BOX.OBJ" the text mesh; each reads back with the box's area.
+TEST(MeshFiles, WriteTargetFilePicksTheFormatByExtensionInAnyCase) {
+  const sc::TargetSpec spec{sc::TargetKind::kBox, 1.0, 2.0, 3.0, 0.0};
+  const double box_area_m2 = 2.0 * (1.0 * 2.0 + 2.0 * 3.0 + 1.0 * 3.0);
+  for (const char* name : {"BOX.GLB", "box.Gltf", "BOX.OBJ", "box.stl"}) {
+    const std::size_t written = sc::write_target_file(spec, tmp(name));
+    const std::string lower = [&] {
+      std::string s(name);
+      for (char& c : s)
+        c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      return s;
+    }();
+    const bool gltf = lower.ends_with(".glb") || lower.ends_with(".gltf");
+    if (lower.ends_with(".glb")) {
+      std::ifstream f(tmp(name), std::ios::binary);
+      char magic[4] = {};
+      f.read(magic, 4);
+      EXPECT_EQ(std::string(magic, 4), "glTF") << name;
+    }
+    const sc::SceneDescription r = gltf ? sc::load_gltf(tmp(name)) : sc::load_mesh_file(tmp(name));
+    ASSERT_EQ(r.objects.size(), 1u) << name;
+    EXPECT_EQ(r.objects[0].mesh.triangles.size(), written) << name;
+    EXPECT_NEAR(area(r.objects[0].mesh), box_area_m2, 1e-6) << name;
+  }
 }
 
 TEST(MeshFiles, HandWrittenFilesLoad) {
