@@ -249,6 +249,8 @@ SceneDescription load_mesh_file(const std::filesystem::path& path, const MeshFil
 void write_mesh_file(const Mesh& mesh, const std::vector<Material>& materials,
                      const std::filesystem::path& path) {
   const std::string ext = common::lower_extension(path);
+  if (ext != ".obj" && ext != ".stl")  // before opening: a refused name leaves no empty file
+    fail(path, 0, "unknown mesh format '" + ext + "' (OBJ or STL)");
   std::ofstream out(path, std::ios::binary);
   if (!out)
     fail(path, 0, "cannot open for writing");
@@ -267,7 +269,7 @@ void write_mesh_file(const Mesh& mesh, const std::vector<Material>& materials,
       const glm::uvec3 f = mesh.triangles[t] + glm::uvec3(1);
       out << "f " << f.x << ' ' << f.y << ' ' << f.z << '\n';
     }
-  } else if (ext == ".stl") {
+  } else {  // ".stl"
     char header[80] = "radar-emu target, metres, binary STL";
     out.write(header, 80);
     // Binary STL is little-endian, as is every platform radar-emu builds on (x86-64, aarch64).
@@ -287,8 +289,6 @@ void write_mesh_file(const Mesh& mesh, const std::vector<Material>& materials,
       std::memcpy(rec, values, sizeof values);
       out.write(rec, sizeof rec);
     }
-  } else {
-    fail(path, 0, "unknown mesh format '" + ext + "' (OBJ or STL)");
   }
   if (!out)
     fail(path, 0, "write failed");

@@ -483,6 +483,10 @@ TEST(MeshFiles, WriteTargetFilePicksTheFormatByExtensionInAnyCase) {
     EXPECT_EQ(r.objects[0].mesh.triangles.size(), written) << name;
     EXPECT_NEAR(area(r.objects[0].mesh), box_area_m2, 1e-6) << name;
   }
+  // A format nobody writes is refused before the file is opened: no empty file left behind.
+  fs::remove(tmp("box.ply"));
+  EXPECT_THROW((void)sc::write_target_file(spec, tmp("box.ply")), std::runtime_error);
+  EXPECT_FALSE(fs::exists(tmp("box.ply")));
 }
 
 TEST(MeshFiles, HandWrittenFilesLoad) {
