@@ -151,6 +151,7 @@ int execute_loop(const loop::Scenario& scenario, loop::RunOptions options, const
       kept += (kept.empty() ? " (" : " and ") + c->file + (out.empty() ? ")" : "");
     if (kept.empty())
       kept = " (none: no --out)";
+    std::fflush(stdout);  // the summary table first, then the one line (a shared terminal or log)
     std::fprintf(stderr, "radar-emu: interrupted after %llu of %llu frames; outputs written%s\n",
                  static_cast<unsigned long long>(result.frames),
                  static_cast<unsigned long long>(result.frames_planned), kept.c_str());

@@ -110,6 +110,7 @@ std::string signal_name(int signal) {
 
 int report_interrupted(const std::string& command, int signal, const ProgressLine& progress,
                        const std::string& written) {
+  std::fflush(stdout);  // what the command printed first, then the one line (a shared terminal)
   std::fprintf(stderr, "radar-emu: %s: interrupted by %s after %zu of %zu %s; %s\n",
                command.c_str(), signal_name(signal).c_str(), progress.done(), progress.total(),
                progress.unit().c_str(), written.c_str());

@@ -8,7 +8,8 @@
    detection list per frame with consecutive frame counters and decodes with canmatrix to
    detections.json (check_run_outputs.py), both pictures are PNG files, and a replay of bus_in.log
    for that many frames gives a byte-identical bus_out.log and detections.json.
-2. SIGTERM likewise: status 143, report.json says SIGTERM.
+2. SIGTERM likewise: status 143, report.json says SIGTERM; its stdout and stderr go to one file,
+   where the summary table comes whole before the one-line "interrupted after" message.
 3. A second signal exits at once: a real-time run at 0.5 Hz sleeps up to 2 s to its next frame
    boundary; a second SIGINT during that sleep ends the process with status 130 before it writes
    report.json.
@@ -58,9 +59,11 @@ def frames_in_csv(path):
         return 0
 
 
-def start(exe, args, err_path):
+def start(exe, args, err_path, merged=False):
+    """merged: stdout into the same file as stderr, as a terminal or a `2>&1` log shows them."""
     err = open(err_path, "w")
-    return subprocess.Popen([exe, "run", *args], stdout=subprocess.DEVNULL, stderr=err)
+    return subprocess.Popen([exe, "run", *args], stdout=err if merged else subprocess.DEVNULL,
+                            stderr=err)
 
 
 def wait_until(pred, proc, what, timeout_s=300.0):
@@ -79,7 +82,10 @@ def check_clean_stop(exe, dbc, work, scenario, sig, sig_name, replay):
     out = os.path.join(work, sig_name.lower())
     err_path = out + ".stderr"
     shutil.rmtree(out, ignore_errors=True)
-    proc = start(exe, [scenario, "--frames", str(PLANNED), "--out", out], err_path)
+    # SIGTERM's run writes stdout and stderr to one file: the summary table must come whole
+    # before the one-line message (stdout into a file is block-buffered; the message is not).
+    merged = not replay
+    proc = start(exe, [scenario, "--frames", str(PLANNED), "--out", out], err_path, merged)
     wait_until(lambda: frames_in_csv(os.path.join(out, "frames.csv")) >= 20, proc,
                "20 frames in frames.csv")
     proc.send_signal(sig)
@@ -91,6 +97,13 @@ def check_clean_stop(exe, dbc, work, scenario, sig, sig_name, replay):
     if rc != 128 + sig:
         fail(f"{sig_name}: exit status {rc}, expected {128 + sig}: {open(err_path).read()}")
 
+    if merged:
+        lines = [ln for ln in open(err_path).read().replace("\r", "\n").split("\n") if ln.strip()]
+        table = [i for i, ln in enumerate(lines) if "stage times" in ln]
+        if not table or not lines[-1].startswith("radar-emu: interrupted after") or \
+                sum("interrupted after" in ln for ln in lines) != 1 or table[0] > len(lines) - 2:
+            fail(f"{sig_name}: stdout and stderr in one file: the summary table, then the "
+                 f"interrupted line last, expected: {lines[-12:]}")
     with open(os.path.join(out, "report.json")) as f:
         rep = json.load(f)
     n = rep["frames"]
