@@ -328,7 +328,9 @@ BENCHMARK(BM_SensorReturns)
 // beamwidth, instead of the scenario's 0.5; 3: no shadows; 2: no terrain), all from the
 // scenario's first pose. Argument 0: the default scenario (0) or examples/terrain_movers.toml
 // (1, the 207k-polygon terrain). Counters: the rays shot, the returns handed to the sensor, the
-// engine's patches (evaluated, lit).
+// engine's patches (evaluated, lit); trace_ms and engine_ms, the wall time of the tracer's trace
+// and of the engine's compute per frame; engine_cpu_ms, the CPU time of all the process's threads
+// during the engine's compute (TBB's workers waiting for work included).
 void BM_TraceTerrain(benchmark::State& state) {
   struct Case {
     loop::Scenario s;
@@ -371,27 +373,34 @@ void BM_TraceTerrain(benchmark::State& state) {
   radar::clutter::TerrainStats es;
   std::uint64_t dropped = 0;
   std::size_t n = 0;
-  double engine_cpu_s = 0.0;  // the engine's share: its thread's CPU time (one thread only)
-  auto thread_cpu_s = [] {
+  // The engine's share: the CPU time of every thread of the process while compute() runs (one
+  // thread: that thread's), and the wall time of compute() and of the tracer's trace().
+  double engine_cpu_s = 0.0, engine_wall_s = 0.0, trace_wall_s = 0.0;
+  auto clock_s = [](clockid_t id) {
     timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    clock_gettime(id, &t);
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
   };
   for (auto _ : state) {
     ts = {};
     es = {};
+    const double w0 = clock_s(CLOCK_MONOTONIC);
     n = tracer.trace(c.pose, out, ts);
+    const double w1 = clock_s(CLOCK_MONOTONIC);
+    trace_wall_s += w1 - w0;
     if (terrain) {
-      const double t0 = thread_cpu_s();
+      const double t0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
       n += terrain->compute(c.pose, std::span(out).subspan(n), es, dropped);
-      engine_cpu_s += thread_cpu_s() - t0;
+      engine_cpu_s += clock_s(CLOCK_PROCESS_CPUTIME_ID) - t0;
+      engine_wall_s += clock_s(CLOCK_MONOTONIC) - w1;
     }
     benchmark::DoNotOptimize(n);
   }
-  if (serial)
-    state.counters["engine_cpu_ms"] =
-        1e3 * engine_cpu_s /
-        static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  const double per_iteration_ms =
+      1e3 / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  state.counters["engine_cpu_ms"] = engine_cpu_s * per_iteration_ms;
+  state.counters["engine_ms"] = engine_wall_s * per_iteration_ms;
+  state.counters["trace_ms"] = trace_wall_s * per_iteration_ms;
   state.counters["rays"] = static_cast<double>(ts.rays);
   state.counters["returns"] = static_cast<double>(n);
   state.counters["patches"] = static_cast<double>(es.patches);
@@ -411,6 +420,62 @@ void BM_TraceTerrain(benchmark::State& state) {
 }
 BENCHMARK(BM_TraceTerrain)
     ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The terrain engine's cells alone (TerrainReturns::compute, the loop's configuration) from the
+// scenario's first pose, as in BM_TraceTerrain's engine rows. Argument 0: the default scenario
+// (0) or examples/terrain_movers.toml (1); argument 1: TBB threads (0: all). Counters: cpu_ms,
+// the CPU time of all the process's threads per compute (one thread: the work itself).
+void BM_TerrainCompute(benchmark::State& state) {
+  std::optional<tbb::global_control> threads;
+  if (state.range(1) > 0)
+    threads.emplace(tbb::global_control::max_allowed_parallelism,
+                    static_cast<std::size_t>(state.range(1)));
+  loop::Scenario s =
+      state.range(0) == 0
+          ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
+          : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  radar::RadarPose pose;
+  pose.position_m = s.ownship_start_enu_m;
+  pose.velocity_mps = s.ownship_velocity_enu_mps;
+  pose.world_from_antenna =
+      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      loop::body_from_antenna(s.antenna_depression_rad);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  radar::SbrTracer tracer(scene, cfg);
+  radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
+  std::vector<radar::Contribution> out(terrain.max_returns());
+  radar::clutter::TerrainStats es;
+  std::uint64_t dropped = 0;
+  std::size_t n = 0;
+  timespec t0{}, t1{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
+  for (auto _ : state) {
+    es = {};
+    n = terrain.compute(pose, out, es, dropped);
+    benchmark::DoNotOptimize(n);
+  }
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
+  state.counters["cpu_ms"] =
+      (1e3 * static_cast<double>(t1.tv_sec - t0.tv_sec) +
+       1e-6 * static_cast<double>(t1.tv_nsec - t0.tv_nsec)) /
+      static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  double power_m2 = 0.0;  // the returns' total mean power: the same cells give the same sum
+  for (std::size_t i = 0; i < n; ++i)
+    power_m2 += std::norm(out[i].amplitude);
+  state.counters["returns"] = static_cast<double>(n);
+  state.counters["power_m2"] = power_m2;
+  state.counters["patches"] = static_cast<double>(es.patches);
+  state.counters["patches_lit"] = static_cast<double>(es.patches_lit);
+  state.counters["queries"] = static_cast<double>(es.occlusion_queries);
+  state.counters["facets_considered"] = static_cast<double>(es.facets_considered);
+}
+BENCHMARK(BM_TerrainCompute)
+    ->ArgsProduct({{0, 1}, {1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
