@@ -3,6 +3,7 @@
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_invoke.h>
 
 #include <complex>
 #include <cstdint>
@@ -325,12 +326,15 @@ BENCHMARK(BM_SensorReturns)
 // trace with the tracer's terrain rays (argument 1 = 0, [radar] terrain = "rays") against the
 // trace without them plus the terrain engine's cells (1, terrain = "engine": shadows by the
 // horizon sweep; 4: by one occlusion query per patch; 5: as 1 in columns of 0.25 deg, a quarter
-// beamwidth, instead of the scenario's 0.5; 3: no shadows; 2: no terrain), all from the
-// scenario's first pose. Argument 0: the default scenario (0) or examples/terrain_movers.toml
-// (1, the 207k-polygon terrain). Counters: the rays shot, the returns handed to the sensor, the
-// engine's patches (evaluated, lit); trace_ms and engine_ms, the wall time of the tracer's trace
-// and of the engine's compute per frame; engine_cpu_ms, the CPU time of all the process's threads
-// during the engine's compute (TBB's workers waiting for work included).
+// beamwidth, instead of the scenario's 0.5; 3: no shadows; 2: no terrain; 6: as 1 but the engine
+// after the trace instead of beside it), all from the scenario's first pose. The engine runs
+// beside the tracer's trace (tbb::parallel_invoke, as the loop runs them) except in mode 6.
+// Argument 0: the default scenario (0) or examples/terrain_movers.toml (1, the 207k-polygon
+// terrain). Counters: the rays shot, the returns handed to the sensor, the engine's patches
+// (evaluated, lit); trace_ms and engine_ms, the wall time of the tracer's trace and of the engine's
+// compute per frame; engine_cpu_ms, the CPU time of all the process's threads during the engine's
+// compute (TBB's workers waiting for work included) in mode 6, else the CPU time of the thread that
+// ran compute() (its whole work with one thread).
 void BM_TraceTerrain(benchmark::State& state) {
   struct Case {
     loop::Scenario s;
@@ -355,7 +359,7 @@ void BM_TraceTerrain(benchmark::State& state) {
   std::optional<tbb::global_control> serial;
   if (state.range(2) == 1)
     serial.emplace(tbb::global_control::max_allowed_parallelism, 1);
-  const bool engine = mode == 1 || mode == 3 || mode == 4 || mode == 5;
+  const bool engine = mode == 1 || mode == 3 || mode == 4 || mode == 5 || mode == 6;
   radar::SbrConfig cfg = c.s.sbr;
   cfg.terrain_rays = mode == 0;
   radar::SbrTracer tracer(c.scene, cfg);
@@ -367,8 +371,8 @@ void BM_TraceTerrain(benchmark::State& state) {
     tc.azimuth_cell_rad = 0.25 * 3.14159265358979323846 / 180.0;  // the former 0.25 deg columns
   if (engine)
     terrain.emplace(c.scene, tracer, tc);
-  std::vector<radar::Contribution> out(tracer.max_contributions() +
-                                       (terrain ? terrain->max_returns() : 0));
+  const std::size_t cap = tracer.max_contributions();
+  std::vector<radar::Contribution> out(cap + (terrain ? terrain->max_returns() : 0));
   radar::TraceStats ts;
   radar::clutter::TerrainStats es;
   std::uint64_t dropped = 0;
@@ -381,18 +385,35 @@ void BM_TraceTerrain(benchmark::State& state) {
     clock_gettime(id, &t);
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
   };
+  const std::span<radar::Contribution> all(out);
+  auto trace = [&] {
+    const double w0 = clock_s(CLOCK_MONOTONIC);
+    n = tracer.trace(c.pose, terrain ? all.first(cap) : all, ts);
+    trace_wall_s += clock_s(CLOCK_MONOTONIC) - w0;
+  };
+  std::size_t m = 0;
+  auto cells = [&] {
+    const double w0 = clock_s(CLOCK_MONOTONIC);
+    const double t0 = clock_s(mode == 6 ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_THREAD_CPUTIME_ID);
+    m = terrain->compute(c.pose, all.subspan(cap), es, dropped);
+    engine_cpu_s += clock_s(mode == 6 ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_THREAD_CPUTIME_ID) - t0;
+    engine_wall_s += clock_s(CLOCK_MONOTONIC) - w0;
+  };
   for (auto _ : state) {
     ts = {};
     es = {};
-    const double w0 = clock_s(CLOCK_MONOTONIC);
-    n = tracer.trace(c.pose, out, ts);
-    const double w1 = clock_s(CLOCK_MONOTONIC);
-    trace_wall_s += w1 - w0;
-    if (terrain) {
-      const double t0 = clock_s(CLOCK_PROCESS_CPUTIME_ID);
-      n += terrain->compute(c.pose, std::span(out).subspan(n), es, dropped);
-      engine_cpu_s += clock_s(CLOCK_PROCESS_CPUTIME_ID) - t0;
-      engine_wall_s += clock_s(CLOCK_MONOTONIC) - w1;
+    if (!terrain) {
+      trace();
+    } else {
+      if (mode == 6) {
+        trace();
+        cells();
+      } else {
+        tbb::parallel_invoke(trace, cells);
+      }
+      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), m,
+                  all.begin() + static_cast<std::ptrdiff_t>(n));
+      n += m;
     }
     benchmark::DoNotOptimize(n);
   }
@@ -414,12 +435,13 @@ void BM_TraceTerrain(benchmark::State& state) {
                                            ", no terrain",
                                            ", engine without shadowing",
                                            ", engine, a ray per patch",
-                                           ", engine, 0.25 deg columns"};
+                                           ", engine, 0.25 deg columns",
+                                           ", engine after the trace"};
   state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") + kModes[mode] +
                  (serial ? ", 1 thread" : ""));
 }
 BENCHMARK(BM_TraceTerrain)
-    ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5}, {0, 1}})
+    ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5, 6}, {0, 1}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
