@@ -334,7 +334,8 @@ BENCHMARK(BM_SensorReturns)
 // (evaluated, lit); trace_ms and engine_ms, the wall time of the tracer's trace and of the engine's
 // compute per frame; engine_cpu_ms, the CPU time of all the process's threads during the engine's
 // compute (TBB's workers waiting for work included) in mode 6, else the CPU time of the thread that
-// ran compute() (its whole work with one thread).
+// ran compute() (its whole work with one thread); cpu_all_ms, the CPU time of all the process's
+// threads per frame (TBB's waiting workers included).
 void BM_TraceTerrain(benchmark::State& state) {
   struct Case {
     loop::Scenario s;
@@ -399,6 +400,7 @@ void BM_TraceTerrain(benchmark::State& state) {
     engine_cpu_s += clock_s(mode == 6 ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_THREAD_CPUTIME_ID) - t0;
     engine_wall_s += clock_s(CLOCK_MONOTONIC) - w0;
   };
+  const double process_cpu0_s = clock_s(CLOCK_PROCESS_CPUTIME_ID);
   for (auto _ : state) {
     ts = {};
     es = {};
@@ -420,6 +422,8 @@ void BM_TraceTerrain(benchmark::State& state) {
   const double per_iteration_ms =
       1e3 / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
   state.counters["engine_cpu_ms"] = engine_cpu_s * per_iteration_ms;
+  state.counters["cpu_all_ms"] =
+      (clock_s(CLOCK_PROCESS_CPUTIME_ID) - process_cpu0_s) * per_iteration_ms;
   state.counters["engine_ms"] = engine_wall_s * per_iteration_ms;
   state.counters["trace_ms"] = trace_wall_s * per_iteration_ms;
   state.counters["rays"] = static_cast<double>(ts.rays);
