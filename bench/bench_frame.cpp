@@ -3,6 +3,7 @@
 
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_invoke.h>
 
 #include <complex>
 #include <cstdint>
@@ -325,10 +326,16 @@ BENCHMARK(BM_SensorReturns)
 // trace with the tracer's terrain rays (argument 1 = 0, [radar] terrain = "rays") against the
 // trace without them plus the terrain engine's cells (1, terrain = "engine": shadows by the
 // horizon sweep; 4: by one occlusion query per patch; 5: as 1 in columns of 0.25 deg, a quarter
-// beamwidth, instead of the scenario's 0.5; 3: no shadows; 2: no terrain), all from the
-// scenario's first pose. Argument 0: the default scenario (0) or examples/terrain_movers.toml
-// (1, the 207k-polygon terrain). Counters: the rays shot, the returns handed to the sensor, the
-// engine's patches (evaluated, lit).
+// beamwidth, instead of the scenario's 0.5; 3: no shadows; 2: no terrain; 6: as 1 but the engine
+// after the trace instead of beside it), all from the scenario's first pose. The engine runs
+// beside the tracer's trace (tbb::parallel_invoke, as the loop runs them) except in mode 6.
+// Argument 0: the default scenario (0) or examples/terrain_movers.toml (1, the 207k-polygon
+// terrain). Counters: the rays shot, the returns handed to the sensor, the engine's patches
+// (evaluated, lit); trace_ms and engine_ms, the wall time of the tracer's trace and of the engine's
+// compute per frame; engine_cpu_ms, the CPU time of all the process's threads during the engine's
+// compute (TBB's workers waiting for work included) in mode 6, else the CPU time of the thread that
+// ran compute() (its whole work with one thread); cpu_all_ms, the CPU time of all the process's
+// threads per frame (TBB's waiting workers included).
 void BM_TraceTerrain(benchmark::State& state) {
   struct Case {
     loop::Scenario s;
@@ -353,7 +360,7 @@ void BM_TraceTerrain(benchmark::State& state) {
   std::optional<tbb::global_control> serial;
   if (state.range(2) == 1)
     serial.emplace(tbb::global_control::max_allowed_parallelism, 1);
-  const bool engine = mode == 1 || mode == 3 || mode == 4 || mode == 5;
+  const bool engine = mode == 1 || mode == 3 || mode == 4 || mode == 5 || mode == 6;
   radar::SbrConfig cfg = c.s.sbr;
   cfg.terrain_rays = mode == 0;
   radar::SbrTracer tracer(c.scene, cfg);
@@ -365,33 +372,60 @@ void BM_TraceTerrain(benchmark::State& state) {
     tc.azimuth_cell_rad = 0.25 * 3.14159265358979323846 / 180.0;  // the former 0.25 deg columns
   if (engine)
     terrain.emplace(c.scene, tracer, tc);
-  std::vector<radar::Contribution> out(tracer.max_contributions() +
-                                       (terrain ? terrain->max_returns() : 0));
+  const std::size_t cap = tracer.max_contributions();
+  std::vector<radar::Contribution> out(cap + (terrain ? terrain->max_returns() : 0));
   radar::TraceStats ts;
   radar::clutter::TerrainStats es;
   std::uint64_t dropped = 0;
   std::size_t n = 0;
-  double engine_cpu_s = 0.0;  // the engine's share: its thread's CPU time (one thread only)
-  auto thread_cpu_s = [] {
+  // The engine's share: the CPU time of every thread of the process while compute() runs (one
+  // thread: that thread's), and the wall time of compute() and of the tracer's trace().
+  double engine_cpu_s = 0.0, engine_wall_s = 0.0, trace_wall_s = 0.0;
+  auto clock_s = [](clockid_t id) {
     timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    clock_gettime(id, &t);
     return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
   };
+  const std::span<radar::Contribution> all(out);
+  auto trace = [&] {
+    const double w0 = clock_s(CLOCK_MONOTONIC);
+    n = tracer.trace(c.pose, terrain ? all.first(cap) : all, ts);
+    trace_wall_s += clock_s(CLOCK_MONOTONIC) - w0;
+  };
+  std::size_t m = 0;
+  auto cells = [&] {
+    const double w0 = clock_s(CLOCK_MONOTONIC);
+    const double t0 = clock_s(mode == 6 ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_THREAD_CPUTIME_ID);
+    m = terrain->compute(c.pose, all.subspan(cap), es, dropped);
+    engine_cpu_s += clock_s(mode == 6 ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_THREAD_CPUTIME_ID) - t0;
+    engine_wall_s += clock_s(CLOCK_MONOTONIC) - w0;
+  };
+  const double process_cpu0_s = clock_s(CLOCK_PROCESS_CPUTIME_ID);
   for (auto _ : state) {
     ts = {};
     es = {};
-    n = tracer.trace(c.pose, out, ts);
-    if (terrain) {
-      const double t0 = thread_cpu_s();
-      n += terrain->compute(c.pose, std::span(out).subspan(n), es, dropped);
-      engine_cpu_s += thread_cpu_s() - t0;
+    if (!terrain) {
+      trace();
+    } else {
+      if (mode == 6) {
+        trace();
+        cells();
+      } else {
+        tbb::parallel_invoke(trace, cells);
+      }
+      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), m,
+                  all.begin() + static_cast<std::ptrdiff_t>(n));
+      n += m;
     }
     benchmark::DoNotOptimize(n);
   }
-  if (serial)
-    state.counters["engine_cpu_ms"] =
-        1e3 * engine_cpu_s /
-        static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  const double per_iteration_ms =
+      1e3 / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  state.counters["engine_cpu_ms"] = engine_cpu_s * per_iteration_ms;
+  state.counters["cpu_all_ms"] =
+      (clock_s(CLOCK_PROCESS_CPUTIME_ID) - process_cpu0_s) * per_iteration_ms;
+  state.counters["engine_ms"] = engine_wall_s * per_iteration_ms;
+  state.counters["trace_ms"] = trace_wall_s * per_iteration_ms;
   state.counters["rays"] = static_cast<double>(ts.rays);
   state.counters["returns"] = static_cast<double>(n);
   state.counters["patches"] = static_cast<double>(es.patches);
@@ -405,12 +439,69 @@ void BM_TraceTerrain(benchmark::State& state) {
                                            ", no terrain",
                                            ", engine without shadowing",
                                            ", engine, a ray per patch",
-                                           ", engine, 0.25 deg columns"};
+                                           ", engine, 0.25 deg columns",
+                                           ", engine after the trace"};
   state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") + kModes[mode] +
                  (serial ? ", 1 thread" : ""));
 }
 BENCHMARK(BM_TraceTerrain)
-    ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5}, {0, 1}})
+    ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5, 6}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The terrain engine's cells alone (TerrainReturns::compute, the loop's configuration) from the
+// scenario's first pose, as in BM_TraceTerrain's engine rows. Argument 0: the default scenario
+// (0) or examples/terrain_movers.toml (1); argument 1: TBB threads (0: all). Counters: cpu_ms,
+// the CPU time of all the process's threads per compute (one thread: the work itself).
+void BM_TerrainCompute(benchmark::State& state) {
+  std::optional<tbb::global_control> threads;
+  if (state.range(1) > 0)
+    threads.emplace(tbb::global_control::max_allowed_parallelism,
+                    static_cast<std::size_t>(state.range(1)));
+  loop::Scenario s =
+      state.range(0) == 0
+          ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
+          : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  radar::RadarPose pose;
+  pose.position_m = s.ownship_start_enu_m;
+  pose.velocity_mps = s.ownship_velocity_enu_mps;
+  pose.world_from_antenna =
+      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      loop::body_from_antenna(s.antenna_depression_rad);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  radar::SbrTracer tracer(scene, cfg);
+  radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
+  std::vector<radar::Contribution> out(terrain.max_returns());
+  radar::clutter::TerrainStats es;
+  std::uint64_t dropped = 0;
+  std::size_t n = 0;
+  timespec t0{}, t1{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
+  for (auto _ : state) {
+    es = {};
+    n = terrain.compute(pose, out, es, dropped);
+    benchmark::DoNotOptimize(n);
+  }
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
+  state.counters["cpu_ms"] =
+      (1e3 * static_cast<double>(t1.tv_sec - t0.tv_sec) +
+       1e-6 * static_cast<double>(t1.tv_nsec - t0.tv_nsec)) /
+      static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  double power_m2 = 0.0;  // the returns' total mean power: the same cells give the same sum
+  for (std::size_t i = 0; i < n; ++i)
+    power_m2 += std::norm(out[i].amplitude);
+  state.counters["returns"] = static_cast<double>(n);
+  state.counters["power_m2"] = power_m2;
+  state.counters["patches"] = static_cast<double>(es.patches);
+  state.counters["patches_lit"] = static_cast<double>(es.patches_lit);
+  state.counters["queries"] = static_cast<double>(es.occlusion_queries);
+  state.counters["facets_considered"] = static_cast<double>(es.facets_considered);
+}
+BENCHMARK(BM_TerrainCompute)
+    ->ArgsProduct({{0, 1}, {1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
@@ -438,6 +529,50 @@ void BM_ClosedLoop50Frames(benchmark::State& state) {
       benchmark::Counter(50.0, benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_ClosedLoop50Frames)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Whole closed-loop frames with terrain clutter both ways (issue 28): the scenario's first 20
+// frames, [governor] off, terrain rays (argument 1 = 0) or the engine's cells (1) beside the
+// trace. Argument 0: the default scenario (0) or examples/terrain_movers.toml (1). Counters:
+// cpu_all_ms, the CPU time of all the process's threads per frame (the frame's work on every
+// core); trace_p50_ms and sensor_p50_ms, the stages' medians.
+void BM_ClosedLoopTerrain(benchmark::State& state) {
+  loop::Scenario s =
+      state.range(0) == 0
+          ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
+          : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
+  s.frames = 20;
+  s.governor.enabled = false;
+  s.terrain_engine = state.range(1) == 1;
+  s.sbr.terrain_rays = !s.terrain_engine;
+  loop::RunResult r;
+  double cpu_s = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    loop::ClosedLoop loop(s, {});
+    timespec t0{}, t1{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
+    state.ResumeTiming();
+    r = loop.run();
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
+    cpu_s += static_cast<double>(t1.tv_sec - t0.tv_sec) +
+             1e-9 * static_cast<double>(t1.tv_nsec - t0.tv_nsec);
+  }
+  const double frames =
+      static_cast<double>(s.frames) *
+      static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  state.counters["cpu_all_ms"] = 1e3 * cpu_s / frames;
+  state.counters["trace_p50_ms"] =
+      1e3 * r.stages[static_cast<std::size_t>(radar_emu::timing::Stage::kTrace)].p50_s;
+  state.counters["sensor_p50_ms"] =
+      1e3 * r.stages[static_cast<std::size_t>(radar_emu::timing::Stage::kSensor)].p50_s;
+  state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") +
+                 (s.terrain_engine ? ", engine" : ", rays"));
+}
+BENCHMARK(BM_ClosedLoopTerrain)
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // The frame budget (issue 15): whole closed-loop runs of a scenario as fast as possible (the
 // governor in its reproducible model mode), the frame time's percentiles as fractions of the

@@ -1,5 +1,6 @@
 #include "loop/closed_loop.hpp"
 
+#include <tbb/parallel_invoke.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -610,15 +611,31 @@ void ClosedLoop::Impl::trace(Frame& f) {
   timing::ScopedStage stage(accounting.profiler, rs.wall, timing::Stage::kTrace);
   if (f.valid) {
     f.decision = &governor.decide(f.pose);
-    f.contributions =
-        tracer.tracer.trace(f.pose, tracer.contributions, r.trace, f.decision->knobs);  // adds
-    if (tracer.terrain) {  // terrain clutter per cell after the tracer's returns
-      const std::span<radar::Contribution> rest =
-          std::span(tracer.contributions).subspan(f.contributions);
+    if (tracer.terrain) {
+      // Terrain clutter per cell from the engine, at the same time as the tracer's rays (both on
+      // TBB: the engine's slices fill the cores the trace leaves idle and the other way round),
+      // each into its own part of the buffer (the tracer's holds max_contributions(), its
+      // bound); the engine's returns then move down behind the tracer's. Same returns in the same
+      // order as one after the other.
+      const std::span<radar::Contribution> all(tracer.contributions);
+      const std::size_t cap = tracer.tracer.max_contributions();
       const std::uint64_t patches_before = r.terrain.patches;
-      f.terrain_returns = tracer.terrain->compute(f.pose, rest, r.terrain, r.terrain_dropped);
+      tbb::parallel_invoke(
+          [&] {
+            f.contributions =
+                tracer.tracer.trace(f.pose, all.first(cap), r.trace, f.decision->knobs);  // adds
+          },
+          [&] {
+            f.terrain_returns =
+                tracer.terrain->compute(f.pose, all.subspan(cap), r.terrain, r.terrain_dropped);
+          });
+      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), f.terrain_returns,
+                  all.begin() + static_cast<std::ptrdiff_t>(f.contributions));
       f.terrain_patches = r.terrain.patches - patches_before;
       f.contributions += f.terrain_returns;
+    } else {
+      f.contributions =
+          tracer.tracer.trace(f.pose, tracer.contributions, r.trace, f.decision->knobs);  // adds
     }
   }
   // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).

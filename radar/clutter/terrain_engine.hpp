@@ -223,13 +223,19 @@ class TerrainEngine {
   /// sigma_k sin(el_k) [m^2] (el_k the patch's elevation in the antenna frame): divided by mean,
   /// the sine of the cell's power-weighted elevation. `horizon`: the scratch of the horizon
   /// sweep (view.shadow_method kHorizon), horizon_scratch_size(grid, view) values or more (fewer:
-  /// its bins are widened to fit, counted in horizon_coarsened). Real-time safe: no allocation,
-  /// no exception; an unusable grid or view adds nothing and returns all-zero statistics.
+  /// its bins are widened to fit, counted in horizon_coarsened). `facet_list` (with the horizon
+  /// sweep): scratch for the facets the sweep finds with patches in the grid's window (their
+  /// vertices tested in the sweep's own transforms), so that the patch pass visits only those
+  /// instead of searching the tiles again; facets().size() values always suffice (too few: the
+  /// patch pass searches the tiles; the result is the same either way). Real-time safe: no
+  /// allocation, no exception; an unusable grid or view adds nothing and returns all-zero
+  /// statistics.
   [[nodiscard]] TerrainStats integrate(const TerrainView& view, const CellGrid& grid,
                                        std::span<std::complex<double>> field,
                                        std::span<double> mean,
                                        std::span<double> elevation_power = {},
-                                       std::span<double> horizon = {}) const noexcept;
+                                       std::span<double> horizon = {},
+                                       std::span<std::uint32_t> facet_list = {}) const noexcept;
   /// Scratch values integrate() needs for the horizon sweep of `grid` from `view` (its columns
   /// and its bins out to the grid's last range edge). Real-time safe.
   [[nodiscard]] static std::size_t horizon_scratch_size(const CellGrid& grid,

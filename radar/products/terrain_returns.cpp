@@ -1,7 +1,6 @@
 #include "radar/products/terrain_returns.hpp"
 
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -37,6 +36,7 @@ const TerrainReturnsConfig& validated(const TerrainReturnsConfig& c) {
   require_field(c.patch_fraction > 0.0 && c.patch_fraction <= 1.0, "patch_fraction",
                 "must be in (0, 1]");
   require_field(std::isfinite(c.carrier_hz) && c.carrier_hz > 0.0, "carrier_hz", "must be > 0");
+  require_field(c.slices >= 1, "slices", "must be >= 1");
   return c;
 }
 
@@ -64,10 +64,8 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
     cos_az_.push_back(std::cos(az));
     sin_az_.push_back(std::sin(az));
   }
-  // One slice of columns per worker (at least one column each).
-  const auto workers =
-      static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-  const std::size_t n_slices = std::min(workers, columns_);
+  // config.slices slices of columns (at least one column each), whatever the threads.
+  const std::size_t n_slices = std::min(c.slices, columns_);
   slices_.resize(n_slices);
   std::size_t first = 0;
   for (std::size_t s = 0; s < n_slices; ++s) {
@@ -77,8 +75,10 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
     first += sl.columns;
     sl.mean.assign(sl.columns * bins_, 0.0);
     sl.elevation_power.assign(sl.columns * bins_, 0.0);
-    if (c.shadowing && c.horizon)
+    if (c.shadowing && c.horizon) {
       sl.horizon.assign(clutter::TerrainEngine::horizon_scratch_size(slice_grid(sl), view()), 0.0);
+      sl.facet_list.assign(engine_.facets().size(), 0);
+    }
   }
   // The object holding most of the terrain area labels the returns (Contribution::object_id).
   std::vector<double> area(scene.objects().size(), 0.0);
@@ -129,7 +129,8 @@ std::size_t TerrainReturns::compute(const RadarPose& pose, std::span<Contributio
     Slice& sl = slices_[s];
     std::fill(sl.mean.begin(), sl.mean.end(), 0.0);
     std::fill(sl.elevation_power.begin(), sl.elevation_power.end(), 0.0);
-    sl.stats = engine_.integrate(v, slice_grid(sl), {}, sl.mean, sl.elevation_power, sl.horizon);
+    sl.stats = engine_.integrate(v, slice_grid(sl), {}, sl.mean, sl.elevation_power, sl.horizon,
+                                 sl.facet_list);
   });
   const glm::dmat3& r = pose.world_from_antenna;
   std::size_t n = 0;

@@ -27,9 +27,10 @@
 // max(range cell, R azimuth cell) x patch_fraction), so each cell holds one or more.
 //
 // Costs. The constructor allocates and throws (std::invalid_argument; the engine's "no terrain"
-// included). compute() allocates nothing and does not throw: the columns are cut into one slice
-// per worker (TBB), each slice integrated into its own buffers; the output order (slice, bin,
-// column) does not depend on the threading.
+// included). compute() allocates nothing and does not throw: the columns are cut into `slices`
+// slices (a number of the configuration, not of the threads), integrated in parallel (TBB), each
+// into its own buffers: the output (values and order: slice, bin, column) is the same for any
+// number of threads.
 
 #include <cstddef>
 #include <cstdint>
@@ -61,12 +62,16 @@ struct TerrainReturnsConfig {
   /// Patches per frame, all slices together (counted in TerrainStats::budget_cut when it cuts).
   std::uint64_t max_patches = 20'000'000;
   std::size_t max_cells = 4'000'000;  ///< setup refuses more columns x bins
+  /// Slices of columns integrated in parallel (at most the columns), >= 1. The same output for
+  /// any number of threads; each slice sweeps the horizon of its own columns, so more slices
+  /// than cores repeat that work for nothing (2: the project's 2-core target).
+  std::size_t slices = 2;
 };
 
 class TerrainReturns {
  public:
   /// Setup: builds the engine from the tracer's resolved materials (make_terrain_engine: the
-  /// tracer's targets left to the rays) and the cell grid; one slice per TBB worker. Throws
+  /// tracer's targets left to the rays) and the cell grid in config.slices slices. Throws
   /// std::invalid_argument naming the field, or the engine's error (a scene with no terrain).
   /// Keeps a reference to `scene`.
   TerrainReturns(const scene::Scene& scene, const SbrTracer& tracer,
@@ -90,6 +95,7 @@ class TerrainReturns {
     std::size_t first_column = 0, columns = 0;
     std::vector<double> mean, elevation_power;  ///< bins x columns of the slice
     std::vector<double> horizon;                ///< the engine's horizon scratch
+    std::vector<std::uint32_t> facet_list;      ///< the engine's list of facets in the window
     clutter::TerrainStats stats;
   };
   [[nodiscard]] clutter::TerrainView view() const noexcept;  ///< the pose left at its default
