@@ -1,6 +1,7 @@
 #include "radar/em/rcs.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -220,9 +221,14 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
 
   const auto& desc = scene.description();
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  std::vector<glm::dvec3> vertices_m;  // every vertex of the scene, world frame
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
+    first_triangle_.push_back(facet_of_triangle_.size());
+    facet_of_triangle_.resize(facet_of_triangle_.size() + mesh.triangles.size(), kNoFacet);
+    for (const glm::vec3& v : mesh.positions_m)
+      vertices_m.push_back(glm::dvec3(m * glm::dvec4(v, 1.0)));
     const scene::MeshTopology topology = scene::build_topology(mesh.positions_m, mesh.triangles);
     const std::vector<std::int8_t> closed = scene::closed_part_winding(topology);
     const std::vector<std::int8_t> solid = solid_winding(topology, mesh.positions_m);
@@ -245,9 +251,11 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       f.normal = nn / twice_area;
       f.area_m2 = 0.5 * twice_area;
       f.centroid = (f.v0 + f.v1 + f.v2) / 3.0;
+      f.longest_m = longest;
       f.surface = mesh.triangle_material[t];
       f.outward = static_cast<std::int8_t>(closed[t] * mirrored);
       f.solid = static_cast<std::int8_t>(solid[t] * mirrored);
+      facet_of_triangle_[first_triangle_.back() + t] = static_cast<std::uint32_t>(facets_.size());
       facets_.push_back(f);
       for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
         lo = glm::min(lo, v);
@@ -256,6 +264,16 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
     }
   }
   require(!facets_.empty(), "the target has no non-degenerate facet");
+  for (const Facet& f : facets_) {
+    for (const glm::dvec3& v : {f.v0, f.v1, f.v2})
+      facet_vertices_m_.push_back(v);
+  }
+  std::sort(facet_vertices_m_.begin(), facet_vertices_m_.end(),
+            [](const glm::dvec3& a, const glm::dvec3& b) {
+              return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+            });
+  facet_vertices_m_.erase(std::unique(facet_vertices_m_.begin(), facet_vertices_m_.end()),
+                          facet_vertices_m_.end());
   centre_m_ = 0.5 * (lo + hi);
   for (const Facet& f : facets_) {
     for (const glm::dvec3& v : {f.v0, f.v1, f.v2})
@@ -264,6 +282,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   // Hits are refit in double precision, but traversal is float: step off a surface by a few
   // float ulps of the target's coordinates (style.md: epsilons scale with the geometry).
   epsilon_m_ = 1e-5 * (radius_m_ + glm::length(centre_m_));
+  find_supporting_sides(vertices_m);
   require(std::isfinite(config_.edge_min_turn_rad) && config_.edge_min_turn_rad >= 0.0 &&
               config_.edge_min_turn_rad < kPi,
           "edge threshold must be in [0, 180) deg");
@@ -334,6 +353,69 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   }
 }
 
+// A facet whose plane has every vertex of the scene on one side (within kSupportTolerance ray
+// offsets) lies on a supporting plane of the target (on its convex hull): the open half-space on
+// the other side holds no geometry, so a ray leaving the facet into it, from a point lifted off
+// the facet by the ray offset, meets nothing. Vertices are tried extreme ones first (each
+// facet's test stops at the first vertex beyond its plane).
+constexpr double kSupportTolerance = 0.1;
+
+void RcsEngine::find_supporting_sides(std::vector<glm::dvec3> vertices_m) {
+  std::sort(vertices_m.begin(), vertices_m.end(), [](const glm::dvec3& a, const glm::dvec3& b) {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  });
+  vertices_m.erase(std::unique(vertices_m.begin(), vertices_m.end()), vertices_m.end());
+  // The extreme vertices along the 13 directions of the cube's axes, face and body diagonals
+  // first: most facets not on the hull find one of them beyond their plane.
+  std::vector<std::size_t> first;
+  for (int x = -1; x <= 1; ++x) {
+    for (int y = -1; y <= 1; ++y) {
+      for (int z = -1; z <= 1; ++z) {
+        if (x == 0 && y == 0 && z == 0)
+          continue;
+        const glm::dvec3 dir(x, y, z);
+        std::size_t best = 0;
+        for (std::size_t i = 1; i < vertices_m.size(); ++i) {
+          if (glm::dot(dir, vertices_m[i]) > glm::dot(dir, vertices_m[best]))
+            best = i;
+        }
+        first.push_back(best);
+      }
+    }
+  }
+  std::sort(first.begin(), first.end());
+  first.erase(std::unique(first.begin(), first.end()), first.end());
+  std::vector<glm::dvec3> ordered;
+  ordered.reserve(vertices_m.size());
+  for (const std::size_t i : first)
+    ordered.push_back(vertices_m[i]);
+  for (std::size_t i = 0, k = 0; i < vertices_m.size(); ++i) {
+    if (k < first.size() && first[k] == i) {
+      ++k;
+      continue;
+    }
+    ordered.push_back(vertices_m[i]);
+  }
+  const double tol_m = kSupportTolerance * epsilon_m_;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, facets_.size(), 64),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          Facet& f = facets_[i];
+          const double offset = glm::dot(f.normal, f.v0);
+          bool front = true, back = true;  // no vertex beyond the plane on the +n / -n side
+          for (const glm::dvec3& v : ordered) {
+            const double h = glm::dot(f.normal, v) - offset;
+            front = front && h <= tol_m;
+            back = back && h >= -tol_m;
+            if (!front && !back)
+              break;
+          }
+          f.empty_side = static_cast<std::uint8_t>((front ? 1u : 0u) | (back ? 2u : 0u));
+        }
+      });
+}
+
 RayGrid RcsEngine::ray_grid(const Direction& tx, double max_freq_hz) const {
   require(std::isfinite(max_freq_hz) && max_freq_hz > 0.0, "frequency must be > 0");
   const glm::dvec3 r_t = unit_vector(tx);
@@ -349,14 +431,12 @@ RayGrid RcsEngine::ray_grid(const Direction& tx, double max_freq_hz) const {
   const glm::dvec3 axis_u = std::cos(turn) * tx_v + std::sin(turn) * tx_h;
   const glm::dvec3 axis_v = -std::sin(turn) * tx_v + std::cos(turn) * tx_h;
   double u_lo = std::numeric_limits<double>::max(), u_hi = -u_lo, v_lo = u_lo, v_hi = -u_lo;
-  for (const Facet& f : facets_) {
-    for (const glm::dvec3& p : {f.v0, f.v1, f.v2}) {
-      const double pu = glm::dot(p - centre_m_, axis_u), pv = glm::dot(p - centre_m_, axis_v);
-      u_lo = std::min(u_lo, pu);
-      u_hi = std::max(u_hi, pu);
-      v_lo = std::min(v_lo, pv);
-      v_hi = std::max(v_hi, pv);
-    }
+  for (const glm::dvec3& p : facet_vertices_m_) {  // the facets' vertices, each once
+    const double pu = glm::dot(p - centre_m_, axis_u), pv = glm::dot(p - centre_m_, axis_v);
+    u_lo = std::min(u_lo, pu);
+    u_hi = std::max(u_hi, pu);
+    v_lo = std::min(v_lo, pv);
+    v_hi = std::max(v_hi, pv);
   }
   RayGrid g;
   const double cols = std::ceil((u_hi - u_lo) / spacing) + 1.0;
@@ -430,6 +510,11 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
   constexpr std::size_t kFacetBlock = 256;
   const std::size_t n_blocks = (facets_.size() + kFacetBlock - 1) / kFacetBlock;
   std::vector<std::vector<FacetTerm>> block_terms(n_blocks);
+  // At one frequency the facets' integrals are summed here, block by block (facet_sums[block],
+  // added in block order below), instead of being kept as terms for the frequency sum.
+  const bool one_frequency = freqs_hz.size() == 1;
+  const double k_one = 2.0 * kPi * freqs_hz[0] / kSpeedOfLight_mps;
+  std::vector<std::array<cplx, 4>> facet_sums(n_blocks, std::array<cplx, 4>{});
   std::atomic<std::uint64_t> lit{0}, partly{0}, shadowed{0}, edge_on{0}, occl{0}, subs{0};
   tbb::parallel_for(std::size_t{0}, n_blocks, [&](std::size_t bi) {
     const std::size_t begin = bi * kFacetBlock, end = std::min(facets_.size(), begin + kFacetBlock);
@@ -472,6 +557,10 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       } else if (inside) {
         l.light = FacetLight::kDark;
         ++n_shadow;
+      } else if ((f.empty_side & (glm::dot(n, f.normal) > 0.0 ? 1u : 2u)) != 0) {
+        // On the convex hull, lit on its open side (find_supporting_sides): every sample's ray
+        // toward the transmitter runs into the empty half-space, so all seven are clear.
+        l.light = FacetLight::kLit;
       } else {
         l.tested = true;
         l.first = rays.size();
@@ -492,9 +581,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       } else if (l.light == FacetLight::kPartial) {
         // Partly lit facets are resolved as finely as the tubes are spaced (sbr_core.hpp).
         const Facet& f = facets_[i];
-        const double longest = std::max(
-            {glm::length(f.v1 - f.v0), glm::length(f.v2 - f.v1), glm::length(f.v0 - f.v2)});
-        l.m = facet_subdivisions(longest, resolution_m);
+        l.m = facet_subdivisions(f.longest_m, resolution_m);
         l.first_sub = sub_rays.size();
         for_each_subtriangle(f.v0, f.v1, f.v2, l.m,
                              [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
@@ -517,6 +604,52 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       const CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
       const std::array<cplx, 4> c =
           coefficients(po_source(e_h, d_i, l.n, s, rc, pec), po_source(e_v, d_i, l.n, s, rc, pec));
+      if (one_frequency) {
+        cplx integral;
+        if (l.light == FacetLight::kLit) {
+          ++n_lit;
+          integral = triangle_phase_integral(f.area_m2, glm::dot(w, f.v0), glm::dot(w, f.v1),
+                                             glm::dot(w, f.v2), k_one);
+        } else {
+          // The m x m congruent sub-triangles (for_each_subtriangle) are translates of two:
+          // the "up" one (v0, v0 + e1, v0 + e2) and the "down" one (v0 + e1, v0 + e1 + e2,
+          // v0 + e2), e1 = (v1 - v0) / m, e2 = (v2 - v0) / m, moved by i e1 + j e2. A
+          // translation by t multiplies the integral of exp(j k w . r) by exp(j k w . t), so
+          // the lit ones sum to I_up sum_up z1^i z2^j + I_down sum_down z1^i z2^j with
+          // z1 = exp(j k w . e1), z2 = exp(j k w . e2): two closed forms per facet and one
+          // complex rotation per sub-triangle instead of a sine and cosine each.
+          ++n_partial;
+          const double m = static_cast<double>(l.m);
+          const glm::dvec3 e1 = (f.v1 - f.v0) / m, e2 = (f.v2 - f.v0) / m;
+          const double b0 = glm::dot(w, f.v0), s1 = glm::dot(w, e1), s2 = glm::dot(w, e2);
+          const double sub_area_m2 = f.area_m2 / (m * m);
+          const cplx up = triangle_phase_integral(sub_area_m2, b0, b0 + s1, b0 + s2, k_one);
+          const cplx down =
+              triangle_phase_integral(sub_area_m2, b0 + s1, b0 + s1 + s2, b0 + s2, k_one);
+          const cplx z1 = std::polar(1.0, k_one * s1), z2 = std::polar(1.0, k_one * s2);
+          cplx sum_up{0.0, 0.0}, sum_down{0.0, 0.0}, row{1.0, 0.0};
+          std::size_t q = l.first_sub;
+          for (int a = 0; a < l.m; ++a) {
+            cplx z = row;
+            for (int b = 0; a + b < l.m; ++b) {
+              if (sub_blocked[q++] == 0) {
+                ++n_subs;
+                sum_up += z;
+              }
+              if (a + b + 2 <= l.m && sub_blocked[q++] == 0) {
+                ++n_subs;
+                sum_down += z;
+              }
+              z *= z2;
+            }
+            row *= z1;
+          }
+          integral = up * sum_up + down * sum_down;
+        }
+        for (std::size_t p = 0; p < 4; ++p)
+          facet_sums[bi][p] += c[p] * integral;
+        continue;
+      }
       auto add = [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
         FacetTerm t;
         t.c = c;
@@ -774,6 +907,58 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     const std::uint64_t cols = grid.cols, n_rows = grid.rows;
     const glm::dvec3 tube_u0 = grid.du_m, tube_v0 = grid.dv_m;
     const auto rows = static_cast<std::size_t>(n_rows);
+    // Per row, the columns whose rays can meet a facet at all: the union of the facets' projected
+    // bounding boxes on the grid (its rows' column intervals), widened by the ray offset. A ray
+    // outside every facet's projection meets nothing (its Embree query would miss), so tracing
+    // only these columns changes no path; on the vehicle about half of the grid's rays miss.
+    struct Spans {
+      std::vector<std::int64_t> lo, hi;
+    };
+    const glm::dvec3 col_axis = grid.du_m / glm::dot(grid.du_m, grid.du_m);
+    const glm::dvec3 row_axis = grid.dv_m / glm::dot(grid.dv_m, grid.dv_m);
+    const double margin = eps / glm::length(grid.du_m);  // du and dv are equally long
+    const auto last_col = static_cast<std::int64_t>(cols) - 1;
+    const auto last_row = static_cast<std::int64_t>(n_rows) - 1;
+    tbb::enumerable_thread_specific<Spans> local_spans([&] {
+      return Spans{std::vector<std::int64_t>(rows, last_col + 1),
+                   std::vector<std::int64_t>(rows, -1)};
+    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, facets_.size(), 1024),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          Spans& sp = local_spans.local();
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            const Facet& f = facets_[i];
+            double c_lo = std::numeric_limits<double>::max(), c_hi = -c_lo, r_lo = c_lo,
+                   r_hi = -c_lo;
+            for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
+              const glm::dvec3 x = v - grid.origin_m;
+              const double c = glm::dot(x, col_axis), r = glm::dot(x, row_axis);
+              c_lo = std::min(c_lo, c);
+              c_hi = std::max(c_hi, c);
+              r_lo = std::min(r_lo, r);
+              r_hi = std::max(r_hi, r);
+            }
+            const auto r0 = std::max<std::int64_t>(0, std::llround(std::ceil(r_lo - margin)));
+            const auto r1 =
+                std::min<std::int64_t>(last_row, std::llround(std::floor(r_hi + margin)));
+            const auto c0 = std::max<std::int64_t>(0, std::llround(std::ceil(c_lo - margin)));
+            const auto c1 =
+                std::min<std::int64_t>(last_col, std::llround(std::floor(c_hi + margin)));
+            for (std::int64_t r = r0; r <= r1; ++r) {
+              const auto ri = static_cast<std::size_t>(r);
+              sp.lo[ri] = std::min(sp.lo[ri], c0);
+              sp.hi[ri] = std::max(sp.hi[ri], c1);
+            }
+          }
+        });
+    Spans spans{std::vector<std::int64_t>(rows, last_col + 1), std::vector<std::int64_t>(rows, -1)};
+    for (const Spans& sp : local_spans) {
+      for (std::size_t r = 0; r < rows; ++r) {
+        spans.lo[r] = std::min(spans.lo[r], sp.lo[r]);
+        spans.hi[r] = std::max(spans.hi[r], sp.hi[r]);
+      }
+    }
     std::vector<std::vector<PathTerm>> row_terms(rows);
     std::atomic<std::uint64_t> hits{0}, n_paths{0}, grazing{0}, segments{0}, cut{0};
     std::array<std::atomic<std::uint64_t>, kMaxRcsBounces + 1> by_bounce{};
@@ -784,7 +969,11 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     // of the row's terms (chunk, bounce, column) differs.
     constexpr std::size_t kChunk = 64;
     tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t row) {
-      row_terms[row].reserve(static_cast<std::size_t>(cols / 8));
+      if (spans.lo[row] > spans.hi[row])
+        return;  // no facet in this row
+      const auto col_begin = static_cast<std::uint64_t>(spans.lo[row]);
+      const auto col_end = static_cast<std::uint64_t>(spans.hi[row]) + 1;
+      row_terms[row].reserve(static_cast<std::size_t>((col_end - col_begin) / 8));
       std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0, l_cut = 0;
       std::array<std::uint64_t, kMaxRcsBounces + 1> l_by{};
       const glm::dvec3 row_origin = grid.origin_m + static_cast<double>(row) * grid.dv_m;
@@ -813,7 +1002,11 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         ReflectionCoefficients rc;
         bool pec = true;
         bool radiate = false;
-        std::uint32_t exit = 0;  // its exit test's index, when radiate and shadowing
+        // The facet is on the convex hull and n points to its empty side (empty_side): rays
+        // from the hit into that side (the reflection, the exit toward the receiver, the cap
+        // test) meet nothing, so they are not traced.
+        bool open = false;
+        std::uint32_t exit = 0;  // its exit test's index, when radiate, shadowing and not open
       };
       std::vector<Tube> tubes(kChunk);
       std::vector<std::uint32_t> active(kChunk), next(kChunk);
@@ -830,9 +1023,9 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         ray.t_far_m = std::numeric_limits<double>::infinity();
         return ray;
       };
-      for (std::uint64_t col0 = 0; col0 < cols; col0 += kChunk) {
+      for (std::uint64_t col0 = col_begin; col0 < col_end; col0 += kChunk) {
         const std::size_t n_chunk =
-            static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, cols - col0));
+            static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, col_end - col0));
         std::size_t n_active = n_chunk;
         for (std::size_t j = 0; j < n_chunk; ++j) {
           Tube& tb = tubes[j];
@@ -886,7 +1079,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             // Bounce 1 is the facets' (above). Later hits radiate when the receiver sees the lit
             // side of the hit (sbr_core.hpp, kGrazingCos) and nothing is in the way.
             mt.radiate = bounce >= 2 && glm::dot(n, s) >= kGrazingCos;
-            if (mt.radiate && shadowing) {
+            mt.open = empty_side(hit.object_id, hit.primitive_id, n);
+            if (mt.radiate && shadowing && !mt.open) {
               mt.exit = static_cast<std::uint32_t>(n_exits);
               exits[n_exits++] = free_ray(hit.position_m + eps * n, s);
             }
@@ -902,7 +1096,7 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             Tube& tb = tubes[mt.tube];
             const glm::dvec3& n = mt.n;
             const glm::dvec3& hit_m = tb.last_hit;
-            if (mt.radiate && (!shadowing || exit_blocked[mt.exit] == 0)) {
+            if (mt.radiate && (!shadowing || mt.open || exit_blocked[mt.exit] == 0)) {
               ++l_paths;
               ++l_by[static_cast<std::size_t>(bounce)];
               // The tube's footprint on this facet: its edge vectors projected along d.
@@ -943,7 +1137,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             const glm::dvec3 d_r = mirror(tb.d, n);
             if (bounce == config_.max_bounces) {
               // The cap: is this tube still bouncing (would its reflection meet the target)?
-              caps[n_caps++] = free_ray(hit_m + eps * n, d_r);
+              if (!mt.open)
+                caps[n_caps++] = free_ray(hit_m + eps * n, d_r);
               continue;
             }
             const CVec e_v_r = reflect_field(tb.e_v, tb.d, d_r, n, mt.rc, mt.pec);
@@ -966,6 +1161,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             tb.tube_u = mirror(tb.tube_u, n);
             tb.tube_v = mirror(tb.tube_v, n);
             tb.d = d_r;
+            if (mt.open)
+              continue;  // the reflection leaves the target
             // Lifted to the lit side: no self-hit.
             rays[n_next] = free_ray(hit_m + eps * n, d_r);
             next[n_next++] = mt.tube;
@@ -1123,6 +1320,12 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     for (std::size_t ci = 0; ci < n_chunks; ++ci) {
       for (std::size_t p = 0; p < 4; ++p)
         sum[p] += partial[ci * nf + fi][p];
+    }
+    if (one_frequency) {
+      for (const std::array<cplx, 4>& b : facet_sums) {
+        for (std::size_t p = 0; p < 4; ++p)
+          sum[p] += b[p];
+      }
     }
     const cplx pre(0.0, -k_of_hz * freqs_hz[fi] / std::sqrt(kPi));  // -j k / sqrt(pi)
     out[fi] = {pre * sum[0], pre * sum[1], pre * sum[2], pre * sum[3]};

@@ -213,6 +213,7 @@ class RcsEngine {
   struct Facet {
     glm::dvec3 v0, v1, v2, centroid, normal;
     double area_m2;
+    double longest_m;  ///< its longest edge
     std::uint16_t surface;
     /// +1: `normal` points out of the closed part the facet belongs to, -1: into it, 0: open
     /// part (sbr_core.hpp, closed parts).
@@ -220,11 +221,31 @@ class RcsEngine {
     /// The same for the bounce-1 lighting, with parts closed up to T-junctions counted closed
     /// (rcs.cpp, solid_winding).
     std::int8_t solid;
+    /// Bit 0: the half-space on the normal's side of the facet's plane holds no geometry (the
+    /// facet is on the target's convex hull, facing that way); bit 1: the same on the other side
+    /// (rcs.cpp, find_supporting_sides).
+    std::uint8_t empty_side = 0;
   };
+  void find_supporting_sides(std::vector<glm::dvec3> vertices_m);
+  /// Whether the side of facet (object, primitive) that unit normal `n` points to is empty
+  /// (Facet::empty_side); false for a triangle the engine dropped as degenerate.
+  [[nodiscard]] bool empty_side(std::uint32_t object, std::uint32_t primitive,
+                                const glm::dvec3& n) const noexcept {
+    const std::uint32_t i = facet_of_triangle_[first_triangle_[object] + primitive];
+    if (i == kNoFacet)
+      return false;
+    const Facet& f = facets_[i];
+    return (f.empty_side & (glm::dot(n, f.normal) > 0.0 ? 1u : 2u)) != 0;
+  }
+  static constexpr std::uint32_t kNoFacet = 0xFFFFFFFFu;
   const scene::Scene* scene_;
   std::vector<SurfaceModel> surfaces_;
   RcsConfig config_;
   std::vector<Facet> facets_;
+  std::vector<glm::dvec3> facet_vertices_m_;  ///< the facets' vertices, each once
+  /// facets_ index of triangle t of object o: facet_of_triangle_[first_triangle_[o] + t].
+  std::vector<std::size_t> first_triangle_;
+  std::vector<std::uint32_t> facet_of_triangle_;
   std::size_t degenerate_ = 0;
   glm::dvec3 centre_m_{0.0};
   double radius_m_ = 0.0;
