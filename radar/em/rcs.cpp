@@ -222,11 +222,13 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   const auto& desc = scene.description();
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
   std::vector<glm::dvec3> vertices_m;  // every vertex of the scene, world frame
+  constexpr std::uint32_t kNoFacet = 0xFFFFFFFFu;
+  std::vector<std::uint32_t> facet_of_triangle;  // facets_ index (kNoFacet: degenerate)
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
-    first_triangle_.push_back(facet_of_triangle_.size());
-    facet_of_triangle_.resize(facet_of_triangle_.size() + mesh.triangles.size(), kNoFacet);
+    first_triangle_.push_back(facet_of_triangle.size());
+    facet_of_triangle.resize(facet_of_triangle.size() + mesh.triangles.size(), kNoFacet);
     for (const glm::vec3& v : mesh.positions_m)
       vertices_m.push_back(glm::dvec3(m * glm::dvec4(v, 1.0)));
     const scene::MeshTopology topology = scene::build_topology(mesh.positions_m, mesh.triangles);
@@ -255,7 +257,7 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       f.surface = mesh.triangle_material[t];
       f.outward = static_cast<std::int8_t>(closed[t] * mirrored);
       f.solid = static_cast<std::int8_t>(solid[t] * mirrored);
-      facet_of_triangle_[first_triangle_.back() + t] = static_cast<std::uint32_t>(facets_.size());
+      facet_of_triangle[first_triangle_.back() + t] = static_cast<std::uint32_t>(facets_.size());
       facets_.push_back(f);
       for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
         lo = glm::min(lo, v);
@@ -283,6 +285,11 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   // float ulps of the target's coordinates (style.md: epsilons scale with the geometry).
   epsilon_m_ = 1e-5 * (radius_m_ + glm::length(centre_m_));
   find_supporting_sides(vertices_m);
+  triangle_empty_side_.assign(facet_of_triangle.size(), 0);
+  for (std::size_t t = 0; t < facet_of_triangle.size(); ++t) {
+    if (facet_of_triangle[t] != kNoFacet)
+      triangle_empty_side_[t] = facets_[facet_of_triangle[t]].empty_side;
+  }
   require(std::isfinite(config_.edge_min_turn_rad) && config_.edge_min_turn_rad >= 0.0 &&
               config_.edge_min_turn_rad < kPi,
           "edge threshold must be in [0, 180) deg");
@@ -919,6 +926,15 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     const double margin = eps / glm::length(grid.du_m);  // du and dv are equally long
     const auto last_col = static_cast<std::int64_t>(cols) - 1;
     const auto last_row = static_cast<std::int64_t>(n_rows) - 1;
+    // floor and ceil of a grid coordinate (the grid covers every vertex: no overflow), inline.
+    auto floor_index = [](double x) {
+      const auto i = static_cast<std::int64_t>(x);
+      return x < static_cast<double>(i) ? i - 1 : i;
+    };
+    auto ceil_index = [](double x) {
+      const auto i = static_cast<std::int64_t>(x);
+      return x > static_cast<double>(i) ? i + 1 : i;
+    };
     tbb::enumerable_thread_specific<Spans> local_spans([&] {
       return Spans{std::vector<std::int64_t>(rows, last_col + 1),
                    std::vector<std::int64_t>(rows, -1)};
@@ -939,12 +955,10 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
               r_lo = std::min(r_lo, r);
               r_hi = std::max(r_hi, r);
             }
-            const auto r0 = std::max<std::int64_t>(0, std::llround(std::ceil(r_lo - margin)));
-            const auto r1 =
-                std::min<std::int64_t>(last_row, std::llround(std::floor(r_hi + margin)));
-            const auto c0 = std::max<std::int64_t>(0, std::llround(std::ceil(c_lo - margin)));
-            const auto c1 =
-                std::min<std::int64_t>(last_col, std::llround(std::floor(c_hi + margin)));
+            const std::int64_t r0 = std::max<std::int64_t>(0, ceil_index(r_lo - margin));
+            const std::int64_t r1 = std::min(last_row, floor_index(r_hi + margin));
+            const std::int64_t c0 = std::max<std::int64_t>(0, ceil_index(c_lo - margin));
+            const std::int64_t c1 = std::min(last_col, floor_index(c_hi + margin));
             for (std::int64_t r = r0; r <= r1; ++r) {
               const auto ri = static_cast<std::size_t>(r);
               sp.lo[ri] = std::min(sp.lo[ri], c0);
@@ -968,6 +982,42 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     // then the cap tests. What each tube does is what the tube-by-tube loop did; only the order
     // of the row's terms (chunk, bounce, column) differs.
     constexpr std::size_t kChunk = 64;
+    // A tube in flight: where it is, its field and its footprint's edges.
+    struct Tube {
+      std::uint64_t col = 0;
+      std::uint64_t seq_key = 0;  // the facets met so far, hashed
+      glm::dvec3 d{0.0}, tube_u{0.0}, tube_v{0.0}, last_hit{0.0};
+      CVec e_h, e_v;
+      double path_m = 0.0;
+    };
+    // What a tube met at this bounce.
+    struct Met {
+      std::uint32_t tube = 0;
+      glm::dvec3 n{0.0};
+      ReflectionCoefficients rc;
+      bool pec = true;
+      bool radiate = false;
+      // The facet is on the convex hull and n points to its empty side (Facet::empty_side): rays
+      // from the hit into that side (the reflection, the exit toward the receiver, the cap
+      // test) meet nothing, so they are not traced.
+      bool open = false;
+      std::uint32_t exit = 0;  // its exit test's index, when radiate, shadowing and not open
+    };
+    // Each thread's buffers for its rows, sized once per call.
+    struct Scratch {
+      std::vector<Tube> tubes = std::vector<Tube>(kChunk);
+      std::vector<std::uint32_t> active = std::vector<std::uint32_t>(kChunk),
+                                 next = std::vector<std::uint32_t>(kChunk);
+      std::vector<scene::Ray> rays = std::vector<scene::Ray>(kChunk),
+                              exits = std::vector<scene::Ray>(kChunk),
+                              caps = std::vector<scene::Ray>(kChunk);
+      std::vector<scene::Hit> met_hits = std::vector<scene::Hit>(kChunk);
+      std::vector<std::uint8_t> found = std::vector<std::uint8_t>(kChunk),
+                                exit_blocked = std::vector<std::uint8_t>(kChunk),
+                                cap_blocked = std::vector<std::uint8_t>(kChunk);
+      std::vector<Met> met = std::vector<Met>(kChunk);
+    };
+    tbb::enumerable_thread_specific<Scratch> row_scratch;
     tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t row) {
       if (spans.lo[row] > spans.hi[row])
         return;  // no facet in this row
@@ -987,33 +1037,14 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
       };
       std::array<Run, kMaxRcsBounces + 1> runs{};
       const double run_tolerance_m = 1e-9 * glm::length(grid.du_m);
-      // A tube in flight: where it is, its field and its footprint's edges.
-      struct Tube {
-        std::uint64_t col = 0;
-        std::uint64_t seq_key = 0;  // the facets met so far, hashed
-        glm::dvec3 d{0.0}, tube_u{0.0}, tube_v{0.0}, last_hit{0.0};
-        CVec e_h, e_v;
-        double path_m = 0.0;
-      };
-      // What a tube met at this bounce.
-      struct Met {
-        std::uint32_t tube = 0;
-        glm::dvec3 n{0.0};
-        ReflectionCoefficients rc;
-        bool pec = true;
-        bool radiate = false;
-        // The facet is on the convex hull and n points to its empty side (empty_side): rays
-        // from the hit into that side (the reflection, the exit toward the receiver, the cap
-        // test) meet nothing, so they are not traced.
-        bool open = false;
-        std::uint32_t exit = 0;  // its exit test's index, when radiate, shadowing and not open
-      };
-      std::vector<Tube> tubes(kChunk);
-      std::vector<std::uint32_t> active(kChunk), next(kChunk);
-      std::vector<scene::Ray> rays(kChunk), exits(kChunk), caps(kChunk);
-      std::vector<scene::Hit> met_hits(kChunk);
-      std::vector<std::uint8_t> found(kChunk), exit_blocked(kChunk), cap_blocked(kChunk);
-      std::vector<Met> met(kChunk);
+      Scratch& scratch = row_scratch.local();
+      std::vector<Tube>& tubes = scratch.tubes;
+      std::vector<std::uint32_t>&active = scratch.active, &next = scratch.next;
+      std::vector<scene::Ray>&rays = scratch.rays, &exits = scratch.exits, &caps = scratch.caps;
+      std::vector<scene::Hit>& met_hits = scratch.met_hits;
+      std::vector<std::uint8_t>&found = scratch.found, &exit_blocked = scratch.exit_blocked,
+      &cap_blocked = scratch.cap_blocked;
+      std::vector<Met>& met = scratch.met;
       std::vector<PathTerm>& terms = row_terms[row];
       auto free_ray = [](const glm::dvec3& from, const glm::dvec3& dir) {
         scene::Ray ray;
@@ -1062,7 +1093,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             tb.last_hit = hit.position_m;
             glm::dvec3 n = hit.normal;
             double cos_i = -glm::dot(n, tb.d);
-            if (cos_i < 0.0) {
+            const bool back = cos_i < 0.0;
+            if (back) {
               n = -n;
               cos_i = -cos_i;
             }
@@ -1079,7 +1111,8 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
             // Bounce 1 is the facets' (above). Later hits radiate when the receiver sees the lit
             // side of the hit (sbr_core.hpp, kGrazingCos) and nothing is in the way.
             mt.radiate = bounce >= 2 && glm::dot(n, s) >= kGrazingCos;
-            mt.open = empty_side(hit.object_id, hit.primitive_id, n);
+            mt.open = (triangle_empty_side_[first_triangle_[hit.object_id] + hit.primitive_id] &
+                       (back ? 2u : 1u)) != 0;
             if (mt.radiate && shadowing && !mt.open) {
               mt.exit = static_cast<std::uint32_t>(n_exits);
               exits[n_exits++] = free_ray(hit.position_m + eps * n, s);

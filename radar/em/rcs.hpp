@@ -227,25 +227,16 @@ class RcsEngine {
     std::uint8_t empty_side = 0;
   };
   void find_supporting_sides(std::vector<glm::dvec3> vertices_m);
-  /// Whether the side of facet (object, primitive) that unit normal `n` points to is empty
-  /// (Facet::empty_side); false for a triangle the engine dropped as degenerate.
-  [[nodiscard]] bool empty_side(std::uint32_t object, std::uint32_t primitive,
-                                const glm::dvec3& n) const noexcept {
-    const std::uint32_t i = facet_of_triangle_[first_triangle_[object] + primitive];
-    if (i == kNoFacet)
-      return false;
-    const Facet& f = facets_[i];
-    return (f.empty_side & (glm::dot(n, f.normal) > 0.0 ? 1u : 2u)) != 0;
-  }
-  static constexpr std::uint32_t kNoFacet = 0xFFFFFFFFu;
   const scene::Scene* scene_;
   std::vector<SurfaceModel> surfaces_;
   RcsConfig config_;
   std::vector<Facet> facets_;
   std::vector<glm::dvec3> facet_vertices_m_;  ///< the facets' vertices, each once
-  /// facets_ index of triangle t of object o: facet_of_triangle_[first_triangle_[o] + t].
+  /// Facet::empty_side of triangle t of object o (as the scene winds it; 0 for a degenerate
+  /// one): triangle_empty_side_[first_triangle_[o] + t], a byte per triangle (the tubes read it
+  /// at every hit).
   std::vector<std::size_t> first_triangle_;
-  std::vector<std::uint32_t> facet_of_triangle_;
+  std::vector<std::uint8_t> triangle_empty_side_;
   std::size_t degenerate_ = 0;
   glm::dvec3 centre_m_{0.0};
   double radius_m_ = 0.0;
