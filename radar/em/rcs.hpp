@@ -184,7 +184,8 @@ class RcsEngine {
   /// the transmitter in direction `tx` and the receiver in `rx` (monostatic: rx == tx).
   /// `stats` is added to. `on_bounce` (may be null) sees every GO reflection, possibly from
   /// several threads at once. Throws std::invalid_argument for empty/non-positive/non-finite
-  /// frequencies, mismatched sizes, or a ray grid over config.max_rays.
+  /// frequencies, mismatched sizes, or a ray grid over config.max_rays. Several calls may run
+  /// at once on one engine (the CLI's sweeps run directions side by side).
   void compute(const Direction& tx, const Direction& rx, std::span<const double> freqs_hz,
                std::span<ScatteringMatrix> out, RcsStats& stats,
                const std::function<void(const BounceEvent&)>* on_bounce = nullptr) const;
