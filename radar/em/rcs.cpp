@@ -285,7 +285,12 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   // Hits are refit in double precision, but traversal is float: step off a surface by a few
   // float ulps of the target's coordinates (style.md: epsilons scale with the geometry).
   epsilon_m_ = 1e-5 * (radius_m_ + glm::length(centre_m_));
-  find_supporting_sides(vertices_m);
+  // The hull flags hold for the geometry as it stands now: none where objects move.
+  bool moving = false;
+  for (const scene::ObjectDesc& o : desc.objects)
+    moving = moving || o.motion.has_value() || o.trajectory.has_value();
+  if (!moving)
+    find_supporting_sides(vertices_m);
   triangle_empty_side_.assign(facet_of_triangle.size(), 0);
   for (std::size_t t = 0; t < facet_of_triangle.size(); ++t) {
     if (facet_of_triangle[t] != kNoFacet)
@@ -365,14 +370,20 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
 // offsets) lies on a supporting plane of the target (on its convex hull): the open half-space on
 // the other side holds no geometry, so a ray leaving the facet into it, from a point lifted off
 // the facet by the ray offset, meets nothing. Vertices are tried extreme ones first (each
-// facet's test stops at the first vertex beyond its plane).
+// facet's test stops at the first vertex beyond its plane). The test costs up to facets x
+// vertices dot products (a facet on the hull reads every vertex): above kSupportMaxWork it is
+// not made and no facet is flagged (the flag only spares rays, so results do not change).
 constexpr double kSupportTolerance = 0.1;
+constexpr double kSupportMaxWork = 5e8;
 
 void RcsEngine::find_supporting_sides(std::vector<glm::dvec3> vertices_m) {
   std::sort(vertices_m.begin(), vertices_m.end(), [](const glm::dvec3& a, const glm::dvec3& b) {
     return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
   });
   vertices_m.erase(std::unique(vertices_m.begin(), vertices_m.end()), vertices_m.end());
+  if (static_cast<double>(facets_.size()) * static_cast<double>(vertices_m.size()) >
+      kSupportMaxWork)
+    return;
   // The extreme vertices along the 13 directions of the cube's axes, face and body diagonals
   // first: most facets not on the hull find one of them beyond their plane.
   std::vector<std::size_t> first;
