@@ -1,5 +1,7 @@
 #include "tools/rcs.hpp"
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <charconv>
@@ -77,6 +79,9 @@ double db_of_power(double p) {
 
 // A stop request, heard in one process only: under mpirun every rank must run its whole block
 // (the gather waits for all of them), so a split sweep runs to its end.
+// Directions computed side by side per wave in the sweeps (sweep_rcs).
+constexpr std::size_t kDirectionWave = 8;
+
 bool stopped(const std::atomic<int>* stop) {
   return stop != nullptr && mpi_work::launched_size() <= 1 &&
          stop->load(std::memory_order_relaxed) != 0;
@@ -532,23 +537,34 @@ std::size_t sweep_rcs(const radar::RcsEngine& engine, std::span<const double> th
   const mpi_work::Block mine = mpi_work::my_block(nt * np);
   radar::RcsStats mine_total;
   std::size_t done = nt * np;
-  for (std::size_t d = mine.begin; d < mine.end; ++d) {
+  // Directions go in waves (kDirectionWave), the directions of a wave side by side, one TBB task
+  // each (compute() is parallel inside too): a direction's serial stages and joins then leave
+  // no core idle. Each direction's result does not depend on the threading, so the output is
+  // the same as one direction at a time; progress and the stop signal are checked per wave.
+  std::array<radar::RcsStats, kDirectionWave> wave{};
+  for (std::size_t w = mine.begin; w < mine.end; w += kDirectionWave) {
     if (stopped(stop)) {
-      done = d;
+      done = w;
       break;
     }
-    const std::size_t it = d / np, ip = d % np;
-    const radar::Direction tx{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
-    const radar::Direction rx = bistatic_deg
-                                    ? radar::Direction{common::radians(bistatic_deg->first),
-                                                       common::radians(bistatic_deg->second)}
-                                    : tx;
-    radar::RcsStats one;
-    engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
-    per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
-    add_stats(mine_total, one);
-    if (progress)
-      progress(d - mine.begin + 1);
+    const std::size_t w_end = std::min(mine.end, w + kDirectionWave);
+    tbb::parallel_for(w, w_end, [&](std::size_t d) {
+      const std::size_t it = d / np, ip = d % np;
+      const radar::Direction tx{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
+      const radar::Direction rx = bistatic_deg
+                                      ? radar::Direction{common::radians(bistatic_deg->first),
+                                                         common::radians(bistatic_deg->second)}
+                                      : tx;
+      radar::RcsStats& one = wave[d - w];
+      one = {};
+      engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
+      per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
+    });
+    for (std::size_t d = w; d < w_end; ++d) {
+      add_stats(mine_total, wave[d - w]);
+      if (progress)
+        progress(d - mine.begin + 1);
+    }
   }
   mpi_work::gather_blocks(s, nf);
   mpi_work::gather_blocks(per_direction);
@@ -571,18 +587,27 @@ std::size_t sweep_profile(const radar::RcsEngine& engine, std::span<const double
   const mpi_work::Block mine = mpi_work::my_block(na);
   radar::RcsStats mine_total;
   std::size_t done = na;
-  for (std::size_t a = mine.begin; a < mine.end; ++a) {
+  // In waves of angles side by side, as sweep_rcs.
+  std::array<radar::RcsStats, kDirectionWave> wave{};
+  for (std::size_t w = mine.begin; w < mine.end; w += kDirectionWave) {
     if (stopped(stop)) {
-      done = a;
+      done = w;
       break;
     }
-    const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
-    const radar::Direction dir{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
-    const std::uint64_t before = mine_total.edges_used;
-    engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), mine_total);
-    edges_used[a] = mine_total.edges_used - before;
-    if (progress)
-      progress(a - mine.begin + 1);
+    const std::size_t w_end = std::min(mine.end, w + kDirectionWave);
+    tbb::parallel_for(w, w_end, [&](std::size_t a) {
+      const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
+      const radar::Direction dir{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
+      radar::RcsStats& one = wave[a - w];
+      one = {};
+      engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), one);
+      edges_used[a] = one.edges_used;
+    });
+    for (std::size_t a = w; a < w_end; ++a) {
+      add_stats(mine_total, wave[a - w]);
+      if (progress)
+        progress(a - mine.begin + 1);
+    }
   }
   mpi_work::gather_blocks(s, nf);
   mpi_work::gather_blocks(edges_used);

@@ -1,7 +1,9 @@
 #include "radar/em/rcs.hpp"
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <atomic>
@@ -220,9 +222,16 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
 
   const auto& desc = scene.description();
   glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  std::vector<glm::dvec3> vertices_m;  // every vertex of the scene, world frame
+  constexpr std::uint32_t kNoFacet = 0xFFFFFFFFu;
+  std::vector<std::uint32_t> facet_of_triangle;  // facets_ index (kNoFacet: degenerate)
   for (std::uint32_t id = 0; id < desc.objects.size(); ++id) {
     const glm::dmat4 m = scene.world_from_body(id);
     const scene::Mesh& mesh = desc.objects[id].mesh;
+    first_triangle_.push_back(facet_of_triangle.size());
+    facet_of_triangle.resize(facet_of_triangle.size() + mesh.triangles.size(), kNoFacet);
+    for (const glm::vec3& v : mesh.positions_m)
+      vertices_m.push_back(glm::dvec3(m * glm::dvec4(v, 1.0)));
     const scene::MeshTopology topology = scene::build_topology(mesh.positions_m, mesh.triangles);
     const std::vector<std::int8_t> closed = scene::closed_part_winding(topology);
     const std::vector<std::int8_t> solid = solid_winding(topology, mesh.positions_m);
@@ -245,9 +254,11 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
       f.normal = nn / twice_area;
       f.area_m2 = 0.5 * twice_area;
       f.centroid = (f.v0 + f.v1 + f.v2) / 3.0;
+      f.longest_m = longest;
       f.surface = mesh.triangle_material[t];
       f.outward = static_cast<std::int8_t>(closed[t] * mirrored);
       f.solid = static_cast<std::int8_t>(solid[t] * mirrored);
+      facet_of_triangle[first_triangle_.back() + t] = static_cast<std::uint32_t>(facets_.size());
       facets_.push_back(f);
       for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
         lo = glm::min(lo, v);
@@ -256,6 +267,16 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
     }
   }
   require(!facets_.empty(), "the target has no non-degenerate facet");
+  for (const Facet& f : facets_) {
+    for (const glm::dvec3& v : {f.v0, f.v1, f.v2})
+      facet_vertices_m_.push_back(v);
+  }
+  std::sort(facet_vertices_m_.begin(), facet_vertices_m_.end(),
+            [](const glm::dvec3& a, const glm::dvec3& b) {
+              return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+            });
+  facet_vertices_m_.erase(std::unique(facet_vertices_m_.begin(), facet_vertices_m_.end()),
+                          facet_vertices_m_.end());
   centre_m_ = 0.5 * (lo + hi);
   for (const Facet& f : facets_) {
     for (const glm::dvec3& v : {f.v0, f.v1, f.v2})
@@ -264,6 +285,17 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   // Hits are refit in double precision, but traversal is float: step off a surface by a few
   // float ulps of the target's coordinates (style.md: epsilons scale with the geometry).
   epsilon_m_ = 1e-5 * (radius_m_ + glm::length(centre_m_));
+  // The hull flags hold for the geometry as it stands now: none where objects move.
+  bool moving = false;
+  for (const scene::ObjectDesc& o : desc.objects)
+    moving = moving || o.motion.has_value() || o.trajectory.has_value();
+  if (!moving)
+    find_supporting_sides(vertices_m);
+  triangle_empty_side_.assign(facet_of_triangle.size(), 0);
+  for (std::size_t t = 0; t < facet_of_triangle.size(); ++t) {
+    if (facet_of_triangle[t] != kNoFacet)
+      triangle_empty_side_[t] = facets_[facet_of_triangle[t]].empty_side;
+  }
   require(std::isfinite(config_.edge_min_turn_rad) && config_.edge_min_turn_rad >= 0.0 &&
               config_.edge_min_turn_rad < kPi,
           "edge threshold must be in [0, 180) deg");
@@ -334,6 +366,75 @@ RcsEngine::RcsEngine(const scene::Scene& scene, std::vector<SurfaceModel> surfac
   }
 }
 
+// A facet whose plane has every vertex of the scene on one side (within kSupportTolerance ray
+// offsets) lies on a supporting plane of the target (on its convex hull): the open half-space on
+// the other side holds no geometry, so a ray leaving the facet into it, from a point lifted off
+// the facet by the ray offset, meets nothing. Vertices are tried extreme ones first (each
+// facet's test stops at the first vertex beyond its plane). The test costs up to facets x
+// vertices dot products (a facet on the hull reads every vertex): above kSupportMaxWork it is
+// not made and no facet is flagged (the flag only spares rays, so results do not change).
+constexpr double kSupportTolerance = 0.1;
+constexpr double kSupportMaxWork = 5e8;
+
+void RcsEngine::find_supporting_sides(std::vector<glm::dvec3> vertices_m) {
+  std::sort(vertices_m.begin(), vertices_m.end(), [](const glm::dvec3& a, const glm::dvec3& b) {
+    return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+  });
+  vertices_m.erase(std::unique(vertices_m.begin(), vertices_m.end()), vertices_m.end());
+  if (static_cast<double>(facets_.size()) * static_cast<double>(vertices_m.size()) >
+      kSupportMaxWork)
+    return;
+  // The extreme vertices along the 13 directions of the cube's axes, face and body diagonals
+  // first: most facets not on the hull find one of them beyond their plane.
+  std::vector<std::size_t> first;
+  for (int x = -1; x <= 1; ++x) {
+    for (int y = -1; y <= 1; ++y) {
+      for (int z = -1; z <= 1; ++z) {
+        if (x == 0 && y == 0 && z == 0)
+          continue;
+        const glm::dvec3 dir(x, y, z);
+        std::size_t best = 0;
+        for (std::size_t i = 1; i < vertices_m.size(); ++i) {
+          if (glm::dot(dir, vertices_m[i]) > glm::dot(dir, vertices_m[best]))
+            best = i;
+        }
+        first.push_back(best);
+      }
+    }
+  }
+  std::sort(first.begin(), first.end());
+  first.erase(std::unique(first.begin(), first.end()), first.end());
+  std::vector<glm::dvec3> ordered;
+  ordered.reserve(vertices_m.size());
+  for (const std::size_t i : first)
+    ordered.push_back(vertices_m[i]);
+  for (std::size_t i = 0, k = 0; i < vertices_m.size(); ++i) {
+    if (k < first.size() && first[k] == i) {
+      ++k;
+      continue;
+    }
+    ordered.push_back(vertices_m[i]);
+  }
+  const double tol_m = kSupportTolerance * epsilon_m_;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, facets_.size(), 64),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+          Facet& f = facets_[i];
+          const double offset = glm::dot(f.normal, f.v0);
+          bool front = true, back = true;  // no vertex beyond the plane on the +n / -n side
+          for (const glm::dvec3& v : ordered) {
+            const double h = glm::dot(f.normal, v) - offset;
+            front = front && h <= tol_m;
+            back = back && h >= -tol_m;
+            if (!front && !back)
+              break;
+          }
+          f.empty_side = static_cast<std::uint8_t>((front ? 1u : 0u) | (back ? 2u : 0u));
+        }
+      });
+}
+
 RayGrid RcsEngine::ray_grid(const Direction& tx, double max_freq_hz) const {
   require(std::isfinite(max_freq_hz) && max_freq_hz > 0.0, "frequency must be > 0");
   const glm::dvec3 r_t = unit_vector(tx);
@@ -349,14 +450,12 @@ RayGrid RcsEngine::ray_grid(const Direction& tx, double max_freq_hz) const {
   const glm::dvec3 axis_u = std::cos(turn) * tx_v + std::sin(turn) * tx_h;
   const glm::dvec3 axis_v = -std::sin(turn) * tx_v + std::cos(turn) * tx_h;
   double u_lo = std::numeric_limits<double>::max(), u_hi = -u_lo, v_lo = u_lo, v_hi = -u_lo;
-  for (const Facet& f : facets_) {
-    for (const glm::dvec3& p : {f.v0, f.v1, f.v2}) {
-      const double pu = glm::dot(p - centre_m_, axis_u), pv = glm::dot(p - centre_m_, axis_v);
-      u_lo = std::min(u_lo, pu);
-      u_hi = std::max(u_hi, pu);
-      v_lo = std::min(v_lo, pv);
-      v_hi = std::max(v_hi, pv);
-    }
+  for (const glm::dvec3& p : facet_vertices_m_) {  // the facets' vertices, each once
+    const double pu = glm::dot(p - centre_m_, axis_u), pv = glm::dot(p - centre_m_, axis_v);
+    u_lo = std::min(u_lo, pu);
+    u_hi = std::max(u_hi, pu);
+    v_lo = std::min(v_lo, pv);
+    v_hi = std::max(v_hi, pv);
   }
   RayGrid g;
   const double cols = std::ceil((u_hi - u_lo) / spacing) + 1.0;
@@ -430,374 +529,473 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
   constexpr std::size_t kFacetBlock = 256;
   const std::size_t n_blocks = (facets_.size() + kFacetBlock - 1) / kFacetBlock;
   std::vector<std::vector<FacetTerm>> block_terms(n_blocks);
+  // At one frequency the facets' integrals are summed here, block by block (facet_sums[block],
+  // added in block order below), instead of being kept as terms for the frequency sum.
+  const bool one_frequency = freqs_hz.size() == 1;
+  const double k_one = 2.0 * kPi * freqs_hz[0] / kSpeedOfLight_mps;
+  std::vector<std::array<cplx, 4>> facet_sums(n_blocks, std::array<cplx, 4>{});
   std::atomic<std::uint64_t> lit{0}, partly{0}, shadowed{0}, edge_on{0}, occl{0}, subs{0};
-  tbb::parallel_for(std::size_t{0}, n_blocks, [&](std::size_t bi) {
-    const std::size_t begin = bi * kFacetBlock, end = std::min(facets_.size(), begin + kFacetBlock);
-    std::uint64_t n_lit = 0, n_partial = 0, n_shadow = 0, n_edge = 0, n_subs = 0;
-    // Per facet of the block: how it is lit, its lit normal and the first of its sample rays
-    // (7 in `rays`) and of its sub-triangle rays (m^2 in `sub_rays`).
-    struct Lighting {
-      FacetLight light = FacetLight::kDark;
-      bool tested = false;
-      int m = 0;
-      glm::dvec3 n{0.0};
-      double cos_i = 0.0;
-      std::size_t first = 0, first_sub = 0;
-    };
-    std::array<Lighting, kFacetBlock> lighting{};
-    // Where the rays toward the transmitter start: the samples, the sub-triangles' samples.
-    std::vector<glm::dvec3> rays, sub_rays;
-    std::vector<std::uint8_t> blocked, sub_blocked;
-    for (std::size_t i = begin; i != end; ++i) {
-      const Facet& f = facets_[i];
-      Lighting& l = lighting[i - begin];
-      glm::dvec3 n = f.normal;
-      double cos_i = -glm::dot(n, d_i);
-      if (cos_i < 0.0) {  // two-sided: the face the wave meets
-        n = -n;
-        cos_i = -cos_i;
-      }
-      l.n = n;
-      l.cos_i = cos_i;
-      if (cos_i <= kEdgeOnCos) {
-        ++n_edge;
-        l.light = FacetLight::kDark;
-        continue;
-      }
-      // The inside of a closed part is never lit (sbr_core.hpp, closed parts), nor that of a
-      // part closed up to T-junctions (solid_winding).
-      const bool inside = f.solid != 0 && f.solid * glm::dot(f.normal, r_t) <= 0.0;
-      if (!shadowing) {
-        l.light = FacetLight::kLit;
-      } else if (inside) {
-        l.light = FacetLight::kDark;
-        ++n_shadow;
-      } else {
-        l.tested = true;
-        l.first = rays.size();
-        for (const glm::dvec3& p : facet_samples(f.v0, f.v1, f.v2, n, eps))
-          rays.push_back(p);
-      }
-    }
-    blocked.resize(rays.size());
-    scene_->occluded_along(r_t, rays, blocked);
-    for (std::size_t i = begin; i != end; ++i) {
-      Lighting& l = lighting[i - begin];
-      if (!l.tested)
-        continue;
-      l.light = facet_light(
-          std::span<const std::uint8_t, kFacetSamples>(blocked.data() + l.first, kFacetSamples));
-      if (l.light == FacetLight::kDark) {
-        ++n_shadow;
-      } else if (l.light == FacetLight::kPartial) {
-        // Partly lit facets are resolved as finely as the tubes are spaced (sbr_core.hpp).
+  // Bounce 1 (the facets' lighting) and the rest (edges, ray tubes) are independent: they run
+  // side by side (one join per call instead of one per stage, so neither stage's tail leaves a
+  // thread idle); each writes only its own outputs, `stats` is written by the second alone.
+  std::vector<FacetTerm> facet_list;
+  std::vector<EdgeTerm> edge_terms;
+  std::vector<DoubleEdgeTerm> double_terms;
+  std::vector<PathTerm> path_terms;
+  auto bounce1 = [&] {
+    tbb::parallel_for(std::size_t{0}, n_blocks, [&](std::size_t bi) {
+      const std::size_t begin = bi * kFacetBlock,
+                        end = std::min(facets_.size(), begin + kFacetBlock);
+      std::uint64_t n_lit = 0, n_partial = 0, n_shadow = 0, n_edge = 0, n_subs = 0;
+      // Per facet of the block: how it is lit, its lit normal and the first of its sample rays
+      // (7 in `rays`) and of its sub-triangle rays (m^2 in `sub_rays`).
+      struct Lighting {
+        FacetLight light = FacetLight::kDark;
+        bool tested = false;
+        int m = 0;
+        glm::dvec3 n{0.0};
+        double cos_i = 0.0;
+        std::size_t first = 0, first_sub = 0;
+      };
+      std::array<Lighting, kFacetBlock> lighting{};
+      // Where the rays toward the transmitter start: the samples, the sub-triangles' samples.
+      std::vector<glm::dvec3> rays, sub_rays;
+      std::vector<std::uint8_t> blocked, sub_blocked;
+      for (std::size_t i = begin; i != end; ++i) {
         const Facet& f = facets_[i];
-        const double longest = std::max(
-            {glm::length(f.v1 - f.v0), glm::length(f.v2 - f.v1), glm::length(f.v0 - f.v2)});
-        l.m = facet_subdivisions(longest, resolution_m);
-        l.first_sub = sub_rays.size();
+        Lighting& l = lighting[i - begin];
+        glm::dvec3 n = f.normal;
+        double cos_i = -glm::dot(n, d_i);
+        if (cos_i < 0.0) {  // two-sided: the face the wave meets
+          n = -n;
+          cos_i = -cos_i;
+        }
+        l.n = n;
+        l.cos_i = cos_i;
+        if (cos_i <= kEdgeOnCos) {
+          ++n_edge;
+          l.light = FacetLight::kDark;
+          continue;
+        }
+        // The inside of a closed part is never lit (sbr_core.hpp, closed parts), nor that of a
+        // part closed up to T-junctions (solid_winding).
+        const bool inside = f.solid != 0 && f.solid * glm::dot(f.normal, r_t) <= 0.0;
+        if (!shadowing) {
+          l.light = FacetLight::kLit;
+        } else if (inside) {
+          l.light = FacetLight::kDark;
+          ++n_shadow;
+        } else if ((f.empty_side & (glm::dot(n, f.normal) > 0.0 ? 1u : 2u)) != 0) {
+          // On the convex hull, lit on its open side (find_supporting_sides): every sample's ray
+          // toward the transmitter runs into the empty half-space, so all seven are clear.
+          l.light = FacetLight::kLit;
+        } else {
+          l.tested = true;
+          l.first = rays.size();
+          for (const glm::dvec3& p : facet_samples(f.v0, f.v1, f.v2, n, eps))
+            rays.push_back(p);
+        }
+      }
+      blocked.resize(rays.size());
+      scene_->occluded_along(r_t, rays, blocked);
+      for (std::size_t i = begin; i != end; ++i) {
+        Lighting& l = lighting[i - begin];
+        if (!l.tested)
+          continue;
+        l.light = facet_light(
+            std::span<const std::uint8_t, kFacetSamples>(blocked.data() + l.first, kFacetSamples));
+        if (l.light == FacetLight::kDark) {
+          ++n_shadow;
+        } else if (l.light == FacetLight::kPartial) {
+          // Partly lit facets are resolved as finely as the tubes are spaced (sbr_core.hpp).
+          const Facet& f = facets_[i];
+          l.m = facet_subdivisions(f.longest_m, resolution_m);
+          l.first_sub = sub_rays.size();
+          for_each_subtriangle(f.v0, f.v1, f.v2, l.m,
+                               [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+                                 sub_rays.push_back(subtriangle_sample(a, b, c, l.n, eps));
+                               });
+        }
+      }
+      sub_blocked.resize(sub_rays.size());
+      scene_->occluded_along(r_t, sub_rays, sub_blocked);
+      occl.fetch_add(rays.size() + sub_rays.size(), std::memory_order_relaxed);
+      std::vector<FacetTerm>& terms = block_terms[bi];
+      for (std::size_t i = begin; i != end; ++i) {
+        const Lighting& l = lighting[i - begin];
+        if (l.light == FacetLight::kDark)
+          continue;
+        const Facet& f = facets_[i];
+        const SurfaceModel& sm = surfaces_[f.surface];
+        const bool pec = sm.kind == SurfaceModel::Kind::kPec;
+        const ReflectionCoefficients rc = reflection_coefficients(sm, l.cos_i, k_ref);
+        const CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
+        const std::array<cplx, 4> c = coefficients(po_source(e_h, d_i, l.n, s, rc, pec),
+                                                   po_source(e_v, d_i, l.n, s, rc, pec));
+        if (one_frequency) {
+          cplx integral;
+          if (l.light == FacetLight::kLit) {
+            ++n_lit;
+            integral = triangle_phase_integral(f.area_m2, glm::dot(w, f.v0), glm::dot(w, f.v1),
+                                               glm::dot(w, f.v2), k_one);
+          } else {
+            // The m x m congruent sub-triangles (for_each_subtriangle) are translates of two:
+            // the "up" one (v0, v0 + e1, v0 + e2) and the "down" one (v0 + e1, v0 + e1 + e2,
+            // v0 + e2), e1 = (v1 - v0) / m, e2 = (v2 - v0) / m, moved by i e1 + j e2. A
+            // translation by t multiplies the integral of exp(j k w . r) by exp(j k w . t), so
+            // the lit ones sum to I_up sum_up z1^i z2^j + I_down sum_down z1^i z2^j with
+            // z1 = exp(j k w . e1), z2 = exp(j k w . e2): two closed forms per facet and one
+            // complex rotation per sub-triangle instead of a sine and cosine each.
+            ++n_partial;
+            const double m = static_cast<double>(l.m);
+            const glm::dvec3 e1 = (f.v1 - f.v0) / m, e2 = (f.v2 - f.v0) / m;
+            const double b0 = glm::dot(w, f.v0), s1 = glm::dot(w, e1), s2 = glm::dot(w, e2);
+            const double sub_area_m2 = f.area_m2 / (m * m);
+            const cplx up = triangle_phase_integral(sub_area_m2, b0, b0 + s1, b0 + s2, k_one);
+            const cplx down =
+                triangle_phase_integral(sub_area_m2, b0 + s1, b0 + s1 + s2, b0 + s2, k_one);
+            const cplx z1 = std::polar(1.0, k_one * s1), z2 = std::polar(1.0, k_one * s2);
+            cplx sum_up{0.0, 0.0}, sum_down{0.0, 0.0}, row{1.0, 0.0};
+            std::size_t q = l.first_sub;
+            for (int a = 0; a < l.m; ++a) {
+              cplx z = row;
+              for (int b = 0; a + b < l.m; ++b) {
+                if (sub_blocked[q++] == 0) {
+                  ++n_subs;
+                  sum_up += z;
+                }
+                if (a + b + 2 <= l.m && sub_blocked[q++] == 0) {
+                  ++n_subs;
+                  sum_down += z;
+                }
+                z *= z2;
+              }
+              row *= z1;
+            }
+            integral = up * sum_up + down * sum_down;
+          }
+          for (std::size_t p = 0; p < 4; ++p)
+            facet_sums[bi][p] += c[p] * integral;
+          continue;
+        }
+        auto add = [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
+          FacetTerm t;
+          t.c = c;
+          t.area_m2 = 0.5 * glm::length(glm::cross(b - a, v - a));
+          t.b0_m = glm::dot(w, a);
+          t.b1_m = glm::dot(w, b);
+          t.b2_m = glm::dot(w, v);
+          terms.push_back(t);
+        };
+        if (l.light == FacetLight::kLit) {
+          ++n_lit;
+          add(f.v0, f.v1, f.v2);
+          continue;
+        }
+        ++n_partial;
+        std::size_t k = l.first_sub;
         for_each_subtriangle(f.v0, f.v1, f.v2, l.m,
-                             [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-                               sub_rays.push_back(subtriangle_sample(a, b, c, l.n, eps));
+                             [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
+                               if (sub_blocked[k++] == 0) {
+                                 ++n_subs;
+                                 add(a, b, v);
+                               }
                              });
       }
+      lit += n_lit;
+      partly += n_partial;
+      shadowed += n_shadow;
+      edge_on += n_edge;
+      subs += n_subs;
+    });
+    {
+      std::size_t total = 0;
+      for (const auto& v : block_terms)
+        total += v.size();
+      facet_list.reserve(total);
+      for (const auto& v : block_terms)
+        facet_list.insert(facet_list.end(), v.begin(), v.end());
     }
-    sub_blocked.resize(sub_rays.size());
-    scene_->occluded_along(r_t, sub_rays, sub_blocked);
-    occl.fetch_add(rays.size() + sub_rays.size(), std::memory_order_relaxed);
-    std::vector<FacetTerm>& terms = block_terms[bi];
-    for (std::size_t i = begin; i != end; ++i) {
-      const Lighting& l = lighting[i - begin];
-      if (l.light == FacetLight::kDark)
-        continue;
-      const Facet& f = facets_[i];
-      const SurfaceModel& sm = surfaces_[f.surface];
-      const bool pec = sm.kind == SurfaceModel::Kind::kPec;
-      const ReflectionCoefficients rc = reflection_coefficients(sm, l.cos_i, k_ref);
-      const CVec e_h{tx_h, glm::dvec3(0.0)}, e_v{tx_v, glm::dvec3(0.0)};
-      const std::array<cplx, 4> c =
-          coefficients(po_source(e_h, d_i, l.n, s, rc, pec), po_source(e_v, d_i, l.n, s, rc, pec));
-      auto add = [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
-        FacetTerm t;
-        t.c = c;
-        t.area_m2 = 0.5 * glm::length(glm::cross(b - a, v - a));
-        t.b0_m = glm::dot(w, a);
-        t.b1_m = glm::dot(w, b);
-        t.b2_m = glm::dot(w, v);
-        terms.push_back(t);
-      };
-      if (l.light == FacetLight::kLit) {
-        ++n_lit;
-        add(f.v0, f.v1, f.v2);
-        continue;
-      }
-      ++n_partial;
-      std::size_t k = l.first_sub;
-      for_each_subtriangle(f.v0, f.v1, f.v2, l.m,
-                           [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& v) {
-                             if (sub_blocked[k++] == 0) {
-                               ++n_subs;
-                               add(a, b, v);
-                             }
-                           });
-    }
-    lit += n_lit;
-    partly += n_partial;
-    shadowed += n_shadow;
-    edge_on += n_edge;
-    subs += n_subs;
-  });
-  std::vector<FacetTerm> facet_list;
-  {
-    std::size_t total = 0;
-    for (const auto& v : block_terms)
-      total += v.size();
-    facet_list.reserve(total);
-    for (const auto& v : block_terms)
-      facet_list.insert(facet_list.end(), v.begin(), v.end());
-  }
-  // --- Edge diffraction: fringe equivalent edge currents (radar/em/edges.hpp). --------------
-  // An edge radiates when a face of it is lit and the path from beside its midpoint (in the free
-  // space) to the transmitter is clear (the same occlusion query as the facets').
-  // Where an edge's occlusion test toward `toward` starts: beside its midpoint in the free space
-  // (edge_probe), and for an open sheet's boundary (whose exterior bisector lies in the sheet's
-  // own plane) also lifted off that plane on the side of `toward`, so that a wave travelling
-  // exactly along the sheet is not blocked by the sheet's own facets seen edge-on (which made
-  // the double-diffraction term vanish at exactly grazing incidence, a step in the pattern).
-  auto probe_toward = [&](const WedgeEdge& e, const glm::dvec3& toward) {
-    glm::dvec3 p = edge_probe(e, 10.0 * eps);
-    if (e.alpha_rad > 2.0 * kPi - 1e-9)
-      p += (glm::dot(e.y0, toward) >= 0.0 ? 10.0 : -10.0) * eps * e.y0;
-    return p;
   };
-  std::vector<EdgeTerm> edge_terms;
-  // The wedge rule at the call's shortest wavelength (edges.hpp): weight 0 for the joints of a
-  // smooth surface, 1 for wedges, a smooth ramp between.
-  std::vector<double> weight(edges_.size());
-  const double lambda_min_m = kSpeedOfLight_mps / f_hi;
-  {
-    for (std::size_t i = 0; i < edges_.size(); ++i)
-      weight[i] = wedge_weight(edges_[i], lambda_min_m, config_.edge_min_turn_rad);
-  }
-  if (!edges_.empty()) {
-    std::vector<EdgeTerm> all(edges_.size());
-    std::vector<std::uint8_t> state(edges_.size());  // 0 used, 1 shadowed, 2 skipped, 3 smooth
-    std::atomic<std::uint64_t> guarded{0}, e_occl{0};
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, edges_.size(), 256),
-        [&](const tbb::blocked_range<std::size_t>& range) {
-          std::uint64_t n_guard = 0, n_occl = 0;
-          for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            if (weight[i] == 0.0) {
-              state[i] = 3;
-              continue;
-            }
-            bool g = false;
-            if (edge_term(edges_[i], d_i, s, tx_h, tx_v, rx_h, rx_v, EdgeCoefficient::kFringe,
-                          all[i], g, std::min(lambda_min_m / edges_[i].length_m, kMaxMinSin2Beta),
-                          kMonostaticFringeBound) != EdgeSkip::kNone) {
-              state[i] = 2;
-              continue;
-            }
-            n_guard += g ? 1u : 0u;
-            if (shadowing) {
-              ++n_occl;
-              if (!clear(probe_toward(edges_[i], r_t), r_t)) {
-                state[i] = 1;
+  auto later = [&] {
+    // --- Edge diffraction: fringe equivalent edge currents (radar/em/edges.hpp). --------------
+    // An edge radiates when a face of it is lit and the path from beside its midpoint (in the free
+    // space) to the transmitter is clear (the same occlusion query as the facets').
+    // Where an edge's occlusion test toward `toward` starts: beside its midpoint in the free space
+    // (edge_probe), and for an open sheet's boundary (whose exterior bisector lies in the sheet's
+    // own plane) also lifted off that plane on the side of `toward`, so that a wave travelling
+    // exactly along the sheet is not blocked by the sheet's own facets seen edge-on (which made
+    // the double-diffraction term vanish at exactly grazing incidence, a step in the pattern).
+    auto probe_toward = [&](const WedgeEdge& e, const glm::dvec3& toward) {
+      glm::dvec3 p = edge_probe(e, 10.0 * eps);
+      if (e.alpha_rad > 2.0 * kPi - 1e-9)
+        p += (glm::dot(e.y0, toward) >= 0.0 ? 10.0 : -10.0) * eps * e.y0;
+      return p;
+    };
+    // The wedge rule at the call's shortest wavelength (edges.hpp): weight 0 for the joints of a
+    // smooth surface, 1 for wedges, a smooth ramp between.
+    std::vector<double> weight(edges_.size());
+    const double lambda_min_m = kSpeedOfLight_mps / f_hi;
+    {
+      for (std::size_t i = 0; i < edges_.size(); ++i)
+        weight[i] = wedge_weight(edges_[i], lambda_min_m, config_.edge_min_turn_rad);
+    }
+    if (!edges_.empty()) {
+      std::vector<EdgeTerm> all(edges_.size());
+      std::vector<std::uint8_t> state(edges_.size());  // 0 used, 1 shadowed, 2 skipped, 3 smooth
+      std::atomic<std::uint64_t> guarded{0}, e_occl{0};
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, edges_.size(), 256),
+          [&](const tbb::blocked_range<std::size_t>& range) {
+            std::uint64_t n_guard = 0, n_occl = 0;
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+              if (weight[i] == 0.0) {
+                state[i] = 3;
                 continue;
               }
-            }
-            for (cplx& c : all[i].c)
-              c *= weight[i];
-            state[i] = 0;
-          }
-          guarded += n_guard;
-          e_occl += n_occl;
-        });
-    for (std::size_t i = 0; i < edges_.size(); ++i) {
-      if (state[i] == 0)
-        edge_terms.push_back(all[i]);
-      stats.edges_shadowed += state[i] == 1 ? 1u : 0u;
-      stats.edges_skipped += state[i] == 2 ? 1u : 0u;
-      stats.edges_smooth += state[i] == 3 ? 1u : 0u;
-    }
-    stats.edges_used += edge_terms.size();
-    stats.edges_guarded += guarded;
-    occl += e_occl;
-  }
-  // Reflection-diffraction (image theory): an edge lit by the transmitter's wave after one
-  // reflection off a reflecting plane (RD), seen by the receiver after one (DR), or both (RDR).
-  // A PEC plane reflects E into R(E) = 2 (n.E) n - E and a direction v into mirror(v, n); the
-  // reflected plane wave's phase at x is -k (d_r . x + 2 (d . n) offset), and a current at x
-  // radiating toward mirror(s, n) reaches the receiver with phase k (mirror(s, n) . x + 2 (s . n)
-  // offset) (Balanis, Advanced Engineering Electromagnetics, 2nd ed., 2012, sec. 7.4: image
-  // theory). The edge term is edges.hpp's with those directions, polarisations and phases. Paths:
-  // from beside the edge's midpoint along -d_r (RD) or mirror(s, n) (DR), the first hit must be
-  // a PEC facet of the plane, on the edge's side, and from there the transmitter (RD) or the
-  // receiver (DR) must be in sight. An edge lying in the plane is not lit by it, and a plane
-  // smaller than kReflectingPlaneMinWavelengths2 square wavelengths at the lowest frequency
-  // lights nothing (image theory needs a plane large against the wavelength).
-  if (!edges_.empty() && !planes_.empty()) {
-    const double tol_m = 100.0 * eps;
-    const double lambda_max_m = kSpeedOfLight_mps / f_lo;
-    const double min_plane_m2 = kReflectingPlaneMinWavelengths2 * lambda_max_m * lambda_max_m;
-    auto reflect_pol = [](const glm::dvec3& e, const glm::dvec3& n) {
-      return 2.0 * glm::dot(n, e) * n - e;
-    };
-    // Per plane, once per direction pair: the mirrored directions, polarisations and phases.
-    struct Image {
-      const ReflectingPlane* plane;
-      glm::dvec3 d_r, s_r, th, tv, rh, rv;
-      double phase_rd, phase_dr;
-    };
-    std::vector<Image> images;
-    for (const ReflectingPlane& plane : planes_) {
-      if (plane.area_m2 < min_plane_m2)
-        continue;  // too small to reflect a plane wave at the lowest frequency
-      const glm::dvec3& n = plane.normal;
-      images.push_back({&plane, mirror(d_i, n), mirror(s, n), reflect_pol(tx_h, n),
-                        reflect_pol(tx_v, n), reflect_pol(rx_h, n), reflect_pol(rx_v, n),
-                        -2.0 * glm::dot(d_i, n) * plane.offset_m,
-                        2.0 * glm::dot(s, n) * plane.offset_m});
-    }
-    std::vector<std::vector<EdgeTerm>> found(edges_.size());
-    std::atomic<std::uint64_t> r_occl{0};
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, edges_.size(), 64),
-        [&](const tbb::blocked_range<std::size_t>& range) {
-          std::uint64_t n_occl = 0;
-          for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            const WedgeEdge& edge = edges_[i];
-            if (weight[i] == 0.0)
-              continue;
-            const glm::dvec3 probe = edge_probe(edge, 10.0 * eps);
-            for (const Image& im : images) {
-              const ReflectingPlane& plane = *im.plane;
-              const glm::dvec3& n = plane.normal;
-              const double side = glm::dot(n, probe) - plane.offset_m;
-              if (std::abs(glm::dot(n, edge.a_m) - plane.offset_m) < tol_m &&
-                  std::abs(glm::dot(n, edge.b_m) - plane.offset_m) < tol_m)
-                continue;  // the edge lies in the plane
-              // Does the ray from the probe along `dir` meet the plane first, on a PEC facet,
-              // and see `toward` from there?
-              auto relayed = [&](const glm::dvec3& dir, const glm::dvec3& toward) {
-                if (side * glm::dot(n, toward) <= 0.0 || std::abs(glm::dot(n, dir)) < 1e-3)
-                  return false;  // the plane faces away, or the path grazes it
-                scene::Ray ray;
-                ray.origin_m = probe;
-                ray.direction = dir;
-                ray.t_near_m = 0.0;
-                ray.t_far_m = std::numeric_limits<double>::infinity();
-                scene::Hit hit;
+              bool g = false;
+              if (edge_term(edges_[i], d_i, s, tx_h, tx_v, rx_h, rx_v, EdgeCoefficient::kFringe,
+                            all[i], g, std::min(lambda_min_m / edges_[i].length_m, kMaxMinSin2Beta),
+                            kMonostaticFringeBound) != EdgeSkip::kNone) {
+                state[i] = 2;
+                continue;
+              }
+              n_guard += g ? 1u : 0u;
+              if (shadowing) {
                 ++n_occl;
-                if (!scene_->intersect(ray, hit) ||
-                    std::abs(glm::dot(hit.normal, n)) < 1.0 - 1e-6 ||
-                    std::abs(glm::dot(n, hit.position_m) - plane.offset_m) > tol_m ||
-                    surfaces_[hit.material_id].kind != SurfaceModel::Kind::kPec)
-                  return false;
-                if (!shadowing)
-                  return true;
-                ++n_occl;
-                const glm::dvec3 lift = (side > 0.0 ? eps : -eps) * n;
-                return clear(hit.position_m + lift, toward);
-              };
-              const bool rd = relayed(-im.d_r, r_t), dr = relayed(im.s_r, r_r);
-              auto add = [&](const glm::dvec3& dd, const glm::dvec3& ss, const glm::dvec3& ah,
-                             const glm::dvec3& av, const glm::dvec3& bh, const glm::dvec3& bv,
-                             double phase_m) {
-                EdgeTerm t;
-                bool g = false;
-                if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g,
-                              std::min(lambda_min_m / edge.length_m, kMaxMinSin2Beta),
-                              kMonostaticFringeBound) != EdgeSkip::kNone)
-                  return;
-                t.phase_m += phase_m;
-                for (cplx& c : t.c)
-                  c *= weight[i];
-                found[i].push_back(t);
-              };
-              if (rd)
-                add(im.d_r, s, im.th, im.tv, rx_h, rx_v, im.phase_rd);
-              if (dr)
-                add(d_i, im.s_r, tx_h, tx_v, im.rh, im.rv, im.phase_dr);
-              if (rd && dr)
-                add(im.d_r, im.s_r, im.th, im.tv, im.rh, im.rv, im.phase_rd + im.phase_dr);
+                if (!clear(probe_toward(edges_[i], r_t), r_t)) {
+                  state[i] = 1;
+                  continue;
+                }
+              }
+              for (cplx& c : all[i].c)
+                c *= weight[i];
+              state[i] = 0;
             }
-          }
-          r_occl += n_occl;
-        });
-    for (const auto& v : found) {
-      edge_terms.insert(edge_terms.end(), v.begin(), v.end());
-      stats.edges_reflected += v.size();
-    }
-    occl += r_occl;
-  }
-  // Double diffraction (edges.hpp): the launching edge's midpoint must see the transmitter and
-  // the receiving edge's the receiver (tests memoised per edge and direction).
-  std::vector<DoubleEdgeTerm> double_terms;
-  if (!pairs_.empty()) {
-    std::vector<std::int8_t> sees_tx(edges_.size(), -1), sees_rx(edges_.size(), -1);
-    auto sees = [&](std::vector<std::int8_t>& memo, std::uint32_t i, const glm::dvec3& toward) {
-      if (!shadowing)
-        return true;
-      if (memo[i] < 0) {
-        ++occl;
-        memo[i] = clear(probe_toward(edges_[i], toward), toward) ? 1 : 0;
+            guarded += n_guard;
+            e_occl += n_occl;
+          });
+      for (std::size_t i = 0; i < edges_.size(); ++i) {
+        if (state[i] == 0)
+          edge_terms.push_back(all[i]);
+        stats.edges_shadowed += state[i] == 1 ? 1u : 0u;
+        stats.edges_skipped += state[i] == 2 ? 1u : 0u;
+        stats.edges_smooth += state[i] == 3 ? 1u : 0u;
       }
-      return memo[i] == 1;
-    };
-    for (const EdgePair& pair : pairs_) {
-      const double w_pair = weight[pair.from] * weight[pair.to];
-      if (w_pair == 0.0)
-        continue;
-      DoubleEdgeTerm t;
-      if (double_edge_term(pair, edges_, d_i, s, tx_h, tx_v, rx_h, rx_v, t) != EdgeSkip::kNone)
-        continue;
-      for (double& p : t.pol)
-        p *= w_pair;
-      if (sees(sees_tx, pair.from, r_t) && sees(sees_rx, pair.to, r_r))
-        double_terms.push_back(t);
+      stats.edges_used += edge_terms.size();
+      stats.edges_guarded += guarded;
+      occl += e_occl;
     }
-    stats.edges_double += double_terms.size();
-  }
-
-  stats.facets_lit += lit;
-  stats.facets_partial += partly;
-  stats.lit_subfacets += subs;
-  stats.facets_shadowed += shadowed;
-  stats.facets_edge_on += edge_on;
-
-  // --- Bounces 2..n: ray tubes over the incident wavefront. -----------------------------------
-  std::vector<PathTerm> path_terms;
-  if (config_.max_bounces >= 2) {
-    const RayGrid grid = ray_grid(tx, f_hi);
-    const std::uint64_t cols = grid.cols, n_rows = grid.rows;
-    const glm::dvec3 tube_u0 = grid.du_m, tube_v0 = grid.dv_m;
-    const auto rows = static_cast<std::size_t>(n_rows);
-    std::vector<std::vector<PathTerm>> row_terms(rows);
-    std::atomic<std::uint64_t> hits{0}, n_paths{0}, grazing{0}, segments{0}, cut{0};
-    std::array<std::atomic<std::uint64_t>, kMaxRcsBounces + 1> by_bounce{};
-    // Each row's tubes go in chunks of neighbouring columns, bounce by bounce: the chunk's rays
-    // of one bounce are intersected by one batched query (Scene::intersect over spans: coherent
-    // rays, traced by Embree in packets), then their exit tests by one batched occlusion query,
-    // then the cap tests. What each tube does is what the tube-by-tube loop did; only the order
-    // of the row's terms (chunk, bounce, column) differs.
-    constexpr std::size_t kChunk = 64;
-    tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t row) {
-      row_terms[row].reserve(static_cast<std::size_t>(cols / 8));
-      std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0, l_cut = 0;
-      std::array<std::uint64_t, kMaxRcsBounces + 1> l_by{};
-      const glm::dvec3 row_origin = grid.origin_m + static_cast<double>(row) * grid.dv_m;
-      // The open run per bounce (PathTerm): its term's index, the facet sequence's key, the
-      // last tube's column and phase path.
-      struct Run {
-        std::size_t term = 0;
-        std::uint64_t key = 0, col = 0;
-        double last_len_m = 0.0;
-        bool open = false;
+    // Reflection-diffraction (image theory): an edge lit by the transmitter's wave after one
+    // reflection off a reflecting plane (RD), seen by the receiver after one (DR), or both (RDR).
+    // A PEC plane reflects E into R(E) = 2 (n.E) n - E and a direction v into mirror(v, n); the
+    // reflected plane wave's phase at x is -k (d_r . x + 2 (d . n) offset), and a current at x
+    // radiating toward mirror(s, n) reaches the receiver with phase k (mirror(s, n) . x + 2 (s . n)
+    // offset) (Balanis, Advanced Engineering Electromagnetics, 2nd ed., 2012, sec. 7.4: image
+    // theory). The edge term is edges.hpp's with those directions, polarisations and phases. Paths:
+    // from beside the edge's midpoint along -d_r (RD) or mirror(s, n) (DR), the first hit must be
+    // a PEC facet of the plane, on the edge's side, and from there the transmitter (RD) or the
+    // receiver (DR) must be in sight. An edge lying in the plane is not lit by it, and a plane
+    // smaller than kReflectingPlaneMinWavelengths2 square wavelengths at the lowest frequency
+    // lights nothing (image theory needs a plane large against the wavelength).
+    if (!edges_.empty() && !planes_.empty()) {
+      const double tol_m = 100.0 * eps;
+      const double lambda_max_m = kSpeedOfLight_mps / f_lo;
+      const double min_plane_m2 = kReflectingPlaneMinWavelengths2 * lambda_max_m * lambda_max_m;
+      auto reflect_pol = [](const glm::dvec3& e, const glm::dvec3& n) {
+        return 2.0 * glm::dot(n, e) * n - e;
       };
-      std::array<Run, kMaxRcsBounces + 1> runs{};
-      const double run_tolerance_m = 1e-9 * glm::length(grid.du_m);
+      // Per plane, once per direction pair: the mirrored directions, polarisations and phases.
+      struct Image {
+        const ReflectingPlane* plane;
+        glm::dvec3 d_r, s_r, th, tv, rh, rv;
+        double phase_rd, phase_dr;
+      };
+      std::vector<Image> images;
+      for (const ReflectingPlane& plane : planes_) {
+        if (plane.area_m2 < min_plane_m2)
+          continue;  // too small to reflect a plane wave at the lowest frequency
+        const glm::dvec3& n = plane.normal;
+        images.push_back({&plane, mirror(d_i, n), mirror(s, n), reflect_pol(tx_h, n),
+                          reflect_pol(tx_v, n), reflect_pol(rx_h, n), reflect_pol(rx_v, n),
+                          -2.0 * glm::dot(d_i, n) * plane.offset_m,
+                          2.0 * glm::dot(s, n) * plane.offset_m});
+      }
+      std::vector<std::vector<EdgeTerm>> found(edges_.size());
+      std::atomic<std::uint64_t> r_occl{0};
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, edges_.size(), 64),
+          [&](const tbb::blocked_range<std::size_t>& range) {
+            std::uint64_t n_occl = 0;
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+              const WedgeEdge& edge = edges_[i];
+              if (weight[i] == 0.0)
+                continue;
+              const glm::dvec3 probe = edge_probe(edge, 10.0 * eps);
+              for (const Image& im : images) {
+                const ReflectingPlane& plane = *im.plane;
+                const glm::dvec3& n = plane.normal;
+                const double side = glm::dot(n, probe) - plane.offset_m;
+                if (std::abs(glm::dot(n, edge.a_m) - plane.offset_m) < tol_m &&
+                    std::abs(glm::dot(n, edge.b_m) - plane.offset_m) < tol_m)
+                  continue;  // the edge lies in the plane
+                // Does the ray from the probe along `dir` meet the plane first, on a PEC facet,
+                // and see `toward` from there?
+                auto relayed = [&](const glm::dvec3& dir, const glm::dvec3& toward) {
+                  if (side * glm::dot(n, toward) <= 0.0 || std::abs(glm::dot(n, dir)) < 1e-3)
+                    return false;  // the plane faces away, or the path grazes it
+                  scene::Ray ray;
+                  ray.origin_m = probe;
+                  ray.direction = dir;
+                  ray.t_near_m = 0.0;
+                  ray.t_far_m = std::numeric_limits<double>::infinity();
+                  scene::Hit hit;
+                  ++n_occl;
+                  if (!scene_->intersect(ray, hit) ||
+                      std::abs(glm::dot(hit.normal, n)) < 1.0 - 1e-6 ||
+                      std::abs(glm::dot(n, hit.position_m) - plane.offset_m) > tol_m ||
+                      surfaces_[hit.material_id].kind != SurfaceModel::Kind::kPec)
+                    return false;
+                  if (!shadowing)
+                    return true;
+                  ++n_occl;
+                  const glm::dvec3 lift = (side > 0.0 ? eps : -eps) * n;
+                  return clear(hit.position_m + lift, toward);
+                };
+                const bool rd = relayed(-im.d_r, r_t), dr = relayed(im.s_r, r_r);
+                auto add = [&](const glm::dvec3& dd, const glm::dvec3& ss, const glm::dvec3& ah,
+                               const glm::dvec3& av, const glm::dvec3& bh, const glm::dvec3& bv,
+                               double phase_m) {
+                  EdgeTerm t;
+                  bool g = false;
+                  if (edge_term(edge, dd, ss, ah, av, bh, bv, EdgeCoefficient::kFringe, t, g,
+                                std::min(lambda_min_m / edge.length_m, kMaxMinSin2Beta),
+                                kMonostaticFringeBound) != EdgeSkip::kNone)
+                    return;
+                  t.phase_m += phase_m;
+                  for (cplx& c : t.c)
+                    c *= weight[i];
+                  found[i].push_back(t);
+                };
+                if (rd)
+                  add(im.d_r, s, im.th, im.tv, rx_h, rx_v, im.phase_rd);
+                if (dr)
+                  add(d_i, im.s_r, tx_h, tx_v, im.rh, im.rv, im.phase_dr);
+                if (rd && dr)
+                  add(im.d_r, im.s_r, im.th, im.tv, im.rh, im.rv, im.phase_rd + im.phase_dr);
+              }
+            }
+            r_occl += n_occl;
+          });
+      for (const auto& v : found) {
+        edge_terms.insert(edge_terms.end(), v.begin(), v.end());
+        stats.edges_reflected += v.size();
+      }
+      occl += r_occl;
+    }
+    // Double diffraction (edges.hpp): the launching edge's midpoint must see the transmitter and
+    // the receiving edge's the receiver (tests memoised per edge and direction).
+    if (!pairs_.empty()) {
+      std::vector<std::int8_t> sees_tx(edges_.size(), -1), sees_rx(edges_.size(), -1);
+      auto sees = [&](std::vector<std::int8_t>& memo, std::uint32_t i, const glm::dvec3& toward) {
+        if (!shadowing)
+          return true;
+        if (memo[i] < 0) {
+          ++occl;
+          memo[i] = clear(probe_toward(edges_[i], toward), toward) ? 1 : 0;
+        }
+        return memo[i] == 1;
+      };
+      for (const EdgePair& pair : pairs_) {
+        const double w_pair = weight[pair.from] * weight[pair.to];
+        if (w_pair == 0.0)
+          continue;
+        DoubleEdgeTerm t;
+        if (double_edge_term(pair, edges_, d_i, s, tx_h, tx_v, rx_h, rx_v, t) != EdgeSkip::kNone)
+          continue;
+        for (double& p : t.pol)
+          p *= w_pair;
+        if (sees(sees_tx, pair.from, r_t) && sees(sees_rx, pair.to, r_r))
+          double_terms.push_back(t);
+      }
+      stats.edges_double += double_terms.size();
+    }
+
+    // --- Bounces 2..n: ray tubes over the incident wavefront. -----------------------------------
+    if (config_.max_bounces >= 2) {
+      const RayGrid grid = ray_grid(tx, f_hi);
+      const std::uint64_t cols = grid.cols, n_rows = grid.rows;
+      const glm::dvec3 tube_u0 = grid.du_m, tube_v0 = grid.dv_m;
+      const auto rows = static_cast<std::size_t>(n_rows);
+      // Per row, the columns whose rays can meet a facet at all: the union of the facets' projected
+      // bounding boxes on the grid (its rows' column intervals), widened by the ray offset. A ray
+      // outside every facet's projection meets nothing (its Embree query would miss), so tracing
+      // only these columns changes no path; on the vehicle about half of the grid's rays miss.
+      struct Spans {
+        std::vector<std::int64_t> lo, hi;
+      };
+      const glm::dvec3 col_axis = grid.du_m / glm::dot(grid.du_m, grid.du_m);
+      const glm::dvec3 row_axis = grid.dv_m / glm::dot(grid.dv_m, grid.dv_m);
+      const double margin = eps / glm::length(grid.du_m);  // du and dv are equally long
+      const auto last_col = static_cast<std::int64_t>(cols) - 1;
+      const auto last_row = static_cast<std::int64_t>(n_rows) - 1;
+      // floor and ceil of a grid coordinate (the grid covers every vertex: no overflow), inline.
+      auto floor_index = [](double x) {
+        const auto i = static_cast<std::int64_t>(x);
+        return x < static_cast<double>(i) ? i - 1 : i;
+      };
+      auto ceil_index = [](double x) {
+        const auto i = static_cast<std::int64_t>(x);
+        return x > static_cast<double>(i) ? i + 1 : i;
+      };
+      tbb::enumerable_thread_specific<Spans> local_spans([&] {
+        return Spans{std::vector<std::int64_t>(rows, last_col + 1),
+                     std::vector<std::int64_t>(rows, -1)};
+      });
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(0, facets_.size(), 1024),
+          [&](const tbb::blocked_range<std::size_t>& range) {
+            Spans& sp = local_spans.local();
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+              const Facet& f = facets_[i];
+              double c_lo = std::numeric_limits<double>::max(), c_hi = -c_lo, r_lo = c_lo,
+                     r_hi = -c_lo;
+              for (const glm::dvec3& v : {f.v0, f.v1, f.v2}) {
+                const glm::dvec3 x = v - grid.origin_m;
+                const double c = glm::dot(x, col_axis), r = glm::dot(x, row_axis);
+                c_lo = std::min(c_lo, c);
+                c_hi = std::max(c_hi, c);
+                r_lo = std::min(r_lo, r);
+                r_hi = std::max(r_hi, r);
+              }
+              const std::int64_t r0 = std::max<std::int64_t>(0, ceil_index(r_lo - margin));
+              const std::int64_t r1 = std::min(last_row, floor_index(r_hi + margin));
+              const std::int64_t c0 = std::max<std::int64_t>(0, ceil_index(c_lo - margin));
+              const std::int64_t c1 = std::min(last_col, floor_index(c_hi + margin));
+              for (std::int64_t r = r0; r <= r1; ++r) {
+                const auto ri = static_cast<std::size_t>(r);
+                sp.lo[ri] = std::min(sp.lo[ri], c0);
+                sp.hi[ri] = std::max(sp.hi[ri], c1);
+              }
+            }
+          });
+      Spans spans{std::vector<std::int64_t>(rows, last_col + 1),
+                  std::vector<std::int64_t>(rows, -1)};
+      for (const Spans& sp : local_spans) {
+        for (std::size_t r = 0; r < rows; ++r) {
+          spans.lo[r] = std::min(spans.lo[r], sp.lo[r]);
+          spans.hi[r] = std::max(spans.hi[r], sp.hi[r]);
+        }
+      }
+      std::vector<std::vector<PathTerm>> row_terms(rows);
+      std::atomic<std::uint64_t> hits{0}, n_paths{0}, grazing{0}, segments{0}, cut{0};
+      std::array<std::atomic<std::uint64_t>, kMaxRcsBounces + 1> by_bounce{};
+      // Each row's tubes go in chunks of neighbouring columns, bounce by bounce: the chunk's rays
+      // of one bounce are intersected by one batched query (Scene::intersect over spans: coherent
+      // rays, traced by Embree in packets), then their exit tests by one batched occlusion query,
+      // then the cap tests. What each tube does is what the tube-by-tube loop did; only the order
+      // of the row's terms (chunk, bounce, column) differs.
+      constexpr std::size_t kChunk = 64;
       // A tube in flight: where it is, its field and its footprint's edges.
       struct Tube {
         std::uint64_t col = 0;
@@ -813,198 +1011,253 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
         ReflectionCoefficients rc;
         bool pec = true;
         bool radiate = false;
-        std::uint32_t exit = 0;  // its exit test's index, when radiate and shadowing
+        // The facet is on the convex hull and n points to its empty side (Facet::empty_side): rays
+        // from the hit into that side (the reflection, the exit toward the receiver, the cap
+        // test) meet nothing, so they are not traced.
+        bool open = false;
+        std::uint32_t exit = 0;  // its exit test's index, when radiate, shadowing and not open
       };
-      std::vector<Tube> tubes(kChunk);
-      std::vector<std::uint32_t> active(kChunk), next(kChunk);
-      std::vector<scene::Ray> rays(kChunk), exits(kChunk), caps(kChunk);
-      std::vector<scene::Hit> met_hits(kChunk);
-      std::vector<std::uint8_t> found(kChunk), exit_blocked(kChunk), cap_blocked(kChunk);
-      std::vector<Met> met(kChunk);
-      std::vector<PathTerm>& terms = row_terms[row];
-      auto free_ray = [](const glm::dvec3& from, const glm::dvec3& dir) {
-        scene::Ray ray;
-        ray.origin_m = from;
-        ray.direction = dir;
-        ray.t_near_m = 0.0;
-        ray.t_far_m = std::numeric_limits<double>::infinity();
-        return ray;
+      // Each thread's buffers for its rows, sized once per call.
+      struct Scratch {
+        std::vector<Tube> tubes = std::vector<Tube>(kChunk);
+        std::vector<std::uint32_t> active = std::vector<std::uint32_t>(kChunk),
+                                   next = std::vector<std::uint32_t>(kChunk);
+        std::vector<scene::Ray> rays = std::vector<scene::Ray>(kChunk),
+                                exits = std::vector<scene::Ray>(kChunk),
+                                caps = std::vector<scene::Ray>(kChunk);
+        std::vector<scene::Hit> met_hits = std::vector<scene::Hit>(kChunk);
+        std::vector<std::uint8_t> found = std::vector<std::uint8_t>(kChunk),
+                                  exit_blocked = std::vector<std::uint8_t>(kChunk),
+                                  cap_blocked = std::vector<std::uint8_t>(kChunk);
+        std::vector<Met> met = std::vector<Met>(kChunk);
       };
-      for (std::uint64_t col0 = 0; col0 < cols; col0 += kChunk) {
-        const std::size_t n_chunk =
-            static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, cols - col0));
-        std::size_t n_active = n_chunk;
-        for (std::size_t j = 0; j < n_chunk; ++j) {
-          Tube& tb = tubes[j];
-          tb.col = col0 + j;
-          tb.seq_key = 0x9e3779b97f4a7c15ull;
-          tb.d = d_i;
-          tb.tube_u = tube_u0;
-          tb.tube_v = tube_v0;
-          tb.e_h = CVec{tx_h, glm::dvec3(0.0)};
-          tb.e_v = CVec{tx_v, glm::dvec3(0.0)};
-          tb.last_hit = glm::dvec3(0.0);
-          rays[j] = free_ray(row_origin + static_cast<double>(tb.col) * grid.du_m, d_i);
-          tb.path_m = glm::dot(d_i, rays[j].origin_m);  // plane-wave phase path at the origin
-          active[j] = static_cast<std::uint32_t>(j);
-        }
-        for (int bounce = 1; bounce <= config_.max_bounces && n_active > 0; ++bounce) {
-          l_segments += n_active;
-          scene_->intersect(std::span<const scene::Ray>(rays.data(), n_active),
-                            std::span<scene::Hit>(met_hits.data(), n_active),
-                            std::span<std::uint8_t>(found.data(), n_active));
-          // The hits, in column order; exit tests of the footprints that may radiate.
-          std::size_t n_met = 0, n_exits = 0;
-          for (std::size_t a = 0; a < n_active; ++a) {
-            if (found[a] == 0)
-              continue;
-            ++l_hits;
-            Tube& tb = tubes[active[a]];
-            scene::Hit& hit = met_hits[a];
-            tb.seq_key = (tb.seq_key ^ ((std::uint64_t{hit.object_id} << 32) | hit.primitive_id)) *
-                         0x100000001b3ull;
-            tb.seq_key ^= tb.seq_key >> 29;
-            hit.position_m = extend_path(bounce == 1, hit.t_m, tb.last_hit, tb.d, hit.position_m,
-                                         hit.normal, tb.path_m);
-            tb.last_hit = hit.position_m;
-            glm::dvec3 n = hit.normal;
-            double cos_i = -glm::dot(n, tb.d);
-            if (cos_i < 0.0) {
-              n = -n;
-              cos_i = -cos_i;
-            }
-            if (cos_i < kGrazingCos) {
-              ++l_grazing;
-              continue;
-            }
-            Met& mt = met[n_met++];
-            mt.tube = active[a];
-            mt.n = n;
-            const SurfaceModel& sm = surfaces_[hit.material_id];
-            mt.pec = sm.kind == SurfaceModel::Kind::kPec;
-            mt.rc = reflection_coefficients(sm, cos_i, k_ref);
-            // Bounce 1 is the facets' (above). Later hits radiate when the receiver sees the lit
-            // side of the hit (sbr_core.hpp, kGrazingCos) and nothing is in the way.
-            mt.radiate = bounce >= 2 && glm::dot(n, s) >= kGrazingCos;
-            if (mt.radiate && shadowing) {
-              mt.exit = static_cast<std::uint32_t>(n_exits);
-              exits[n_exits++] = free_ray(hit.position_m + eps * n, s);
-            }
+      tbb::enumerable_thread_specific<Scratch> row_scratch;
+      tbb::parallel_for(std::size_t{0}, rows, [&](std::size_t row) {
+        if (spans.lo[row] > spans.hi[row])
+          return;  // no facet in this row
+        const auto col_begin = static_cast<std::uint64_t>(spans.lo[row]);
+        const auto col_end = static_cast<std::uint64_t>(spans.hi[row]) + 1;
+        row_terms[row].reserve(static_cast<std::size_t>((col_end - col_begin) / 8));
+        std::uint64_t l_hits = 0, l_paths = 0, l_grazing = 0, l_occl = 0, l_segments = 0, l_cut = 0;
+        std::array<std::uint64_t, kMaxRcsBounces + 1> l_by{};
+        const glm::dvec3 row_origin = grid.origin_m + static_cast<double>(row) * grid.dv_m;
+        // The open run per bounce (PathTerm): its term's index, the facet sequence's key, the
+        // last tube's column and phase path.
+        struct Run {
+          std::size_t term = 0;
+          std::uint64_t key = 0, col = 0;
+          double last_len_m = 0.0;
+          bool open = false;
+        };
+        std::array<Run, kMaxRcsBounces + 1> runs{};
+        const double run_tolerance_m = 1e-9 * glm::length(grid.du_m);
+        Scratch& scratch = row_scratch.local();
+        std::vector<Tube>& tubes = scratch.tubes;
+        std::vector<std::uint32_t>&active = scratch.active, &next = scratch.next;
+        std::vector<scene::Ray>&rays = scratch.rays, &exits = scratch.exits, &caps = scratch.caps;
+        std::vector<scene::Hit>& met_hits = scratch.met_hits;
+        std::vector<std::uint8_t>&found = scratch.found, &exit_blocked = scratch.exit_blocked,
+        &cap_blocked = scratch.cap_blocked;
+        std::vector<Met>& met = scratch.met;
+        std::vector<PathTerm>& terms = row_terms[row];
+        auto free_ray = [](const glm::dvec3& from, const glm::dvec3& dir) {
+          scene::Ray ray;
+          ray.origin_m = from;
+          ray.direction = dir;
+          ray.t_near_m = 0.0;
+          ray.t_far_m = std::numeric_limits<double>::infinity();
+          return ray;
+        };
+        for (std::uint64_t col0 = col_begin; col0 < col_end; col0 += kChunk) {
+          const std::size_t n_chunk =
+              static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, col_end - col0));
+          std::size_t n_active = n_chunk;
+          for (std::size_t j = 0; j < n_chunk; ++j) {
+            Tube& tb = tubes[j];
+            tb.col = col0 + j;
+            tb.seq_key = 0x9e3779b97f4a7c15ull;
+            tb.d = d_i;
+            tb.tube_u = tube_u0;
+            tb.tube_v = tube_v0;
+            tb.e_h = CVec{tx_h, glm::dvec3(0.0)};
+            tb.e_v = CVec{tx_v, glm::dvec3(0.0)};
+            tb.last_hit = glm::dvec3(0.0);
+            rays[j] = free_ray(row_origin + static_cast<double>(tb.col) * grid.du_m, d_i);
+            tb.path_m = glm::dot(d_i, rays[j].origin_m);  // plane-wave phase path at the origin
+            active[j] = static_cast<std::uint32_t>(j);
           }
-          if (n_exits > 0) {
-            l_occl += n_exits;
-            scene_->occluded(std::span<const scene::Ray>(exits.data(), n_exits),
-                             std::span<std::uint8_t>(exit_blocked.data(), n_exits));
-          }
-          std::size_t n_next = 0, n_caps = 0;
-          for (std::size_t q = 0; q < n_met; ++q) {
-            const Met& mt = met[q];
-            Tube& tb = tubes[mt.tube];
-            const glm::dvec3& n = mt.n;
-            const glm::dvec3& hit_m = tb.last_hit;
-            if (mt.radiate && (!shadowing || exit_blocked[mt.exit] == 0)) {
-              ++l_paths;
-              ++l_by[static_cast<std::size_t>(bounce)];
-              // The tube's footprint on this facet: its edge vectors projected along d.
-              const TubeFootprint fp = tube_footprint(tb.tube_u, tb.tube_v, tb.d, n, s);
-              PathTerm t;
-              t.c = coefficients(po_source(tb.e_h, tb.d, n, s, mt.rc, mt.pec),
-                                 po_source(tb.e_v, tb.d, n, s, mt.rc, mt.pec));
-              t.area_m2 = fp.area_m2;
-              t.phase_len_m = tb.path_m - glm::dot(s, hit_m);
-              t.taper_u_m = fp.taper_u_m;
-              t.taper_v_m = fp.taper_v_m;
-              t.count = 1;
-              t.step_m = 0.0;
-              Run& run = runs[static_cast<std::size_t>(bounce)];
-              bool merged = false;
-              if (run.open && run.key == tb.seq_key && run.col + 1 == tb.col) {
-                PathTerm& r = terms[run.term];
-                const double step = t.phase_len_m - run.last_len_m;
-                if (r.c == t.c && r.area_m2 == t.area_m2 && r.taper_u_m == t.taper_u_m &&
-                    r.taper_v_m == t.taper_v_m &&
-                    (r.count == 1 || std::abs(step - r.step_m) <= run_tolerance_m)) {
-                  if (r.count == 1)
-                    r.step_m = step;
-                  ++r.count;
-                  merged = true;
+          for (int bounce = 1; bounce <= config_.max_bounces && n_active > 0; ++bounce) {
+            l_segments += n_active;
+            scene_->intersect(std::span<const scene::Ray>(rays.data(), n_active),
+                              std::span<scene::Hit>(met_hits.data(), n_active),
+                              std::span<std::uint8_t>(found.data(), n_active));
+            // The hits, in column order; exit tests of the footprints that may radiate.
+            std::size_t n_met = 0, n_exits = 0;
+            for (std::size_t a = 0; a < n_active; ++a) {
+              if (found[a] == 0)
+                continue;
+              ++l_hits;
+              Tube& tb = tubes[active[a]];
+              scene::Hit& hit = met_hits[a];
+              tb.seq_key =
+                  (tb.seq_key ^ ((std::uint64_t{hit.object_id} << 32) | hit.primitive_id)) *
+                  0x100000001b3ull;
+              tb.seq_key ^= tb.seq_key >> 29;
+              hit.position_m = extend_path(bounce == 1, hit.t_m, tb.last_hit, tb.d, hit.position_m,
+                                           hit.normal, tb.path_m);
+              tb.last_hit = hit.position_m;
+              glm::dvec3 n = hit.normal;
+              double cos_i = -glm::dot(n, tb.d);
+              const bool back = cos_i < 0.0;
+              if (back) {
+                n = -n;
+                cos_i = -cos_i;
+              }
+              if (cos_i < kGrazingCos) {
+                ++l_grazing;
+                continue;
+              }
+              Met& mt = met[n_met++];
+              mt.tube = active[a];
+              mt.n = n;
+              const SurfaceModel& sm = surfaces_[hit.material_id];
+              mt.pec = sm.kind == SurfaceModel::Kind::kPec;
+              mt.rc = reflection_coefficients(sm, cos_i, k_ref);
+              // Bounce 1 is the facets' (above). Later hits radiate when the receiver sees the lit
+              // side of the hit (sbr_core.hpp, kGrazingCos) and nothing is in the way.
+              mt.radiate = bounce >= 2 && glm::dot(n, s) >= kGrazingCos;
+              mt.open = (triangle_empty_side_[first_triangle_[hit.object_id] + hit.primitive_id] &
+                         (back ? 2u : 1u)) != 0;
+              if (mt.radiate && shadowing && !mt.open) {
+                mt.exit = static_cast<std::uint32_t>(n_exits);
+                exits[n_exits++] = free_ray(hit.position_m + eps * n, s);
+              }
+            }
+            if (n_exits > 0) {
+              l_occl += n_exits;
+              scene_->occluded(std::span<const scene::Ray>(exits.data(), n_exits),
+                               std::span<std::uint8_t>(exit_blocked.data(), n_exits));
+            }
+            std::size_t n_next = 0, n_caps = 0;
+            for (std::size_t q = 0; q < n_met; ++q) {
+              const Met& mt = met[q];
+              Tube& tb = tubes[mt.tube];
+              const glm::dvec3& n = mt.n;
+              const glm::dvec3& hit_m = tb.last_hit;
+              if (mt.radiate && (!shadowing || mt.open || exit_blocked[mt.exit] == 0)) {
+                ++l_paths;
+                ++l_by[static_cast<std::size_t>(bounce)];
+                // The tube's footprint on this facet: its edge vectors projected along d.
+                const TubeFootprint fp = tube_footprint(tb.tube_u, tb.tube_v, tb.d, n, s);
+                PathTerm t;
+                t.c = coefficients(po_source(tb.e_h, tb.d, n, s, mt.rc, mt.pec),
+                                   po_source(tb.e_v, tb.d, n, s, mt.rc, mt.pec));
+                t.area_m2 = fp.area_m2;
+                t.phase_len_m = tb.path_m - glm::dot(s, hit_m);
+                t.taper_u_m = fp.taper_u_m;
+                t.taper_v_m = fp.taper_v_m;
+                t.count = 1;
+                t.step_m = 0.0;
+                Run& run = runs[static_cast<std::size_t>(bounce)];
+                bool merged = false;
+                if (run.open && run.key == tb.seq_key && run.col + 1 == tb.col) {
+                  PathTerm& r = terms[run.term];
+                  const double step = t.phase_len_m - run.last_len_m;
+                  if (r.c == t.c && r.area_m2 == t.area_m2 && r.taper_u_m == t.taper_u_m &&
+                      r.taper_v_m == t.taper_v_m &&
+                      (r.count == 1 || std::abs(step - r.step_m) <= run_tolerance_m)) {
+                    if (r.count == 1)
+                      r.step_m = step;
+                    ++r.count;
+                    merged = true;
+                  }
                 }
+                if (!merged) {
+                  run.term = terms.size();
+                  run.key = tb.seq_key;
+                  run.open = true;
+                  terms.push_back(t);
+                }
+                run.col = tb.col;
+                run.last_len_m = t.phase_len_m;
               }
-              if (!merged) {
-                run.term = terms.size();
-                run.key = tb.seq_key;
-                run.open = true;
-                terms.push_back(t);
+              // Specular reflection: direction, tube edges and field (law of reflection).
+              const glm::dvec3 d_r = mirror(tb.d, n);
+              if (bounce == config_.max_bounces) {
+                // The cap: is this tube still bouncing (would its reflection meet the target)?
+                if (!mt.open)
+                  caps[n_caps++] = free_ray(hit_m + eps * n, d_r);
+                continue;
               }
-              run.col = tb.col;
-              run.last_len_m = t.phase_len_m;
+              const CVec e_v_r = reflect_field(tb.e_v, tb.d, d_r, n, mt.rc, mt.pec);
+              const CVec e_h_r = reflect_field(tb.e_h, tb.d, d_r, n, mt.rc, mt.pec);
+              if (on_bounce != nullptr) {
+                BounceEvent ev;
+                ev.bounce = bounce;
+                ev.incident = tb.d;
+                ev.normal = n;
+                ev.reflected = d_r;
+                ev.field_before = norm(tb.e_v);
+                ev.field_after = norm(e_v_r);
+                ev.field_h_before = norm(tb.e_h);
+                ev.field_h_after = norm(e_h_r);
+                ev.pec = mt.pec;
+                (*on_bounce)(ev);
+              }
+              tb.e_h = e_h_r;
+              tb.e_v = e_v_r;
+              tb.tube_u = mirror(tb.tube_u, n);
+              tb.tube_v = mirror(tb.tube_v, n);
+              tb.d = d_r;
+              if (mt.open)
+                continue;  // the reflection leaves the target
+              // Lifted to the lit side: no self-hit.
+              rays[n_next] = free_ray(hit_m + eps * n, d_r);
+              next[n_next++] = mt.tube;
             }
-            // Specular reflection: direction, tube edges and field (law of reflection).
-            const glm::dvec3 d_r = mirror(tb.d, n);
-            if (bounce == config_.max_bounces) {
-              // The cap: is this tube still bouncing (would its reflection meet the target)?
-              caps[n_caps++] = free_ray(hit_m + eps * n, d_r);
-              continue;
+            if (n_caps > 0) {
+              l_occl += n_caps;
+              scene_->occluded(std::span<const scene::Ray>(caps.data(), n_caps),
+                               std::span<std::uint8_t>(cap_blocked.data(), n_caps));
+              for (std::size_t q = 0; q < n_caps; ++q)
+                l_cut += cap_blocked[q] != 0 ? 1u : 0u;
             }
-            const CVec e_v_r = reflect_field(tb.e_v, tb.d, d_r, n, mt.rc, mt.pec);
-            const CVec e_h_r = reflect_field(tb.e_h, tb.d, d_r, n, mt.rc, mt.pec);
-            if (on_bounce != nullptr) {
-              BounceEvent ev;
-              ev.bounce = bounce;
-              ev.incident = tb.d;
-              ev.normal = n;
-              ev.reflected = d_r;
-              ev.field_before = norm(tb.e_v);
-              ev.field_after = norm(e_v_r);
-              ev.field_h_before = norm(tb.e_h);
-              ev.field_h_after = norm(e_h_r);
-              ev.pec = mt.pec;
-              (*on_bounce)(ev);
-            }
-            tb.e_h = e_h_r;
-            tb.e_v = e_v_r;
-            tb.tube_u = mirror(tb.tube_u, n);
-            tb.tube_v = mirror(tb.tube_v, n);
-            tb.d = d_r;
-            // Lifted to the lit side: no self-hit.
-            rays[n_next] = free_ray(hit_m + eps * n, d_r);
-            next[n_next++] = mt.tube;
+            std::swap(active, next);
+            n_active = n_next;
           }
-          if (n_caps > 0) {
-            l_occl += n_caps;
-            scene_->occluded(std::span<const scene::Ray>(caps.data(), n_caps),
-                             std::span<std::uint8_t>(cap_blocked.data(), n_caps));
-            for (std::size_t q = 0; q < n_caps; ++q)
-              l_cut += cap_blocked[q] != 0 ? 1u : 0u;
-          }
-          std::swap(active, next);
-          n_active = n_next;
         }
-      }
-      hits += l_hits;
-      segments += l_segments;
-      n_paths += l_paths;
-      grazing += l_grazing;
-      cut += l_cut;
-      occl += l_occl;
-      for (std::size_t b = 0; b < l_by.size(); ++b)
-        by_bounce[b] += l_by[b];
-    });
-    std::size_t total = 0;
-    for (const auto& r : row_terms)
-      total += r.size();
-    path_terms.reserve(total);
-    for (const auto& r : row_terms)
-      path_terms.insert(path_terms.end(), r.begin(), r.end());
-    stats.rays += cols * n_rows;
-    stats.ray_hits += hits;
-    stats.segments += segments;
-    stats.paths += n_paths;
-    stats.grazing_stops += grazing;
-    stats.tubes_cut_off += cut;
-    for (std::size_t b = 0; b < by_bounce.size(); ++b)
-      stats.paths_by_bounce[b] += by_bounce[b];
-  }
+        hits += l_hits;
+        segments += l_segments;
+        n_paths += l_paths;
+        grazing += l_grazing;
+        cut += l_cut;
+        occl += l_occl;
+        for (std::size_t b = 0; b < l_by.size(); ++b)
+          by_bounce[b] += l_by[b];
+      });
+      std::size_t total = 0;
+      for (const auto& r : row_terms)
+        total += r.size();
+      path_terms.reserve(total);
+      for (const auto& r : row_terms)
+        path_terms.insert(path_terms.end(), r.begin(), r.end());
+      stats.rays += cols * n_rows;
+      stats.ray_hits += hits;
+      stats.segments += segments;
+      stats.paths += n_paths;
+      stats.grazing_stops += grazing;
+      stats.tubes_cut_off += cut;
+      for (std::size_t b = 0; b < by_bounce.size(); ++b)
+        stats.paths_by_bounce[b] += by_bounce[b];
+    }
+  };
+  tbb::parallel_invoke(bounce1, later);
+  stats.facets_lit += lit;
+  stats.facets_partial += partly;
+  stats.lit_subfacets += subs;
+  stats.facets_shadowed += shadowed;
+  stats.facets_edge_on += edge_on;
+
   stats.occlusion_queries += occl;
 
   // --- Every frequency from the same terms. ---------------------------------------------------
@@ -1123,6 +1376,12 @@ void RcsEngine::compute(const Direction& tx, const Direction& rx, std::span<cons
     for (std::size_t ci = 0; ci < n_chunks; ++ci) {
       for (std::size_t p = 0; p < 4; ++p)
         sum[p] += partial[ci * nf + fi][p];
+    }
+    if (one_frequency) {
+      for (const std::array<cplx, 4>& b : facet_sums) {
+        for (std::size_t p = 0; p < 4; ++p)
+          sum[p] += b[p];
+      }
     }
     const cplx pre(0.0, -k_of_hz * freqs_hz[fi] / std::sqrt(kPi));  // -j k / sqrt(pi)
     out[fi] = {pre * sum[0], pre * sum[1], pre * sum[2], pre * sum[3]};

@@ -184,7 +184,8 @@ class RcsEngine {
   /// the transmitter in direction `tx` and the receiver in `rx` (monostatic: rx == tx).
   /// `stats` is added to. `on_bounce` (may be null) sees every GO reflection, possibly from
   /// several threads at once. Throws std::invalid_argument for empty/non-positive/non-finite
-  /// frequencies, mismatched sizes, or a ray grid over config.max_rays.
+  /// frequencies, mismatched sizes, or a ray grid over config.max_rays. Several calls may run
+  /// at once on one engine (the CLI's sweeps run directions side by side).
   void compute(const Direction& tx, const Direction& rx, std::span<const double> freqs_hz,
                std::span<ScatteringMatrix> out, RcsStats& stats,
                const std::function<void(const BounceEvent&)>* on_bounce = nullptr) const;
@@ -213,6 +214,7 @@ class RcsEngine {
   struct Facet {
     glm::dvec3 v0, v1, v2, centroid, normal;
     double area_m2;
+    double longest_m;  ///< its longest edge
     std::uint16_t surface;
     /// +1: `normal` points out of the closed part the facet belongs to, -1: into it, 0: open
     /// part (sbr_core.hpp, closed parts).
@@ -220,11 +222,22 @@ class RcsEngine {
     /// The same for the bounce-1 lighting, with parts closed up to T-junctions counted closed
     /// (rcs.cpp, solid_winding).
     std::int8_t solid;
+    /// Bit 0: the half-space on the normal's side of the facet's plane holds no geometry (the
+    /// facet is on the target's convex hull, facing that way); bit 1: the same on the other side
+    /// (rcs.cpp, find_supporting_sides).
+    std::uint8_t empty_side = 0;
   };
+  void find_supporting_sides(std::vector<glm::dvec3> vertices_m);
   const scene::Scene* scene_;
   std::vector<SurfaceModel> surfaces_;
   RcsConfig config_;
   std::vector<Facet> facets_;
+  std::vector<glm::dvec3> facet_vertices_m_;  ///< the facets' vertices, each once
+  /// Facet::empty_side of triangle t of object o (as the scene winds it; 0 for a degenerate
+  /// one): triangle_empty_side_[first_triangle_[o] + t], a byte per triangle (the tubes read it
+  /// at every hit).
+  std::vector<std::size_t> first_triangle_;
+  std::vector<std::uint8_t> triangle_empty_side_;
   std::size_t degenerate_ = 0;
   glm::dvec3 centre_m_{0.0};
   double radius_m_ = 0.0;
