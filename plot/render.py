@@ -69,7 +69,7 @@ def arr(v):
     return np.array([math.nan if x is None else x for x in v], dtype=float)
 
 
-def wrap(text, width_px, size_px=7.5):
+def wrap(text, width_px, size_px=8.5):
     if not text:
         return ""
     return "\n".join(textwrap.wrap(text, max(20, int(width_px / size_px))))
@@ -135,8 +135,9 @@ def draw_line(fig, ax, p, fig_w_px, panel_w_px):
         if s.get("no_line"):
             ls = "none"
         marker = "o" if s.get("markers") or len(x) == 1 else None
-        ax.plot(x, y, linestyle=ls, marker=marker, markersize=4, color=col, label=label,
-                linewidth=1.6)
+        ax.plot(x, y, linestyle=ls, marker=marker, markersize=6 if ls == "none" else 4,
+                markeredgecolor="white" if ls == "none" else col, markeredgewidth=0.6,
+                color=col, label=label, linewidth=1.6)
         ylo, yhi = s.get("y_lo"), s.get("y_hi")
         xlo, xhi = s.get("x_lo"), s.get("x_hi")
         if ylo or xlo:

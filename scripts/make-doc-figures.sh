@@ -19,6 +19,7 @@ for a in "$@"; do
     *) build="$a" ;;
   esac
 done
+build="$(cd "$build" 2>/dev/null && pwd || echo "$build")"  # absolute: the script changes folder
 exe="$build/app/radar-emu"
 [ -x "$exe" ] || { echo "make-doc-figures: $exe not found (build first: scripts/build.sh)" >&2; exit 1; }
 img="$root/docs/img"
@@ -87,3 +88,5 @@ if [ "$images" = 1 ]; then
   "$exe" tradeoff --out "$work/trade_full" -q
   cp "$work/trade_full/tradeoff.png" "$work/trade_full/tradeoff_frame.png" "$img/"
 fi
+# The docs show the PNGs; the SVGs the tools write beside them are not kept here.
+rm -f "$img"/*.svg

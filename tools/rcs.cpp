@@ -239,6 +239,7 @@ Series read_overlay(const std::string& spec) {
   const std::string path = spec.substr(0, eq);
   Series ser;
   ser.label = spec.substr(eq + 1);
+  ser.dashed = true;  // a reference beside the computed curves (docs/plotting.md)
   FILE* f = std::fopen(path.c_str(), "r");
   if (f == nullptr)
     throw std::invalid_argument("--overlay: cannot read " + path);
@@ -1133,6 +1134,11 @@ int run_profile_tool(const ProfileToolOptions& o) {
       m.value_max = peak;
       m.value_range = o.dynamic_range_db;
       m.scale_bar = 0.0;  // equal scales (both axes in m) and a scale bar
+      // The picture's height from the image's aspect (room for the title and the x axis).
+      const double span_x = img.range_m.back() - img.range_m.front();
+      const double span_y = img.cross_range_m.back() - img.cross_range_m.front();
+      if (span_x > 0.0 && span_y > 0.0)
+        m.height = std::clamp(static_cast<int>(760.0 * span_y / span_x) + 160, 360, 1000);
       figures.add(plot::single(std::move(m)), isar_png);
     }
   }

@@ -101,7 +101,7 @@ run("profile", "--mesh", w("tri.stl"), "--freq-sweep-hz", "9e9:11e9:64", "--thet
     "54.7356", "--phi-deg", "40:50:16", "--out", w("profile.csv"), "--plot", w("profile.png"),
     "--isar-plot", w("isar.png"), "-q")
 figure(w("profile.png"), size=(1000, 640), colour_bars=0, texts=["|profile| [dBsm]"])
-figure(w("isar.png"), size=(1000, 640), colour_bars=1,
+figure(w("isar.png"), colour_bars=1,
        texts=["range [m]", "cross-range [m]", "image amplitude [dBsm]"])
 
 # A run's pictures (the run_default fixture): the B-scope coloured by time (a colour bar in s),
