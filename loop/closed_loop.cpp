@@ -934,7 +934,11 @@ void ClosedLoop::write_outputs(const RunResult& r) {
   // The streamed files first: the writer finishes what the run handed it.
   (void)m.outputs.stream->finish();
   write_report_json(report(r), m.options.out_dir / "report.json");
-  write_timing_png(m.accounting.profiler, 1.0 / m.scenario.rate_hz,
+  GovernorTrace gov;
+  gov.enabled = m.governor.config().enabled;
+  gov.deadline_ms = m.governor.config().compute_fraction * 1e3 / m.scenario.rate_hz;
+  gov.levels = r.governor.per_frame_level;
+  write_timing_png(m.accounting.profiler, 1.0 / m.scenario.rate_hz, gov,
                    m.options.out_dir / "timing.png");
 }
 

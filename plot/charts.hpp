@@ -1,56 +1,101 @@
 #pragma once
-// The one plotting layer of the tools: line charts and heat maps (images) as PNG, drawn to the
-// conventions of a report (docs/plotting.md): axis labels with units, 1-2-5 ticks on linear axes,
-// decade and 2..9 minor ticks on log axes, colour bars with ticks and a label, legends outside
-// the data, titles wrapped rather than clipped, images in metres at equal x and y scale.
+// The one plotting layer of the tools (docs/plotting.md): the tools describe their figures here
+// (line charts, stacked areas, polar cuts, heat maps and pictures, panels of them) and matplotlib
+// draws them: an anti-aliased PNG and an SVG beside it (same stem), real fonts, log ticks,
+// colour bars with units, perceptual colour maps, legends outside the data.
+//
+// How: the figures are written as JSON (arrays of heat maps as raw little-endian doubles beside
+// it) to a temporary folder with the renderer plot/render.py (embedded in the binary at build
+// time), and one Python process draws them all: the interpreter CMake found at configure time
+// (Debian's /usr/bin/python3 with python3-matplotlib), or $RADAR_EMU_PYTHON. Setup-time code
+// only: it allocates, writes files and waits for a child process.
 
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <variant>
 #include <vector>
 
-#include "plot/canvas.hpp"
-
 namespace radar_emu::plot {
+
+struct Rgb {
+  std::uint8_t r = 0, g = 0, b = 0;
+};
 
 struct Series {
   std::string label;         ///< legend entry; empty: not in the legend
   std::vector<double> x, y;  ///< same length; non-finite y values break the line
   bool markers = false;      ///< a marker at every point as well as the line
-  bool dashed = false;
+  bool dashed = false;       ///< closed forms, references, values outside a model's validity
   std::optional<Rgb> colour = std::nullopt;  ///< default: series_colour(index of the series)
+  /// Markers only, no line between them (measured points).
+  bool no_line = false;
+  /// A stacked area: this series' y is drawn on top of the previous stacked series' (all the
+  /// chart's stacked series share the first one's x).
+  bool stacked = false;
+  /// The spread of each point (error bars), empty or one per point: y_lo <= y <= y_hi, and the
+  /// same across for x.
+  std::vector<double> y_lo{}, y_hi{}, x_lo{}, x_hi{};
+  /// Text beside each point (a knob's value), empty or one per point ("" for none).
+  std::vector<std::string> point_labels{};
+  /// A scatter coloured by these values (one per point) through the chart's colour map, with a
+  /// colour bar labelled LineChart::colour_label.
+  std::vector<double> colour_values{};
+  double marker_size = 12.0;  ///< scatter marker area [pt^2]
 };
 
-/// The colour of the k-th series when it sets none (ten well separated colours, repeating).
+/// The colour of the k-th series when it sets none (matplotlib's tab10, repeating).
 [[nodiscard]] Rgb series_colour(std::size_t k) noexcept;
+
+/// A horizontal (or vertical) reference line across the data: a budget, a deadline.
+struct RefLine {
+  double value = 0.0;
+  std::string label;  ///< legend entry
+  bool vertical = false;
+  bool dashed = true;
+  std::optional<Rgb> colour = std::nullopt;  ///< default: near black
+};
 
 struct LineChart {
   /// Axis labels carry the unit in brackets, "range [m]" (docs/plotting.md).
   std::string title, x_label, y_label;
   std::vector<Series> series;
-  std::optional<double> y_min, y_max;  ///< default: the data range (finite values), padded
-  std::optional<double> x_min, x_max;  ///< default: the data range
+  std::vector<RefLine> ref_lines;
+  std::optional<double> y_min, y_max;  ///< default: the data range, padded
+  std::optional<double> x_min, x_max;  ///< default: the data range, padded
   /// Log axes: non-positive values are left out; decade ticks, minor ticks at 2..9.
   bool log_x = false, log_y = false;
-  int width = 1000, height = 640;  ///< pixels of the whole picture
+  /// Polar axes: x is the angle [deg] (0 up, clockwise), y the radius (y_min at the centre).
+  bool polar = false;
+  /// Equal x and y scale (a map of positions in metres).
+  bool equal_aspect = false;
+  /// Scatter series with colour_values: the colour bar's label (unit included), the map and
+  /// its limits (default: the values' range).
+  std::string colour_label;
+  std::string colour_map = "viridis";
+  std::optional<double> colour_min, colour_max;
+  /// The legend under the data instead of right of it (default: chosen by the labels' length).
+  std::optional<bool> legend_below;
+  bool legend = true;  ///< false: no legend (a panel beside another with the same series)
+  int width = 1000, height = 640;  ///< pixels of the whole picture when drawn alone
 };
 
 struct Heatmap {
   std::string title, x_label, y_label;
-  /// The colour bar's label, the unit included ("dBsm", "|chi| [dB]").
+  /// The colour bar's label, the unit included ("RCS [dBsm]", "|chi| [dB]").
   std::string value_label;
   std::vector<double> x, y;    ///< pixel centres, ascending (need not be evenly spaced)
   std::vector<double> values;  ///< row-major [y][x]; non-finite values are drawn grey
   double value_max = 0.0;      ///< top of the colour scale
   double value_range = 40.0;   ///< the scale spans [value_max - range, value_max]
-  /// Equal x and y scale (square data units, letterboxed). Default: when the x and y labels
-  /// carry the same unit in brackets ("range [m]", "cross-range [m]").
+  /// Equal x and y scale. Default: when the x and y labels carry the same unit in brackets
+  /// ("range [m]", "cross-range [m]").
   std::optional<bool> equal_aspect;
   /// A scale bar in the image's lower left, this long in x units (0: a 1-2-5 length near a
   /// fifth of the x span), labelled with the x unit. Default: none.
   std::optional<double> scale_bar;
-  int width = 1000, height = 640;  ///< pixels of the whole picture
+  int width = 1000, height = 640;  ///< pixels of the whole picture when drawn alone
   /// Grey scale (black at the bottom of the scale, white at the top) instead of viridis.
   bool grey = false;
   /// A picture instead of values (an optical view beside a radar image): x.size() * y.size()
@@ -58,90 +103,50 @@ struct Heatmap {
   std::vector<std::uint8_t> rgb;
 };
 
-/// Panels side by side (height: the tallest).
-[[nodiscard]] Canvas join_panels(const std::vector<Canvas>& panels);
+using Panel = std::variant<LineChart, Heatmap>;
 
-/// Throw std::runtime_error naming the path on write failure, std::invalid_argument for empty or
-/// inconsistent data.
-void write_line_chart_png(const LineChart& chart, const std::filesystem::path& path);
-/// The same chart as a canvas (chart.width x chart.height, to combine several in one picture).
-[[nodiscard]] Canvas render_line_chart(const LineChart& chart);
-void write_heatmap_png(const Heatmap& map, const std::filesystem::path& path);
-[[nodiscard]] Canvas render_heatmap(const Heatmap& map);
-/// Panels one under the other (width: the widest), e.g. one heat map per slice of a sweep.
-[[nodiscard]] Canvas stack_panels(const std::vector<Canvas>& panels);
-
-/// Tick positions at 1, 2 or 5 times a power of ten covering [lo, hi] with about `target`
-/// intervals.
-[[nodiscard]] std::vector<double> nice_ticks(double lo, double hi, int target = 6);
-
-struct AxisTicks {
-  std::vector<double> major;        ///< labelled
-  std::vector<std::string> labels;  ///< one per major tick; "10^k" is drawn with a superscript
-  std::vector<double> minor;        ///< unlabelled (log axes: 2..9 x 10^k)
-};
-/// Linear: nice_ticks. Log (lo > 0): every decade in range (every other one past 12 decades),
-/// minor ticks at 2..9 (up to 8 decades); 2 and 5 labelled too when fewer than 3 decade ticks show;
-/// labels plain between 0.001 and 10^4, 10^k outside.
-[[nodiscard]] AxisTicks axis_ticks(double lo, double hi, bool log_axis, int target = 6);
-/// "%g"-like label at the precision the tick step needs ("0.25", "1500", "-3").
-[[nodiscard]] std::string format_tick(double value, double step);
-
-/// Pixel rectangle, inclusive.
-struct PixelRect {
-  int x0 = 0, y0 = 0, x1 = -1, y1 = -1;
-  [[nodiscard]] int width() const noexcept { return x1 - x0 + 1; }
-  [[nodiscard]] int height() const noexcept { return y1 - y0 + 1; }
-  [[nodiscard]] bool overlaps(const PixelRect& o) const noexcept {
-    return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1;
-  }
+/// Panels in a grid, filled row by row.
+struct Figure {
+  std::string title;  ///< above all panels (each panel may have its own too)
+  std::vector<Panel> panels;
+  int columns = 1;
+  int width = 1000, height = 640;     ///< pixels of the PNG
+  std::vector<double> height_ratios;  ///< of the rows; empty: equal
 };
 
-struct TextLine {
-  std::string text;
-  int x = 0, y = 0, scale = 2;  ///< top-left
+/// A figure of one panel at the panel's own size.
+[[nodiscard]] Figure single(LineChart chart);
+[[nodiscard]] Figure single(Heatmap map);
+
+/// Figures drawn together by one renderer process (matplotlib's import costs ~0.5 s).
+class FigureBatch {
+ public:
+  /// `png`: the PNG's path; the SVG goes beside it (same stem, .svg). Checks the data
+  /// (std::invalid_argument naming the figure: empty or inconsistent data, a log axis with no
+  /// positive value).
+  void add(Figure figure, const std::filesystem::path& png);
+  /// Draws every figure added, then forgets them. Throws std::runtime_error with one line:
+  /// the interpreter cannot be run, matplotlib is missing (naming the interpreter and the
+  /// Debian package), or the renderer's own error naming the figure.
+  void write();
+  [[nodiscard]] bool empty() const noexcept { return figures_.empty(); }
+
+ private:
+  std::vector<std::pair<Figure, std::filesystem::path>> figures_;
 };
 
-/// Where render_line_chart puts things (shared with tests).
-struct ChartLayout {
-  int width = 0, height = 0;
-  PixelRect plot;                          ///< the data area, inside the axes' frame
-  std::vector<TextLine> title;             ///< wrapped to the picture's width
-  std::vector<PixelRect> legend;           ///< one box (swatch + label) per labelled series
-  std::vector<std::size_t> legend_series;  ///< the series of each legend box
-  int legend_scale = 2;
-  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;  ///< axis ranges (data units)
-  bool log_x = false, log_y = false;
-  AxisTicks x_ticks, y_ticks;
-  [[nodiscard]] double fx(double x) const noexcept;  ///< fractional pixel column
-  [[nodiscard]] double fy(double y) const noexcept;  ///< fractional pixel row
-};
-[[nodiscard]] ChartLayout line_chart_layout(const LineChart& chart);
+/// One figure drawn at once (a batch of one).
+void write_figure(Figure figure, const std::filesystem::path& png);
+void write_line_chart_png(const LineChart& chart, const std::filesystem::path& png);
+void write_heatmap_png(const Heatmap& map, const std::filesystem::path& png);
 
-/// Where render_heatmap puts things (shared with tests).
-struct HeatmapLayout {
-  int width = 0, height = 0;
-  PixelRect image;       ///< the data area (letterboxed when equal_aspect)
-  PixelRect colour_bar;  ///< top row: value_max, bottom row: value_max - value_range; empty
-                         ///< (width 0) for a picture
-  std::vector<TextLine> title;
-  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;  ///< extents of the cells (data units)
-  bool equal_aspect = false;
-  AxisTicks x_ticks, y_ticks, bar_ticks;
-  double value_lo = 0, value_hi = 1;
-  /// The pixel column / row whose cell holds data coordinate x / y.
-  [[nodiscard]] int px(double x) const noexcept;
-  [[nodiscard]] int py(double y) const noexcept;
-  /// The colour-bar row of a value (clamped to the bar).
-  [[nodiscard]] int bar_row(double value) const noexcept;
-};
-[[nodiscard]] HeatmapLayout heatmap_layout(const Heatmap& map);
+/// The SVG written beside a PNG.
+[[nodiscard]] std::filesystem::path svg_path(const std::filesystem::path& png);
+
+/// The interpreter that draws: $RADAR_EMU_PYTHON, else the one CMake found.
+[[nodiscard]] std::string plot_interpreter();
 
 /// The unit in the last "[...]" of an axis label ("range [m]" -> "m"); empty when none.
 [[nodiscard]] std::string unit_of(const std::string& label);
-/// Words of `text` in lines no wider than `max_width_px` at `scale` (a word wider than that is
-/// cut); no character is lost.
-[[nodiscard]] std::vector<std::string> wrap_text(const std::string& text, int max_width_px,
-                                                 int scale);
 
 }  // namespace radar_emu::plot

@@ -26,6 +26,9 @@ PACKAGES=(
   python3 python3-can python3-canmatrix python3-pymodbus python3-serial-asyncio mbpoll socat
   # the Python module radar_emu (python/, optional at build time) and its tests
   python3-dev pybind11-dev python3-numpy python3-pytest
+  # every figure of the tools (plot/render.py, docs/plotting.md): matplotlib draws them, run
+  # by the interpreter CMake finds (RADAR_EMU_PLOT_PYTHON; $RADAR_EMU_PYTHON at run time)
+  python3-matplotlib
   # MPI scale-out of rcs / profile (tools/mpi_work.hpp, docs/cluster.md; optional at build
   # time, CMake RADAR_EMU_MPI) and its mpirun test
   openmpi-bin libopenmpi-dev

@@ -20,11 +20,11 @@ using loop::default_scenario_toml;
 using loop::load_scenario;
 using loop::parse_scenario;
 using loop::Scenario;
+using plot::FigureBatch;
 using plot::Heatmap;
 using plot::LineChart;
 using plot::Series;
-using plot::write_heatmap_png;
-using plot::write_line_chart_png;
+using plot::single;
 
 namespace {
 
@@ -198,7 +198,8 @@ int run_ambiguity_tool(const AmbiguityToolOptions& o) {
     map.values.push_back(to_db(v));
   map.value_max = 0.0;
   map.value_range = o.dynamic_range_db;
-  write_heatmap_png(map, o.out_dir / "ambiguity.png");
+  FigureBatch figures;  // both figures by one renderer
+  figures.add(single(std::move(map)), o.out_dir / "ambiguity.png");
 
   // Cuts: computed vs the single-pulse closed form (train: the train's closed form itself).
   LineChart cuts;
@@ -233,8 +234,9 @@ int run_ambiguity_tool(const AmbiguityToolOptions& o) {
   }
   s_delay_cf.dashed = s_dopp_cf.dashed = true;
   cuts.series = {s_delay, s_delay_cf, s_dopp, s_dopp_cf};
-  write_line_chart_png(cuts, o.out_dir / "cuts.png");
   write_text(o.out_dir / "cuts.csv", cuts_csv);
+  figures.add(single(std::move(cuts)), o.out_dir / "cuts.png");
+  figures.write();
 
   if (!o.quiet) {
     std::printf(

@@ -39,10 +39,8 @@ using loop::parse_scenario;
 using loop::Scenario;
 using loop::scene_description;
 using loop::WeatherSpec;
-using plot::Canvas;
+using plot::Figure;
 using plot::Heatmap;
-using plot::join_panels;
-using plot::render_heatmap;
 
 namespace {
 
@@ -141,7 +139,10 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
       radar_map.values.push_back(
           db(static_cast<double>(im.at(static_cast<int>(rows - 1 - y), static_cast<int>(x)))));
   }
-  std::vector<Canvas> panels{render_heatmap(radar_map)};
+  Figure fig;
+  fig.width = 1000;
+  fig.height = 400;
+  fig.panels.emplace_back(std::move(radar_map));
   const auto w = static_cast<std::size_t>(im.columns * s),
              h = static_cast<std::size_t>(im.rows * s);
   if (p.optical.width_px == static_cast<int>(w) && p.optical.height_px == static_cast<int>(h)) {
@@ -152,9 +153,11 @@ void write_png(const EvImageProduct& p, const std::filesystem::path& path) {
     for (std::size_t y = 0; y < h; ++y)
       std::copy_n(p.optical.rgb.data() + (h - 1 - y) * w * 3, w * 3,
                   optical.rgb.data() + y * w * 3);
-    panels.push_back(render_heatmap(optical));
+    fig.panels.emplace_back(std::move(optical));
+    fig.columns = 2;
+    fig.width = 2000;
   }
-  join_panels(panels).write_png(path);
+  plot::write_figure(std::move(fig), path);
 }
 
 // The strips of columns the image is formed in, and the estimate checked before any work.

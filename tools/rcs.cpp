@@ -34,13 +34,11 @@ using common::Polarisation;
 
 using config::parse_number;
 using config::split;
-using plot::Canvas;
+using plot::Figure;
+using plot::FigureBatch;
 using plot::Heatmap;
 using plot::LineChart;
-using plot::render_heatmap;
 using plot::Series;
-using plot::stack_panels;
-using plot::write_heatmap_png;
 using plot::write_line_chart_png;
 
 using config::parse_sweep;
@@ -247,6 +245,7 @@ Series read_overlay(const std::string& spec) {
   const std::string path = spec.substr(0, eq);
   Series ser;
   ser.label = spec.substr(eq + 1);
+  ser.dashed = true;  // a reference beside the computed curves (docs/plotting.md)
   FILE* f = std::fopen(path.c_str(), "r");
   if (f == nullptr)
     throw std::invalid_argument("--overlay: cannot read " + path);
@@ -668,6 +667,25 @@ void write_rcs_chart(const RcsToolOptions& o, const std::vector<radar::Scatterin
       low = std::min(low, y);
   }
   chart.y_min = std::max(low, peak - 60.0);
+  // A cut over half a turn or more in phi is also drawn as the polar pattern an engineer
+  // expects, beside the Cartesian one (the same curves).
+  const double span = sweep_phi ? std::abs(o.phi_deg.back() - o.phi_deg.front()) : 0.0;
+  if (!sweep_theta && sweep_phi && span >= 180.0) {
+    Figure fig;
+    fig.title = chart.title;
+    chart.title.clear();
+    LineChart polar = chart;
+    polar.polar = true;
+    polar.y_max = std::ceil(peak / 10.0) * 10.0;
+    polar.legend = false;  // the Cartesian panel's legend names the same curves
+    chart.legend_below = true;
+    fig.panels = {chart, polar};
+    fig.columns = 2;
+    fig.width = 1500;
+    fig.height = 700;
+    plot::write_figure(std::move(fig), o.plot_png);
+    return;
+  }
   write_line_chart_png(chart, o.plot_png);
 }
 
@@ -726,11 +744,11 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
     for (Polarisation p : o.pols)
       peak = std::max(peak, radar::dbsm(component(m, p)));
   }
-  std::vector<Canvas> panels;
+  Figure fig;
   std::size_t skipped = 0;
   for (std::size_t sl = 0; sl < n_slices; ++sl) {
     for (Polarisation p : o.pols) {
-      if (panels.size() == kMaxPanels) {
+      if (fig.panels.size() == kMaxPanels) {
         ++skipped;
         continue;
       }
@@ -751,7 +769,6 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
       m.y_label = labels[static_cast<std::size_t>(ay)];
       m.value_label = "RCS [dBsm]";
       m.equal_aspect = false;
-      m.height = 560;
       for (std::size_t i : ox)
         m.x.push_back(xs[i]);
       for (std::size_t j : oy)
@@ -768,7 +785,7 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
       }
       m.value_max = std::ceil(peak);
       m.value_range = 60.0;
-      panels.push_back(render_heatmap(m));
+      fig.panels.emplace_back(std::move(m));
     }
   }
   if (skipped > 0) {
@@ -776,7 +793,10 @@ void write_rcs_maps(const RcsToolOptions& o, const std::vector<radar::Scattering
                  "radar-emu: warning: --plot: drew the first %zu maps of %zu (the CSV has all)\n",
                  kMaxPanels, kMaxPanels + skipped);
   }
-  stack_panels(panels).write_png(o.plot_png);
+  // Panels one under the other, 560 pixels each.
+  fig.width = 1000;
+  fig.height = 560 * static_cast<int>(fig.panels.size());
+  plot::write_figure(std::move(fig), o.plot_png);
 }
 
 }  // namespace
@@ -1062,6 +1082,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
     return 128 + o.control.stop_signal();  // no plot or ISAR image of a partial sweep
   const radar::RangeProfile& centre = profiles[na / 2];
   const std::string name = std::filesystem::path(o.mesh).filename().string();
+  FigureBatch figures;  // the profile and the ISAR image by one renderer
   if (!o.plot_png.empty()) {
     LineChart chart;
     char title[200];
@@ -1083,7 +1104,7 @@ int run_profile_tool(const ProfileToolOptions& o) {
     chart.series.push_back(std::move(ser));
     chart.y_min = peak - o.dynamic_range_db;
     chart.y_max = peak + 3.0;
-    write_line_chart_png(chart, o.plot_png);
+    figures.add(plot::single(std::move(chart)), o.plot_png);
   }
   std::string isar_csv, isar_png;
   double cross_res = 0.0;
@@ -1137,9 +1158,15 @@ int run_profile_tool(const ProfileToolOptions& o) {
       m.value_max = peak;
       m.value_range = o.dynamic_range_db;
       m.scale_bar = 0.0;  // equal scales (both axes in m) and a scale bar
-      write_heatmap_png(m, isar_png);
+      // The picture's height from the image's aspect (room for the title and the x axis).
+      const double span_x = img.range_m.back() - img.range_m.front();
+      const double span_y = img.cross_range_m.back() - img.cross_range_m.front();
+      if (span_x > 0.0 && span_y > 0.0)
+        m.height = std::clamp(static_cast<int>(760.0 * span_y / span_x) + 160, 360, 1000);
+      figures.add(plot::single(std::move(m)), isar_png);
     }
   }
+  figures.write();
   if (!o.quiet) {
     std::printf(
         "%zu angle(s) x %zu frequencies in %.2f s (%llu multi-bounce paths, %llu tubes cut off "

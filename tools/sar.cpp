@@ -32,7 +32,6 @@
 #include "config/progress.hpp"
 #include "config/toml_reader.hpp"
 #include "loop/closed_loop.hpp"
-#include "plot/canvas.hpp"
 #include "plot/charts.hpp"
 #include "radar/clutter/speckle.hpp"
 #include "radar/clutter/terrain.hpp"
@@ -48,11 +47,8 @@
 
 namespace radar_emu::tools {
 
-using plot::Canvas;
 using plot::LineChart;
-using plot::Rgb;
 using plot::Series;
-using plot::write_line_chart_png;
 
 namespace {
 
@@ -341,60 +337,39 @@ sc::SceneDescription build_scene(const SarCase& c, double half_extent_m) {
 
 // ------------------------------------------------------------------------------ outputs
 
-void write_png(const rd::SarImage& img, const std::string& title, const std::string& path) {
+// The image in grey (dB over 50 dB below the 99.9th percentile), ground range across (near left)
+// and along track up (the flight goes down the image, row 0 at the top), at equal scales in
+// metres with a scale bar (docs/plotting.md).
+plot::Heatmap image_figure(const rd::SarImage& img, const std::string& title) {
   const auto& g = img.grid;
-  // Square display pixels of the finer spacing (nearest neighbour), dB over a 50 dB range below
-  // the 99.9th percentile.
-  const double px = std::min(g.azimuth_spacing_m, g.ground_range_spacing_m);
+  plot::Heatmap m;
+  m.title = title;
+  m.x_label = "ground range from the near edge [m]";
+  m.y_label = "along track [m] (flight toward the bottom)";
+  m.value_label = "pixel power [dB]";
+  m.grey = true;
+  m.scale_bar = 0.0;
+  m.equal_aspect = true;
+  for (std::size_t c = 0; c < g.cols; ++c)
+    m.x.push_back((static_cast<double>(c) + 0.5) * g.ground_range_spacing_m);
+  for (std::size_t r = 0; r < g.rows; ++r)
+    m.y.push_back((static_cast<double>(r) + 0.5) * g.azimuth_spacing_m);
+  m.values.resize(img.pixels.size());
+  for (std::size_t r = 0; r < g.rows; ++r) {
+    for (std::size_t c = 0; c < g.cols; ++c)
+      m.values[r * g.cols + c] =
+          db10(static_cast<double>(std::norm(img.pixels[(g.rows - 1 - r) * g.cols + c])));
+  }
+  std::vector<double> sorted = m.values;
+  std::sort(sorted.begin(), sorted.end());
+  m.value_max = sorted[static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1))];
+  m.value_range = 50.0;
+  // About the picture's aspect (the colour bar and labels beside it).
   const double w_m = static_cast<double>(g.cols) * g.ground_range_spacing_m;
   const double h_m = static_cast<double>(g.rows) * g.azimuth_spacing_m;
-  double scale = px;
-  while (w_m / scale > 1600.0 || h_m / scale > 1600.0)
-    scale *= 1.25;
-  const int w = std::max(1, static_cast<int>(w_m / scale));
-  const int h = std::max(1, static_cast<int>(h_m / scale));
-  std::vector<double> db(img.pixels.size());
-  for (std::size_t i = 0; i < db.size(); ++i)
-    db[i] = db10(static_cast<double>(std::norm(img.pixels[i])));
-  std::vector<double> sorted = db;
-  std::sort(sorted.begin(), sorted.end());
-  const double top =
-      sorted[static_cast<std::size_t>(0.999 * static_cast<double>(sorted.size() - 1))];
-  const double range = 50.0;
-  const int margin = 40;
-  Canvas cv(w + 2 * margin, h + 2 * margin + 30, Rgb{255, 255, 255});
-  for (int y = 0; y < h; ++y) {
-    const auto r =
-        std::min(g.rows - 1, static_cast<std::size_t>((y + 0.5) * scale / g.azimuth_spacing_m));
-    for (int x = 0; x < w; ++x) {
-      const auto col = std::min(
-          g.cols - 1, static_cast<std::size_t>((x + 0.5) * scale / g.ground_range_spacing_m));
-      const double f = std::clamp((db[r * g.cols + col] - (top - range)) / range, 0.0, 1.0);
-      const auto v = static_cast<std::uint8_t>(std::lround(255.0 * f));
-      cv.put(margin + x, margin + y, Rgb{v, v, v});
-    }
-  }
-  cv.text(margin, 12, title, Rgb{0, 0, 0}, 1);
-  cv.text(margin, margin + h + 8,
-          "rows: along track (flight down), columns: ground range (near left); " +
-              std::to_string(static_cast<int>(range)) + " dB grey scale",
-          Rgb{0, 0, 0}, 1);
-  // Scale bar: 1, 2 or 5 x 10^n metres, about a fifth of the width.
-  const double target = w_m / 5.0;
-  double bar = std::pow(10.0, std::floor(std::log10(target)));
-  for (double m : {5.0, 2.0, 1.0})
-    if (bar * m <= target) {
-      bar *= m;
-      break;
-    }
-  const int bar_px = static_cast<int>(bar / scale);
-  const int bx = margin + w - bar_px - 10, by = margin + h - 16;
-  cv.rect(bx - 4, by - 14, bx + bar_px + 4, by + 8, Rgb{0, 0, 0});
-  cv.rect(bx, by, bx + bar_px, by + 4, Rgb{255, 255, 255});
-  std::ostringstream label;
-  label << bar << " m";
-  cv.text(bx, by - 11, label.str(), Rgb{255, 255, 255}, 1);
-  cv.write_png(path);
+  m.width = 1100;
+  m.height = std::clamp(static_cast<int>(900.0 * h_m / std::max(w_m, 1e-9)) + 160, 400, 1400);
+  return m;
 }
 
 #ifdef RADAR_EMU_HAVE_GDAL
@@ -931,7 +906,8 @@ int run_sar_tool(const SarToolOptions& o) {
   std::ostringstream title;
   title << "radar-emu sar: " << p.carrier_hz / 1e9 << " GHz, B " << p.bandwidth_hz / 1e6
         << " MHz, incidence " << p.incidence_rad / common::kRadPerDeg << " deg, " << c.pol_name;
-  write_png(img, title.str(), (dir / "image.png").string());
+  plot::FigureBatch figures;  // the image and the impulse response by one renderer
+  figures.add(plot::single(image_figure(img, title.str())), dir / "image.png");
 
   // The impulse response of the first analysed trihedral: range and azimuth cuts, dB.
   for (const auto& t : jt) {
@@ -965,9 +941,10 @@ int run_sar_tool(const SarToolOptions& o) {
       }
       chart.series.push_back(std::move(se));
     }
-    write_line_chart_png(chart, dir / "irf.png");
+    figures.add(plot::single(std::move(chart)), dir / "irf.png");
     break;
   }
+  figures.write();
 
   nlohmann::json j;
   j["config"] = o.config;

@@ -17,13 +17,11 @@ namespace radar_emu::tools {
 
 using common::Polarisation;
 
-using plot::Canvas;
+using plot::Figure;
 using plot::Heatmap;
 using plot::LineChart;
-using plot::render_heatmap;
 using plot::Series;
 using plot::series_colour;
-using plot::stack_panels;
 using plot::write_line_chart_png;
 
 namespace {
@@ -214,7 +212,7 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
     if (std::adjacent_find(ti.begin(), ti.end()) != ti.end() ||
         std::adjacent_find(ts.begin(), ts.end()) != ts.end())
       throw std::invalid_argument("--plot: the map needs distinct incidence and scattering angles");
-    std::vector<Canvas> panels;
+    Figure fig;
     for (Polarisation p : pols) {
       Heatmap m;
       char title[200];
@@ -227,7 +225,6 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
       m.y_label = "incidence angle theta_i [deg]";
       m.value_label = "sigma0 [dB]";
       m.equal_aspect = false;
-      m.height = 560;
       m.x = ts;
       m.y = ti;
       m.values.assign(ts.size() * ti.size(), std::nan(""));
@@ -245,9 +242,11 @@ int run_sigma0_tool(const Sigma0ToolOptions& o) {
       }
       m.value_max = peak > -400.0 ? std::ceil(peak / 5.0) * 5.0 : 0.0;
       m.value_range = 60.0;
-      panels.push_back(render_heatmap(m));
+      fig.panels.emplace_back(std::move(m));
     }
-    stack_panels(panels).write_png(o.plot_png);
+    fig.width = 1000;  // panels one under the other
+    fig.height = 560 * static_cast<int>(fig.panels.size());
+    plot::write_figure(std::move(fig), o.plot_png);
   } else if (!o.plot_png.empty() && rows.size() > 1) {
     LineChart chart;
     char title[200];
@@ -358,7 +357,7 @@ int run_catalogue_chart(const Sigma0ToolOptions& o) {
       }
     }
   }
-  std::vector<Canvas> panels;
+  Figure fig;
   for (double f : {10e9, 35e9, 94e9}) {
     LineChart chart;
     char title[200];
@@ -373,7 +372,7 @@ int run_catalogue_chart(const Sigma0ToolOptions& o) {
     chart.y_max = 15.0;
     chart.x_min = 0.0;
     chart.x_max = 90.0;
-    chart.height = 520;
+    chart.legend_below = false;
     std::size_t colour = 0;
     for (const std::string& m : materials) {
       const cl::TerrainMaterial& mat = cl::terrain_material(m);
@@ -382,6 +381,7 @@ int run_catalogue_chart(const Sigma0ToolOptions& o) {
       inside.colour = outside.colour = pts.colour = series_colour(colour++);
       outside.dashed = true;
       pts.markers = true;
+      pts.no_line = true;
       for (int i = 0; i <= 899; ++i) {
         const double th = i * 0.1;
         const cl::Sigma0Value v = cl::sigma0(mat, f, cl::Sigma0Pol::kVV, common::radians(th));
@@ -407,9 +407,11 @@ int run_catalogue_chart(const Sigma0ToolOptions& o) {
           chart.series.push_back(std::move(*series));
       }
     }
-    panels.push_back(plot::render_line_chart(chart));
+    fig.panels.emplace_back(std::move(chart));
   }
-  stack_panels(panels).write_png(o.catalogue_chart_png);
+  fig.width = 1000;  // one panel per frequency, one under the other
+  fig.height = 1560;
+  plot::write_figure(std::move(fig), o.catalogue_chart_png);
   if (!o.quiet)
     std::printf("catalogue chart of %s at 10, 35, 94 GHz with %s: wrote %s\n",
                 o.chart_materials.c_str(), o.points_csv.c_str(), o.catalogue_chart_png.c_str());

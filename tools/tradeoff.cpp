@@ -77,6 +77,13 @@ struct Row {
   double error = 0.0;
   std::string reference;
   std::string validity = "ok";
+  /// Where a row pools several measurements (the governor levels over frames along the
+  /// approach): the range of the cost and of the error over them (NaN: one measurement). For
+  /// the charts; the CSV keeps the pooled values.
+  double cost_lo_ms = std::numeric_limits<double>::quiet_NaN();
+  double cost_hi_ms = std::numeric_limits<double>::quiet_NaN();
+  double error_lo = std::numeric_limits<double>::quiet_NaN();
+  double error_hi = std::numeric_limits<double>::quiet_NaN();
 };
 
 class Log {
@@ -753,6 +760,10 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
     std::size_t detections = 0, matched = 0, missed = 0, added = 0;
     double range_m = 0, azimuth_deg = 0, snr_db = 0, cost_ms = 0;
     std::uint64_t rays = 0;
+    // The spread over the frames pooled: cost, |SNR error| and missed + added per frame.
+    double cost_lo = std::numeric_limits<double>::infinity(), cost_hi = 0.0;
+    double snr_lo = std::numeric_limits<double>::infinity(), snr_hi = 0.0;
+    double wrong_lo = std::numeric_limits<double>::infinity(), wrong_hi = 0.0;
   };
   std::vector<Pool> pools(levels.size());
   for (double t : times_s) {
@@ -773,6 +784,15 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
       p.azimuth_deg += m.azimuth_deg * n;
       p.snr_db += m.snr_db * n;
       p.cost_ms += (r.trace_ms + r.sensor_ms) / static_cast<double>(times_s.size());
+      p.cost_lo = std::min(p.cost_lo, r.trace_ms + r.sensor_ms);
+      p.cost_hi = std::max(p.cost_hi, r.trace_ms + r.sensor_ms);
+      if (m.matched > 0) {
+        p.snr_lo = std::min(p.snr_lo, m.snr_db);
+        p.snr_hi = std::max(p.snr_hi, m.snr_db);
+      }
+      const auto wrong = static_cast<double>(m.missed + m.added);
+      p.wrong_lo = std::min(p.wrong_lo, wrong);
+      p.wrong_hi = std::max(p.wrong_hi, wrong);
       p.rays += r.rays / times_s.size();
     }
   }
@@ -783,18 +803,31 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
   for (std::size_t i = 0; i < levels.size(); ++i) {
     const Pool& p = pools[i];
     const double n = p.matched > 0 ? static_cast<double>(p.matched) : 1.0;
-    auto add = [&](const char* metric, double v) {
-      rows.push_back({"frame", "governor_level", static_cast<double>(levels[i]), p.cost_ms, p.rays,
-                      metric, v, ref_pooled, "ok"});
+    auto add = [&](const char* metric, double v, double lo = std::nan(""),
+                   double hi = std::nan("")) {
+      Row row{"frame",   "governor_level", static_cast<double>(levels[i]),
+              p.cost_ms, p.rays,           metric,
+              v,         ref_pooled,       "ok"};
+      if (times_s.size() > 1) {
+        row.cost_lo_ms = p.cost_lo;
+        row.cost_hi_ms = p.cost_hi;
+        row.error_lo = lo;
+        row.error_hi = hi;
+      }
+      rows.push_back(std::move(row));
     };
     add("detections", static_cast<double>(p.detections));
     add("matched", static_cast<double>(p.matched));
     add("missed", static_cast<double>(p.missed));
     add("added", static_cast<double>(p.added));
-    add("missed_plus_added", static_cast<double>(p.missed + p.added));
+    // (Pooled: the sum over the frames; its spread is that of a frame times the frames.)
+    const auto frames = static_cast<double>(times_s.size());
+    add("missed_plus_added", static_cast<double>(p.missed + p.added), p.wrong_lo * frames,
+        p.wrong_hi * frames);
     add("mean_abs_range_error_m", p.range_m / n);
     add("mean_abs_azimuth_error_deg", p.azimuth_deg / n);
-    add("mean_abs_snr_error_db", p.snr_db / n);
+    add("mean_abs_snr_error_db", p.snr_db / n, p.snr_hi >= p.snr_lo ? p.snr_lo : std::nan(""),
+        p.snr_hi >= p.snr_lo ? p.snr_hi : std::nan(""));
     log("  frame governor_level %d (%zu frames): %.0f ms a frame, %llu rays: %zu detections, %zu "
         "matched, %zu missed, %zu added; |dR| %.3f m, |dAz| %.4f deg, |dSNR| %.2f dB\n",
         levels[i], times_s.size(), p.cost_ms, static_cast<unsigned long long>(p.rays), p.detections,
@@ -844,38 +877,88 @@ void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path,
 // otherwise stretch the log axis over six empty decades).
 constexpr double kChartFloorDb = 0.01;
 
-// Error against cost, one series per (case, knob): the vehicle and profile dB RMS, the frame's
-// mean |SNR error| of matched detections. The reference settings (zero error) are left out.
-Plot summary_plot(const std::vector<Row>& rows) {
-  Plot p;
-  p.title = "radar-emu tradeoff: error against cost, one series per knob";
+// The knobs of the cases, in the order of their series (a knob keeps its colour in every panel).
+const std::array<const char*, 6> kKnobs{
+    "rays_per_wavelength",     "max_bounces", "target_ray_spacing_m",
+    "terrain_ray_spacing_rad", "pulses",      "governor_level"};
+
+// One panel of the summary: error against cost for one error metric, a series per knob, each
+// point labelled with its knob value and, where it pools several frames, bars over their
+// spread. The reference settings (zero error by construction) are left out.
+struct MetricPanel {
+  const char* case_name;
+  const char* metric;
+  const char* title;
+  const char* y_label;
+  bool log_y;
+};
+
+LineChart metric_panel(const std::vector<Row>& rows, const MetricPanel& mp) {
+  LineChart p;
+  p.title = mp.title;
   p.x_label = "cost [ms] (wall, 2 threads)";
-  p.y_label = "error [dB] (floored at 0.01 dB)";
-  p.log_x = p.log_y = true;
-  for (const char* c : {"vehicle", "profile", "frame"}) {
-    for (const char* k : {"rays_per_wavelength", "max_bounces", "target_ray_spacing_m",
-                          "terrain_ray_spacing_rad", "pulses"}) {
-      PlotSeries s;
-      for (const Row& r : rows) {
-        if (r.case_name != c || r.knob != k)
-          continue;
-        if (std::string(c) == "frame" && r.metric != "mean_abs_snr_error_db")
-          continue;
-        if (r.validity.rfind("reference", 0) == 0)
-          continue;
-        s.x.push_back(r.cost_ms);
-        s.y.push_back(std::max(r.error, kChartFloorDb));
-      }
-      if (s.x.empty())
+  p.y_label = mp.y_label;
+  p.log_x = true;
+  p.log_y = mp.log_y;
+  p.legend_below = true;
+  auto floor = [&](double v) { return mp.log_y ? std::max(v, kChartFloorDb) : v; };
+  for (std::size_t k = 0; k < kKnobs.size(); ++k) {
+    PlotSeries s;
+    s.label = kKnobs[k];
+    s.colour = series_colour(k);
+    s.markers = true;
+    bool spread = false;
+    for (const Row& r : rows) {
+      if (r.case_name != mp.case_name || r.knob != kKnobs[k] || r.metric != mp.metric ||
+          r.validity.rfind("reference", 0) == 0)
         continue;
-      const std::string what = std::string(c) == "vehicle"   ? "RCS dB RMS"
-                               : std::string(c) == "profile" ? "profile dB RMS"
-                                                             : "mean |SNR err|";
-      s.label = std::string(c) + " " + k + " (" + what + ")";
-      p.series.push_back(std::move(s));
+      s.x.push_back(r.cost_ms);
+      s.y.push_back(floor(r.error));
+      s.point_labels.push_back(fmt("%g", r.value));
+      const bool has = std::isfinite(r.cost_lo_ms) && std::isfinite(r.error_lo);
+      spread = spread || has;
+      s.x_lo.push_back(has ? r.cost_lo_ms : r.cost_ms);
+      s.x_hi.push_back(has ? r.cost_hi_ms : r.cost_ms);
+      s.y_lo.push_back(has ? floor(r.error_lo) : s.y.back());
+      s.y_hi.push_back(has ? floor(r.error_hi) : s.y.back());
     }
+    if (!spread)
+      s.x_lo = s.x_hi = s.y_lo = s.y_hi = {};
+    else
+      s.label += " (bars: spread over the frames pooled)";
+    if (!s.x.empty())
+      p.series.push_back(std::move(s));
   }
   return p;
+}
+
+// The summary: one panel per error metric measured (two columns), error against cost.
+plot::Figure summary_figure(const std::vector<Row>& rows) {
+  static const std::array<MetricPanel, 4> panels{{
+      {"vehicle", "rcs_vv_db_rms", "vehicle RCS over a turn: RMS error against the finest",
+       "RCS error [dB RMS] (floored at 0.01 dB)", true},
+      {"profile", "profile_db_rms_within_30db", "vehicle range profile: RMS error (top 30 dB)",
+       "profile error [dB RMS] (floored at 0.01 dB)", true},
+      {"frame", "mean_abs_snr_error_db", "default frame: mean |SNR error| of matched detections",
+       "|SNR error| [dB] (floored at 0.01 dB)", true},
+      {"frame", "missed_plus_added", "default frame: detections missed + added",
+       "missed + added detections [count]", false},
+  }};
+  plot::Figure f;
+  f.title =
+      "radar-emu tradeoff: error against cost, one panel per error metric (point labels: "
+      "the knob's value)";
+  f.columns = 2;
+  for (const MetricPanel& mp : panels) {
+    LineChart p = metric_panel(rows, mp);
+    if (!p.series.empty())
+      f.panels.emplace_back(std::move(p));
+  }
+  const int n = static_cast<int>(f.panels.size());
+  f.columns = n > 1 ? 2 : 1;
+  f.width = n > 1 ? 1500 : 900;
+  f.height = 150 + 560 * ((n + 1) / 2);
+  return f;
 }
 
 }  // namespace
@@ -960,7 +1043,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
     sphere_case(o.quick, log, rows, ka, norm, mom_ka, mom_norm);
     Plot p;
     p.title = "PEC sphere: PO and the method of moments against Mie; PO invalid below ka 10";
-    p.x_label = "ka (wavenumber x radius)";
+    p.x_label = "ka (wavenumber x radius) [1]";
     p.y_label = "sigma / (pi a^2) [dB]";
     p.log_x = true;
     p.series = {{"PO, faceted sphere (RcsEngine, 1 bounce)", ka, norm[0]},
@@ -976,7 +1059,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
     grazing_case(o.quick, log, rows, curves);
     Plot p;
     p.title = "Dihedral double bounce near grazing: |error| against the densest rays, 10 GHz";
-    p.x_label = "rays per wavelength";
+    p.x_label = "ray density [rays per wavelength]";
     p.y_label = "|error| [dB]";
     p.log_x = p.log_y = true;
     for (const auto& c : curves)
@@ -992,7 +1075,7 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
                                               {"gauss_kl10", cl::Correlation::kGaussian, 10.0}}};
     Plot p;
     p.title = "sigma0 VV, 10 GHz, 40 deg, eps 15-j3: IEM, SPM, Kirchhoff inside/outside validity";
-    p.x_label = "ks (wavenumber x rms height)";
+    p.x_label = "ks (wavenumber x rms height) [1]";
     p.y_label = "sigma0 VV [dB]";
     p.log_x = true;
     for (const IemSurface& surf : surfaces) {
@@ -1022,28 +1105,15 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
     case_done();
   }
   if (frame_run) {
-    Plot p;
-    p.title = "Default-scenario frame: detections missed + added against the reference frame";
+    LineChart p = metric_panel(
+        rows, {"frame", "missed_plus_added",
+               "Default-scenario frame: detections missed + added against the reference frame",
+               "missed + added detections [count]", false});
     p.x_label = "frame cost: trace + sensor [ms] (wall, 2 threads)";
-    p.y_label = "missed + added detections";
-    p.log_x = true;
-    for (const char* k : {"target_ray_spacing_m", "terrain_ray_spacing_rad", "max_bounces",
-                          "pulses", "governor_level"}) {
-      PlotSeries s{k, {}, {}};
-      double missed = 0.0;
-      for (const Row& r : rows) {
-        if (r.case_name != "frame" || r.knob != k)
-          continue;
-        if (r.metric == "missed")
-          missed = r.error;
-        if (r.metric == "added") {
-          s.x.push_back(r.cost_ms);
-          s.y.push_back(missed + r.error);
-        }
-      }
-      p.series.push_back(std::move(s));
-    }
-    write_plot_png(p, dir / "tradeoff_frame.png");
+    p.width = 1200;
+    p.height = 820;
+    p.legend_below = std::nullopt;
+    plot::write_line_chart_png(p, dir / "tradeoff_frame.png");
     written.push_back("tradeoff_frame.png");
   }
   std::string incomplete;
@@ -1054,9 +1124,9 @@ int run_tradeoff_tool(const TradeoffOptions& o) {
   }
   write_csv(rows, dir / "tradeoff.csv", incomplete);
   written.insert(written.begin(), "tradeoff.csv");
-  const Plot summary = summary_plot(rows);
-  if (!summary.series.empty()) {
-    write_plot_png(summary, dir / "tradeoff.png");
+  plot::Figure summary = summary_figure(rows);
+  if (!summary.panels.empty()) {
+    plot::write_figure(std::move(summary), dir / "tradeoff.png");
     written.insert(written.begin() + 1, "tradeoff.png");
   }
   if (!o.quiet) {

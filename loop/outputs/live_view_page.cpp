@@ -1,7 +1,7 @@
 // The live view's page (loop/outputs/live_view.hpp), embedded in the binary: HTML and JavaScript
-// drawing on <canvas>, no external resources. The B-scope uses the geometry of detections.png
-// (loop/outputs/run_plots.hpp BScopeLayout: 900 x 700 pixels, margins 70/20/40/50, azimuth across,
-// range up) and sits at the page's top-left corner, so a pixel of a screenshot is a pixel of the
+// drawing on <canvas>, no external resources. The B-scope has its own geometry (900 x 700 pixels,
+// margins 70/20/40/50, azimuth across, range up; once the geometry of the old detections.png) and
+// sits at the page's top-left corner, so a pixel of a screenshot is a pixel of the
 // plot. Detections are filled 7 x 7 squares of pure magenta (#ff00ff), a colour nothing else on the
 // page uses; truth is a green ring.
 
@@ -52,7 +52,7 @@ constexpr std::string_view kPage = R"HTML(<!DOCTYPE html>
 </div>
 <script>
 "use strict";
-// loop/outputs/run_plots.hpp BScopeLayout.
+// The B-scope's geometry (the header comment above).
 const L = { W: 900, H: 700, left: 70, right: 20, top: 40, bottom: 50 };
 const BG = "#10141c", GRID = "rgb(55,62,78)", INK = "rgb(210,215,225)";
 const DET = "#ff00ff", TRUTH = "rgb(60,220,80)";

@@ -4,109 +4,79 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "common/units.hpp"
-#include "plot/canvas.hpp"
 #include "plot/charts.hpp"
 
 namespace radar_emu::loop {
 
-using plot::Canvas;
-using plot::format_tick;
+using plot::Figure;
 using plot::LineChart;
-using plot::nice_ticks;
-using plot::render_line_chart;
+using plot::RefLine;
 using plot::Rgb;
 using plot::Series;
 
-namespace {
-
-// Blue (start of the run) to red (end).
-Rgb time_colour(double f) noexcept {
-  f = std::clamp(f, 0.0, 1.0);
-  return {static_cast<std::uint8_t>(40 + 215 * f),
-          static_cast<std::uint8_t>(90 + 60 * (1 - std::abs(2 * f - 1))),
-          static_cast<std::uint8_t>(255 - 215 * f)};
-}
-
-}  // namespace
-
-int BScopeLayout::x_of(double azimuth_deg) const noexcept {
-  const double f = (azimuth_deg - azimuth_min_deg) / (azimuth_max_deg - azimuth_min_deg);
-  return kLeft + static_cast<int>(std::lround(f * (kWidth - kLeft - kRight - 1)));
-}
-
-int BScopeLayout::y_of(double range_m) const noexcept {
-  const double f = range_m / range_max_m;
-  return kHeight - kBottom - static_cast<int>(std::lround(f * (kHeight - kTop - kBottom - 1)));
-}
-
-namespace {
-const Rgb kBScopeBackground{16, 20, 28}, kBScopeGrid{55, 62, 78}, kBScopeInk{210, 215, 225};
-}  // namespace
-
-BScope::BScope(const Scenario& s, std::uint64_t frames_planned)
-    : canvas_(BScopeLayout::kWidth, BScopeLayout::kHeight, kBScopeBackground),
-      colour_scale_(1.0 / std::max(1.0, static_cast<double>(frames_planned) - 1.0)) {
-  BScopeLayout& L = layout_;
-  L.azimuth_min_deg = common::degrees(s.sbr.azimuth_min_rad);
-  L.azimuth_max_deg = common::degrees(s.sbr.azimuth_max_rad);
-  L.range_max_m = s.sensor.max_range_m;
-  Canvas& c = canvas_;
-  char label[64];
-  // Grids and labels at 1-2-5 steps (charts.hpp's ticks): range in km up the left, azimuth in
-  // deg along the bottom; the axis titles with their units.
-  const std::vector<double> range_km = nice_ticks(0.0, L.range_max_m / 1000.0, 6);
-  for (double r : range_km) {
-    const int y = L.y_of(r * 1000.0);
-    c.rect(BScopeLayout::kLeft, y, BScopeLayout::kWidth - BScopeLayout::kRight - 1, y, kBScopeGrid);
-    const std::string t = format_tick(r, range_km.size() > 1 ? range_km[1] - range_km[0] : 1.0);
-    c.text(BScopeLayout::kLeft - 8 - Canvas::text_width(t, 2), y - 6, t, kBScopeInk, 2);
-  }
-  const std::string range_title = "range [km]";
-  c.text_up(6,
-            (BScopeLayout::kTop + BScopeLayout::kHeight - BScopeLayout::kBottom -
-             Canvas::text_width(range_title, 2)) /
-                2,
-            range_title, kBScopeInk, 2);
-  const std::vector<double> az = nice_ticks(L.azimuth_min_deg, L.azimuth_max_deg, 8);
-  for (double a : az) {
-    const int x = L.x_of(a);
-    c.rect(x, BScopeLayout::kTop, x, BScopeLayout::kHeight - BScopeLayout::kBottom - 1,
-           kBScopeGrid);
-    std::snprintf(label, sizeof label, std::abs(a) < 1e-9 ? "0" : "%+g", a);
-    c.text(x - Canvas::text_width(label, 2) / 2, BScopeLayout::kHeight - BScopeLayout::kBottom + 8,
-           label, kBScopeInk, 2);
-  }
-  const std::string az_title = "azimuth [deg], right of boresight";
-  c.text((BScopeLayout::kLeft + BScopeLayout::kWidth - BScopeLayout::kRight -
-          Canvas::text_width(az_title, 2)) /
-             2,
-         BScopeLayout::kHeight - 24, az_title, kBScopeInk, 2);
-}
+BScope::BScope(const Scenario& s, std::uint64_t /*frames_planned*/)
+    : azimuth_min_deg_(common::degrees(s.sbr.azimuth_min_rad)),
+      azimuth_max_deg_(common::degrees(s.sbr.azimuth_max_rad)),
+      range_max_m_(s.sensor.max_range_m),
+      period_s_(1.0 / s.rate_hz),
+      last_frame_(kAzimuthCells * kRangeCells, -1.0f) {}
 
 void BScope::add_frame(std::span<const io::icd::Detection> detections) noexcept {
-  const Rgb col = time_colour(static_cast<double>(frames_) * colour_scale_);
+  const double az_span = azimuth_max_deg_ - azimuth_min_deg_;
   for (const io::icd::Detection& d : detections) {
-    const int x = layout_.x_of(d.azimuth_deg), y = layout_.y_of(d.range_m);
-    canvas_.rect(x - 2, y - 2, x + 2, y + 2, col);
+    const double fa = (d.azimuth_deg - azimuth_min_deg_) / az_span, fr = d.range_m / range_max_m_;
+    if (!(fa >= 0.0 && fa <= 1.0 && fr >= 0.0 && fr <= 1.0))
+      continue;  // outside the plotted field (counted all the same)
+    const auto ia = std::min(kAzimuthCells - 1, static_cast<std::size_t>(fa * kAzimuthCells));
+    const auto ir = std::min(kRangeCells - 1, static_cast<std::size_t>(fr * kRangeCells));
+    last_frame_[ir * kAzimuthCells + ia] = static_cast<float>(frames_);
   }
   ++frames_;
   detections_ += detections.size();
 }
 
 void BScope::write_png(const std::filesystem::path& path) {
-  // The title band (above kTop) is left free by the grid: the title is written last, once the
-  // frames and detections are known.
-  char label[96];
-  std::snprintf(
-      label, sizeof label, "radar-emu: %llu frames, %llu detections (blue: first, red: last)",
-      static_cast<unsigned long long>(frames_), static_cast<unsigned long long>(detections_));
-  canvas_.text(BScopeLayout::kLeft, 12, label, kBScopeInk, 2);
-  canvas_.write_png(path);
+  LineChart c;
+  c.title = "radar-emu B-scope: " + std::to_string(frames_) + " frames, " +
+            std::to_string(detections_) + " detections (colour: time of the last detection)";
+  c.x_label = "azimuth [deg], right of boresight";
+  c.y_label = "range [km]";
+  c.colour_label = "time from the first frame [s]";
+  c.colour_map = "plasma";
+  c.colour_min = 0.0;
+  c.colour_max = std::max(1.0, static_cast<double>(frames_) - 1.0) * period_s_;
+  c.x_min = azimuth_min_deg_;
+  c.x_max = azimuth_max_deg_;
+  c.y_min = 0.0;
+  c.y_max = range_max_m_ * 1e-3;
+  c.width = kWidth;
+  c.height = kHeight;
+  Series s;
+  const double da = (azimuth_max_deg_ - azimuth_min_deg_) / kAzimuthCells;
+  const double dr_km = range_max_m_ * 1e-3 / kRangeCells;
+  for (std::size_t ir = 0; ir < kRangeCells; ++ir) {
+    for (std::size_t ia = 0; ia < kAzimuthCells; ++ia) {
+      const float f = last_frame_[ir * kAzimuthCells + ia];
+      if (f < 0.0f)
+        continue;
+      s.x.push_back(azimuth_min_deg_ + (static_cast<double>(ia) + 0.5) * da);
+      s.y.push_back((static_cast<double>(ir) + 0.5) * dr_km);
+      s.colour_values.push_back(static_cast<double>(f) * period_s_);
+    }
+  }
+  s.marker_size = 10.0;
+  if (s.x.empty()) {  // nothing detected: an empty field, still with its axes
+    s.x = {azimuth_min_deg_};
+    s.y = {-1.0};  // below the axis: not drawn
+    s.colour_values = {0.0};
+  }
+  c.series.push_back(std::move(s));
+  plot::write_line_chart_png(c, path);
 }
 
 void write_bscope_png(const RunResult& result, const Scenario& s,
@@ -120,53 +90,56 @@ void write_bscope_png(const RunResult& result, const Scenario& s,
 }
 
 void write_timing_png(const timing::StageProfiler& profiler, double period_s,
-                      const std::filesystem::path& path) {
+                      const GovernorTrace& governor, const std::filesystem::path& path) {
   using timing::Stage;
   const double budget_ms = period_s * 1e3;
   const std::vector<std::int64_t> frame_ns = profiler.history_ns(Stage::kFrame);
   const std::size_t n = frame_ns.size();
-  Canvas out(kTimingPngWidth, kTimingPngHeight, Rgb{255, 255, 255});
+  // The ring keeps the last n frames of the run: their run frame indices.
+  const std::uint64_t total = profiler.summary(Stage::kFrame).count;
+  const double first = static_cast<double>(total >= n ? total - n : 0);
+  const Rgb kBudget{200, 30, 30}, kDeadline{30, 30, 30};
+  std::vector<RefLine> lines{{budget_ms, "frame period (budget)", false, false, kBudget}};
+  if (governor.enabled)
+    lines.push_back(
+        {governor.deadline_ms, "governor deadline (trace + sensor)", false, true, kDeadline});
 
   LineChart stages;
-  stages.title = "stage time per frame, stacked (budget = frame period)";
-  stages.x_label = "frame (of the last " + std::to_string(n) + " kept)";
+  stages.title = "stage time per frame, stacked";
+  stages.x_label = "frame [index in the run]";
   stages.y_label = "time [ms]";
-  std::vector<double> x(n), cumulative(n, 0.0);
+  std::vector<double> x(n);
   for (std::size_t i = 0; i < n; ++i)
-    x[i] = static_cast<double>(i);
+    x[i] = first + static_cast<double>(i);
   for (Stage st :
        {Stage::kInput, Stage::kSceneUpdate, Stage::kTrace, Stage::kSensor, Stage::kOutput}) {
     const std::vector<std::int64_t> h = profiler.history_ns(st);
     Series s;
-    s.label = st == Stage::kInput         ? "input"
-              : st == Stage::kSceneUpdate ? "+scene"
-                                          : "+" + std::string(timing::stage_name(st));
+    s.label = st == Stage::kSceneUpdate ? "scene update" : std::string(timing::stage_name(st));
     s.x = x;
     s.y.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      cumulative[i] += i < h.size() ? static_cast<double>(h[i]) * 1e-6 : 0.0;
-      s.y[i] = cumulative[i];
-    }
+    for (std::size_t i = 0; i < n; ++i)
+      s.y[i] = i < h.size() ? static_cast<double>(h[i]) * 1e-6 : 0.0;
+    s.stacked = true;
     stages.series.push_back(std::move(s));
   }
-  Series frame{"frame", x, std::vector<double>(n)};
+  Series frame{"whole frame", x, std::vector<double>(n)};
   for (std::size_t i = 0; i < n; ++i)
     frame.y[i] = static_cast<double>(frame_ns[i]) * 1e-6;
+  frame.colour = Rgb{0, 0, 0};
   stages.series.push_back(std::move(frame));
-  stages.series.push_back(Series{"budget",
-                                 {0.0, n > 1 ? static_cast<double>(n - 1) : 1.0},
-                                 {budget_ms, budget_ms},
-                                 false,
-                                 true});
+  stages.ref_lines = lines;
   stages.y_min = 0.0;
-  out.blit(render_line_chart(stages), 0, 0);
+  stages.legend_below = false;
+  if (n == 0)  // no frame: the axes and the lines alone
+    stages.series = {Series{"", {first}, {0.0}}};
 
   // Histogram of frame times: 40 bins from 0 to the larger of the slowest frame and the budget,
   // drawn as a step outline.
   LineChart hist;
   hist.title = "frame-time histogram (" + std::to_string(n) + " frames)";
   hist.x_label = "frame time [ms]";
-  hist.y_label = "frames";
+  hist.y_label = "frames per bin [count]";
   constexpr std::size_t kBins = 40;
   double top_ms = budget_ms;
   for (std::int64_t v : frame_ns)
@@ -182,20 +155,47 @@ void write_timing_png(const timing::StageProfiler& profiler, double period_s,
   steps.label = "frames";
   steps.x.push_back(0.0);
   steps.y.push_back(0.0);
-  double count_max = 1.0;
   for (std::size_t b = 0; b < kBins; ++b) {
     const double lo = static_cast<double>(b) * bin_ms;
     steps.x.insert(steps.x.end(), {lo, lo + bin_ms});
     steps.y.insert(steps.y.end(), {counts[b], counts[b]});
-    count_max = std::max(count_max, counts[b]);
   }
   steps.x.push_back(top_ms);
   steps.y.push_back(0.0);
   hist.series.push_back(std::move(steps));
-  hist.series.push_back(Series{"budget", {budget_ms, budget_ms}, {0.0, count_max}, false, true});
+  for (RefLine r : lines) {
+    r.vertical = true;
+    hist.ref_lines.push_back(r);
+  }
   hist.y_min = 0.0;
-  out.blit(render_line_chart(hist), 0, kTimingPngHeight / 2);
-  out.write_png(path);
+  hist.legend_below = false;
+
+  Figure fig;
+  fig.width = kTimingPngWidth;
+  fig.height = kTimingPngHeight;
+  fig.panels = {stages, hist};
+  fig.height_ratios = {1.4, 1.0};
+  // The governor's level per frame (0: the scenario's fidelity; higher: coarser).
+  std::vector<double> gx, gy;
+  for (std::size_t i = 0; i < governor.levels.size(); ++i) {
+    if (governor.levels[i] < 0)
+      continue;
+    gx.push_back(static_cast<double>(i));
+    gy.push_back(static_cast<double>(governor.levels[i]));
+  }
+  if (!gx.empty()) {
+    LineChart gov;
+    gov.title = std::string("fidelity governor") + (governor.enabled ? "" : " (disabled)");
+    gov.x_label = "frame [index in the run]";
+    gov.y_label = "level [0 = the scenario's fidelity]";
+    gov.series.push_back(Series{"level chosen", gx, gy, gx.size() < 60});
+    gov.y_min = -0.5;
+    gov.y_max = std::max(3.0, *std::max_element(gy.begin(), gy.end()) + 0.5);
+    gov.legend_below = false;
+    fig.panels.emplace_back(std::move(gov));
+    fig.height_ratios.push_back(0.7);
+  }
+  plot::write_figure(std::move(fig), path);
 }
 
 }  // namespace radar_emu::loop

@@ -1,55 +1,57 @@
 #pragma once
 // Pictures of a run, for people who would rather look than read: a B-scope (azimuth across,
-// range up) of every detection the radar sent, coloured by time.
+// range up) of every detection the radar sent, coloured by time; the stage times per frame.
 
 #include <cstdint>
 #include <filesystem>
 #include <span>
+#include <vector>
 
 #include "loop/frame_record.hpp"
 #include "loop/scenario.hpp"
-#include "plot/canvas.hpp"
 #include "timing/profiler.hpp"
 
 namespace radar_emu::loop {
 
-/// Plot geometry, shared with tests: pixel of an (azimuth, range) point.
-struct BScopeLayout {
-  static constexpr int kWidth = 900, kHeight = 700;
-  static constexpr int kLeft = 70, kRight = 20, kTop = 40, kBottom = 50;
-  double azimuth_min_deg = -8.0, azimuth_max_deg = 8.0, range_max_m = 6000.0;
-  [[nodiscard]] int x_of(double azimuth_deg) const noexcept;
-  [[nodiscard]] int y_of(double range_m) const noexcept;
+/// What the fidelity governor did, for timing.png's governor panel.
+struct GovernorTrace {
+  bool enabled = false;
+  double deadline_ms = 0.0;             ///< its deadline of trace + sensor [ms]
+  std::span<const std::int8_t> levels;  ///< level per frame from the first (-1: no state)
 };
 
-/// timing.png, 1000 x 1280: above, each stage's time per frame stacked in frame order (input,
-/// + scene update, + trace, + sensor, + output) with the whole frame and the budget (the
-/// period) as lines [ms]; below, the histogram of frame times with the budget marked. Throws
-/// std::runtime_error naming the path on failure.
+/// timing.png (and timing.svg), 1000 x 1280 (matplotlib, plot/charts.hpp): above, each stage's
+/// time per frame as stacked areas (input, scene update, trace, sensor, output) with the whole
+/// frame as a line, the frame period (budget) and the governor's deadline drawn [ms]; below it,
+/// the histogram of frame times with the same lines; last, the governor's level per frame.
+/// Throws std::runtime_error naming the path on failure.
 inline constexpr int kTimingPngWidth = 1000, kTimingPngHeight = 1280;
 void write_timing_png(const timing::StageProfiler& profiler, double period_s,
-                      const std::filesystem::path& path);
+                      const GovernorTrace& governor, const std::filesystem::path& path);
 
-/// The B-scope drawn frame by frame, as a run's outputs stream (loop/outputs/output_stream.hpp):
-/// the grid at construction (setup: allocates the canvas), each frame's detections as they come
-/// (add_frame(): no allocation), the title when written.
+/// The B-scope of a run, as its outputs stream (loop/outputs/output_stream.hpp): each frame's
+/// detections binned as they come into a fixed grid of azimuth x range cells holding the last
+/// frame that had a detection there (add_frame(): no allocation), drawn when written as a
+/// scatter of the occupied cells coloured by time, with a colour bar [s] (detections.png and
+/// detections.svg, kWidth x kHeight pixels).
 class BScope {
  public:
-  /// `frames_planned` sets the colour scale: frame k of n is drawn at k / (n - 1) from blue to
-  /// red (an interrupted run stops short of red).
+  static constexpr int kWidth = 1000, kHeight = 760;  ///< pixels of detections.png
+  static constexpr std::size_t kAzimuthCells = 400, kRangeCells = 400;
+  /// Setup: allocates the grid. `frames_planned` is not needed by the picture (kept for the
+  /// callers' symmetry with the streamed outputs).
   BScope(const Scenario& scenario, std::uint64_t frames_planned);
-  /// Draws the detections of the next frame. Real-time safe.
+  /// Bins the detections of the next frame. Real-time safe.
   void add_frame(std::span<const io::icd::Detection> detections) noexcept;
-  /// Titles the picture with the frames and detections drawn and writes it. Throws
-  /// std::runtime_error naming the path on failure.
+  /// Titles the picture with the frames and detections drawn and writes it (the renderer runs
+  /// here). Throws std::runtime_error naming the path on failure.
   void write_png(const std::filesystem::path& path);
   [[nodiscard]] std::uint64_t frames() const noexcept { return frames_; }
   [[nodiscard]] std::uint64_t detections() const noexcept { return detections_; }
 
  private:
-  BScopeLayout layout_;
-  plot::Canvas canvas_;
-  double colour_scale_;
+  double azimuth_min_deg_, azimuth_max_deg_, range_max_m_, period_s_;
+  std::vector<float> last_frame_;  ///< [range cell][azimuth cell]; < 0: no detection
   std::uint64_t frames_ = 0;
   std::uint64_t detections_ = 0;
 };

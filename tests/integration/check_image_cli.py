@@ -19,6 +19,7 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from cli_check import check, finish, runner  # noqa: E402
+from figure_checks import check_figure  # noqa: E402
 
 exe, source_dir, out = sys.argv[1], sys.argv[2], sys.argv[3]
 run = runner(exe)
@@ -72,8 +73,12 @@ with open(os.path.join(out, "looks10", "image.png"), "rb") as f:
     head = f.read(24)
 check(head[:8] == b"\x89PNG\r\n\x1a\n", "image.png is a PNG")
 w, hgt = struct.unpack(">II", head[16:24])
-# Two 1000 x 400 panels side by side (tools/image.cpp: radar image and optical preview).
+# Two panels side by side, 2000 x 400 (tools/image.cpp: the radar image in grey with its colour
+# bar [dBsm], the optical preview), labels with units (figure_checks.py).
 check((w, hgt) == (2000, 400), f"image.png is {w} x {hgt}, want 2000 x 400")
+for f in check_figure(os.path.join(out, "looks10", "image.png"), size=(2000, 400), colour_bars=1,
+                      texts=["azimuth [deg]", "elevation [deg]", "pixel [dBsm]"]):
+    check(False, f)
 
 meta1, rows1 = image(1, os.path.join(out, "looks1"))
 cv1, n1 = grass_cv(rows1)

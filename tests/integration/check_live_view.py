@@ -10,7 +10,7 @@
 2. While the server lingers, headless Chromium (Debian's `chromium`) loads the page and takes a
    screenshot. The PNG is decoded here (zlib + struct, PNG spec filters 0-4) and must hold a
    magenta (#ff00ff) mark at the B-scope pixel of every detection of the last frame of
-   detections.json (geometry of detections.png, loop/outputs/run_plots.hpp BScopeLayout, computed here
+   detections.json (the page's own B-scope geometry, loop/outputs/live_view_page.cpp, computed here
    from the scenario's field of view read with tomllib), no magenta anywhere else, and a green
    ring around every object of the last frame of truth.json.
 3. report.json "live_view" accounts for every update the frame loop published.

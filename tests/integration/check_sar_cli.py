@@ -18,7 +18,8 @@ reader, an independent tool):
     and raw.tif as CFloat32 pulses x samples with ground control points;
   - a trihedral receding at 1 m/s images -R v_r / V along track off its place (Raney 1971),
     within 1 m (about a resolution cell);
-  - image.png is a PNG.
+  - image.png and irf.png are figures with their axis and colour-bar labels in units
+    (figure_checks.py).
 Usage: check_sar_cli.py RADAR_EMU SOURCE_DIR WORK_DIR"""
 import json
 import math
@@ -27,6 +28,7 @@ import subprocess
 import sys
 
 from cli_check import check, finish, runner
+from figure_checks import check_figure
 
 exe, src, work = sys.argv[1], sys.argv[2], sys.argv[3]
 os.makedirs(work, exist_ok=True)
@@ -153,6 +155,12 @@ for taper in ("none", "hamming"):
           "per pulse")
     check(raw.get("bands", [{}])[0].get("type") == "CFloat32", f"{taper}: raw.tif CFloat32")
     check(len(raw.get("gcps", {}).get("gcpList", [])) >= 4, f"{taper}: raw.tif GCPs")
-    with open(os.path.join(out, "image.png"), "rb") as f:
-        check(f.read(8) == b"\x89PNG\r\n\x1a\n", f"{taper}: image.png is a PNG")
+    # The figures (figure_checks.py): the grey image in metres with its colour bar [dB], the
+    # impulse response's cuts.
+    for f in check_figure(os.path.join(out, "image.png"), colour_bars=1,
+                          texts=["ground range from the near edge [m]", "pixel power [dB]"]):
+        check(False, f"{taper}: {f}")
+    for f in check_figure(os.path.join(out, "irf.png"), size=(1000, 640), colour_bars=0,
+                          texts=["power [dB]"]):
+        check(False, f"{taper}: {f}")
 finish()

@@ -23,6 +23,7 @@ import os
 import sys
 
 from cli_check import check, finish, runner
+from figure_checks import check_figure, panels
 
 exe, work = sys.argv[1], sys.argv[2]
 os.makedirs(work, exist_ok=True)
@@ -35,10 +36,19 @@ columns = ["case", "knob", "value", "cost_ms", "rays", "metric", "error", "refer
 check(rows and list(rows[0].keys()) == columns, f"CSV columns {columns}")
 for case in ("vehicle", "profile", "frame", "sphere", "grazing", "iem"):
     check(any(r["case"] == case for r in rows), f"case {case} in the CSV")
-for name in ("tradeoff.png", "tradeoff_sphere.png", "tradeoff_grazing.png", "tradeoff_iem.png",
-             "tradeoff_frame.png"):
-    with open(os.path.join(work, name), "rb") as f:
-        check(f.read(8) == b"\x89PNG\r\n\x1a\n", f"{name} is a PNG")
+# The figures (figure_checks.py): sizes, axis labels with units; the summary one panel per error
+# metric (four: vehicle, profile, frame |SNR error| and missed + added), its points labelled
+# with the knob values.
+for name, size in (("tradeoff.png", (1500, 1270)), ("tradeoff_sphere.png", (1200, 820)),
+                   ("tradeoff_grazing.png", (1200, 820)), ("tradeoff_iem.png", (1200, 820)),
+                   ("tradeoff_frame.png", (1200, 820))):
+    for f in check_figure(os.path.join(work, name), size=size, colour_bars=0):
+        check(False, f)
+summary = panels(os.path.join(work, "tradeoff.svg"))
+check(len(summary) == 4, f"the summary has one panel per error metric (4), got {len(summary)}")
+check(all(p[0] == "cost [ms] (wall, 2 threads)" for p in summary), "the summary's x: cost [ms]")
+check(any("rays_per_wavelength" in p[3] and "0.5" in p[3] for p in summary),
+      "the summary labels the knobs and their values")
 for r in rows:
     check(math.isfinite(float(r["error"])) and float(r["cost_ms"]) >= 0.0,
           f"finite error and cost: {r}")

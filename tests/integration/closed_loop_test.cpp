@@ -224,7 +224,10 @@ class ClosedLoopDefault : public ::testing::Test {
     loop_ = new loop::ClosedLoop(*scenario_, options);
     result_ = new loop::RunResult(loop_->run());
     allocations_ = radar_emu::test::stop_counting_allocations();  // the count frozen at the end
+    // The renderer also writes where each figure's data area landed (plot/render.py).
+    ::setenv("RADAR_EMU_PLOT_AXES", "1", 1);
     loop_->write_outputs(*result_);
+    ::unsetenv("RADAR_EMU_PLOT_AXES");
     loop_->write_trace_events();
   }
   static void TearDownTestSuite() {
@@ -542,35 +545,43 @@ TEST_F(ClosedLoopDefault, BusOutputDecodesToTheDetectionsWithinIcdQuantisation) 
 }
 
 TEST_F(ClosedLoopDefault, PictureShowsEachDetectionWhereItIs) {
-  // Decode detections.png with stb_image (independent of the writer) and look at the pixel of
-  // the first and last frames' detections, and at an empty corner.
+  // Decode detections.png with stb_image (independent of matplotlib) and look at the pixel of
+  // the first and last frames' detections, placed through the data area the renderer reports
+  // (detections.axes.json: its pixel box and axis limits), and at an empty corner.
   int w = 0, h = 0, channels = 0;
   unsigned char* px = stbi_load((out_ / "detections.png").c_str(), &w, &h, &channels, 3);
   ASSERT_NE(px, nullptr) << "detections.png missing or not a PNG";
-  EXPECT_EQ(w, loop::BScopeLayout::kWidth);
-  EXPECT_EQ(h, loop::BScopeLayout::kHeight);
-  loop::BScopeLayout layout;
-  layout.azimuth_min_deg = scenario_->sbr.azimuth_min_rad * 180.0 / std::numbers::pi;
-  layout.azimuth_max_deg = scenario_->sbr.azimuth_max_rad * 180.0 / std::numbers::pi;
-  layout.range_max_m = scenario_->sensor.max_range_m;
-  auto rgb = [&](int x, int y) {
+  EXPECT_EQ(w, loop::BScope::kWidth);
+  EXPECT_EQ(h, loop::BScope::kHeight);
+  EXPECT_TRUE(fs::exists(out_ / "detections.svg"));
+  std::ifstream axes_in(out_ / "detections.axes.json");
+  ASSERT_TRUE(axes_in) << "detections.axes.json";
+  const nlohmann::json ax = nlohmann::json::parse(axes_in).at("panels").at(0);
+  const double x0 = ax.at("x0"), x1 = ax.at("x1"), y0 = ax.at("y0"), y1 = ax.at("y1");
+  const double az0 = ax.at("xlim")[0], az1 = ax.at("xlim")[1];
+  const double r0 = ax.at("ylim")[0], r1 = ax.at("ylim")[1];
+  EXPECT_NEAR(az0, scenario_->sbr.azimuth_min_rad * 180.0 / std::numbers::pi, 1e-9);
+  EXPECT_NEAR(r1, scenario_->sensor.max_range_m * 1e-3, 1e-9);
+  auto rgb = [&](double azimuth_deg, double range_m) {
+    const int x = static_cast<int>(x0 + (azimuth_deg - az0) / (az1 - az0) * (x1 - x0));
+    const int y = static_cast<int>(y1 - (range_m * 1e-3 - r0) / (r1 - r0) * (y1 - y0));
     const unsigned char* p = px + (static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
                                    static_cast<std::size_t>(x)) *
                                       3;
     return std::array<int, 3>{p[0], p[1], p[2]};
   };
-  const std::array<int, 3> background = rgb(w - 30, loop::BScopeLayout::kTop + 30);
+  const std::array<int, 3> background{255, 255, 255};
+  EXPECT_EQ(rgb(az0 + 0.02 * (az1 - az0), 0.98 * r1 * 1e3), background) << "empty corner";
   for (const loop::FrameRecord* rec : {&result_->records.front(), &result_->records.back()}) {
     ASSERT_GT(rec->detection_count, 0u);
     const auto& d = result_->detections[rec->first_detection];
-    const auto c = rgb(layout.x_of(d.azimuth_deg), layout.y_of(d.range_m));
-    EXPECT_NE(c, background) << "no dot at detection range " << d.range_m;
+    EXPECT_NE(rgb(d.azimuth_deg, d.range_m), background) << "no dot at range " << d.range_m;
   }
-  // The first frame is drawn blue-ish, the last red-ish (colour encodes time).
+  // Colour encodes time (plasma: blue-violet at the first frame, yellow at the last).
   const auto& first = result_->detections[result_->records.front().first_detection];
   const auto& last = result_->detections[result_->records.back().first_detection];
-  const auto cf = rgb(layout.x_of(first.azimuth_deg), layout.y_of(first.range_m));
-  const auto cl = rgb(layout.x_of(last.azimuth_deg), layout.y_of(last.range_m));
+  const auto cf = rgb(first.azimuth_deg, first.range_m);
+  const auto cl = rgb(last.azimuth_deg, last.range_m);
   EXPECT_GT(cf[2], cf[0]);
   EXPECT_GT(cl[0], cl[2]);
   stbi_image_free(px);
