@@ -212,6 +212,8 @@ std::unique_ptr<CubeWriter> open_cube_writer(const Scenario& s, const RunOptions
   c.file = o.cube_file;
   c.first_frame = o.cube_first_frame;
   c.last_frame = o.cube_last_frame;
+  c.file_source = o.cube_file_source;
+  c.frames_source = o.cube_frames_source;
   c.run_frames = s.frames;
   c.sensor = &sensor;
   c.scenario_name = s.name;
@@ -738,6 +740,40 @@ std::optional<LiveViewCounters> ClosedLoop::live_view_counters() const {
   if (!impl_->outputs.view)
     return std::nullopt;
   return impl_->outputs.view->counters();
+}
+
+void choose_cube(const Scenario& s, const std::string& file, const std::string& frames,
+                 RunOptions& o, std::string_view file_option, std::string_view frames_option) {
+  o.cube_file = s.cube_file;
+  o.cube_first_frame = s.cube_first_frame;
+  o.cube_last_frame = s.cube_last_frame;
+  o.cube_file_source = s.cube_source.empty() ? std::string(file_option) : s.cube_source + "cube";
+  // Both from the scenario: the file's name is in the message once (before the file's key).
+  o.cube_frames_source =
+      s.cube_source.empty() ? std::string(frames_option) : "[output] cube_frames";
+  if (!file.empty()) {
+    const std::string ext = std::filesystem::path(file).extension().string();
+    if (ext != ".h5" && ext != ".hdf5") {
+      throw std::runtime_error(std::string(file_option) + " " + file +
+                               ": not an HDF5 file name (.h5 or .hdf5; docs/cube.md)");
+    }
+    o.cube_file = file;
+    o.cube_file_source = std::string(file_option);
+    if (!s.cube_source.empty())
+      o.cube_frames_source = s.cube_source + "cube_frames";
+  }
+  if (frames.empty())
+    return;
+  if (o.cube_file.empty()) {
+    throw std::runtime_error(std::string(frames_option) + " " + frames + ": needs a cube file (" +
+                             std::string(file_option) +
+                             " FILE.h5, or the scenario's [output] "
+                             "cube)");
+  }
+  const std::string error = parse_cube_frames(frames, o.cube_first_frame, o.cube_last_frame);
+  if (!error.empty())
+    throw std::runtime_error(std::string(frames_option) + " " + error);
+  o.cube_frames_source = std::string(frames_option);
 }
 
 std::optional<CubeCounters> ClosedLoop::cube_counters() const {
