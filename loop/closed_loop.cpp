@@ -925,6 +925,16 @@ RunReport ClosedLoop::report(const RunResult& result) const {
                       ir.seconds};
   }
   p.weather = m.tracer.weather;
+  if (m.tracer.terrain) {  // issue 28: the engine's flagged sigma0 values, the whole run
+    const radar::TerrainReturns& t = *m.tracer.terrain;
+    const std::span<const radar::clutter::Sigma0Use> use = t.sigma0_use();
+    p.sigma0_tracked = true;
+    p.sigma0_flags = radar::clutter::sigma0_use_flags(use);
+    p.sigma0_lines = radar::clutter::sigma0_use_lines(
+        use, radar::clutter::sigma0_row_names(t.engine().materials()), m.scenario.sbr.carrier_hz);
+    p.sigma0_patch_fraction = radar::clutter::sigma0_use_patch_fraction(use);
+    p.sigma0_power_fraction = radar::clutter::sigma0_use_power_fraction(use);
+  }
   p.governor = m.governor.config();
   p.governor_trace_factor = m.governor.trace_factor();
   p.governor_sensor_factor = m.governor.sensor_factor();

@@ -69,6 +69,7 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
       static_cast<std::size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
   const std::size_t n_slices = std::min(workers, columns_);
   slices_.resize(n_slices);
+  sigma0_use_.resize(engine_.materials().table.materials());
   std::size_t first = 0;
   for (std::size_t s = 0; s < n_slices; ++s) {
     Slice& sl = slices_[s];
@@ -77,6 +78,7 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
     first += sl.columns;
     sl.mean.assign(sl.columns * bins_, 0.0);
     sl.elevation_power.assign(sl.columns * bins_, 0.0);
+    sl.sigma0_use.resize(engine_.materials().table.materials());
     if (c.shadowing && c.horizon)
       sl.horizon.assign(clutter::TerrainEngine::horizon_scratch_size(slice_grid(sl), view()), 0.0);
   }
@@ -129,8 +131,13 @@ std::size_t TerrainReturns::compute(const RadarPose& pose, std::span<Contributio
     Slice& sl = slices_[s];
     std::fill(sl.mean.begin(), sl.mean.end(), 0.0);
     std::fill(sl.elevation_power.begin(), sl.elevation_power.end(), 0.0);
-    sl.stats = engine_.integrate(v, slice_grid(sl), {}, sl.mean, sl.elevation_power, sl.horizon);
+    std::fill(sl.sigma0_use.begin(), sl.sigma0_use.end(), clutter::Sigma0Use{});
+    sl.stats = engine_.integrate(v, slice_grid(sl), {}, sl.mean, sl.elevation_power, sl.horizon,
+                                 sl.sigma0_use);
   });
+  for (const Slice& sl : slices_)
+    for (std::size_t r = 0; r < sl.sigma0_use.size() && r < sigma0_use_.size(); ++r)
+      sigma0_use_[r].merge(sl.sigma0_use[r]);
   const glm::dmat3& r = pose.world_from_antenna;
   std::size_t n = 0;
   for (const Slice& sl : slices_) {

@@ -179,7 +179,8 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
   e.terrain_engine = true;
   e.sbr.terrain_rays = false;
 
-  const loop::RunResult with_rays = loop::ClosedLoop(s, {}).run();
+  loop::ClosedLoop rays_loop(s, {});
+  const loop::RunResult with_rays = rays_loop.run();
 
   loop::RunOptions options;
   options.progress = radar_emu::test::count_allocations_from_frame(5);
@@ -191,6 +192,28 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
   EXPECT_GT(with_engine.terrain.patches_lit, 0u);
   EXPECT_EQ(with_engine.terrain_dropped, 0u);
   EXPECT_EQ(with_engine.terrain.budget_cut, 0u);
+  // Issue 28: the engine counts the flagged sigma0 values its patches read (at 94 GHz every land
+  // value of the catalogue is assumed: clutter::sigma0 by name says so for each of the scene's
+  // terrain materials, checked at 0, 45 and 89 deg), and the report says so; the rays do not
+  // track them.
+  const loop::RunReport rep = engine_loop.report(with_engine);
+  EXPECT_TRUE(rep.sigma0_tracked);
+  EXPECT_NE(rep.sigma0_flags & radar::clutter::kAssumedValue, 0u);
+  EXPECT_DOUBLE_EQ(rep.sigma0_patch_fraction, 1.0);
+  ASSERT_FALSE(rep.sigma0_lines.empty());
+  for (const std::string& line : rep.sigma0_lines) {
+    std::printf("flagged: %s\n", line.c_str());
+    const std::string material = line.substr(0, line.find(" at 94 GHz, "));
+    ASSERT_NE(material.size(), line.size()) << line;
+    for (double deg : {0.0, 45.0, 89.0})
+      EXPECT_NE(radar::clutter::sigma0(material, e.sbr.carrier_hz, radar::clutter::Sigma0Pol::kVV,
+                                       deg * std::acos(-1.0) / 180.0)
+                        .flags &
+                    radar::clutter::kAssumedValue,
+                0u)
+          << material << " at " << deg << " deg";
+  }
+  EXPECT_FALSE(rays_loop.report(with_rays).sigma0_tracked);
 
   const auto& a = with_rays.outcome.targets;
   const auto& b = with_engine.outcome.targets;
