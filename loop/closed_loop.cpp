@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
@@ -934,6 +935,22 @@ RunReport ClosedLoop::report(const RunResult& result) const {
         use, radar::clutter::sigma0_row_names(t.engine().materials()), m.scenario.sbr.carrier_hz);
     p.sigma0_patch_fraction = radar::clutter::sigma0_use_patch_fraction(use);
     p.sigma0_power_fraction = radar::clutter::sigma0_use_power_fraction(use);
+  } else if (result.trace.terrain_returns > 0) {  // the tracer's terrain rays: counts alone
+    const radar::TraceStats& t = result.trace;
+    p.sigma0_tracked = true;
+    p.sigma0_flags = t.terrain_sigma0_flags;
+    p.sigma0_patch_fraction =
+        static_cast<double>(t.terrain_returns_flagged) / static_cast<double>(t.terrain_returns);
+    p.sigma0_power_fraction = std::numeric_limits<double>::quiet_NaN();  // not tracked
+    if (p.sigma0_flags != 0) {
+      char line[96];
+      std::snprintf(line, sizeof line,
+                    "terrain rays at %.4g GHz: ", m.scenario.sbr.carrier_hz * 1e-9);
+      char share[96];
+      std::snprintf(share, sizeof share, " (%.1f %% of the terrain returns)",
+                    100.0 * p.sigma0_patch_fraction);
+      p.sigma0_lines.push_back(line + radar::clutter::describe_validity(p.sigma0_flags) + share);
+    }
   }
   p.governor = m.governor.config();
   p.governor_trace_factor = m.governor.trace_factor();

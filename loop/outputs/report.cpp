@@ -409,7 +409,9 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                       {"flags", p.sigma0_flags},
                       {"description", radar::clutter::describe_validity(p.sigma0_flags)},
                       {"flagged_patch_fraction", p.sigma0_patch_fraction},
-                      {"flagged_power_fraction", p.sigma0_power_fraction},
+                      {"flagged_power_fraction", std::isnan(p.sigma0_power_fraction)
+                                                     ? nlohmann::json(nullptr)
+                                                     : nlohmann::json(p.sigma0_power_fraction)},
                       {"materials", p.sigma0_lines}}}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   const SensorFigures& f = p.sensor;
@@ -665,8 +667,8 @@ void print_output_lines(const RunReport& p, std::FILE* out) {
   if (p.sigma0_flags != 0) {  // issue 28: the terrain read flagged sigma0 values
     std::fprintf(out,
                  "  terrain     sigma0 outside model validity in %.1f %% of the terrain's patches "
-                 "(%.1f %% of its power; report.json terrain.sigma0_validity):\n",
-                 100.0 * p.sigma0_patch_fraction, 100.0 * p.sigma0_power_fraction);
+                 "(report.json terrain.sigma0_validity):\n",
+                 100.0 * p.sigma0_patch_fraction);
     for (const std::string& line : p.sigma0_lines)
       std::fprintf(out, "              %s\n", line.c_str());
   }

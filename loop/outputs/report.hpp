@@ -103,9 +103,10 @@ struct RunReport {
   std::optional<LiveViewCounters> live_view;
   /// Issue 28: the terrain's sigma0 values the catalogue flags (outside a model's validity,
   /// extrapolated or assumed curves), tracked by the terrain engine ([radar] terrain = "engine";
-  /// the tracer's terrain rays do not track them): one line per flagged material
+  /// the tracer's terrain rays, terrain = "rays", count their returns and OR the flags only:
+  /// one line for all, the power share NaN): one line per flagged material
   /// (radar::clutter::sigma0_use_lines), the OR of the flags, and the shares of the terrain's
-  /// patches and power that read them.
+  /// patches (returns) and power that read them.
   bool sigma0_tracked = false;
   std::uint32_t sigma0_flags = 0;
   std::vector<std::string> sigma0_lines;

@@ -743,6 +743,20 @@ float Sigma0Table::lookup(std::size_t index, Pol pol, double cos_incidence) cons
   return row[i] + w * (row[i + 1] - row[i]);
 }
 
+float Sigma0Table::lookup(std::size_t index, Pol pol, double cos_incidence,
+                          std::uint32_t& flags) const noexcept {
+  flags = 0u;
+  if (index >= materials() || !(cos_incidence >= 0.0 && cos_incidence <= 1.0))
+    return 0.0f;
+  const double x = std::acos(cos_incidence) * ((kSamples - 1) / (kPi / 2.0));
+  const int i = std::min(static_cast<int>(x), kSamples - 2);
+  const float w = static_cast<float>(x - i);
+  const std::size_t at = (index * 4 + pol) * kSamples;
+  const float* row = values_.data() + at;
+  flags = flags_[at + static_cast<std::size_t>(i)] | flags_[at + static_cast<std::size_t>(i) + 1];
+  return row[i] + w * (row[i + 1] - row[i]);
+}
+
 void Sigma0Use::add(std::uint32_t sample_flags, double cos_incidence,
                     double patch_power_m2) noexcept {
   ++patches;

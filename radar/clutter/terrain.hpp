@@ -189,6 +189,9 @@ class Sigma0Table {
   /// Linear sigma0 of material `index` for incidence cos(theta) in [0, 1]; out-of-range index
   /// or non-finite input gives 0.
   [[nodiscard]] float lookup(std::size_t index, Pol pol, double cos_incidence) const noexcept;
+  /// lookup() and, in `flags`, lookup_flags() of the same samples (one acos). Real-time safe.
+  [[nodiscard]] float lookup(std::size_t index, Pol pol, double cos_incidence,
+                             std::uint32_t& flags) const noexcept;
   /// Validity bits of the two samples lookup() interpolates (OR); 0 for bad input. Real-time
   /// safe. For images: kOutsideMeasuredRange / kAssumedValue mark catalogue values that are
   /// extrapolated or assumed (surface.hpp).

@@ -194,8 +194,7 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
   EXPECT_EQ(with_engine.terrain.budget_cut, 0u);
   // Issue 28: the engine counts the flagged sigma0 values its patches read (at 94 GHz every land
   // value of the catalogue is assumed: clutter::sigma0 by name says so for each of the scene's
-  // terrain materials, checked at 0, 45 and 89 deg), and the report says so; the rays do not
-  // track them.
+  // terrain materials, checked at 0, 45 and 89 deg), and the report says so.
   const loop::RunReport rep = engine_loop.report(with_engine);
   EXPECT_TRUE(rep.sigma0_tracked);
   EXPECT_NE(rep.sigma0_flags & radar::clutter::kAssumedValue, 0u);
@@ -213,7 +212,16 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
                 0u)
           << material << " at " << deg << " deg";
   }
-  EXPECT_FALSE(rays_loop.report(with_rays).sigma0_tracked);
+  // The terrain rays count their returns alone: every one read an assumed value here.
+  const loop::RunReport rays_rep = rays_loop.report(with_rays);
+  EXPECT_TRUE(rays_rep.sigma0_tracked);
+  EXPECT_GT(with_rays.trace.terrain_returns, 0u);
+  EXPECT_EQ(with_rays.trace.terrain_returns_flagged, with_rays.trace.terrain_returns);
+  EXPECT_NE(rays_rep.sigma0_flags & radar::clutter::kAssumedValue, 0u);
+  EXPECT_DOUBLE_EQ(rays_rep.sigma0_patch_fraction, 1.0);
+  ASSERT_EQ(rays_rep.sigma0_lines.size(), 1u);
+  EXPECT_EQ(rays_rep.sigma0_lines[0].rfind("terrain rays at 94 GHz: ", 0), 0u)
+      << rays_rep.sigma0_lines[0];
 
   const auto& a = with_rays.outcome.targets;
   const auto& b = with_engine.outcome.targets;
