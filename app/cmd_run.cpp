@@ -31,9 +31,8 @@ int run_command(const RunArgs& a) {
   options.modbus_server = a.bus.modbus_server;
   options.trace_events_file = a.bus.trace_events;
   options.serve = a.bus.serve;
-  options.cube_file = a.cube;
-  if (!a.cube.empty())
-    (void)parse_cube_frames(a.cube_frames, options.cube_first_frame, options.cube_last_frame);
+  // The scenario's [output] cube and cube_frames, each replaced by the CLI's when given.
+  loop::choose_cube(scenario, a.cube, a.cube_frames, options);
   return execute_loop(scenario, std::move(options), a.out, a.quiet, a.bus.modbus_linger_s,
                       a.bus.serve_wait_s, a.bus.serve_linger_s);
 }

@@ -24,14 +24,9 @@ struct RunArgs {
   bool realtime = false, print_scenario = false, quiet = false, lock_memory = false;
   int rt_priority = 0, cpu = -1;
   BusArgs bus;
-  std::string cube;                 // --cube FILE.h5 (docs/cube.md)
-  std::string cube_frames = "0:3";  // --cube-frames FIRST:LAST
+  std::string cube;         // --cube FILE.h5 (docs/cube.md)
+  std::string cube_frames;  // --cube-frames FIRST:LAST; "": the scenario's (0:3)
 };
-
-/// --cube-frames FIRST:LAST (frame indices, inclusive) into `first` and `last`; "" when it
-/// parses, else what is wrong.
-[[nodiscard]] std::string parse_cube_frames(const std::string& text, std::uint64_t& first,
-                                            std::uint64_t& last);
 
 /// Adds run's option table to `run`, bound to `a` (which must outlive parsing).
 void add_run_options(CLI::App& run, RunArgs& a);

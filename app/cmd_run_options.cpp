@@ -7,25 +7,10 @@
 
 #include "app/cmd_run.hpp"
 #include "config/cli_checks.hpp"
+#include "loop/outputs/cube_writer.hpp"
 #include "loop/outputs/live_view.hpp"
 
 namespace radar_emu::app {
-
-std::string parse_cube_frames(const std::string& text, std::uint64_t& first, std::uint64_t& last) {
-  const std::size_t colon = text.find(':');
-  auto number = [](const std::string& t, std::uint64_t& v) {
-    if (t.empty() || t.find_first_not_of("0123456789") != std::string::npos || t.size() > 18)
-      return false;
-    v = std::stoull(t);
-    return true;
-  };
-  if (colon == std::string::npos || !number(text.substr(0, colon), first) ||
-      !number(text.substr(colon + 1), last))
-    return "'" + text + "' is not FIRST:LAST (frame indices from 0, e.g. 0:3)";
-  if (last < first)
-    return "'" + text + "': LAST is before FIRST";
-  return {};
-}
 
 void add_run_options(CLI::App& run, RunArgs& a) {
   run.add_option("scenario", a.scenario_file,
@@ -98,23 +83,25 @@ void add_run_options(CLI::App& run, RunArgs& a) {
                  "Keep serving the live view's last frame this long after the run [s]")
       ->check(config::in_range(0.0, 86400.0, "s"))
       ->needs(serve);
-  CLI::Option* cube =
-      run.add_option("--cube", a.cube,
-                     "Data cubes out: write each frame of --cube-frames as HDF5 to FILE (.h5): "
-                     "the raw samples per beam, channel and pulse before processing, the "
-                     "range-Doppler-beam image the CFAR ran on, and the frame's detections "
-                     "(layout, units and attributes: docs/cube.md)")
-          ->check(config::output_file({".h5", ".hdf5"}));
+  run.add_option("--cube", a.cube,
+                 "Data cubes out: write each frame of --cube-frames as HDF5 to FILE (.h5): "
+                 "the raw samples per beam, channel and pulse before processing, the "
+                 "range-Doppler-beam image the CFAR ran on, and the frame's detections "
+                 "(layout, units and attributes: docs/cube.md); replaces the scenario's "
+                 "[output] cube")
+      ->check(config::output_file({".h5", ".hdf5"}));
+  // Not ->needs(cube): the file may come from the scenario's [output] cube (loop::choose_cube
+  // refuses a range without a file).
   run.add_option("--cube-frames", a.cube_frames,
-                 "Frames --cube holds, FIRST:LAST (frame indices from 0, inclusive; default "
-                 "0:3); refused, with the estimate, when the file would exceed 4 GiB")
+                 "Frames the cube holds, FIRST:LAST (frame indices from 0, inclusive; default "
+                 "the scenario's [output] cube_frames, else 0:3); refused, with the estimate, "
+                 "when the file would exceed 4 GiB")
       ->check(CLI::Validator(
           [](std::string& v) {
             std::uint64_t first = 0, last = 0;
-            return parse_cube_frames(v, first, last);
+            return loop::parse_cube_frames(v, first, last);
           },
-          "FIRST:LAST"))
-      ->needs(cube);
+          "FIRST:LAST"));
   // --print-scenario prints and exits: every other option would be silently ignored.
   for (CLI::Option* o : run.get_options()) {
     if (o != print_flag && o->get_name() != "--help" && !o->get_name().empty())

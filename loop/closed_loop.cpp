@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
@@ -213,6 +214,8 @@ std::unique_ptr<CubeWriter> open_cube_writer(const Scenario& s, const RunOptions
   c.file = o.cube_file;
   c.first_frame = o.cube_first_frame;
   c.last_frame = o.cube_last_frame;
+  c.file_source = o.cube_file_source;
+  c.frames_source = o.cube_frames_source;
   c.run_frames = s.frames;
   c.sensor = &sensor;
   c.scenario_name = s.name;
@@ -757,6 +760,40 @@ std::optional<LiveViewCounters> ClosedLoop::live_view_counters() const {
   return impl_->outputs.view->counters();
 }
 
+void choose_cube(const Scenario& s, const std::string& file, const std::string& frames,
+                 RunOptions& o, std::string_view file_option, std::string_view frames_option) {
+  o.cube_file = s.cube_file;
+  o.cube_first_frame = s.cube_first_frame;
+  o.cube_last_frame = s.cube_last_frame;
+  o.cube_file_source = s.cube_source.empty() ? std::string(file_option) : s.cube_source + "cube";
+  // Both from the scenario: the file's name is in the message once (before the file's key).
+  o.cube_frames_source =
+      s.cube_source.empty() ? std::string(frames_option) : "[output] cube_frames";
+  if (!file.empty()) {
+    const std::string ext = std::filesystem::path(file).extension().string();
+    if (ext != ".h5" && ext != ".hdf5") {
+      throw std::runtime_error(std::string(file_option) + " " + file +
+                               ": not an HDF5 file name (.h5 or .hdf5; docs/cube.md)");
+    }
+    o.cube_file = file;
+    o.cube_file_source = std::string(file_option);
+    if (!s.cube_source.empty())
+      o.cube_frames_source = s.cube_source + "cube_frames";
+  }
+  if (frames.empty())
+    return;
+  if (o.cube_file.empty()) {
+    throw std::runtime_error(std::string(frames_option) + " " + frames + ": needs a cube file (" +
+                             std::string(file_option) +
+                             " FILE.h5, or the scenario's [output] "
+                             "cube)");
+  }
+  const std::string error = parse_cube_frames(frames, o.cube_first_frame, o.cube_last_frame);
+  if (!error.empty())
+    throw std::runtime_error(std::string(frames_option) + " " + error);
+  o.cube_frames_source = std::string(frames_option);
+}
+
 std::optional<CubeCounters> ClosedLoop::cube_counters() const {
   if (!impl_->cube)
     return std::nullopt;
@@ -906,6 +943,32 @@ RunReport ClosedLoop::report(const RunResult& result) const {
                       ir.seconds};
   }
   p.weather = m.tracer.weather;
+  if (m.tracer.terrain) {  // issue 28: the engine's flagged sigma0 values, the whole run
+    const radar::TerrainReturns& t = *m.tracer.terrain;
+    const std::span<const radar::clutter::Sigma0Use> use = t.sigma0_use();
+    p.sigma0_tracked = true;
+    p.sigma0_flags = radar::clutter::sigma0_use_flags(use);
+    p.sigma0_lines = radar::clutter::sigma0_use_lines(
+        use, radar::clutter::sigma0_row_names(t.engine().materials()), m.scenario.sbr.carrier_hz);
+    p.sigma0_patch_fraction = radar::clutter::sigma0_use_patch_fraction(use);
+    p.sigma0_power_fraction = radar::clutter::sigma0_use_power_fraction(use);
+  } else if (result.trace.terrain_returns > 0) {  // the tracer's terrain rays: counts alone
+    const radar::TraceStats& t = result.trace;
+    p.sigma0_tracked = true;
+    p.sigma0_flags = t.terrain_sigma0_flags;
+    p.sigma0_patch_fraction =
+        static_cast<double>(t.terrain_returns_flagged) / static_cast<double>(t.terrain_returns);
+    p.sigma0_power_fraction = std::numeric_limits<double>::quiet_NaN();  // not tracked
+    if (p.sigma0_flags != 0) {
+      char line[96];
+      std::snprintf(line, sizeof line,
+                    "terrain rays at %.4g GHz: ", m.scenario.sbr.carrier_hz * 1e-9);
+      char share[96];
+      std::snprintf(share, sizeof share, " (%.1f %% of the terrain returns)",
+                    100.0 * p.sigma0_patch_fraction);
+      p.sigma0_lines.push_back(line + radar::clutter::describe_validity(p.sigma0_flags) + share);
+    }
+  }
   p.governor = m.governor.config();
   p.governor_trace_factor = m.governor.trace_factor();
   p.governor_sensor_factor = m.governor.sensor_factor();

@@ -11,6 +11,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "io/can_frame.hpp"
@@ -85,7 +86,19 @@ struct RunOptions {
   std::filesystem::path cube_file;
   std::uint64_t cube_first_frame = 0;
   std::uint64_t cube_last_frame = 3;
+  /// Where cube_file and the range came from, for setup errors (see choose_cube()).
+  std::string cube_file_source = "--cube";
+  std::string cube_frames_source = "--cube-frames";
 };
+
+/// The cube of a run (docs/cube.md) into `o`: the scenario's [output] cube and cube_frames,
+/// each replaced by the caller's when given (non-empty `file`, `frames`: the CLI's --cube and
+/// --cube-frames, the Python Loop's cube= and cube_frames=; the caller wins). `file_option` and
+/// `frames_option` name the caller's options in messages. Setup only: throws
+/// std::runtime_error for `frames` that is not FIRST:LAST, or a range without a file.
+void choose_cube(const Scenario& s, const std::string& file, const std::string& frames,
+                 RunOptions& o, std::string_view file_option = "--cube",
+                 std::string_view frames_option = "--cube-frames");
 
 /// The ownship state of a stepped frame (ClosedLoop::step), given by the caller instead of the
 /// bus, in the conventions of the scenario's [ownship]: position and velocity in the scene's

@@ -15,6 +15,7 @@
 #include "common/units.hpp"
 #include "config/memory_limit.hpp"
 #include "config/toml_reader.hpp"
+#include "loop/outputs/cube_writer.hpp"
 #include "radar/em/surfaces.hpp"
 #include "radar/sensor/waveform.hpp"
 #include "scene/targets.hpp"
@@ -72,6 +73,8 @@ vel_up_id = 1132
 
 [output]
 can_fd = false              # detection lists as packed CAN FD frames (0x70B/0x70C) instead of classic
+# cube = "cube.h5"          # data cubes out (docs/cube.md), relative to this file; as --cube
+# cube_frames = "0:3"       # frames it holds, FIRST:LAST; as --cube-frames (the CLI wins)
 
 [antenna]
 depression_deg = 5.0        # boresight below the body x axis (3 deg below the horizon here)
@@ -766,8 +769,24 @@ void read_input_output(Scenario& s, const Table& root) {
     in.fail("", e.what());
   }
   const Table out = root.table("output");
-  out.refuse_unknown({"can_fd"});
+  out.refuse_unknown({"can_fd", "cube", "cube_frames"});
   out.boolean("can_fd", s.can_fd);
+  std::string cube;
+  if (out.string("cube", cube)) {
+    const std::string ext = std::filesystem::path(cube).extension().string();
+    if (ext != ".h5" && ext != ".hdf5")
+      out.fail("cube", "\"" + cube + "\" is not an HDF5 file name (.h5 or .hdf5; docs/cube.md)");
+    s.cube_file = cube;
+    s.cube_source = out.file() + ": [output] ";
+  }
+  std::string frames;
+  if (out.string("cube_frames", frames)) {
+    if (s.cube_file.empty())
+      out.fail("cube_frames", "needs cube (the HDF5 file the frames go to)");
+    const std::string error = parse_cube_frames(frames, s.cube_first_frame, s.cube_last_frame);
+    if (!error.empty())
+      out.fail("cube_frames", error);
+  }
 }
 
 // [faults]: the software bus's fault injection.
@@ -1016,6 +1035,8 @@ Scenario parse_impl(std::string_view toml_text, const std::string& origin,
   }
   if (!s.pattern_file.empty() && s.pattern_file.is_relative() && !base_dir.empty())
     s.pattern_file = base_dir / s.pattern_file;
+  if (!s.cube_file.empty() && s.cube_file.is_relative() && !base_dir.empty())
+    s.cube_file = base_dir / s.cube_file;  // relative to the scenario file
   for (scene::TargetPlacement& t : s.targets) {
     if (t.mesh_file.empty())
       continue;

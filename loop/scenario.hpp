@@ -149,6 +149,13 @@ struct Scenario {
   radar::SensorConfig sensor{};  ///< derived from the tables above once the file is read
   // [output]
   bool can_fd = false;  ///< detection lists as packed CAN FD frames (docs/icd/detections.md)
+  /// Data cubes out (docs/cube.md): `cube` (relative to the scenario file), "" = none, and
+  /// `cube_frames` FIRST:LAST (frame indices, inclusive). The CLI's --cube / --cube-frames and
+  /// the Python Loop's cube= / cube_frames= replace them (loop::choose_cube).
+  std::filesystem::path cube_file;
+  std::uint64_t cube_first_frame = 0;
+  std::uint64_t cube_last_frame = 3;
+  std::string cube_source;  ///< "FILE: [output] " when the file set them, for messages
   // [faults] (sim_bus/fault_injector.hpp; seeded, so a run is reproducible from its seed)
   std::uint64_t malformed_every_n_frames = 0;  ///< 0 = no malformed-frame injection
   sim_bus::FaultConfig link_faults{};          ///< on the radar's receiving side of the bus

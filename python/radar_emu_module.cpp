@@ -577,7 +577,9 @@ const Table& truth_table() {
 class Loop {
  public:
   Loop(const std::optional<std::filesystem::path>& file, const std::optional<std::string>& toml,
-       std::optional<std::uint64_t> frames, const std::optional<std::filesystem::path>& out_dir)
+       std::optional<std::uint64_t> frames, const std::optional<std::filesystem::path>& out_dir,
+       const std::optional<std::filesystem::path>& cube,
+       const std::optional<std::string>& cube_frames)
       : scenario_(scenario_from(file, toml)) {
     if (frames) {
       if (*frames < 1 || *frames > 100'000'000)
@@ -589,6 +591,14 @@ class Loop {
     if (out_dir)
       o.out_dir = *out_dir;
     has_outputs_ = out_dir.has_value();
+    // Data cubes (docs/cube.md): the scenario's [output] cube and cube_frames, each replaced by
+    // the argument when given, as `radar-emu run --cube --cube-frames` replaces them.
+    try {
+      loop::choose_cube(scenario_, cube ? cube->string() : std::string(), cube_frames.value_or(""),
+                        o, "cube=", "cube_frames=");
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(e.what());
+    }
     loop_ = std::make_unique<loop::ClosedLoop>(scenario_, o);
     for (const std::string& w : loop_->setup_warnings())
       warn(w);
@@ -670,6 +680,23 @@ class Loop {
       targets.append(e);
     }
     d["targets"] = targets;
+    // The cube file, when the run wrote one: what it holds and what it lost (docs/cube.md).
+    if (const std::optional<loop::CubeCounters> c = loop_->cube_counters()) {
+      py::dict e;
+      e["file"] = c->file;
+      e["first_frame"] = c->first_frame;
+      e["last_frame"] = c->last_frame;
+      e["frames_written"] = c->frames_written;
+      e["frames_dropped"] = c->frames_dropped;
+      e["frames_without_state"] = c->frames_without_state;
+      e["capture_dropped"] = c->capture_dropped;
+      e["write_errors"] = c->write_errors;
+      e["bytes_written"] = c->bytes_written;
+      e["first_error"] = c->first_error;
+      d["cube"] = e;
+    } else {
+      d["cube"] = py::none();
+    }
     return d;
   }
 
@@ -942,9 +969,12 @@ PYBIND11_MODULE(radar_emu, m) {
   py::class_<Loop>(m, "Loop",
                    "The closed loop of radar-emu run, stepped frame by frame from Python.")
       .def(py::init<const std::optional<std::filesystem::path>&, const std::optional<std::string>&,
-                    std::optional<std::uint64_t>, const std::optional<std::filesystem::path>&>(),
+                    std::optional<std::uint64_t>, const std::optional<std::filesystem::path>&,
+                    const std::optional<std::filesystem::path>&,
+                    const std::optional<std::string>&>(),
            py::arg("scenario") = py::none(), py::kw_only(), py::arg("toml") = py::none(),
-           py::arg("frames") = py::none(), py::arg("out_dir") = py::none())
+           py::arg("frames") = py::none(), py::arg("out_dir") = py::none(),
+           py::arg("cube") = py::none(), py::arg("cube_frames") = py::none())
       .def("step", &Loop::step, py::arg("ownship") = py::none(),
            "Runs the next frame; a dict, or None once the scenario's frames are done.")
       .def("finish", &Loop::finish, "Ends the run: a summary dict (and the files in out_dir).")

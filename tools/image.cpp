@@ -344,6 +344,14 @@ EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std
   if (p.columns_done == columns)
     im.outside_columns = considered - placed;
   p.terrain = terrain.stats;
+  if (engine) {  // issue 28: the flagged sigma0 values the terrain read
+    p.sigma0_use = terrain.sigma0_use;
+    p.sigma0_lines = radar::clutter::sigma0_use_lines(
+        p.sigma0_use, radar::clutter::sigma0_row_names(engine->materials()), s.sbr.carrier_hz);
+    p.sigma0_flags = radar::clutter::sigma0_use_flags(p.sigma0_use);
+    p.terrain_cells = terrain.terrain_cells;
+    p.sigma0_flagged_cells = terrain.flagged_cells;
+  }
   p.form_s = seconds_since(t);
 
   if (optical_scale > 0 && p.stop_signal == 0) {
@@ -442,6 +450,20 @@ int run_image_tool(const ImageToolOptions& o) {
                   {"patches_lit", p.terrain.patches_lit},
                   {"patches_shadowed", p.terrain.patches_shadowed},
                   {"budget_cut", p.terrain.budget_cut}};
+  // Issue 28: where the terrain read sigma0 values outside a model's validity (extrapolated or
+  // assumed curves), and how much of the image that is.
+  j["sigma0_validity"] = {
+      {"flagged", p.sigma0_flags != 0},
+      {"flags", p.sigma0_flags},
+      {"description", radar::clutter::describe_validity(p.sigma0_flags)},
+      {"terrain_cells", p.terrain_cells},
+      {"flagged_cells", p.sigma0_flagged_cells},
+      {"flagged_cell_fraction", p.terrain_cells > 0 ? static_cast<double>(p.sigma0_flagged_cells) /
+                                                          static_cast<double>(p.terrain_cells)
+                                                    : 0.0},
+      {"flagged_patch_fraction", radar::clutter::sigma0_use_patch_fraction(p.sigma0_use)},
+      {"flagged_power_fraction", radar::clutter::sigma0_use_power_fraction(p.sigma0_use)},
+      {"materials", p.sigma0_lines}};
   j["incomplete"] = incomplete;
   if (incomplete) {
     j["stop_signal"] = config::signal_name(p.stop_signal);
@@ -451,6 +473,17 @@ int run_image_tool(const ImageToolOptions& o) {
   j["memory_estimate_bytes"] = p.estimate_bytes;
   j["timing_s"] = {
       {"trace", p.trace_s}, {"form", p.form_s}, {"optical", p.optical_s}, {"total", p.total_s}};
+  // Issue 28: whatever -q says, like the other warnings.
+  if (p.sigma0_flags != 0) {
+    std::fprintf(stderr,
+                 "image: warning: sigma0 outside model validity in %.1f %% of the image's terrain "
+                 "cells (image.json sigma0_validity):\n",
+                 p.terrain_cells > 0 ? 100.0 * static_cast<double>(p.sigma0_flagged_cells) /
+                                           static_cast<double>(p.terrain_cells)
+                                     : 0.0);
+    for (const std::string& line : p.sigma0_lines)
+      std::fprintf(stderr, "  %s\n", line.c_str());
+  }
   {
     std::ofstream f(dir / "image.json");
     f << j.dump(2) << "\n";

@@ -15,6 +15,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "common/work_control.hpp"
 #include "loop/scenario.hpp"
@@ -54,6 +55,14 @@ struct EvImageProduct {
   bool terrain_engine = false;
   radar::clutter::TerrainStats terrain{};
   std::size_t terrain_facets = 0;
+  /// Issue 28: the terrain's sigma0 values the catalogue flags (outside a model's validity,
+  /// extrapolated, assumed): per sigma0 row what the image read (clutter::Sigma0Use), the rows'
+  /// names, one line per flagged row (clutter::sigma0_use_lines), the OR of the flags, and the
+  /// image's cells with terrain and those holding a flagged patch.
+  std::vector<radar::clutter::Sigma0Use> sigma0_use;
+  std::vector<std::string> sigma0_lines;
+  std::uint32_t sigma0_flags = 0;
+  std::uint64_t terrain_cells = 0, sigma0_flagged_cells = 0;
   double trace_s = 0.0, form_s = 0.0, optical_s = 0.0, total_s = 0.0;  ///< wall times
   /// Columns formed: image.columns unless a stop request ended the work early (the columns
   /// [0, columns_done) are whole, the rest zero, and no optical preview is rendered).

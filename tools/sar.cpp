@@ -548,6 +548,7 @@ int run_sar_tool(const SarToolOptions& o) {
   std::size_t shadowed = 0, patches = 0;
   std::optional<rd::clutter::TerrainEngine> engine;
   rd::SarDem dem;
+  std::vector<rd::clutter::Sigma0Use> sigma0_use;  // issue 28: flagged sigma0 the clutter read
   // A scene database is always focused on its DEM (with or without clutter: the image's
   // georeferencing holds for what stands on the terrain); the flat ground needs the engine only
   // for its clutter.
@@ -576,6 +577,7 @@ int run_sar_tool(const SarToolOptions& o) {
       progress("terrain engine: " + std::to_string(engine->facets().size()) +
                " facets; patches of " + fmt(c.clutter_cell_m) + " m with shadowing");
       rd::TerrainCells tc = rd::terrain_cells(*engine, p, c.clutter_cell_m);
+      sigma0_use = std::move(tc.sigma0_use);
       cells = std::move(tc.cells);
       shadowed = tc.shadowed;
       patches = tc.patches;
@@ -594,6 +596,27 @@ int run_sar_tool(const SarToolOptions& o) {
                    "band\n",
                    dem.holes);
     trace_s += seconds_since(t0);
+  }
+  // Issue 28: the clutter's sigma0 values outside a model's validity (extrapolated or assumed
+  // curves), said whatever -q says, in sar.json, the GeoTIFFs' metadata and the mask band.
+  std::vector<std::string> sigma0_lines;
+  if (engine)
+    sigma0_lines = rd::clutter::sigma0_use_lines(
+        sigma0_use, rd::clutter::sigma0_row_names(engine->materials()), p.carrier_hz);
+  const std::uint32_t sigma0_flags = rd::clutter::sigma0_use_flags(sigma0_use);
+  const double sigma0_pixel_fraction =
+      dem.sigma0_pixels > 0
+          ? static_cast<double>(dem.sigma0_flagged) / static_cast<double>(dem.sigma0_pixels)
+          : 0.0;
+  if (sigma0_flags != 0) {
+    std::fprintf(stderr,
+                 "sar: warning: sigma0 outside model validity in %.1f %% of the image's terrain "
+                 "pixels (%.1f %% of the clutter patches; sar.json sigma0_validity, mask bit "
+                 "16):\n",
+                 100.0 * sigma0_pixel_fraction,
+                 100.0 * rd::clutter::sigma0_use_patch_fraction(sigma0_use));
+    for (const std::string& line : sigma0_lines)
+      std::fprintf(stderr, "  %s\n", line.c_str());
   }
 
   // --- raw data: clutter cells, then the tracer's coherent returns per pulse.
@@ -845,6 +868,13 @@ int run_sar_tool(const SarToolOptions& o) {
       {"CARRIER_HZ", fmt(p.carrier_hz)},         {"BANDWIDTH_HZ", fmt(p.bandwidth_hz)},
       {"SAMPLE_RATE_HZ", fmt(p.sample_rate_hz)}, {"PRF_HZ", fmt(p.prf_hz)},
       {"NEAR_RANGE_M", fmt(p.near_range_m)},     {"POLARISATION", c.pol_name}};
+  // Issue 28: whether the clutter read sigma0 values outside a model's validity, and where.
+  md.emplace_back("SIGMA0_VALIDITY",
+                  sigma0_flags == 0
+                      ? std::string("valid")
+                      : "outside model validity: " + rd::clutter::describe_validity(sigma0_flags));
+  for (std::size_t i = 0; i < sigma0_lines.size(); ++i)
+    md.emplace_back("SIGMA0_FLAGGED_" + std::to_string(i + 1), sigma0_lines[i]);
 #ifdef RADAR_EMU_HAVE_GDAL
   if (!o.no_raw) {
     // Raw data in radar geometry (pulse, fast-time sample): GCPs at the four corners and the
@@ -893,10 +923,17 @@ int run_sar_tool(const SarToolOptions& o) {
     mdi.emplace_back("INTEGRATION_ANGLE_RAD", fmt(c.theta_rad));
     std::vector<std::pair<std::string, std::vector<float>>> bands;
     if (!dem.mask.empty()) {
-      mdi.emplace_back("BAND_2", "mask: 1 shadow, 2 layover, 4 foreshortening, 8 no DEM (sum)");
+      mdi.emplace_back("BAND_2",
+                       "mask: 1 shadow, 2 layover, 4 foreshortening, 8 no DEM, 16 sigma0 outside "
+                       "model validity (sum)");
       mdi.emplace_back("BAND_3", "DEM height the image is focused on [m], world up");
-      bands.emplace_back("mask: 1 shadow, 2 layover, 4 foreshortening, 8 no DEM",
-                         std::vector<float>(dem.mask.begin(), dem.mask.end()));
+      std::vector<float> mask_band(dem.mask.size());
+      for (std::size_t i = 0; i < mask_band.size(); ++i)
+        mask_band[i] = static_cast<float>(
+            dem.mask[i] | (c.clutter && dem.sigma0_flags[i] != 0u ? rd::kSarSigma0Flagged : 0));
+      bands.emplace_back(
+          "mask: 1 shadow, 2 layover, 4 foreshortening, 8 no DEM, 16 sigma0 outside validity",
+          std::move(mask_band));
       bands.emplace_back("DEM height [m]", dem.height_m);
     }
     write_geotiff((dir / "image.tif").string(), grid.rows, grid.cols, img.pixels, c, gt, {}, mdi,
@@ -1039,13 +1076,27 @@ int run_sar_tool(const SarToolOptions& o) {
     }
   }
   j["regions"] = regions;
+  j["sigma0_validity"] = {
+      {"flagged", sigma0_flags != 0},
+      {"flags", sigma0_flags},
+      {"description", rd::clutter::describe_validity(sigma0_flags)},
+      {"terrain_pixels", c.clutter ? dem.sigma0_pixels : 0},
+      {"flagged_pixels", c.clutter ? dem.sigma0_flagged : 0},
+      {"flagged_pixel_fraction", c.clutter ? sigma0_pixel_fraction : 0.0},
+      {"flagged_patch_fraction", rd::clutter::sigma0_use_patch_fraction(sigma0_use)},
+      {"flagged_power_fraction", rd::clutter::sigma0_use_power_fraction(sigma0_use)},
+      {"mask_bit", 16},
+      {"materials", sigma0_lines}};
   if (engine)
     j["mask"] = {{"shadow_pixels", dem.shadow},
                  {"layover_pixels", dem.layover},
                  {"foreshortening_pixels", dem.foreshortening},
                  {"dem_hole_pixels", dem.holes},
                  {"band", 2},
-                 {"bits", "1 shadow, 2 layover, 4 foreshortening, 8 no DEM"}};
+                 {"sigma0_flagged_pixels", c.clutter ? dem.sigma0_flagged : 0},
+                 {"bits",
+                  "1 shadow, 2 layover, 4 foreshortening, 8 no DEM, 16 sigma0 outside "
+                  "model validity"}};
   j["scene"] = {{"database", !c.database             ? std::string("none")
                              : c.source.import       ? "import:" + c.source.import->dem.string()
                              : c.source.file.empty() ? c.source.builtin

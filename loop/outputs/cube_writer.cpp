@@ -39,6 +39,22 @@ std::string mib(std::uint64_t bytes) {
 
 }  // namespace
 
+std::string parse_cube_frames(const std::string& text, std::uint64_t& first, std::uint64_t& last) {
+  const std::size_t colon = text.find(':');
+  auto number = [](const std::string& t, std::uint64_t& v) {
+    if (t.empty() || t.find_first_not_of("0123456789") != std::string::npos || t.size() > 18)
+      return false;
+    v = std::stoull(t);
+    return true;
+  };
+  if (colon == std::string::npos || !number(text.substr(0, colon), first) ||
+      !number(text.substr(colon + 1), last))
+    return "'" + text + "' is not FIRST:LAST (frame indices from 0, e.g. 0:3)";
+  if (last < first)
+    return "'" + text + "': LAST is before FIRST";
+  return {};
+}
+
 std::uint64_t cube_bytes_per_frame(const radar::CaptureShape& shape) noexcept {
   return 8ull * (shape.raw_values() + shape.image_values());
 }
@@ -136,15 +152,16 @@ CubeWriter::CubeWriter(CubeWriterConfig config) : config_(std::move(config)) {
     throw std::invalid_argument("cube: no sensor");
   const radar::Sensor& sensor = *config_.sensor;
   shape_ = sensor.capture_shape();
-  const std::string where = "--cube " + config_.file.string();
+  const std::string where = config_.file_source + " " + config_.file.string();
+  const std::string& frames_option = config_.frames_source;
   if (config_.run_frames == 0 || config_.first_frame >= config_.run_frames) {
-    throw std::runtime_error(where + ": --cube-frames starts at frame " +
+    throw std::runtime_error(where + ": " + frames_option + " starts at frame " +
                              std::to_string(config_.first_frame) + ", past the run's " +
                              std::to_string(config_.run_frames) + " frames (0.." +
                              std::to_string(config_.run_frames - 1) + ")");
   }
   if (config_.last_frame < config_.first_frame)
-    throw std::runtime_error(where + ": --cube-frames FIRST:LAST needs FIRST <= LAST");
+    throw std::runtime_error(where + ": " + frames_option + " FIRST:LAST needs FIRST <= LAST");
   config_.last_frame = std::min(config_.last_frame, config_.run_frames - 1);
   const std::uint64_t n_frames = config_.last_frame - config_.first_frame + 1;
   const std::uint64_t per_frame = cube_bytes_per_frame(shape_);
@@ -156,9 +173,8 @@ CubeWriter::CubeWriter(CubeWriterConfig config) : config_(std::move(config)) {
         std::to_string(shape_.channels) + " channels x " + std::to_string(shape_.pulses) +
         " pulses x " + std::to_string(shape_.fast_samples) + " samples raw, " +
         std::to_string(shape_.velocity_bins) + " x " + std::to_string(shape_.range_bins) +
-        " cells a beam after), over the " + mib(kCubeMaxBytes) +
-        " limit: narrow --cube-frames (at most " + std::to_string(kCubeMaxBytes / per_frame) +
-        " frames)");
+        " cells a beam after), over the " + mib(kCubeMaxBytes) + " limit: narrow " + frames_option +
+        " (at most " + std::to_string(kCubeMaxBytes / per_frame) + " frames)");
   }
 
   counters_.file = config_.file.string();

@@ -35,7 +35,11 @@ struct CubeWriterConfig {
   std::filesystem::path file;     ///< created (truncated) at setup
   std::uint64_t first_frame = 0;  ///< frame indices (FrameRecord::frame_index), inclusive
   std::uint64_t last_frame = 0;
-  std::uint64_t run_frames = 1;           ///< the run's frames: the range is clipped to them
+  std::uint64_t run_frames = 1;  ///< the run's frames: the range is clipped to them
+  /// Where the file and the range were given, for setup errors: "--cube" and "--cube-frames"
+  /// (the CLI), or "FILE: [output] cube" and "FILE: [output] cube_frames" (a scenario).
+  std::string file_source = "--cube";
+  std::string frames_source = "--cube-frames";
   const radar::Sensor* sensor = nullptr;  ///< must outlive the writer
   std::string scenario_name;
   /// Frames in flight between the frame thread and the writer: 0 picks 2 on the simulated
@@ -63,6 +67,11 @@ struct CubeCounters {
     return frames_dropped == 0 && write_errors == 0 && capture_dropped == 0;
   }
 };
+
+/// A frame range FIRST:LAST (frame indices from 0, inclusive; `--cube-frames`, `[output]
+/// cube_frames`) into `first` and `last`: "" when it parses, else what is wrong.
+[[nodiscard]] std::string parse_cube_frames(const std::string& text, std::uint64_t& first,
+                                            std::uint64_t& last);
 
 /// Bytes a captured frame adds to the file (raw and image, complex64), for the estimate.
 [[nodiscard]] std::uint64_t cube_bytes_per_frame(const radar::CaptureShape& shape) noexcept;

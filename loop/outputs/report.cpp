@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "common/units.hpp"
+#include "radar/clutter/terrain.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "timing/profiler.hpp"
 
@@ -400,7 +401,18 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                     {"horizon_patches", r.terrain.horizon_patches},
                     {"occlusion_queries", r.terrain.occlusion_queries},
                     {"budget_cut", r.terrain.budget_cut},
-                    {"dropped_returns", r.terrain_dropped}};
+                    {"dropped_returns", r.terrain_dropped},
+                    // Issue 28: sigma0 values outside a model's validity the terrain read.
+                    {"sigma0_validity",
+                     {{"tracked", p.sigma0_tracked},
+                      {"flagged", p.sigma0_flags != 0},
+                      {"flags", p.sigma0_flags},
+                      {"description", radar::clutter::describe_validity(p.sigma0_flags)},
+                      {"flagged_patch_fraction", p.sigma0_patch_fraction},
+                      {"flagged_power_fraction", std::isnan(p.sigma0_power_fraction)
+                                                     ? nlohmann::json(nullptr)
+                                                     : nlohmann::json(p.sigma0_power_fraction)},
+                      {"materials", p.sigma0_lines}}}};
   const radar::Waveform& wf = s.sensor.processing.waveform;
   const SensorFigures& f = p.sensor;
   rep["sensor"] = {{"waveform", radar::waveform_name(wf.kind)},
@@ -652,6 +664,14 @@ void print_exception_lines(const RunReport& p, std::FILE* out) {
 }
 
 void print_output_lines(const RunReport& p, std::FILE* out) {
+  if (p.sigma0_flags != 0) {  // issue 28: the terrain read flagged sigma0 values
+    std::fprintf(out,
+                 "  terrain     sigma0 outside model validity in %.1f %% of the terrain's patches "
+                 "(report.json terrain.sigma0_validity):\n",
+                 100.0 * p.sigma0_patch_fraction);
+    for (const std::string& line : p.sigma0_lines)
+      std::fprintf(out, "              %s\n", line.c_str());
+  }
   if (const std::optional<LiveViewCounters>& lv = p.live_view) {
     std::fprintf(out,
                  "  live view   http://%s/: %llu of %llu updates sent to browsers, %llu dropped "

@@ -101,6 +101,17 @@ struct RunReport {
   std::filesystem::path out_dir;          ///< "" = no output files
   OutputCounters outputs;                 ///< complete once the streamed outputs finished
   std::optional<LiveViewCounters> live_view;
+  /// Issue 28: the terrain's sigma0 values the catalogue flags (outside a model's validity,
+  /// extrapolated or assumed curves), tracked by the terrain engine ([radar] terrain = "engine";
+  /// the tracer's terrain rays, terrain = "rays", count their returns and OR the flags only:
+  /// one line for all, the power share NaN): one line per flagged material
+  /// (radar::clutter::sigma0_use_lines), the OR of the flags, and the shares of the terrain's
+  /// patches (returns) and power that read them.
+  bool sigma0_tracked = false;
+  std::uint32_t sigma0_flags = 0;
+  std::vector<std::string> sigma0_lines;
+  double sigma0_patch_fraction = 0.0;
+  double sigma0_power_fraction = 0.0;
 };
 
 /// Writes report.json to `path`. Throws std::runtime_error "PATH: write failed".

@@ -131,3 +131,39 @@ def test_toml_text_and_ownship_from_python():
     loop.step()
     assert loop.step() is None  # five frames
     assert loop.finish()["frames"] == 5
+
+
+def test_cube_from_python_is_the_clis(cli, tmp_path):
+    # Data cubes out (docs/cube.md): Loop(cube=, cube_frames=) writes the file `radar-emu run
+    # --cube --cube-frames` writes (every dataset equal), and finish() says what it holds; the
+    # scenario's [output] cube does the same; bad values are a ValueError naming the argument.
+    h5py = pytest.importorskip("h5py")
+    n = 3
+    cli("run", "--frames", n, "--out", tmp_path / "cli", "-q", "--cube", tmp_path / "cli.h5",
+        "--cube-frames", "1:2")
+    loop = radar_emu.Loop(frames=n, cube=str(tmp_path / "py.h5"), cube_frames="1:2")
+    assert len(list(loop)) == n
+    c = loop.finish()["cube"]
+    assert (c["frames_written"], c["first_frame"], c["last_frame"]) == (2, 1, 2)
+    assert c["frames_dropped"] == 0 and c["write_errors"] == 0 and c["first_error"] == ""
+    toml = radar_emu.default_scenario_toml().replace(
+        "[output]\n", f'[output]\ncube = "{tmp_path / "toml.h5"}"\ncube_frames = "1:2"\n', 1)
+    loop = radar_emu.Loop(toml=toml, frames=n)
+    list(loop)
+    assert loop.finish()["cube"]["frames_written"] == 2
+    with h5py.File(tmp_path / "cli.h5") as a:
+        for other in ("py.h5", "toml.h5"):
+            with h5py.File(tmp_path / other) as b:
+                assert list(b["frames"][...]) == [1, 2]
+                for g in ("frame_000001", "frame_000002"):
+                    for ds in ("raw", "image", "detections"):
+                        assert np.array_equal(a[g][ds][...], b[g][ds][...]), f"{other} {g}/{ds}"
+    no_cube = radar_emu.Loop(frames=1)
+    list(no_cube)
+    assert no_cube.finish()["cube"] is None
+    with pytest.raises(ValueError, match="cube_frames= 5:1': LAST is before FIRST|LAST is before"):
+        radar_emu.Loop(frames=n, cube=str(tmp_path / "x.h5"), cube_frames="5:1")
+    with pytest.raises(ValueError, match="cube= .*not an HDF5 file name"):
+        radar_emu.Loop(frames=n, cube=str(tmp_path / "x.txt"))
+    with pytest.raises(ValueError, match="cube_frames= 0:1: needs a cube file"):
+        radar_emu.Loop(frames=n, cube_frames="0:1")

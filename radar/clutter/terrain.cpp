@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "common/units.hpp"
@@ -740,6 +741,98 @@ float Sigma0Table::lookup(std::size_t index, Pol pol, double cos_incidence) cons
   const float w = static_cast<float>(x - i);
   const float* row = values_.data() + (index * 4 + pol) * kSamples;
   return row[i] + w * (row[i + 1] - row[i]);
+}
+
+float Sigma0Table::lookup(std::size_t index, Pol pol, double cos_incidence,
+                          std::uint32_t& flags) const noexcept {
+  flags = 0u;
+  if (index >= materials() || !(cos_incidence >= 0.0 && cos_incidence <= 1.0))
+    return 0.0f;
+  const double x = std::acos(cos_incidence) * ((kSamples - 1) / (kPi / 2.0));
+  const int i = std::min(static_cast<int>(x), kSamples - 2);
+  const float w = static_cast<float>(x - i);
+  const std::size_t at = (index * 4 + pol) * kSamples;
+  const float* row = values_.data() + at;
+  flags = flags_[at + static_cast<std::size_t>(i)] | flags_[at + static_cast<std::size_t>(i) + 1];
+  return row[i] + w * (row[i + 1] - row[i]);
+}
+
+void Sigma0Use::add(std::uint32_t sample_flags, double cos_incidence,
+                    double patch_power_m2) noexcept {
+  ++patches;
+  power_m2 += patch_power_m2;
+  if (sample_flags == 0u)
+    return;
+  ++flagged_patches;
+  flags |= sample_flags;
+  flagged_power_m2 += patch_power_m2;
+  const double theta = std::acos(std::clamp(cos_incidence, 0.0, 1.0));
+  flagged_incidence_min_rad = std::min(flagged_incidence_min_rad, theta);
+  flagged_incidence_max_rad = std::max(flagged_incidence_max_rad, theta);
+}
+
+void Sigma0Use::merge(const Sigma0Use& o) noexcept {
+  patches += o.patches;
+  flagged_patches += o.flagged_patches;
+  flags |= o.flags;
+  power_m2 += o.power_m2;
+  flagged_power_m2 += o.flagged_power_m2;
+  flagged_incidence_min_rad = std::min(flagged_incidence_min_rad, o.flagged_incidence_min_rad);
+  flagged_incidence_max_rad = std::max(flagged_incidence_max_rad, o.flagged_incidence_max_rad);
+}
+
+std::uint32_t sigma0_use_flags(std::span<const Sigma0Use> use) noexcept {
+  std::uint32_t f = 0u;
+  for (const Sigma0Use& u : use)
+    f |= u.flagged_patches > 0 ? u.flags : 0u;
+  return f;
+}
+
+double sigma0_use_patch_fraction(std::span<const Sigma0Use> use) noexcept {
+  std::uint64_t n = 0, flagged = 0;
+  for (const Sigma0Use& u : use) {
+    n += u.patches;
+    flagged += u.flagged_patches;
+  }
+  return n > 0 ? static_cast<double>(flagged) / static_cast<double>(n) : 0.0;
+}
+
+double sigma0_use_power_fraction(std::span<const Sigma0Use> use) noexcept {
+  double p = 0.0, flagged = 0.0;
+  for (const Sigma0Use& u : use) {
+    p += u.power_m2;
+    flagged += u.flagged_power_m2;
+  }
+  return p > 0.0 ? flagged / p : 0.0;
+}
+
+std::vector<std::string> sigma0_use_lines(std::span<const Sigma0Use> use,
+                                          std::span<const std::string> names, double carrier_hz) {
+  std::uint64_t all_patches = 0;
+  double all_power = 0.0;
+  for (const Sigma0Use& u : use) {
+    all_patches += u.patches;
+    all_power += u.power_m2;
+  }
+  std::vector<std::string> lines;
+  for (std::size_t r = 0; r < use.size(); ++r) {
+    const Sigma0Use& u = use[r];
+    if (u.flagged_patches == 0)
+      continue;
+    const std::string name = r < names.size() ? names[r] : "row " + std::to_string(r);
+    char buf[192];
+    std::snprintf(buf, sizeof buf, " at %.4g GHz, %.0f-%.0f deg incidence: ", carrier_hz * 1e-9,
+                  common::degrees(u.flagged_incidence_min_rad),
+                  common::degrees(u.flagged_incidence_max_rad));
+    char share[160];
+    std::snprintf(share, sizeof share, " (%.1f %% of the terrain's patches, %.1f %% of its power)",
+                  all_patches > 0 ? 100.0 * static_cast<double>(u.flagged_patches) /
+                                        static_cast<double>(all_patches)
+                                  : 0.0,
+                  all_power > 0.0 ? 100.0 * u.flagged_power_m2 / all_power : 0.0);
+    lines.push_back(name + buf + describe_validity(u.flags) + share);
+  }
+  return lines;
 }
 
 }  // namespace radar_emu::radar::clutter

@@ -189,6 +189,9 @@ class Sigma0Table {
   /// Linear sigma0 of material `index` for incidence cos(theta) in [0, 1]; out-of-range index
   /// or non-finite input gives 0.
   [[nodiscard]] float lookup(std::size_t index, Pol pol, double cos_incidence) const noexcept;
+  /// lookup() and, in `flags`, lookup_flags() of the same samples (one acos). Real-time safe.
+  [[nodiscard]] float lookup(std::size_t index, Pol pol, double cos_incidence,
+                             std::uint32_t& flags) const noexcept;
   /// Validity bits of the two samples lookup() interpolates (OR); 0 for bad input. Real-time
   /// safe. For images: kOutsideMeasuredRange / kAssumedValue mark catalogue values that are
   /// extrapolated or assumed (surface.hpp).
@@ -201,5 +204,37 @@ class Sigma0Table {
   std::vector<float> values_;
   std::vector<std::uint32_t> flags_;
 };
+
+/// Where a product's terrain read sigma0 values the catalogue flags (issue 28: outside a
+/// physical model's validity, extrapolated or assumed; the bits of surface.hpp): per sigma0 row
+/// (material) of a Sigma0Table, what the product's patches read. The core fills it, the tools
+/// report it (sigma0_use_lines()). Plain counters: add() and merge() are real-time safe.
+struct Sigma0Use {
+  std::uint64_t patches = 0;          ///< patches (lit, added to the product) of this row
+  std::uint64_t flagged_patches = 0;  ///< of those, the ones whose sample carried a flag
+  std::uint32_t flags = 0;            ///< OR of the flags of the samples read
+  double power_m2 = 0.0;              ///< mean power of the row's patches [m^2]
+  double flagged_power_m2 = 0.0;      ///< of the flagged ones [m^2]
+  /// Incidence span of the flagged patches [rad] (min > max: none).
+  double flagged_incidence_min_rad = 10.0;
+  double flagged_incidence_max_rad = -10.0;
+  /// One patch of mean power `power_m2` at incidence cos theta = `cos_incidence` whose sample
+  /// carried `flags` (Sigma0Table::lookup_flags).
+  void add(std::uint32_t sample_flags, double cos_incidence, double patch_power_m2) noexcept;
+  void merge(const Sigma0Use& other) noexcept;
+};
+
+/// The rows of `use` that read flagged values, one line each, e.g. "water at 35 GHz, 2-28 deg
+/// incidence: catalogue: extrapolated beyond ... (12.5 % of the terrain's patches, 3.1 % of its
+/// power)"; `names` per row (a missing name: "row N"). Empty when nothing was flagged. Setup and
+/// reporting only (allocates).
+[[nodiscard]] std::vector<std::string> sigma0_use_lines(std::span<const Sigma0Use> use,
+                                                        std::span<const std::string> names,
+                                                        double carrier_hz);
+/// OR of the flags of every row that read a flagged value (0: none).
+[[nodiscard]] std::uint32_t sigma0_use_flags(std::span<const Sigma0Use> use) noexcept;
+/// Fractions over all rows: flagged patches / patches and flagged power / power (0 when none).
+[[nodiscard]] double sigma0_use_patch_fraction(std::span<const Sigma0Use> use) noexcept;
+[[nodiscard]] double sigma0_use_power_fraction(std::span<const Sigma0Use> use) noexcept;
 
 }  // namespace radar_emu::radar::clutter

@@ -81,6 +81,21 @@ TerrainPatch facet_patch(const TerrainFacet& f, std::uint32_t facet, std::uint32
   return p;
 }
 
+std::vector<std::string> sigma0_row_names(const TerrainMaterials& m) {
+  std::vector<std::string> out(m.table.materials());
+  for (std::size_t i = 0; i < m.sigma0_row.size(); ++i) {
+    const int r = m.sigma0_row[i];
+    if (r < 0 || static_cast<std::size_t>(r) >= out.size() || i >= m.names.size())
+      continue;
+    std::string& name = out[static_cast<std::size_t>(r)];
+    name += (name.empty() ? "" : "/") + m.names[i];
+  }
+  for (std::size_t r = 0; r < out.size(); ++r)
+    if (out[r].empty())
+      out[r] = "row " + std::to_string(r);
+  return out;
+}
+
 TerrainMaterials terrain_materials(std::span<const int> sigma0_rows, const Sigma0Table& table,
                                    std::span<const scene::Material> materials) {
   TerrainMaterials m;
@@ -352,6 +367,11 @@ void TerrainEngine::mark_layers() {
   }
 }
 
+std::uint32_t TerrainEngine::sigma0_flags(const TerrainFacet& f,
+                                          double cos_incidence) const noexcept {
+  return materials_.table.lookup_flags(f.sigma0_row, spec_.channel, cos_incidence);
+}
+
 double TerrainEngine::sigma0(const TerrainFacet& f, double cos_incidence) const noexcept {
   return static_cast<double>(materials_.table.lookup(f.sigma0_row, spec_.channel, cos_incidence));
 }
@@ -473,14 +493,17 @@ std::size_t TerrainEngine::horizon_scratch_size(const CellGrid& grid,
 TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& grid,
                                       std::span<std::complex<double>> field, std::span<double> mean,
                                       std::span<double> elevation_power, std::span<double> horizon,
-                                      std::span<std::uint32_t> facet_list) const noexcept {
+                                      std::span<std::uint32_t> facet_list,
+                                      std::span<Sigma0Use> sigma0_use,
+                                      std::span<std::uint32_t> cell_flags) const noexcept {
   TerrainStats st;
   const std::size_t cells = grid.columns * grid.bins;
   const std::size_t looks = std::max<std::size_t>(view.looks, 1);
   const std::size_t edges_needed = (grid.per_column_edges ? grid.columns : 1) * (grid.bins + 1);
   if (cells == 0 || !(grid.azimuth_step_rad > 0.0) || grid.range_edges_m.size() < edges_needed ||
       mean.size() < cells || (!field.empty() && field.size() < looks * cells) ||
-      (!elevation_power.empty() && elevation_power.size() < cells) || !(view.wavelength_m > 0.0) ||
+      (!elevation_power.empty() && elevation_power.size() < cells) ||
+      (!cell_flags.empty() && cell_flags.size() < cells) || !(view.wavelength_m > 0.0) ||
       !(view.patch_min_m > 0.0) || !(view.patch_angle_rad >= 0.0) ||
       !(view.one_way_loss_db_per_m >= 0.0))
     return st;
@@ -846,6 +869,13 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
       mean[cell] += power;
       if (!elevation_power.empty())
         elevation_power[cell] += power * sin_el;
+      if (!sigma0_use.empty() || !cell_flags.empty()) {  // issue 28: flagged sigma0 values
+        const std::uint32_t flags = sigma0_flags(f, cos_inc);
+        if (f.sigma0_row < sigma0_use.size())
+          sigma0_use[f.sigma0_row].add(flags, cos_inc, power);
+        if (!cell_flags.empty())
+          cell_flags[cell] |= flags;
+      }
       ++st.patches_lit;
       if (field.empty())
         return;

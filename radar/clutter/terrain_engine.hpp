@@ -227,15 +227,24 @@ class TerrainEngine {
   /// sweep): scratch for the facets the sweep finds with patches in the grid's window (their
   /// vertices tested in the sweep's own transforms), so that the patch pass visits only those
   /// instead of searching the tiles again; facets().size() values always suffice (too few: the
-  /// patch pass searches the tiles; the result is the same either way). Real-time safe: no
-  /// allocation, no exception; an unusable grid or view adds nothing and returns all-zero
+  /// patch pass searches the tiles; the result is the same either way). `sigma0_use`, when not
+  /// empty (materials().table.materials() values or more), gets each lit patch added to its
+  /// sigma0 row's Sigma0Use (the validity flags of the table's samples it read: issue 28);
+  /// `cell_flags`, when not empty (cells values), the OR of those flags per cell. Real-time safe:
+  /// no allocation, no exception; an unusable grid or view adds nothing and returns all-zero
   /// statistics.
   [[nodiscard]] TerrainStats integrate(const TerrainView& view, const CellGrid& grid,
                                        std::span<std::complex<double>> field,
                                        std::span<double> mean,
                                        std::span<double> elevation_power = {},
                                        std::span<double> horizon = {},
-                                       std::span<std::uint32_t> facet_list = {}) const noexcept;
+                                       std::span<std::uint32_t> facet_list = {},
+                                       std::span<Sigma0Use> sigma0_use = {},
+                                       std::span<std::uint32_t> cell_flags = {}) const noexcept;
+  /// The validity flags (surface.hpp) of the table's samples sigma0() reads for facet `f` at
+  /// incidence cos theta. Real-time safe.
+  [[nodiscard]] std::uint32_t sigma0_flags(const TerrainFacet& f,
+                                           double cos_incidence) const noexcept;
   /// Scratch values integrate() needs for the horizon sweep of `grid` from `view` (its columns
   /// and its bins out to the grid's last range edge). Real-time safe.
   [[nodiscard]] static std::size_t horizon_scratch_size(const CellGrid& grid,
@@ -273,6 +282,10 @@ class TerrainEngine {
   void collect_occluders(std::span<const std::uint8_t> structures);
   void mark_layers();
 };
+
+/// A name for each sigma0 row of `m.table`: the names of the scene materials that read it,
+/// joined by "/" ("row N" for a row no material reads). For messages (issue 28).
+[[nodiscard]] std::vector<std::string> sigma0_row_names(const TerrainMaterials& m);
 
 /// The materials of a resolved SurfaceSet-like description: per scene material its sigma0 row
 /// (-1 none). Convenience for callers holding radar::SurfaceSet (radar/em/surfaces.hpp).

@@ -637,8 +637,15 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       // material's setup-time table (radar/clutter/terrain.hpp; every non-conductor has a row).
       const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, -d);
       const double d_omega = glm::length(glm::cross(u, v));
-      const double sigma_m2 = static_cast<double>(surfaces_.sigma0(hit.material_id, cos_i)) *
-                              path_m * path_m * d_omega / cos_i;
+      std::uint32_t sigma0_flags = 0u;
+      const double sigma_m2 =
+          static_cast<double>(surfaces_.sigma0(hit.material_id, cos_i, sigma0_flags)) * path_m *
+          path_m * d_omega / cos_i;
+      ++stats.terrain_returns;  // issue 28: the flagged sigma0 values the terrain read
+      if (sigma0_flags != 0u) {
+        ++stats.terrain_returns_flagged;
+        stats.terrain_sigma0_flags |= sigma0_flags;
+      }
       Contribution& out = slot[count++];
       out.amplitude = {std::sqrt(sigma_m2), 0.0};
       out.range_m = path_m;
@@ -831,6 +838,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   stats.rays += rays;
 
   std::atomic<std::uint64_t> hits{0}, grazing{0}, dielectric{0}, pruned{0};
+  std::atomic<std::uint64_t> terrain_returns{0}, terrain_flagged{0};
+  std::atomic<std::uint32_t> terrain_flags{0};
   tbb::parallel_for(
       tbb::blocked_range<std::size_t>(0, usable_rays, 256),
       [&](const tbb::blocked_range<std::size_t>& range) {
@@ -860,11 +869,17 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         grazing += local.grazing_skipped;
         dielectric += local.dielectric_reflections;
         pruned += local.pruned_paths;
+        terrain_returns += local.terrain_returns;
+        terrain_flagged += local.terrain_returns_flagged;
+        terrain_flags.fetch_or(local.terrain_sigma0_flags, std::memory_order_relaxed);
       });
   stats.hits += hits.load();
   stats.grazing_skipped += grazing.load();
   stats.dielectric_reflections += dielectric.load();
   stats.pruned_paths += pruned.load();
+  stats.terrain_returns += terrain_returns.load();
+  stats.terrain_returns_flagged += terrain_flagged.load();
+  stats.terrain_sigma0_flags |= terrain_flags.load();
   stats.facet_queries += facet_queries.load();
   stats.dropped_contributions += (rays - usable_rays) * per_ray;  // upper bound, counted
   // Compact the fixed per-ray slots in ray order: deterministic whatever the threading.

@@ -191,6 +191,11 @@ struct TraceStats {
   std::uint64_t edges_shadowed = 0;  ///< edges whose midpoint does not see the radar
   std::uint64_t edges_skipped = 0;   ///< back-facing, along the Keller cone, out of view/range
   std::uint64_t edges_double = 0;    ///< double-diffraction contributions (edge_order 2)
+  /// Issue 28: diffuse terrain returns, those whose sigma0 sample the catalogue flags (outside
+  /// a model's validity, extrapolated, assumed), and the OR of their flags (surface.hpp).
+  std::uint64_t terrain_returns = 0;
+  std::uint64_t terrain_returns_flagged = 0;
+  std::uint32_t terrain_sigma0_flags = 0;
 };
 
 class SbrTracer {

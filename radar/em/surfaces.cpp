@@ -40,6 +40,15 @@ float SurfaceSet::sigma0(std::size_t material, double cos_incidence) const noexc
                              cos_incidence);
 }
 
+float SurfaceSet::sigma0(std::size_t material, double cos_incidence,
+                         std::uint32_t& flags) const noexcept {
+  flags = 0u;
+  if (material >= surfaces.size() || surfaces[material].sigma0_row < 0)
+    return 0.0f;
+  return sigma0_table.lookup(static_cast<std::size_t>(surfaces[material].sigma0_row), channel,
+                             cos_incidence, flags);
+}
+
 SurfaceSet resolve_surfaces(std::span<const scene::Material> materials,
                             const SurfaceRequest& request) {
   if (request.carrier_hz && !(std::isfinite(*request.carrier_hz) && *request.carrier_hz > 0.0))

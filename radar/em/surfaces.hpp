@@ -65,6 +65,10 @@ struct SurfaceSet {
   /// Linear sigma0 of scene material `material` at incidence cos(theta_i) = cos_incidence, in
   /// `channel`; 0 for a material without a row (or out of range). Real-time safe.
   [[nodiscard]] float sigma0(std::size_t material, double cos_incidence) const noexcept;
+  /// The same, and the validity flags of the table's samples it read (Sigma0Table::
+  /// lookup_flags; 0 without a row). Real-time safe.
+  [[nodiscard]] float sigma0(std::size_t material, double cos_incidence,
+                             std::uint32_t& flags) const noexcept;
 };
 
 /// Thrown by resolve_surfaces() for a material it cannot resolve.

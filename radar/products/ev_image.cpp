@@ -169,6 +169,11 @@ EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPo
     constexpr std::size_t kBlock = 8;
     const std::size_t blocks = (cols + kBlock - 1) / kBlock;
     std::vector<clutter::TerrainStats> block_stats(blocks);
+    // Issue 28: what each block read from flagged sigma0 samples, merged below.
+    const std::size_t rows_s0 = terrain.engine->materials().table.materials();
+    std::vector<std::vector<clutter::Sigma0Use>> block_use(
+        blocks, std::vector<clutter::Sigma0Use>(rows_s0));
+    std::vector<std::uint64_t> block_terrain_cells(blocks, 0), block_flagged_cells(blocks, 0);
     terrain_field.assign(looks_engine * cells, {0.0, 0.0});
     tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t k) {
       const std::size_t c0 = k * kBlock, nc = std::min(kBlock, cols - c0), bc = nc * rows;
@@ -183,7 +188,13 @@ EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPo
       cg.per_column_edges = true;
       std::vector<double> mean(bc, 0.0);
       std::vector<std::complex<double>> field(looks_engine * bc);
-      block_stats[k] = terrain.engine->integrate(v, cg, field, mean);
+      std::vector<std::uint32_t> cell_flags(bc, 0u);
+      block_stats[k] =
+          terrain.engine->integrate(v, cg, field, mean, {}, {}, {}, block_use[k], cell_flags);
+      for (std::size_t i = 0; i < bc; ++i) {
+        block_terrain_cells[k] += static_cast<std::uint64_t>(mean[i] > 0.0);
+        block_flagged_cells[k] += static_cast<std::uint64_t>(mean[i] > 0.0 && cell_flags[i] != 0u);
+      }
       // Back to the image's rows (row r = bin rows - 1 - r) and columns.
       for (std::size_t b = 0; b < rows; ++b)
         for (std::size_t j = 0; j < nc; ++j) {
@@ -193,6 +204,14 @@ EvImage form_ev_image(std::span<const Contribution> contributions, const RadarPo
             terrain_field[l * cells + to] = field[l * bc + from];
         }
     });
+    if (terrain.sigma0_use.size() < rows_s0)
+      terrain.sigma0_use.resize(rows_s0);
+    for (std::size_t k = 0; k < blocks; ++k) {
+      for (std::size_t r = 0; r < rows_s0; ++r)
+        terrain.sigma0_use[r].merge(block_use[k][r]);
+      terrain.terrain_cells += block_terrain_cells[k];
+      terrain.flagged_cells += block_flagged_cells[k];
+    }
     for (const clutter::TerrainStats& b : block_stats) {
       terrain.stats.facets_considered += b.facets_considered;
       terrain.stats.patches += b.patches;

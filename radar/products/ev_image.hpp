@@ -115,6 +115,12 @@ struct EvTerrain {
   double patch_min_m = 0.5;
   double one_way_loss_db_per_m = 0.0;
   clutter::TerrainStats stats{};  ///< filled by form_ev_image
+  /// Issue 28: per sigma0 row of the engine's table, the patches that read flagged values
+  /// (clutter::Sigma0Use), and the image's cells with terrain and those with a flagged patch;
+  /// form_ev_image adds to them (sizing sigma0_use to the table's rows when smaller).
+  std::vector<clutter::Sigma0Use> sigma0_use;
+  std::uint64_t terrain_cells = 0;
+  std::uint64_t flagged_cells = 0;
 };
 [[nodiscard]] EvImage form_ev_image(std::span<const Contribution> contributions,
                                     const RadarPose& pose, const EvImageConfig& config,

@@ -1,5 +1,6 @@
 #include "radar/products/sar_terrain.hpp"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -43,7 +44,12 @@ TerrainCells terrain_cells(const clutter::TerrainEngine& engine, const SarParams
   const glm::dvec3 track = sar_track_dir(p);
   std::vector<SarScatterer> all(first.back());
   std::vector<std::uint8_t> lit(first.back(), 0);
+  // Issue 28: each thread's Sigma0Use per sigma0 row, merged after.
+  const std::size_t rows_s0 = engine.materials().table.materials();
+  tbb::enumerable_thread_specific<std::vector<clutter::Sigma0Use>> use(
+      [rows_s0] { return std::vector<clutter::Sigma0Use>(rows_s0); });
   tbb::parallel_for(std::size_t{0}, facets.size(), [&](std::size_t i) {
+    std::vector<clutter::Sigma0Use>& my_use = use.local();
     const clutter::TerrainFacet& f = facets[i];
     const std::uint32_t n = clutter::patch_divisions(f, patch_m);
     for (std::uint32_t k = 0; k < n * n; ++k) {
@@ -57,6 +63,8 @@ TerrainCells terrain_cells(const clutter::TerrainEngine& engine, const SarParams
       if (!(cos_inc > 1e-9) || !engine.clear(pt.centre_m, f.normal, radar))
         continue;
       const double power = engine.sigma0(f, cos_inc) * pt.area_m2;
+      if (f.sigma0_row < my_use.size())
+        my_use[f.sigma0_row].add(engine.sigma0_flags(f, cos_inc), cos_inc, power);
       const clutter::SpeckleSample s = engine.speckle(pt, 0);
       all[first[i] + k] = {pt.centre_m,
                            std::polar(std::sqrt(power * double(s.intensity)), double(s.phase_rad))};
@@ -64,6 +72,10 @@ TerrainCells terrain_cells(const clutter::TerrainEngine& engine, const SarParams
     }
   });
   TerrainCells out;
+  out.sigma0_use.resize(rows_s0);
+  for (const std::vector<clutter::Sigma0Use>& u : use)
+    for (std::size_t r = 0; r < rows_s0; ++r)
+      out.sigma0_use[r].merge(u[r]);
   out.patches = all.size();
   out.area_m2 = engine.area_m2();
   std::size_t n_lit = 0;
@@ -89,6 +101,7 @@ SarDem sar_dem(const clutter::TerrainEngine& engine, const SarParams& p, const S
   dem.height_m.assign(n, kNone);
   dem.mask.assign(n, 0);
   dem.facet.assign(n, -1);
+  dem.sigma0_flags.assign(n, 0u);
   // Rasterise each facet's horizontal projection at the pixel centres (grid coordinates: row
   // along track, column along the look direction); the highest surface wins.
   const auto facets = engine.facets();
@@ -187,12 +200,23 @@ SarDem sar_dem(const clutter::TerrainEngine& engine, const SarParams& p, const S
       if (!engine.clear(pt, {0.0, 0.0, 1.0}, radar))
         bits |= kSarShadow;
       dem.mask[i] |= bits;
+      if (dem.facet[i] >= 0) {  // the sigma0 sample the pixel's terrain reads (issue 28)
+        const clutter::TerrainFacet& f = facets[static_cast<std::size_t>(dem.facet[i])];
+        const glm::dvec3 to = radar - pt;
+        const double dist = glm::length(to);
+        if (dist > 0.0)
+          dem.sigma0_flags[i] = engine.sigma0_flags(f, std::abs(glm::dot(f.normal, to / dist)));
+      }
     }
   });
   for (std::uint8_t m : dem.mask) {
     dem.shadow += (m & kSarShadow) != 0;
     dem.layover += (m & kSarLayover) != 0;
     dem.foreshortening += (m & kSarForeshortening) != 0;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    dem.sigma0_pixels += static_cast<std::size_t>(dem.facet[i] >= 0);
+    dem.sigma0_flagged += static_cast<std::size_t>(dem.facet[i] >= 0 && dem.sigma0_flags[i] != 0u);
   }
   return dem;
 }

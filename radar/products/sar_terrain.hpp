@@ -51,6 +51,9 @@ struct TerrainCells {
   std::size_t patches = 0;   ///< patches evaluated
   std::size_t shadowed = 0;  ///< left out: line of sight blocked
   double area_m2 = 0.0;      ///< terrain area of the engine's facets
+  /// Issue 28: per sigma0 row of the engine's table, the lit patches and those whose sigma0
+  /// sample the catalogue flags (outside a model's validity, extrapolated, assumed).
+  std::vector<clutter::Sigma0Use> sigma0_use;
 };
 
 /// The engine's patches (edge <= patch_m) as fixed SAR scatterers (header). Throws
@@ -63,6 +66,9 @@ enum SarMaskBit : std::uint8_t {
   kSarLayover = 2,
   kSarForeshortening = 4,
   kSarNoDem = 8,
+  /// The pixel's terrain reads a flagged sigma0 value (issue 28; SarDem::sigma0_flags): not in
+  /// SarDem::mask (whose bits mark geometry), set in the image's mask band only.
+  kSarSigma0Flagged = 16,
 };
 
 struct SarDem {
@@ -72,6 +78,11 @@ struct SarDem {
   /// cover), -1 in a hole.
   std::vector<std::int32_t> facet;
   std::size_t holes = 0, shadow = 0, layover = 0, foreshortening = 0;  ///< pixel counts
+  /// Per pixel, the validity flags (radar/clutter/surface.hpp) of the sigma0 sample its facet
+  /// reads at the pixel's broadside incidence (0: none, or no facet); issue 28.
+  std::vector<std::uint32_t> sigma0_flags;
+  std::size_t sigma0_flagged = 0;  ///< pixels with a facet whose sample is flagged
+  std::size_t sigma0_pixels = 0;   ///< pixels with a facet
 };
 
 /// DEM and mask of `grid` (its origin's z ignored) over the engine's facets (header).

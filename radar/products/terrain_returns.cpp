@@ -67,6 +67,7 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
   // config.slices slices of columns (at least one column each), whatever the threads.
   const std::size_t n_slices = std::min(c.slices, columns_);
   slices_.resize(n_slices);
+  sigma0_use_.resize(engine_.materials().table.materials());
   std::size_t first = 0;
   for (std::size_t s = 0; s < n_slices; ++s) {
     Slice& sl = slices_[s];
@@ -75,6 +76,7 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
     first += sl.columns;
     sl.mean.assign(sl.columns * bins_, 0.0);
     sl.elevation_power.assign(sl.columns * bins_, 0.0);
+    sl.sigma0_use.resize(engine_.materials().table.materials());
     if (c.shadowing && c.horizon) {
       sl.horizon.assign(clutter::TerrainEngine::horizon_scratch_size(slice_grid(sl), view()), 0.0);
       sl.facet_list.assign(engine_.facets().size(), 0);
@@ -129,9 +131,13 @@ std::size_t TerrainReturns::compute(const RadarPose& pose, std::span<Contributio
     Slice& sl = slices_[s];
     std::fill(sl.mean.begin(), sl.mean.end(), 0.0);
     std::fill(sl.elevation_power.begin(), sl.elevation_power.end(), 0.0);
+    std::fill(sl.sigma0_use.begin(), sl.sigma0_use.end(), clutter::Sigma0Use{});
     sl.stats = engine_.integrate(v, slice_grid(sl), {}, sl.mean, sl.elevation_power, sl.horizon,
-                                 sl.facet_list);
+                                 sl.facet_list, sl.sigma0_use);
   });
+  for (const Slice& sl : slices_)
+    for (std::size_t r = 0; r < sl.sigma0_use.size() && r < sigma0_use_.size(); ++r)
+      sigma0_use_[r].merge(sl.sigma0_use[r]);
   const glm::dmat3& r = pose.world_from_antenna;
   std::size_t n = 0;
   for (const Slice& sl : slices_) {

@@ -89,6 +89,12 @@ class TerrainReturns {
   /// out.size() are dropped and counted in `dropped`.
   [[nodiscard]] std::size_t compute(const RadarPose& pose, std::span<Contribution> out,
                                     clutter::TerrainStats& stats, std::uint64_t& dropped) noexcept;
+  /// Issue 28: per sigma0 row of the engine's table, what every compute() so far read (lit
+  /// patches, those whose sample the catalogue flags; clutter::Sigma0Use). Not for a frame in
+  /// flight.
+  [[nodiscard]] std::span<const clutter::Sigma0Use> sigma0_use() const noexcept {
+    return sigma0_use_;
+  }
 
  private:
   struct Slice {
@@ -97,6 +103,7 @@ class TerrainReturns {
     std::vector<double> horizon;                ///< the engine's horizon scratch
     std::vector<std::uint32_t> facet_list;      ///< the engine's list of facets in the window
     clutter::TerrainStats stats;
+    std::vector<clutter::Sigma0Use> sigma0_use;  ///< this frame's, per sigma0 row
   };
   [[nodiscard]] clutter::TerrainView view() const noexcept;  ///< the pose left at its default
   [[nodiscard]] clutter::CellGrid slice_grid(const Slice& sl) const noexcept;
@@ -106,6 +113,7 @@ class TerrainReturns {
   std::vector<double> edges_m_;          ///< bins + 1
   std::vector<double> cos_az_, sin_az_;  ///< per column, of its centre
   std::vector<Slice> slices_;
+  std::vector<clutter::Sigma0Use> sigma0_use_;  ///< every frame's, per sigma0 row
   std::uint32_t terrain_object_ = 0;  ///< Contribution::object_id: the object of most terrain area
 };
 

@@ -10,7 +10,9 @@ captured frame, against detections.json of the same frame (what went on the bus)
     within one bin of the detection's cell, at a power within 3 dB of the image's at that cell
     (strong detections of scene objects, SNR >= 20 dB: noise and clutter speckle are drawn anew
     for the raw samples, so a clutter-dominated cell agrees only in distribution).
-The same run without --cube writes the same detections.json byte for byte. Then the errors: an unwritable path, a bad --cube-frames, a range past the run and one over the
+The same run without --cube writes the same detections.json byte for byte. The scenario's
+`[output] cube` and `cube_frames` write the same file as the flags (every dataset and attribute
+equal), and the flags win over them. Then the errors: an unwritable path, a bad --cube-frames, a range past the run and one over the
 size limit (its estimate printed) are each refused with one line before the run.
 
 usage: check_cube.py RADAR_EMU WORK_DIR
@@ -171,6 +173,73 @@ def main():
             fail(f"radar-emu run {' '.join(args)}: exit {p.returncode}, stderr {p.stderr!r}, "
                  f"expected a line with {fragment!r}")
     print("cube: errors refused before the run")
+
+    # The scenario's [output] cube and cube_frames: the same file as the flags; the flags win.
+    def scenario(name, body):
+        path = os.path.join(work, name)
+        with open(path, "w") as fh:
+            fh.write(body)
+        return path
+
+    toml = scenario("cube.toml", '[output]\ncube = "toml_cube.h5"\ncube_frames = "2:4"\n')
+    toml_cube = os.path.join(work, "toml_cube.h5")  # relative to the scenario file
+    if os.path.exists(toml_cube):
+        os.remove(toml_cube)
+    p = run(exe, [toml, "--frames", "5", "--out", os.path.join(work, "run_toml")])
+    if "cube: 3 frames (2..4)" not in p.stdout:
+        fail(f"[output] cube: no cube line for frames 2..4:\n{p.stdout}")
+    same_file(cube, toml_cube)
+    cli_cube = os.path.join(work, "cli_wins.h5")
+    os.remove(toml_cube)
+    run(exe, [toml, "-q", "--frames", "5", "--out", os.path.join(work, "run_cli"), "--cube",
+              cli_cube, "--cube-frames", "3:3"])
+    if os.path.exists(toml_cube):
+        fail("--cube given, yet the scenario's [output] cube was written too")
+    with h5py.File(cli_cube, "r") as f:
+        if list(f["frames"][...]) != [3]:
+            fail(f"--cube-frames 3:3 over the scenario's 2:4: frames {list(f['frames'][...])}")
+    print("cube: [output] cube writes the flags' file; the flags win")
+    bad = [
+        ('[output]\ncube = "x.txt"\n', [], '[output] cube: "x.txt" is not an HDF5 file name'),
+        ('[output]\ncube_frames = "0:3"\n', [], "[output] cube_frames: needs cube"),
+        ('[output]\ncube = "c.h5"\ncube_frames = "4:2"\n', [], "LAST is before FIRST"),
+        ('[output]\ncube = "c.h5"\ncube_frames = "7:9"\n', ["--frames", "5"],
+         "[output] cube_frames starts at frame 7, past the run's 5 frames"),
+        ('[output]\ncube = "c.h5"\n', ["--cube-frames", "x"], "FIRST:LAST"),
+    ]
+    for body, extra, fragment in bad:
+        p = run(exe, [scenario("bad.toml", body)] + extra, expect_ok=False)
+        err = p.stderr.strip().splitlines()
+        if p.returncode == 0 or not err or fragment not in err[-1]:
+            fail(f"scenario {body!r} {extra}: exit {p.returncode}, stderr {p.stderr!r}, "
+                 f"expected a line with {fragment!r}")
+    print("cube: bad [output] cube keys refused before the run")
+
+
+def same_file(a, b):
+    """Every group, dataset and attribute of cube file `a` equals `b`'s (but the scenario name)."""
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        def attrs_equal(x, y, where):
+            if set(x.attrs) != set(y.attrs):
+                fail(f"{where}: attributes {sorted(x.attrs)} against {sorted(y.attrs)}")
+            for k in x.attrs:
+                if k == "scenario":
+                    continue
+                if not np.array_equal(np.asarray(x.attrs[k]), np.asarray(y.attrs[k])):
+                    fail(f"{where}: attribute {k} {x.attrs[k]!r} against {y.attrs[k]!r}")
+
+        attrs_equal(fa, fb, "/")
+        if sorted(fa.keys()) != sorted(fb.keys()):
+            fail(f"groups {sorted(fa.keys())} against {sorted(fb.keys())}")
+        for name in fa:
+            if isinstance(fa[name], h5py.Dataset):
+                if not np.array_equal(fa[name][...], fb[name][...]):
+                    fail(f"/{name} differs between {a} and {b}")
+                continue
+            attrs_equal(fa[name], fb[name], name)
+            for ds in fa[name]:
+                if not np.array_equal(fa[name][ds][...], fb[name][ds][...]):
+                    fail(f"/{name}/{ds} differs between {a} and {b}")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,9 @@
 //   - the runway's edges and threshold, found independently in the radar image (its mean, no
 //     speckle) and in the optical preview by the strongest gradient, register within a pixel;
 //   - fog of 0.05 g/m^3 dims a trihedral 1 km ahead by the two-way ITU-R P.840-9 loss within
-//     0.1 dB, the loss computed here from the Recommendation's formulas (not from radar/).
+//     0.1 dB, the loss computed here from the Recommendation's formulas (not from radar/);
+//   - every terrain cell read a sigma0 value the catalogue flags as assumed at 94 GHz, and the
+//     image reports it per material (issue 28).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -405,4 +407,27 @@ TEST_F(EvImageScenario, RunwayUnderGrassByTheCatalogueContrastAndApproachLightsA
     }
   }
   EXPECT_GE(points, 2);
+
+  // Issue 28: at 94 GHz the catalogue's grass and asphalt are assumed at every incidence (its
+  // own flags, clutter::sigma0 by name, checked here every degree), so every terrain cell of the
+  // image read a flagged value, and the image says so per material.
+  std::uint32_t catalogue = 0u;
+  for (const char* m : {"grass", "asphalt"})
+    for (int deg = 0; deg <= 89; ++deg) {
+      const std::uint32_t f = rd::clutter::sigma0(m, s.sbr.carrier_hz, rd::clutter::Sigma0Pol::kVV,
+                                                  common::radians(static_cast<double>(deg)))
+                                  .flags;
+      ASSERT_NE(f & rd::clutter::kAssumedValue, 0u) << m << " at " << deg << " deg";
+      catalogue |= f;
+    }
+  EXPECT_NE(p.sigma0_flags & rd::clutter::kAssumedValue, 0u);
+  EXPECT_EQ(p.sigma0_flags & ~catalogue, 0u);
+  ASSERT_GT(p.terrain_cells, 0u);
+  EXPECT_EQ(p.sigma0_flagged_cells, p.terrain_cells);
+  ASSERT_FALSE(p.sigma0_lines.empty());
+  for (const std::string& line : p.sigma0_lines) {
+    std::printf("flagged: %s\n", line.c_str());
+    EXPECT_NE(line.find(" at 94 GHz, "), std::string::npos) << line;
+    EXPECT_NE(line.find("catalogue: assumed value"), std::string::npos) << line;
+  }
 }

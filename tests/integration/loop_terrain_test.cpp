@@ -180,7 +180,8 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
   e.terrain_engine = true;
   e.sbr.terrain_rays = false;
 
-  const loop::RunResult with_rays = loop::ClosedLoop(s, {}).run();
+  loop::ClosedLoop rays_loop(s, {});
+  const loop::RunResult with_rays = rays_loop.run();
 
   loop::RunOptions options;
   options.progress = radar_emu::test::count_allocations_from_frame(5);
@@ -192,6 +193,36 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
   EXPECT_GT(with_engine.terrain.patches_lit, 0u);
   EXPECT_EQ(with_engine.terrain_dropped, 0u);
   EXPECT_EQ(with_engine.terrain.budget_cut, 0u);
+  // Issue 28: the engine counts the flagged sigma0 values its patches read (at 94 GHz every land
+  // value of the catalogue is assumed: clutter::sigma0 by name says so for each of the scene's
+  // terrain materials, checked at 0, 45 and 89 deg), and the report says so.
+  const loop::RunReport rep = engine_loop.report(with_engine);
+  EXPECT_TRUE(rep.sigma0_tracked);
+  EXPECT_NE(rep.sigma0_flags & radar::clutter::kAssumedValue, 0u);
+  EXPECT_DOUBLE_EQ(rep.sigma0_patch_fraction, 1.0);
+  ASSERT_FALSE(rep.sigma0_lines.empty());
+  for (const std::string& line : rep.sigma0_lines) {
+    std::printf("flagged: %s\n", line.c_str());
+    const std::string material = line.substr(0, line.find(" at 94 GHz, "));
+    ASSERT_NE(material.size(), line.size()) << line;
+    for (double deg : {0.0, 45.0, 89.0})
+      EXPECT_NE(radar::clutter::sigma0(material, e.sbr.carrier_hz, radar::clutter::Sigma0Pol::kVV,
+                                       deg * std::acos(-1.0) / 180.0)
+                        .flags &
+                    radar::clutter::kAssumedValue,
+                0u)
+          << material << " at " << deg << " deg";
+  }
+  // The terrain rays count their returns alone: every one read an assumed value here.
+  const loop::RunReport rays_rep = rays_loop.report(with_rays);
+  EXPECT_TRUE(rays_rep.sigma0_tracked);
+  EXPECT_GT(with_rays.trace.terrain_returns, 0u);
+  EXPECT_EQ(with_rays.trace.terrain_returns_flagged, with_rays.trace.terrain_returns);
+  EXPECT_NE(rays_rep.sigma0_flags & radar::clutter::kAssumedValue, 0u);
+  EXPECT_DOUBLE_EQ(rays_rep.sigma0_patch_fraction, 1.0);
+  ASSERT_EQ(rays_rep.sigma0_lines.size(), 1u);
+  EXPECT_EQ(rays_rep.sigma0_lines[0].rfind("terrain rays at 94 GHz: ", 0), 0u)
+      << rays_rep.sigma0_lines[0];
 
   const auto& a = with_rays.outcome.targets;
   const auto& b = with_engine.outcome.targets;

@@ -228,6 +228,61 @@ TEST(Scenario, MissingFileNamesThePath) {
   }
 }
 
+// Data cubes out (docs/cube.md): [output] cube and cube_frames, the path relative to the
+// scenario file, and the CLI's / Python's options replacing each key (loop::choose_cube).
+TEST(Scenario, CubeKeysAndTheCallersOptionsReplacingThem) {
+  const auto dir = std::filesystem::temp_directory_path() / "radar_emu_cube_key_test";
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream toml(dir / "s.toml");
+    toml << "[output]\ncube = \"out/c.h5\"\ncube_frames = \"2:4\"\n";
+  }
+  const loop::Scenario s = loop::load_scenario(dir / "s.toml");
+  EXPECT_EQ(s.cube_file, dir / "out/c.h5");  // beside the scenario, as its other paths
+  EXPECT_EQ(s.cube_first_frame, 2u);
+  EXPECT_EQ(s.cube_last_frame, 4u);
+  loop::RunOptions o;
+  loop::choose_cube(s, "", "", o);  // nothing on the command line: the scenario's
+  EXPECT_EQ(o.cube_file, dir / "out/c.h5");
+  EXPECT_EQ(o.cube_first_frame, 2u);
+  EXPECT_EQ(o.cube_last_frame, 4u);
+  EXPECT_NE(o.cube_file_source.find("s.toml: [output] cube"), std::string::npos);
+  loop::choose_cube(s, "cli.h5", "", o);  // --cube wins, the scenario's range stays
+  EXPECT_EQ(o.cube_file, "cli.h5");
+  EXPECT_EQ(o.cube_file_source, "--cube");
+  EXPECT_EQ(o.cube_last_frame, 4u);
+  loop::choose_cube(s, "", "0:1", o);  // --cube-frames wins, the scenario's file stays
+  EXPECT_EQ(o.cube_file, dir / "out/c.h5");
+  EXPECT_EQ(o.cube_first_frame, 0u);
+  EXPECT_EQ(o.cube_last_frame, 1u);
+  EXPECT_EQ(o.cube_frames_source, "--cube-frames");
+  // No cube anywhere: none, and a range alone is refused.
+  const loop::Scenario plain = loop::parse_scenario("", "p.toml");
+  EXPECT_TRUE(plain.cube_file.empty());
+  loop::RunOptions none;
+  loop::choose_cube(plain, "", "", none);
+  EXPECT_TRUE(none.cube_file.empty());
+  EXPECT_THROW(loop::choose_cube(plain, "", "0:3", none), std::runtime_error);
+  EXPECT_THROW(loop::choose_cube(plain, "x.txt", "", none), std::runtime_error);
+  EXPECT_THROW(loop::choose_cube(plain, "x.h5", "3", none), std::runtime_error);
+  // Bad keys: one line naming the table and the key.
+  EXPECT_NE(
+      error_of("[output]\ncube = \"c.txt\"\n").find("[output] cube: \"c.txt\" is not an HDF5"),
+      std::string::npos);
+  EXPECT_NE(error_of("[output]\ncube = 3\n").find("[output] cube"), std::string::npos);
+  EXPECT_NE(error_of("[output]\ncube_frames = \"0:3\"\n").find("[output] cube_frames: needs cube"),
+            std::string::npos);
+  EXPECT_NE(error_of("[output]\ncube = \"c.h5\"\ncube_frames = \"4:2\"\n")
+                .find("[output] cube_frames: '4:2': LAST is before FIRST"),
+            std::string::npos);
+  EXPECT_NE(error_of("[output]\ncube = \"c.h5\"\ncube_frames = \"a:b\"\n")
+                .find("[output] cube_frames: 'a:b' is not FIRST:LAST"),
+            std::string::npos);
+  EXPECT_NE(error_of("[output]\ncubes = \"c.h5\"\n").find("[output] cubes: unknown key"),
+            std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Scenario, TabulatedAntennaPatternFromCsvBesideTheScenario) {
   const auto dir = std::filesystem::temp_directory_path() / "radar_emu_pattern_test";
   std::filesystem::create_directories(dir);

@@ -503,6 +503,93 @@ TEST(TerrainEngineSar, TowerLaysOverTowardTheRadarByEqualRange) {
   EXPECT_NEAR(measured, g_top, 1.0);
 }
 
+// Issue 28: the flags of the catalogue's sigma0 values a product read. Water at 35 GHz (the NRL
+// sea-clutter curve) is flagged near nadir and not at 60-80 deg incidence; the expected flags
+// come from the catalogue itself (clutter::sigma0 by name, not the engine's table), at the
+// incidences of each grid's ranges from a radar H above a flat field.
+TEST(TerrainEngine, FlaggedSigma0ValuesAreCountedWhereTheCatalogueFlagsThem) {
+  constexpr double kF = 35e9, kH = 100.0, kDeg = kPi / 180.0;
+  scene::SceneDescription d;
+  d.materials = {{"water", {}}};
+  scene::ObjectDesc g;
+  g.name = "lake";
+  quad(g.mesh, {-200, -20, 0}, {200, -20, 0}, {200, 850, 0}, {-200, 850, 0}, 0);
+  d.objects.push_back(g);
+  const scene::Scene s(d);
+  const SurfaceSet set = resolve_surfaces(s.materials(), {kF, Polarisation::kVV, {}});
+  const cl::TerrainEngine eng = engine_of(s, set, {});
+  cl::TerrainView view;
+  view.position_m = {0.0, 0.0, kH};
+  view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
+  view.wavelength_m = kC / kF;
+  view.patch_min_m = 1.0;
+  view.shadowing = false;
+  auto run = [&](double r0, double r1, std::vector<cl::Sigma0Use>& use,
+                 std::vector<std::uint32_t>& cell_flags, std::vector<double>& mean) {
+    cl::CellGrid grid;
+    grid.azimuth_min_rad = -10.0 * kDeg;
+    grid.azimuth_step_rad = 4.0 * kDeg;
+    grid.columns = 5;
+    grid.bins = 10;
+    grid.elevation_min_rad = -1.55;
+    std::vector<double> edges;
+    for (std::size_t b = 0; b <= grid.bins; ++b)
+      edges.push_back(r0 + (r1 - r0) * static_cast<double>(b) / static_cast<double>(grid.bins));
+    grid.range_edges_m = edges;
+    use.assign(eng.materials().table.materials(), {});
+    cell_flags.assign(grid.columns * grid.bins, 0u);
+    mean.assign(grid.columns * grid.bins, 0.0);
+    return eng.integrate(view, grid, {}, mean, {}, {}, {}, use, cell_flags);
+  };
+  auto catalogue_flags = [&](double theta_rad) {
+    return cl::sigma0("water", kF, cl::Sigma0Pol::kVV, theta_rad).flags;
+  };
+  const double far_lo = std::acos(kH / 200.0), far_hi = std::acos(kH / 500.0);    // 60-78.5 deg
+  const double near_lo = std::acos(kH / 101.0), near_hi = std::acos(kH / 110.0);  // 8-24.6 deg
+  ASSERT_EQ(
+      catalogue_flags(far_lo) | catalogue_flags(0.5 * (far_lo + far_hi)) | catalogue_flags(far_hi),
+      0u);
+  const std::uint32_t near_flags = catalogue_flags(near_lo) | catalogue_flags(near_hi);
+  ASSERT_NE(near_flags, 0u);
+
+  std::vector<cl::Sigma0Use> use;
+  std::vector<std::uint32_t> cell_flags;
+  std::vector<double> mean;
+  // Far: every patch inside the curve's validity, nothing flagged, no line.
+  cl::TerrainStats st = run(200.0, 500.0, use, cell_flags, mean);
+  ASSERT_GT(st.patches_lit, 0u);
+  EXPECT_EQ(use[0].patches, st.patches_lit);
+  EXPECT_EQ(use[0].flagged_patches, 0u);
+  EXPECT_EQ(cl::sigma0_use_flags(use), 0u);
+  EXPECT_EQ(std::count_if(cell_flags.begin(), cell_flags.end(), [](auto f) { return f != 0u; }), 0);
+  EXPECT_TRUE(cl::sigma0_use_lines(use, cl::sigma0_row_names(eng.materials()), kF).empty());
+  EXPECT_DOUBLE_EQ(cl::sigma0_use_patch_fraction(use), 0.0);
+  // Near nadir: every patch flagged with the catalogue's bits, every lit cell marked, the
+  // incidence span inside the grid's.
+  st = run(101.0, 110.0, use, cell_flags, mean);
+  ASSERT_GT(st.patches_lit, 0u);
+  EXPECT_EQ(use[0].patches, st.patches_lit);
+  EXPECT_EQ(use[0].flagged_patches, st.patches_lit);
+  EXPECT_EQ(use[0].flags, near_flags);
+  EXPECT_GE(use[0].flagged_incidence_min_rad, near_lo - 0.1 * kDeg);
+  EXPECT_LE(use[0].flagged_incidence_max_rad, near_hi + 0.1 * kDeg);
+  for (std::size_t i = 0; i < mean.size(); ++i) {
+    if (mean[i] > 0.0) {
+      EXPECT_EQ(cell_flags[i], near_flags) << "cell " << i;
+    }
+  }
+  EXPECT_DOUBLE_EQ(cl::sigma0_use_patch_fraction(use), 1.0);
+  EXPECT_DOUBLE_EQ(cl::sigma0_use_power_fraction(use), 1.0);
+  const std::vector<std::string> lines =
+      cl::sigma0_use_lines(use, cl::sigma0_row_names(eng.materials()), kF);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0].rfind("water at 35 GHz, ", 0), 0u) << lines[0];
+  EXPECT_NE(lines[0].find(cl::describe_validity(near_flags)), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("(100.0 % of the terrain's patches, 100.0 % of its power)"),
+            std::string::npos)
+      << lines[0];
+}
+
 TEST(TerrainEngine, BadInputIsAClearError) {
   // A scene of metal only: no terrain.
   scene::SceneDescription d;
