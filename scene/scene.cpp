@@ -720,8 +720,11 @@ bool Scene::Impl::finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) cons
     prim = rh.hit.primID;
   }
   RTCIntersectContext ctx;
-  const double origin_offset_m = m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
-  const double direction_length = glm::length(ray.direction);
+  // Levels of detail only (most scenes have none): a square root each, per query.
+  const bool levels = !m.level_scenes.empty();
+  const double origin_offset_m =
+      levels && m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
+  const double direction_length = levels ? glm::length(ray.direction) : 0.0;
   for (const Impl::LevelBvh& l : m.level_scenes) {
     RTCRayHit rl{};
     if (!m.level_ray(l, rh.ray, origin_offset_m, direction_length, rl.ray))
@@ -763,9 +766,13 @@ bool Scene::Impl::finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) cons
     return false;
   const glm::uvec3 tri = o.mesh.triangles[prim];
   const glm::dmat4& x = m.world_from_body[object];
-  const glm::dvec3 a(x * glm::dvec4(glm::dvec3(o.mesh.positions_m[tri.x]), 1.0));
-  const glm::dvec3 b(x * glm::dvec4(glm::dvec3(o.mesh.positions_m[tri.y]), 1.0));
-  const glm::dvec3 c(x * glm::dvec4(glm::dvec3(o.mesh.positions_m[tri.z]), 1.0));
+  glm::dvec3 a(o.mesh.positions_m[tri.x]), b(o.mesh.positions_m[tri.y]),
+      c(o.mesh.positions_m[tri.z]);
+  if (x != glm::dmat4(1.0)) {  // the identity (static objects placed in world) changes nothing
+    a = glm::dvec3(x * glm::dvec4(a, 1.0));
+    b = glm::dvec3(x * glm::dvec4(b, 1.0));
+    c = glm::dvec3(x * glm::dvec4(c, 1.0));
+  }
   const glm::dvec3 e1 = b - a, e2 = c - a;
   // Double-precision refit (Moller & Trumbore, "Fast, minimum storage ray-triangle
   // intersection", JGT 1997). The triangle is the one Embree found; only t is taken from the
@@ -847,8 +854,11 @@ void Scene::intersect(std::span<const Ray> rays, std::span<Hit> hits,
 bool Scene::Impl::occluded_beyond_static(const Ray& ray, const RTCRay& r) const noexcept {
   const Impl& m = *this;
   RTCIntersectContext ctx;
-  const double origin_offset_m = m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
-  const double direction_length = glm::length(ray.direction);
+  // Levels of detail only (most scenes have none): a square root each, per query.
+  const bool levels = !m.level_scenes.empty();
+  const double origin_offset_m =
+      levels && m.view_bands ? glm::length(ray.origin_m - m.view_position_m) : 0.0;
+  const double direction_length = levels ? glm::length(ray.direction) : 0.0;
   for (const Impl::LevelBvh& l : m.level_scenes) {
     RTCRay rl{};
     if (!m.level_ray(l, r, origin_offset_m, direction_length, rl))
