@@ -75,17 +75,16 @@ double db_of_power(double p) {
   return p > 0.0 ? common::db_from_power(p) : -400.0;
 }
 
-// A stop request, heard in one process only: under mpirun every rank must run its whole block
-// (the gather waits for all of them), so a split sweep runs to its end.
-// Directions computed side by side per wave in the sweeps (sweep_rcs).
+// Directions computed side by side per wave in the sweeps (sweep_in_waves).
 constexpr std::size_t kDirectionWave = 8;
 
+// A stop request, heard in one process only: under mpirun every rank must run its whole block
+// (the gather waits for all of them), so a split sweep runs to its end.
 bool stopped(const std::atomic<int>* stop) {
   return stop != nullptr && mpi_work::launched_size() <= 1 &&
          stop->load(std::memory_order_relaxed) != 0;
 }
 
-// Physical optics is an asymptotic (high-frequency) method: flag small electrical sizes.
 // Sums the counters of one compute() call into a run's total.
 void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
   total.facets_lit += one.facets_lit;
@@ -108,6 +107,35 @@ void add_stats(radar::RcsStats& total, const radar::RcsStats& one) {
   total.edges_reflected += one.edges_reflected;
   for (std::size_t b = 0; b <= static_cast<std::size_t>(radar::kMaxRcsBounces); ++b)
     total.paths_by_bounce[b] += one.paths_by_bounce[b];
+}
+
+// The directions of this rank's block in waves (kDirectionWave), the directions of a wave side by
+// side, one TBB task each (compute() is parallel inside too): a direction's serial stages and
+// joins then leave no core idle. `one(d, stats)` computes direction d whole; its result does not
+// depend on the threading, so the output is that of one direction at a time. Progress and the
+// stop signal are checked per wave. Returns the directions done (`all` unless stopped).
+template <class ComputeOne>
+std::size_t sweep_in_waves(const mpi_work::Block& mine, std::size_t all,
+                           const std::atomic<int>* stop,
+                           const std::function<void(std::size_t)>& progress,
+                           radar::RcsStats& mine_total, ComputeOne&& one) {
+  std::array<radar::RcsStats, kDirectionWave> wave{};
+  for (std::size_t w = mine.begin; w < mine.end; w += kDirectionWave) {
+    if (stopped(stop))
+      return w;
+    const std::size_t w_end = std::min(mine.end, w + kDirectionWave);
+    tbb::parallel_for(w, w_end, [&](std::size_t d) {
+      radar::RcsStats& st = wave[d - w];
+      st = {};
+      one(d, st);
+    });
+    for (std::size_t d = w; d < w_end; ++d) {
+      add_stats(mine_total, wave[d - w]);
+      if (progress)
+        progress(d - mine.begin + 1);
+    }
+  }
+  return all;
 }
 
 // Adds a sweep's counters to `total`: this rank's `mine`; on rank 0 of an MPI split, every
@@ -138,7 +166,8 @@ void warn_cut_off(const radar::RcsStats& stats, int bounces) {
                bounces, radar::kMaxRcsBounces);
 }
 
-// A warning: printed whatever -q says (-q silences progress and the summary only).
+// Physical optics is an asymptotic (high-frequency) method: flag small electrical sizes. A
+// warning: printed whatever -q says (-q silences progress and the summary only).
 void warn_electrical_size(const radar::RcsEngine& engine, double f_min_hz) {
   const double ka =
       2.0 * radar::kPi * f_min_hz / radar::kSpeedOfLight_mps * engine.bounding_radius_m();
@@ -535,36 +564,17 @@ std::size_t sweep_rcs(const radar::RcsEngine& engine, std::span<const double> th
   // whole, exactly as in one process. MPI ranks take contiguous blocks (mpi_work.hpp).
   const mpi_work::Block mine = mpi_work::my_block(nt * np);
   radar::RcsStats mine_total;
-  std::size_t done = nt * np;
-  // Directions go in waves (kDirectionWave), the directions of a wave side by side, one TBB task
-  // each (compute() is parallel inside too): a direction's serial stages and joins then leave
-  // no core idle. Each direction's result does not depend on the threading, so the output is
-  // the same as one direction at a time; progress and the stop signal are checked per wave.
-  std::array<radar::RcsStats, kDirectionWave> wave{};
-  for (std::size_t w = mine.begin; w < mine.end; w += kDirectionWave) {
-    if (stopped(stop)) {
-      done = w;
-      break;
-    }
-    const std::size_t w_end = std::min(mine.end, w + kDirectionWave);
-    tbb::parallel_for(w, w_end, [&](std::size_t d) {
-      const std::size_t it = d / np, ip = d % np;
-      const radar::Direction tx{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
-      const radar::Direction rx = bistatic_deg
-                                      ? radar::Direction{common::radians(bistatic_deg->first),
-                                                         common::radians(bistatic_deg->second)}
-                                      : tx;
-      radar::RcsStats& one = wave[d - w];
-      one = {};
-      engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
-      per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
-    });
-    for (std::size_t d = w; d < w_end; ++d) {
-      add_stats(mine_total, wave[d - w]);
-      if (progress)
-        progress(d - mine.begin + 1);
-    }
-  }
+  const std::size_t done = sweep_in_waves(
+      mine, nt * np, stop, progress, mine_total, [&](std::size_t d, radar::RcsStats& one) {
+        const std::size_t it = d / np, ip = d % np;
+        const radar::Direction tx{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
+        const radar::Direction rx = bistatic_deg
+                                        ? radar::Direction{common::radians(bistatic_deg->first),
+                                                           common::radians(bistatic_deg->second)}
+                                        : tx;
+        engine.compute(tx, rx, freqs_hz, s.subspan(d * nf, nf), one);
+        per_direction[d] = {one.facets_lit, one.facets_partial, one.tubes_cut_off, one.edges_used};
+      });
   mpi_work::gather_blocks(s, nf);
   mpi_work::gather_blocks(per_direction);
   add_gathered_stats(total, mine_total);
@@ -585,29 +595,13 @@ std::size_t sweep_profile(const radar::RcsEngine& engine, std::span<const double
   // The work items are the angles, all frequencies each (as sweep_rcs), split over MPI ranks.
   const mpi_work::Block mine = mpi_work::my_block(na);
   radar::RcsStats mine_total;
-  std::size_t done = na;
-  // In waves of angles side by side, as sweep_rcs.
-  std::array<radar::RcsStats, kDirectionWave> wave{};
-  for (std::size_t w = mine.begin; w < mine.end; w += kDirectionWave) {
-    if (stopped(stop)) {
-      done = w;
-      break;
-    }
-    const std::size_t w_end = std::min(mine.end, w + kDirectionWave);
-    tbb::parallel_for(w, w_end, [&](std::size_t a) {
-      const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
-      const radar::Direction dir{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
-      radar::RcsStats& one = wave[a - w];
-      one = {};
-      engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), one);
-      edges_used[a] = one.edges_used;
-    });
-    for (std::size_t a = w; a < w_end; ++a) {
-      add_stats(mine_total, wave[a - w]);
-      if (progress)
-        progress(a - mine.begin + 1);
-    }
-  }
+  const std::size_t done = sweep_in_waves(
+      mine, na, stop, progress, mine_total, [&](std::size_t a, radar::RcsStats& one) {
+        const std::size_t it = nt > 1 ? a : 0, ip = np > 1 ? a : 0;
+        const radar::Direction dir{common::radians(theta_deg[it]), common::radians(phi_deg[ip])};
+        engine.compute(dir, dir, freqs_hz, s.subspan(a * nf, nf), one);
+        edges_used[a] = one.edges_used;
+      });
   mpi_work::gather_blocks(s, nf);
   mpi_work::gather_blocks(edges_used);
   add_gathered_stats(total, mine_total);
