@@ -19,6 +19,7 @@
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/products/terrain_returns.hpp"
+#include "radar/sensor/capture_storage.hpp"
 #include "radar/sensor/noise.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "scene/airport_gen.hpp"
@@ -170,33 +171,13 @@ BENCHMARK(BM_Sensor)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime
 
 // Data cubes out (`run --cube`, docs/cube.md): storage for one captured frame, as
 // loop/outputs/cube_writer.cpp allocates a slot.
-struct CaptureStorage {
-  explicit CaptureStorage(const radar::Sensor& sensor) {
-    const radar::CaptureShape shape = sensor.capture_shape();
-    image.resize(shape.image_values());
-    power.resize(shape.image_values());
-    synthesised.resize(shape.beams * shape.velocity_bins);
-    alarms.resize(shape.beams * 256);
-    alarm_count.resize(shape.beams);
-    returns.resize(std::size_t{1} << 17);
-    raw.resize(shape.raw_values());
-    workspace = sensor.make_raw_workspace();
-    capture.image = image;
-    capture.power = power;
-    capture.synthesised = synthesised;
-    capture.false_alarms = alarms;
-    capture.false_alarm_count = alarm_count;
-    capture.returns = returns;
-  }
-  std::vector<std::complex<float>> image;
-  std::vector<float> power;
-  std::vector<radar::RowSpan> synthesised;
-  std::vector<radar::FalseAlarm> alarms;
-  std::vector<std::uint32_t> alarm_count;
-  std::vector<radar::CapturedReturn> returns;
+struct CaptureStorage : radar::CaptureStorage {
+  explicit CaptureStorage(const radar::Sensor& sensor)
+      : radar::CaptureStorage(sensor.capture_shape(), 256, std::size_t{1} << 17),
+        raw(sensor.capture_shape().raw_values()),
+        workspace(sensor.make_raw_workspace()) {}
   std::vector<std::complex<float>> raw;
   std::unique_ptr<radar::Sensor::RawWorkspace> workspace;
-  radar::SensorCapture capture;
 };
 
 // The frame path's share of a captured frame, on one thread (so that CPU time counts all the

@@ -9,6 +9,7 @@
 #include <string_view>
 
 #include "radar/constants.hpp"
+#include "radar/sensor/capture_storage.hpp"
 #include "radar/sensor/waveform.hpp"
 
 namespace radar_emu::loop {
@@ -59,14 +60,8 @@ std::uint64_t cube_bytes_per_frame(const radar::CaptureShape& shape) noexcept {
   return 8ull * (shape.raw_values() + shape.image_values());
 }
 
-struct CubeWriter::Slot {
-  std::vector<std::complex<float>> image;
-  std::vector<float> power;
-  std::vector<radar::RowSpan> synthesised;
-  std::vector<radar::FalseAlarm> alarms;
-  std::vector<std::uint32_t> alarm_count;
-  std::vector<radar::CapturedReturn> returns;
-  radar::SensorCapture capture;
+struct CubeWriter::Slot : radar::CaptureStorage {
+  using radar::CaptureStorage::CaptureStorage;
   FrameRecord record{};
   std::vector<radar::Detection> detections;
   std::size_t detection_count = 0;
@@ -259,26 +254,13 @@ CubeWriter::CubeWriter(CubeWriterConfig config) : config_(std::move(config)) {
     throw std::runtime_error(where + ": cannot write the file's attributes");
 
   // Slots and the writer's buffers: everything the frames need, now.
-  const std::size_t beams = shape_.beams;
   const std::size_t n_slots = config_.slots > 0 ? config_.slots
                               : config_.wait_when_full
                                   ? 2
                                   : static_cast<std::size_t>(std::min<std::uint64_t>(n_frames, 4));
   for (std::size_t i = 0; i < n_slots; ++i) {
-    auto s = std::make_unique<Slot>();
-    s->image.resize(shape_.image_values());
-    s->power.resize(shape_.image_values());
-    s->synthesised.resize(beams * shape_.velocity_bins);
-    s->alarms.resize(beams * config_.max_false_alarms_per_beam);
-    s->alarm_count.resize(beams);
-    s->returns.resize(config_.max_returns);
+    auto s = std::make_unique<Slot>(shape_, config_.max_false_alarms_per_beam, config_.max_returns);
     s->detections.resize(sc.max_detections);
-    s->capture.image = s->image;
-    s->capture.power = s->power;
-    s->capture.synthesised = s->synthesised;
-    s->capture.false_alarms = s->alarms;
-    s->capture.false_alarm_count = s->alarm_count;
-    s->capture.returns = s->returns;
     slots_.push_back(std::move(s));
   }
   raw_.resize(shape_.raw_values());

@@ -12,6 +12,7 @@
 #include <random>
 #include <vector>
 
+#include "radar/sensor/capture_storage.hpp"
 #include "radar/sensor/noise.hpp"
 #include "radar/sensor/range_doppler.hpp"
 #include "radar/sensor/sensor.hpp"
@@ -38,33 +39,15 @@ rd::Waveform pulsed() {
 }
 
 // Storage for one captured frame, as loop/outputs/cube_writer.cpp allocates a slot.
-struct Storage {
-  explicit Storage(const rd::Sensor& sensor) : shape(sensor.capture_shape()) {
-    image.resize(shape.image_values());
-    power.resize(shape.image_values());
-    synthesised.resize(shape.beams * shape.velocity_bins);
-    alarms.resize(shape.beams * 64);
-    alarm_count.resize(shape.beams);
-    returns.resize(4096);
-    raw.resize(shape.raw_values());
-    workspace = sensor.make_raw_workspace();
-    capture.image = image;
-    capture.power = power;
-    capture.synthesised = synthesised;
-    capture.false_alarms = alarms;
-    capture.false_alarm_count = alarm_count;
-    capture.returns = returns;
-  }
+struct Storage : rd::CaptureStorage {
+  explicit Storage(const rd::Sensor& sensor)
+      : rd::CaptureStorage(sensor.capture_shape(), 64, 4096),
+        shape(sensor.capture_shape()),
+        raw(shape.raw_values()),
+        workspace(sensor.make_raw_workspace()) {}
   rd::CaptureShape shape;
-  std::vector<std::complex<float>> image;
-  std::vector<float> power;
-  std::vector<rd::RowSpan> synthesised;
-  std::vector<rd::FalseAlarm> alarms;
-  std::vector<std::uint32_t> alarm_count;
-  std::vector<rd::CapturedReturn> returns;
   std::vector<std::complex<float>> raw;
   std::unique_ptr<rd::Sensor::RawWorkspace> workspace;
-  rd::SensorCapture capture;
 };
 
 rd::SensorConfig three_beams() {
