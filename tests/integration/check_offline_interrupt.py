@@ -47,15 +47,12 @@ import subprocess
 import sys
 import time
 
+import cli_check
+from cli_check import check, failures, finish
+
 exe, src, work = sys.argv[1], sys.argv[2], sys.argv[3]
 os.makedirs(work, exist_ok=True)
-failures = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        failures.append(what)
+cli_check.verbose = True  # an "ok" line for every check that passes
 
 
 def run_on_pty(args, signal_when=None, sig=signal.SIGINT, timeout_s=120.0):
@@ -364,7 +361,4 @@ else:
     check(code == 130 and len(msgs) == 1 and "the scene was generated whole and is written to"
           in msgs[0], f"scene gen: status {code}, one message: {msgs}")
 
-if failures:
-    print(f"{len(failures)} check(s) failed")
-    sys.exit(1)
-print("all checks passed")
+finish()

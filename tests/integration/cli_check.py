@@ -4,12 +4,15 @@ import subprocess
 import sys
 
 failures = []
+verbose = False  # a script that sets it also prints a line for each check that passes
 
 
 def check(cond, what):
     if not cond:
         failures.append(what)
         print("FAIL:", what)
+    elif verbose:
+        print("ok  ", what)
 
 
 def runner(exe):
@@ -32,3 +35,5 @@ def write_series(path, values):
 def finish():
     if failures:
         sys.exit(f"{len(failures)} failure(s)")
+    if verbose:
+        print("all checks passed")
