@@ -209,9 +209,10 @@ TerrainEngine::TerrainEngine(const scene::Scene& scene, TerrainMaterials materia
     for (std::size_t m = 0; m < materials_.names.size(); ++m)
       names += (names.empty() ? "" : ", ") + materials_.names[m] +
                (materials_.sigma0_row[m] >= 0 ? "" : " (no sigma0)");
-    fail(std::string("the scene has no terrain") + (spec_.clip_to_region ? " in the region" : "") +
-         ": no static non-structure triangle of a material with a sigma0 (materials: " + names +
-         ")");
+    throw NoTerrain(std::string("terrain engine: the scene has no terrain") +
+                    (spec_.clip_to_region ? " in the region" : "") +
+                    ": no static non-structure triangle of a material with a sigma0 (materials: " +
+                    names + ")");
   }
 }
 
@@ -527,6 +528,7 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
     uniform =
         std::abs(e0[b] - (e0[0] + static_cast<double>(b) * edge_step)) <= 1e-9 * e0[grid.bins];
   const double inv_edge_step = uniform ? 1.0 / edge_step : 0.0;
+  const bool spread = view.spread_range && uniform;
 
   // Whether a sphere (centre, radius) can meet the window [r_lo, r_hi] x [az_lo, az_hi] x
   // [el_lo, el_hi]: range, then angles; its distance from the radar in rc.
@@ -779,6 +781,10 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
     }
     const double patch_area_m2 = f.area_m2 / static_cast<double>(count);
     const std::uint64_t key0 = mix64((static_cast<std::uint64_t>(fi) << 20) ^ n);
+    // The patches' edges (spread_range): the facet's edges / n, the same for every patch.
+    const double inv_n = 1.0 / static_cast<double>(n);
+    const glm::dvec3 pe1 = (f.b_m - f.a_m) * inv_n, pe2 = (f.c_m - f.a_m) * inv_n;
+    const glm::dvec3 pe3 = pe2 - pe1;
     st.patches += count;
     for_each_patch(f, n, [&](const glm::dvec3& centre, std::uint32_t k) {
       const glm::dvec3 d = centre - view.position_m;
@@ -866,9 +872,32 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
       if (view.one_way_loss_db_per_m > 0.0)
         power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
       const std::size_t cell = bin * grid.columns + col;
-      mean[cell] += power;
-      if (!elevation_power.empty())
-        elevation_power[cell] += power * sin_el;
+      const double half_m =
+          spread ? 0.5 * std::max({std::abs(glm::dot(u, pe1)), std::abs(glm::dot(u, pe2)),
+                                   std::abs(glm::dot(u, pe3))})
+                 : 0.0;
+      if (half_m > 1e-6 * edge_step) {
+        // The box [range - h, range + h] over the bins it overlaps, clipped to the grid (what
+        // falls outside is lost, as for a patch outside). Weights sum to 1 inside the grid.
+        const double lo = range - half_m, hi = range + half_m, inv_len = 0.5 / half_m;
+        const auto b_lo = static_cast<std::size_t>(std::clamp(
+            std::floor((lo - e[0]) * inv_edge_step), 0.0, static_cast<double>(grid.bins - 1)));
+        const auto b_hi = static_cast<std::size_t>(std::clamp(
+            std::floor((hi - e[0]) * inv_edge_step), 0.0, static_cast<double>(grid.bins - 1)));
+        for (std::size_t b = b_lo; b <= b_hi; ++b) {
+          const double w = (std::min(hi, e[b + 1]) - std::max(lo, e[b])) * inv_len;
+          if (!(w > 0.0))
+            continue;
+          const std::size_t c = b * grid.columns + col;
+          mean[c] += w * power;
+          if (!elevation_power.empty())
+            elevation_power[c] += w * power * sin_el;
+        }
+      } else {
+        mean[cell] += power;
+        if (!elevation_power.empty())
+          elevation_power[cell] += power * sin_el;
+      }
       if (!sigma0_use.empty() || !cell_flags.empty()) {  // issue 28: flagged sigma0 values
         const std::uint32_t flags = sigma0_flags(f, cos_inc);
         if (f.sigma0_row < sigma0_use.size())

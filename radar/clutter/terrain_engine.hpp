@@ -70,6 +70,7 @@
 #include <functional>
 #include <glm/glm.hpp>
 #include <span>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -168,6 +169,15 @@ struct TerrainView {
   Shadow shadow_method = Shadow::kRays;
   double horizon_azimuth_rad = 0.0;  ///< horizon column width; 0: half the grid's column
   double horizon_rho_m = 0.0;        ///< horizon bin along rho = R cos(el); 0: patch_min_m
+  /// Each patch's mean power (mean, elevation_power) spread over the range bins its own range
+  /// extent covers, in proportion to the overlap of a box of that extent centred on the patch
+  /// (uniform range edges only), instead of all of it into its centroid's bin. For patches longer
+  /// in range than a bin: near grazing a patch sized to the azimuth cell (patch_angle_rad) spans
+  /// several range bins, and put whole into one it leaves its neighbours empty, a comb along
+  /// range that a CFAR reads as targets. The patch's extent along the line of sight u is
+  /// max |u . e| over its three edges e (the facet's edges / n). The speckle field stays at the
+  /// centroid's bin.
+  bool spread_range = false;
   /// Atmospheric loss, one way [dB/m] >= 0: each patch's power times 10^(-2 L R / 10)
   /// (radar/propagation/path.hpp's two-way loss, applied per patch at its own range).
   double one_way_loss_db_per_m = 0.0;
@@ -186,6 +196,14 @@ struct TerrainStats {
   std::uint64_t horizon_patches = 0;    ///< kHorizon: points of pass 1 (the horizon's samples)
   std::uint64_t occlusion_queries = 0;  ///< Embree occlusion queries made
   std::uint64_t horizon_coarsened = 0;  ///< kHorizon: scratch too small, bins widened
+};
+
+/// The engine's setup error for a scene with no terrain (no static non-structure triangle of a
+/// material with a sigma0), apart from its other errors: a caller may fall back on it (the closed
+/// loop's default engine over a scene of metal alone: no terrain clutter, with a warning).
+class NoTerrain : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
 };
 
 class TerrainEngine {

@@ -7,6 +7,8 @@
 //    DEM): a ridge's shadow ends where the line of sight over its crest meets the ground, and a
 //    tower's wall lays over toward the radar by the displacement of equal slant range (h cot
 //    theta in the far field), each within one pixel;
+//  - patches longer in range than a bin, spread over the bins they cover, follow that closed form
+//    per bin (put whole into one bin they leave a comb);
 //  - the frame path does not allocate; bad input is a clear error; a DEM hole is flagged.
 #include "radar/clutter/terrain_engine.hpp"
 
@@ -171,6 +173,77 @@ TEST(TerrainEngine, HomogeneousFieldCellMeanAndExponentialIntensity) {
   EXPECT_EQ(sh.patches_lit, st.patches_lit);
   for (std::size_t c = 0; c < cells; ++c)
     EXPECT_NEAR(mean_h[c], mean[c], 1e-9 * mean[c]);
+}
+
+// Patches longer in range than a bin (the loop's far cells: a patch sized to the azimuth cell,
+// range bins of 3 m): put whole into its centroid's bin, the field's cell means are a comb
+// along range (bins with no centroid stay empty, a CFAR reads the others as targets); spread
+// over the bins their range extent covers (TerrainView::spread_range) they follow the closed
+// form of the first test, and the total is unchanged.
+TEST(TerrainEngine, PatchesLongerThanABinAreSpreadOverTheBinsTheyCover) {
+  constexpr double kF = 94e9, kH = 30.0, kDeg = kPi / 180.0;
+  scene::SceneDescription d;
+  d.materials = {{"grass", {}}};
+  scene::ObjectDesc g;
+  g.name = "field";
+  quad(g.mesh, {-300, 200, 0}, {300, 200, 0}, {300, 800, 0}, {-300, 800, 0}, 0);
+  d.objects.push_back(g);
+  const scene::Scene s(d);
+  const SurfaceSet set = resolve_surfaces(s.materials(), {kF, Polarisation::kVV, {}});
+  const cl::TerrainEngine eng = engine_of(s, set, {});
+  cl::TerrainView view;
+  view.position_m = {0.0, 0.0, kH};
+  view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
+  view.wavelength_m = kC / kF;
+  view.patch_min_m = 10.0;  // five 2 m bins
+  cl::CellGrid grid;
+  grid.azimuth_min_rad = -10.0 * kDeg;
+  grid.azimuth_step_rad = 5.0 * kDeg;
+  grid.columns = 4;
+  grid.bins = 100;
+  std::vector<double> edges;
+  for (std::size_t b = 0; b <= grid.bins; ++b)
+    edges.push_back(400.0 + 2.0 * static_cast<double>(b));
+  grid.range_edges_m = edges;
+  const std::size_t cells = grid.columns * grid.bins;
+  std::vector<double> whole(cells, 0.0), spread(cells, 0.0);
+  (void)eng.integrate(view, grid, {}, whole);
+  cl::TerrainView sv = view;
+  sv.spread_range = true;
+  (void)eng.integrate(sv, grid, {}, spread);
+
+  // Per bin, summed over the four columns (the 20 deg sector; what a patch's azimuth does at the
+  // columns' edges is not under test), against the closed form of the annulus (as above).
+  double worst_whole_db = 0.0, worst_spread_db = 0.0, total_whole = 0.0, total_spread = 0.0;
+  for (std::size_t b = 0; b < grid.bins; ++b) {
+    const double rho1 = std::sqrt(edges[b] * edges[b] - kH * kH);
+    const double rho2 = std::sqrt(edges[b + 1] * edges[b + 1] - kH * kH);
+    double ring = 0.0;
+    const double step = 1e-3;
+    for (double rho = rho1 + step / 2; rho < rho2; rho += step)
+      ring += static_cast<double>(
+                  set.sigma0_table.lookup(0, cl::Sigma0Table::kVV, kH / std::hypot(rho, kH))) *
+              rho * step;
+    const double expected = ring * 20.0 * kDeg;
+    double w = 0.0, sp = 0.0;
+    for (std::size_t c = 0; c < grid.columns; ++c) {
+      w += whole[b * grid.columns + c];
+      sp += spread[b * grid.columns + c];
+    }
+    total_whole += w;
+    total_spread += sp;
+    // The first and last patch length of bins: the box reaches past the grid there.
+    if (b < 5 || b + 5 >= grid.bins)
+      continue;
+    worst_whole_db = std::max(worst_whole_db, w > 0.0 ? std::abs(db(w / expected)) : 99.0);
+    worst_spread_db = std::max(worst_spread_db, std::abs(db(sp / expected)));
+  }
+  std::cout << "patch 10 m over 2 m bins: worst bin vs closed form " << worst_whole_db
+            << " dB whole, " << worst_spread_db << " dB spread; totals " << total_whole << " / "
+            << total_spread << " m^2\n";
+  EXPECT_GT(worst_whole_db, 3.0);  // the comb
+  EXPECT_LT(worst_spread_db, 1.0);
+  EXPECT_NEAR(total_spread / total_whole, 1.0, 0.02);
 }
 
 // ------------------------------------------------------------------ the horizon sweep
