@@ -28,6 +28,7 @@
 #include "loop/ownship_source.hpp"
 #include "loop/peers.hpp"
 #include "loop/scene_import.hpp"
+#include "radar/clutter/terrain_engine.hpp"
 #include "radar/em/surfaces.hpp"
 #include "radar/propagation/itu.hpp"
 #include "radar/propagation/path.hpp"
@@ -328,15 +329,23 @@ struct SceneSide {
 };
 
 // The SBR tracer, the terrain engine's cells ([radar] terrain = "engine"), their contribution
-// buffer (the tracer's returns, then the cells') and the path loss every return takes.
+// buffer (the tracer's returns, then the cells') and the path loss every return takes. A scene
+// with no terrain (metal alone) has no terrain clutter: the engine is left out, and no_terrain
+// says why (a setup warning).
 struct TracerSide {
   TracerSide(const scene::Scene& scene, const Scenario& s) : tracer(scene, s.sbr) {
-    if (s.terrain_engine)
-      terrain.emplace(scene, tracer, terrain_returns_config(s));
+    if (s.terrain_engine) {
+      try {
+        terrain.emplace(scene, tracer, terrain_returns_config(s));
+      } catch (const radar::clutter::NoTerrain& e) {
+        no_terrain = std::string(e.what()) + ": no terrain clutter";
+      }
+    }
     contributions.resize(tracer.max_contributions() + (terrain ? terrain->max_returns() : 0));
   }
   radar::SbrTracer tracer;
   std::optional<radar::TerrainReturns> terrain;
+  std::string no_terrain;  ///< why the engine was left out; empty when it runs
   std::vector<radar::Contribution> contributions;
   WeatherFigures weather;  ///< [weather] one-way; all 0: free space
 };
@@ -460,6 +469,8 @@ struct ClosedLoop::Impl {
     outcome.emplace(association_gate(s, sensor.sensor), scene.truth_objects,
                     s.sensor.max_detections, scene.truth_objects.size());
     warn_targets_never_in_beam(s, scene.scene, warnings);
+    if (!tracer.no_terrain.empty())
+      warnings.push_back(tracer.no_terrain);
     if (!scene.scene.incomplete().empty()) {  // a `scene import` stopped early
       warnings.push_back((s.scene_file.empty() ? std::string("the scene") : s.scene_file.string()) +
                          ": an incomplete scene database (" + scene.scene.incomplete() + ")");
@@ -629,8 +640,10 @@ void ClosedLoop::Impl::trace(Frame& f) {
                 tracer.tracer.trace(f.pose, all.first(cap), r.trace, f.decision->knobs);  // adds
           },
           [&] {
+            // The governor's terrain knob coarsens the engine's patches as the terrain rays.
             f.terrain_returns =
-                tracer.terrain->compute(f.pose, all.subspan(cap), r.terrain, r.terrain_dropped);
+                tracer.terrain->compute(f.pose, all.subspan(cap), r.terrain, r.terrain_dropped,
+                                        f.decision->knobs.terrain_spacing_scale);
           });
       std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), f.terrain_returns,
                   all.begin() + static_cast<std::ptrdiff_t>(f.contributions));

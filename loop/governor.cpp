@@ -86,10 +86,11 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
 }
 
 double FidelityGovernor::model_trace_ms(double rays) const noexcept {
-  // The rays, and the terrain engine's patches (as many as the previous frame's: the engine
-  // does not follow the level).
-  return 1e-6 *
-         (config_.trace_ns_per_ray * rays + config_.terrain_ns_per_patch * prev_terrain_patches_);
+  // The rays, and the terrain engine's patches: the previous frame's, as the square of the patch
+  // size scale it used over this level's (TerrainReturns::compute's patch_scale).
+  const double s = prev_terrain_scale_ / decision_.knobs.terrain_spacing_scale;
+  return 1e-6 * (config_.trace_ns_per_ray * rays +
+                 config_.terrain_ns_per_patch * prev_terrain_patches_ * s * s);
 }
 
 double FidelityGovernor::model_sensor_ms(double rays) const noexcept {
@@ -223,6 +224,7 @@ void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t 
   prev_returns_ = static_cast<double>(returns);
   prev_cells_ = static_cast<double>(cells_synthesised);
   prev_terrain_patches_ = static_cast<double>(terrain_patches);
+  prev_terrain_scale_ = decision_.knobs.terrain_spacing_scale;  // the level that frame ran at
   prev_terrain_returns_ = static_cast<double>(std::min(terrain_returns, returns));
 }
 

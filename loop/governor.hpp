@@ -4,11 +4,12 @@
 //
 // Levels. Level 0 is the scenario's own fidelity ([radar] ray spacings, bounces). Each level up
 // halves the rays of a target bundle (bundle spacing x sqrt 2) and coarsens the terrain grid by
-// 2^(1/4) (its rays x 0.71); from level kBounceLevel on, rays bounce one time less (at least
-// twice: the target-ground double bounce and dihedrals stay); from level kFacetLevel on, bounce
-// 1 judges each facet by its centroid's visibility alone (TraceKnobs::facet_centroid_only: a
-// seventh of the facet pass's occlusion queries, which dominate targets of tens of thousands of
-// facets over the 207k-triangle terrain). Up to kMaxLevel.
+// 2^(1/4) (its rays x 0.71), or with the terrain engine its patches by the same factor (their
+// count x 0.71; the cells and their mean power stay); from level kBounceLevel on, rays bounce one
+// time less (at least twice: the target-ground double bounce and dihedrals stay); from level
+// kFacetLevel on, bounce 1 judges each facet by its centroid's visibility alone
+// (TraceKnobs::facet_centroid_only: a seventh of the facet pass's occlusion queries, which dominate
+// targets of tens of thousands of facets over the 207k-triangle terrain). Up to kMaxLevel.
 //
 // Where the rays go. Above level 0 a target's level is the frame's level plus its "rank", at
 // most the frame's level again: rank 0 for targets whose expected SNR is within kRankStep_db of
@@ -23,7 +24,7 @@
 // Cost model. predicted = trace + sensor, with
 //   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
 //          + terrain_ns_per_patch x the terrain engine's patches of the previous frame
-//            ([radar] terrain = "engine": the engine's cost does not follow the level)
+//            x (its patch scale / this level's)^2 ([radar] terrain = "engine")
 //   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
 //          + sensor_ns_per_return x (the previous frame's ray returns x (rays / its rays)
 //                                    + its terrain engine returns)
@@ -142,6 +143,7 @@ class FidelityGovernor {
   // The previous frame, for the sensor term.
   double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;
   double prev_terrain_patches_ = 0.0, prev_terrain_returns_ = 0.0;
+  double prev_terrain_scale_ = 1.0;  ///< the engine's patch scale of the previous frame
   /// The model's trace and sensor terms [ms] at `rays` (factors not applied).
   [[nodiscard]] double model_trace_ms(double rays) const noexcept;
   [[nodiscard]] double model_sensor_ms(double rays) const noexcept;

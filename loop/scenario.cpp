@@ -106,8 +106,9 @@ max_range_m = 6000.0        # swath end: 1502 range bins of 3 m
 range_window = "hann"       # rectangular | hann | hamming | blackman | taylor
 doppler_window = "hann"
 max_bounces = 3
-terrain = "rays"            # terrain clutter: "rays" (the tracer's terrain grid) | "engine" (per cell)
-terrain_ray_spacing_deg = 0.0573   # 1 mrad
+terrain = "engine"          # terrain clutter: "engine" (per range-azimuth cell) | "rays" (the
+                            # tracer's terrain grid)
+terrain_ray_spacing_deg = 0.0573   # 1 mrad: terrain rays' grid; the tracer's terrain detail
 target_ray_spacing_m = 0.1
 max_rays_per_target = 20000 # bundles of larger targets (the parked transports) coarsen (counted)
 edges = true                # edge diffraction (PTD fringe edge currents) of the targets' wedges

@@ -1,5 +1,7 @@
 #include "tools/tradeoff.hpp"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -31,6 +33,7 @@
 #include "radar/em/rcs.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/products/range_profile.hpp"
+#include "radar/products/terrain_returns.hpp"
 #include "radar/reference/mie.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "radar/sensor/waveform.hpp"
@@ -46,6 +49,7 @@ using loop::FidelityGovernor;
 using loop::parse_scenario;
 using loop::Scenario;
 using loop::scene_description;
+using loop::terrain_returns_config;
 using plot::LineChart;
 using plot::Series;
 using plot::series_colour;
@@ -524,12 +528,15 @@ struct FrameSetting {
   /// >= 0: the scenario's own sampling (the first four fields ignored but pulses) at this level
   /// of the fidelity governor (loop/governor.hpp).
   int governor_level = -1;
+  /// [radar] terrain = "engine": the engine's column width [rad]; 0: the scenario's.
+  double terrain_cell_rad = 0.0;
 };
 
 struct FrameResult {
   std::vector<radar::Detection> detections;
   double trace_ms = 0.0, sensor_ms = 0.0;
   std::uint64_t rays = 0, coarsened = 0, contributions = 0;
+  std::uint64_t terrain_returns = 0;  ///< the terrain engine's cells ([radar] terrain = "engine")
 };
 
 class FrameBench {
@@ -575,7 +582,17 @@ class FrameBench {
     view.angular_cell_rad = c.terrain_ray_spacing_rad;
     scene_.set_view(view);
     radar::SbrTracer tracer(scene_, c);
-    std::vector<radar::Contribution> contributions(tracer.max_contributions());
+    // [radar] terrain = "engine" (the default): terrain clutter from the engine's cells, as the
+    // closed loop takes it (loop/closed_loop.cpp); the tracer's terrain rays are off.
+    std::optional<radar::TerrainReturns> terrain;
+    if (s_.terrain_engine) {
+      radar::TerrainReturnsConfig tc = terrain_returns_config(s_);
+      if (f.terrain_cell_rad > 0.0)
+        tc.azimuth_cell_rad = f.terrain_cell_rad;
+      terrain.emplace(scene_, tracer, tc);
+    }
+    const std::size_t cap = tracer.max_contributions();
+    std::vector<radar::Contribution> contributions(cap + (terrain ? terrain->max_returns() : 0));
     FrameResult r;
     radar::TraceStats ts;
     radar::SensorConfig sc = s_.sensor;
@@ -591,7 +608,25 @@ class FrameBench {
       knobs = governor->decide_at(pose_, f.governor_level).knobs;
     }
     auto t0 = Clock::now();
-    const std::size_t n = tracer.trace(pose_, contributions, ts, knobs);
+    std::size_t n = 0;
+    if (terrain) {
+      // Beside each other on TBB, each into its own part of the buffer, as in the loop.
+      const std::span<radar::Contribution> all(contributions);
+      std::size_t m = 0;
+      radar::clutter::TerrainStats es;
+      std::uint64_t dropped = 0;
+      tbb::parallel_invoke([&] { n = tracer.trace(pose_, all.first(cap), ts, knobs); },
+                           [&] {
+                             m = terrain->compute(pose_, all.subspan(cap), es, dropped,
+                                                  knobs.terrain_spacing_scale);
+                           });
+      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), m,
+                  all.begin() + static_cast<std::ptrdiff_t>(n));
+      n += m;
+      r.terrain_returns = m;
+    } else {
+      n = tracer.trace(pose_, contributions, ts, knobs);
+    }
     r.trace_ms = ms_since(t0);
     r.rays = ts.rays;
     r.coarsened = ts.coarsened_bundles;
@@ -607,6 +642,7 @@ class FrameBench {
     return r;
   }
   [[nodiscard]] const Scenario& scenario() const noexcept { return s_; }
+  void set_max_rays_per_target(std::size_t n) noexcept { max_rays_per_target_ = n; }
   [[nodiscard]] double range_cell_m() const noexcept { return range_cell_m_; }
 
  private:
@@ -676,36 +712,57 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
   // Reference: every knob at its finest, the others held there while one knob moves. The
   // per-target ray cap is raised so that a bundle's spacing is the knob's value (the default
   // scenario caps bundles at 20,000 rays and coarsens the larger ones).
-  FrameSetting ref_setting{0.05, 0.5e-3, 4, 64};
+  // With the terrain engine (the default scenario's [radar] terrain = "engine") the terrain
+  // knob is the engine's column width (0.25 deg in the reference, a quarter of the beamwidth);
+  // with the tracer's terrain rays, their spacing.
+  const double deg = common::kRadPerDeg;
+  FrameSetting ref_setting{0.05, 0.5e-3, 4, 64, -1, 0.25 * deg};
   std::size_t cap = 100'000;
   std::vector<FrameKnob> knobs(4);
   knobs[0].name = "target_ray_spacing_m";
   knobs[0].values = {0.4, 0.2, 0.1, 0.05};
-  knobs[1].name = "terrain_ray_spacing_rad";
-  knobs[1].values = {4e-3, 2e-3, 1e-3, 0.5e-3};
+  FrameBench bench(cap);
+  const bool engine = bench.scenario().terrain_engine;
+  knobs[1].name = engine ? "terrain_cell_azimuth_rad" : "terrain_ray_spacing_rad";
+  knobs[1].values = engine ? std::vector<double>{2.0 * deg, 1.0 * deg, 0.5 * deg, 0.25 * deg}
+                           : std::vector<double>{4e-3, 2e-3, 1e-3, 0.5e-3};
   knobs[2].name = "max_bounces";
   knobs[2].values = {1, 2, 3, 4};
   knobs[3].name = "pulses";
   knobs[3].values = {8, 16, 32, 64};
 
   if (quick) {
-    ref_setting = {0.1, 1e-3, 3, 32};
+    ref_setting = {0.1, 1e-3, 3, 32, -1, 0.25 * deg};
     cap = 20'000;
-    for (FrameKnob& k : knobs)
-      k.values.pop_back();
+    bench.set_max_rays_per_target(cap);
+    // Coarse grids: each knob's finest value goes (the reference is coarser too), but the
+    // engine's columns keep their 0.25 deg reference and lose the 2 deg setting instead (columns
+    // of 1 and 2 deg, one and two beamwidths, both misplace the clutter between beams alike).
+    for (FrameKnob& k : knobs) {
+      if (k.name == "terrain_cell_azimuth_rad")
+        k.values.erase(k.values.begin());
+      else
+        k.values.pop_back();
+    }
   }
-  FrameBench bench(cap);
   log("frame: default scenario (%s) at its start pose, thermal noise off\n",
       bench.scenario().name.c_str());
   const FrameResult ref = bench.run(ref_setting);
   const double range_gate_m = 2.0 * bench.range_cell_m();
   const double az_gate_rad = common::radians(0.5);
+  char terrain_text[64];
+  if (engine)
+    std::snprintf(terrain_text, sizeof terrain_text, "terrain engine, %g deg columns",
+                  ref_setting.terrain_cell_rad / deg);
+  else
+    std::snprintf(terrain_text, sizeof terrain_text, "terrain rays %g mrad",
+                  ref_setting.terrain_spacing_rad * 1e3);
   char ref_text[256];
   std::snprintf(ref_text, sizeof ref_text,
-                "target %g m; terrain %g mrad; %d bounces; %d pulses; %zu rays a target max; "
+                "target %g m; %s; %d bounces; %d pulses; %zu rays a target max; "
                 "no thermal noise (%zu detections)",
-                ref_setting.target_spacing_m, ref_setting.terrain_spacing_rad * 1e3,
-                ref_setting.bounces, ref_setting.pulses, cap, ref.detections.size());
+                ref_setting.target_spacing_m, terrain_text, ref_setting.bounces, ref_setting.pulses,
+                cap, ref.detections.size());
   log("  reference: %s; %llu rays (%llu bundles coarsened), trace %.0f ms, sensor %.0f ms; "
       "gates %.2f m, %.2f deg\n",
       ref_text, static_cast<unsigned long long>(ref.rays),
@@ -719,6 +776,8 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
         fs.target_spacing_m = k.values[i];
       else if (k.name == "terrain_ray_spacing_rad")
         fs.terrain_spacing_rad = k.values[i];
+      else if (k.name == "terrain_cell_azimuth_rad")
+        fs.terrain_cell_rad = k.values[i];
       else if (k.name == "max_bounces")
         fs.bounces = static_cast<int>(k.values[i]);
       else
@@ -772,6 +831,7 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
     for (std::size_t i = 0; i < levels.size(); ++i) {
       FrameSetting fs = ref_setting;
       fs.governor_level = levels[i];
+      fs.terrain_cell_rad = 0.0;  // the scenario's, as the other sampling
       const FrameResult r = bench.run(fs);
       const MatchStats m = match(rt.detections, r.detections, range_gate_m, az_gate_rad);
       Pool& p = pools[i];
@@ -878,9 +938,9 @@ void write_csv(const std::vector<Row>& rows, const std::filesystem::path& path,
 constexpr double kChartFloorDb = 0.01;
 
 // The knobs of the cases, in the order of their series (a knob keeps its colour in every panel).
-const std::array<const char*, 6> kKnobs{
-    "rays_per_wavelength",     "max_bounces", "target_ray_spacing_m",
-    "terrain_ray_spacing_rad", "pulses",      "governor_level"};
+const std::array<const char*, 7> kKnobs{
+    "rays_per_wavelength",      "max_bounces", "target_ray_spacing_m", "terrain_ray_spacing_rad",
+    "terrain_cell_azimuth_rad", "pulses",      "governor_level"};
 
 // One panel of the summary: error against cost for one error metric, a series per knob, each
 // point labelled with its knob value and, where it pools several frames, bars over their

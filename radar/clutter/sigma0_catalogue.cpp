@@ -19,7 +19,12 @@
 //         terrain type, band (L 1.23, S 3.24, X 9.2 GHz) and polarisation at depression angles
 //         of a few degrees (the book's mean-strength tables, as transcribed in AFSIM,
 //         WsfMIT_ClutterStrength.cpp, tables sLOW_RELIEF_* and sGENERAL_URBAN; the book's own
-//         table numbers were not checked). Used at 2.75 deg depression (87.25 deg incidence).
+//         table numbers were not checked). The rows are the book's means over the 1.5-4 deg
+//         depression range (Billingsley's depression-angle classes; 2.75 deg is its midpoint);
+//         used at 2.75 deg (87.25 deg incidence). Depression, not grazing: the local slope of
+//         the measured patches is not in it. The AFSIM copies found carry distribution and
+//         export-control markings: the values are to be re-read from the book (ch. 5, sec. 5.4)
+//         and cited by table; none is contradicted by a public source, none confirmed either.
 //   [NRL] Gregers-Hansen & Mital (2012), An Improved Empirical Model for Radar Sea Clutter
 //         Reflectivity, NRL/MR/5310-12-9346, eq. (7) and Table 1 (p. 6); fitted to Nathanson's
 //         tables over 0.5-35 GHz, grazing 0.1-60 deg, sea state 0-6; mean absolute error
@@ -50,7 +55,7 @@ constexpr double kRowEndRad = common::radians(70.0);
 // Largest incidence evaluated: 90 deg itself has no backscatter (cos^p -> 0, NRL's
 // log10(sin(grazing)) -> -inf); values beyond are those at 89.95 deg, flagged.
 constexpr double kThetaMaxRad = common::radians(89.95);
-constexpr double kBillingsleyThetaDeg = 87.25;  // [BL] 2.75 deg depression
+constexpr double kBillingsleyThetaDeg = 87.25;  // [BL] 1.5-4 deg depression, at its midpoint
 constexpr double kAssumedGrazeThetaDeg = 85.0;
 
 /// One polarisation of one anchor: a row up to 70 deg, a cos^p tail through a grazing point.

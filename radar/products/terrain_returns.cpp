@@ -97,6 +97,9 @@ clutter::TerrainView TerrainReturns::view() const noexcept {
   v.patch_min_m = c.range_cell_m * c.patch_fraction;
   v.patch_angle_rad = c.azimuth_cell_rad * c.patch_fraction;
   v.shadowing = c.shadowing;
+  // Far out a patch (R x azimuth cell wide) spans several range cells: its power goes to each
+  // of them by overlap, not whole to one (TerrainView::spread_range).
+  v.spread_range = true;
   v.shadow_method =
       c.horizon ? clutter::TerrainView::Shadow::kHorizon : clutter::TerrainView::Shadow::kRays;
   // The horizon: columns of half a cell, bins of half a range cell along rho.
@@ -122,11 +125,16 @@ clutter::CellGrid TerrainReturns::slice_grid(const Slice& sl) const noexcept {
 }
 
 std::size_t TerrainReturns::compute(const RadarPose& pose, std::span<Contribution> out,
-                                    clutter::TerrainStats& stats, std::uint64_t& dropped) noexcept {
+                                    clutter::TerrainStats& stats, std::uint64_t& dropped,
+                                    double patch_scale) noexcept {
   const TerrainReturnsConfig& c = config_;
   clutter::TerrainView v = view();
   v.position_m = pose.position_m;
   v.world_from_antenna = pose.world_from_antenna;
+  if (patch_scale > 1.0 && std::isfinite(patch_scale)) {  // else the configured size
+    v.patch_min_m *= patch_scale;
+    v.patch_angle_rad *= patch_scale;
+  }
   tbb::parallel_for(std::size_t{0}, slices_.size(), [&](std::size_t s) {
     Slice& sl = slices_[s];
     std::fill(sl.mean.begin(), sl.mean.end(), 0.0);

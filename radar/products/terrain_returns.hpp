@@ -23,8 +23,11 @@
 //                    antenna's velocity: static ground seen from a moving radar, positive
 //                    receding (the tracer's rule at a terrain ray's first hit, path rate
 //                    (0 - v) . d; the Doppler shift is the sensor's, f_D = -2 v_r / lambda).
-// Patches are at most patch_fraction of a cell wide (the engine's patch size
-// max(range cell, R azimuth cell) x patch_fraction), so each cell holds one or more.
+// Patches are patch_fraction of a cell wide: the engine's patch size max(range cell, R azimuth
+// cell) x patch_fraction, so that each column holds one or more. Far out a patch is longer than
+// the range cell: its power is spread over the range cells its extent covers
+// (TerrainView::spread_range), not put whole into one, which would leave the cells between
+// patches empty (a comb along range; CFAR false alarms).
 //
 // Costs. The constructor allocates and throws (std::invalid_argument; the engine's "no terrain"
 // included). compute() allocates nothing and does not throw: the columns are cut into `slices`
@@ -86,9 +89,13 @@ class TerrainReturns {
 
   /// The lit cells' returns for `pose` into `out` (header), in slice, bin, column order; returns
   /// how many. `stats` is added to. Real-time safe: no allocation, no exception; returns beyond
-  /// out.size() are dropped and counted in `dropped`.
+  /// out.size() are dropped and counted in `dropped`. `patch_scale` (>= 1; the fidelity
+  /// governor's terrain knob, TraceKnobs::terrain_spacing_scale) multiplies the patch size: the
+  /// patches, and the engine's work, fall as its square; the cells and their mean power stay
+  /// (spread_range).
   [[nodiscard]] std::size_t compute(const RadarPose& pose, std::span<Contribution> out,
-                                    clutter::TerrainStats& stats, std::uint64_t& dropped) noexcept;
+                                    clutter::TerrainStats& stats, std::uint64_t& dropped,
+                                    double patch_scale = 1.0) noexcept;
   /// Issue 28: per sigma0 row of the engine's table, what every compute() so far read (lit
   /// patches, those whose sample the catalogue flags; clutter::Sigma0Use). Not for a frame in
   /// flight.

@@ -117,7 +117,8 @@ for (v0, e0), (v1, e1) in zip(from_half, from_half[1:]):
 check(non_ref[-1][1] < non_ref[0][1], "vehicle: finest non-reference setting beats the coarsest")
 
 # Frame: missed + added, finest non-reference against coarsest, per sampling knob.
-for knob in ("target_ray_spacing_m", "terrain_ray_spacing_rad", "max_bounces"):
+# The terrain knob is the engine's column width with the default scenario's terrain engine.
+for knob in ("target_ray_spacing_m", "terrain_cell_azimuth_rad", "max_bounces"):
     rs = [r for r in sel("frame", "missed_plus_added", knob)
           if not r["validity"].startswith("reference")]
     check(len(rs) >= 2, f"frame {knob}: rows")

@@ -216,7 +216,8 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
 TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   // [radar] terrain = "engine": the engine's time (terrain_ns_per_patch x its patches) and its
   // returns (sensor_ns_per_return each, not scaled with the rays) join the prediction at every
-  // level, by the closed form of the cost model (loop/governor.hpp).
+  // level, by the closed form of the cost model (loop/governor.hpp): the patches as observed
+  // at the level they were made at, times (that level's patch scale / the predicted level's)^2.
   DefaultFrame& f = default_frame();
   loop::GovernorConfig g = f.s.governor;
   g.mode = loop::GovernorConfig::Mode::kModel;
@@ -234,12 +235,27 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   std::cout << "level 0: " << rays_only.predicted_ms << " ms with rays only, "
             << with_engine.predicted_ms << " ms with the engine's " << kPatches << " patches\n";
   EXPECT_NEAR(with_engine.predicted_ms - rays_only.predicted_ms, expected_extra_ms, 1e-9);
-  // At a coarser level the engine's share stays whole (it does not follow the level).
+  // Patches counted at level 0 predict level 6 at 1 / (2^(6/4))^2 = 1/8 of them (the engine's
+  // patches grow with the level as the terrain rays' spacing); the returns stay.
   gov.observe(10.0, 5.0, kRays, kReturns, kCells);
   const loop::GovernorDecision coarse_rays = gov.decide_at(f.pose, 6);
+  (void)gov.decide_at(f.pose, 0);
   gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns);
   const loop::GovernorDecision coarse_engine = gov.decide_at(f.pose, 6);
-  EXPECT_NEAR(coarse_engine.predicted_ms - coarse_rays.predicted_ms, expected_extra_ms, 1e-9);
+  const double coarse_extra_ms =
+      1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) / 8.0 +
+              g.sensor_ns_per_return * static_cast<double>(kEngineReturns));
+  EXPECT_NEAR(coarse_engine.predicted_ms - coarse_rays.predicted_ms, coarse_extra_ms, 1e-9);
+  // And patches counted at level 6 predict level 6 as they are, level 0 at 8 times as many.
+  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns);
+  const loop::GovernorDecision again_6 = gov.decide_at(f.pose, 6);
+  EXPECT_NEAR(again_6.predicted_ms - coarse_rays.predicted_ms, expected_extra_ms, 1e-9);
+  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns);
+  const loop::GovernorDecision fine = gov.decide_at(f.pose, 0);
+  EXPECT_NEAR(fine.predicted_ms - rays_only.predicted_ms,
+              1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) * 8.0 +
+                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns)),
+              1e-9);
 }
 
 TEST(Governor, InvalidSettingsFailAtSetupNamingTheField) {

@@ -177,6 +177,8 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
   s.governor.enabled = false;
   s.frames = 30;
   loop::Scenario e = s;
+  s.terrain_engine = false;  // the tracer's terrain rays (the default is the engine)
+  s.sbr.terrain_rays = true;
   e.terrain_engine = true;
   e.sbr.terrain_rays = false;
 
@@ -281,6 +283,40 @@ void expect_same_returns(const std::vector<radar::Contribution>& a,
 }
 
 }  // namespace
+
+TEST(LoopTerrain, GovernorPatchScaleCutsThePatchesAndKeepsThePower) {
+  // The governor's terrain knob (TraceKnobs::terrain_spacing_scale) passed as compute()'s
+  // patch_scale: patches s times larger each way, about 1/s^2 as many (the facets smaller than a
+  // patch stay one patch each, so somewhat more), and the clutter's total mean power the same
+  // sum of sigma0 dA within 0.5 dB (the patches spread over the cells they cover).
+  const loop::Scenario s = default_scenario();
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  const radar::SbrTracer tracer(scene, cfg);
+  radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
+  std::vector<radar::Contribution> out(terrain.max_returns());
+  auto run = [&](double scale, double& power) {
+    radar::clutter::TerrainStats st;
+    std::uint64_t dropped = 0;
+    const std::size_t n = terrain.compute(first_pose(s), out, st, dropped, scale);
+    EXPECT_EQ(dropped, 0u);
+    power = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      power += std::norm(out[i].amplitude);
+    return st.patches;
+  };
+  double p1 = 0.0, p2 = 0.0;
+  const std::uint64_t n1 = run(1.0, p1), n2 = run(2.0, p2);
+  const double ratio = static_cast<double>(n2) / static_cast<double>(n1);
+  std::printf("patch scale 2: %llu -> %llu patches (x %.3f), total power %+.3f dB\n",
+              static_cast<unsigned long long>(n1), static_cast<unsigned long long>(n2), ratio,
+              10.0 * std::log10(p2 / p1));
+  EXPECT_GT(ratio, 0.2);
+  EXPECT_LT(ratio, 0.45);
+  EXPECT_NEAR(10.0 * std::log10(p2 / p1), 0.0, 0.5);
+}
 
 TEST(LoopTerrain, EngineReturnsAreTheSameForAnyNumberOfThreads) {
   // The slices are the configuration's, not the threads': one thread and all of them give the

@@ -42,9 +42,10 @@ TEST(Scenario, DefaultValuesAreTheDocumentedOnes) {
   EXPECT_DOUBLE_EQ(s.rate_hz, 20.0);
   EXPECT_DOUBLE_EQ(s.sensor.processing.waveform.carrier_hz, 94e9);
   EXPECT_DOUBLE_EQ(s.sbr.carrier_hz, s.sensor.processing.waveform.carrier_hz);
-  // Terrain clutter from the tracer's terrain rays ([radar] terrain = "rays").
-  EXPECT_FALSE(s.terrain_engine);
-  EXPECT_TRUE(s.sbr.terrain_rays);
+  // Terrain clutter from the terrain engine ([radar] terrain = "engine"), the tracer's terrain
+  // rays off.
+  EXPECT_TRUE(s.terrain_engine);
+  EXPECT_FALSE(s.sbr.terrain_rays);
   // Edge diffraction on in the loop, wedges turning by more than 30 deg; no corner reflectors.
   EXPECT_TRUE(s.sbr.edges);
   EXPECT_NEAR(s.sbr.edge_min_turn_rad, common::radians(30.0), 1e-12);
@@ -160,10 +161,11 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
             std::string::npos);
   EXPECT_EQ(error_of("[radar]\nterrain = \"dem\"\n"),
             "test.toml: [radar] terrain: unknown value \"dem\" (known: rays, engine)");
-  EXPECT_NE(error_of("[radar]\nterrain_cell_range_bins = 4\n")
+  EXPECT_NE(error_of("[radar]\nterrain = \"rays\"\nterrain_cell_range_bins = 4\n")
                 .find("[radar] terrain_cell_range_bins: is read with terrain = \"engine\" only"),
             std::string::npos);
   EXPECT_EQ(error_of("[radar]\nterrain = \"engine\"\nterrain_cell_azimuth_deg = 0.5\n"), "");
+  EXPECT_EQ(error_of("[radar]\nterrain_cell_range_bins = 4\n"), "");  // the default engine
   EXPECT_EQ(error_of("[radar]\nwaveform = \"cw\"\n"),
             "test.toml: [radar] waveform: unknown value \"cw\" (known: pulsed_lfm, fmcw)");
   EXPECT_EQ(error_of("[radar]\nrange_window = \"kaiser\"\n"),
