@@ -4,8 +4,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -23,22 +25,31 @@ void require(bool ok, const char* field, const char* what) {
 }
 
 // Vertical polarisation for a wave along `d`: antenna "up" projected perpendicular to d.
-glm::dvec3 v_pol(const glm::dvec3& up, const glm::dvec3& boresight, const glm::dvec3& d) {
+inline glm::dvec3 v_pol(const glm::dvec3& up, const glm::dvec3& boresight, const glm::dvec3& d) {
   glm::dvec3 v = up - glm::dot(up, d) * d;
-  double n = glm::length(v);
-  if (n < 1e-9) {  // looking along "up": fall back to the boresight's projection
+  double n2 = glm::dot(v, v);
+  if (n2 < 1e-18) {  // looking along "up" (|v| < 1e-9): fall back to the boresight's projection
     v = boresight - glm::dot(boresight, d) * d;
-    n = glm::length(v);
+    n2 = glm::dot(v, v);
   }
-  return v / n;
+  return v * (1.0 / std::sqrt(n2));
 }
 
 // The antenna's polarisation vector of channel `h` (H: true, V: false) for a wave along `d`
 // (from the radar): V as above, H = V x d (SbrConfig::polarisation).
-glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
-                      const glm::dvec3& d) {
+inline glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
+                             const glm::dvec3& d) {
   const glm::dvec3 v = v_pol(up, boresight, d);
-  return h ? glm::normalize(glm::cross(v, d)) : v;
+  if (!h)
+    return v;
+  const glm::dvec3 x = glm::cross(v, d);
+  return x * (1.0 / std::sqrt(glm::dot(x, x)));
+}
+
+// azel_from_direction for a return's direction of arrival (an output, no decision rests on
+// it): sqrt(x^2 + y^2) for hypot(x, y), whose overflow guard a unit vector does not need.
+inline AzEl arrival_azel(const glm::dvec3& d) noexcept {
+  return {std::atan2(d.y, d.x), std::atan2(-d.z, std::sqrt(d.x * d.x + d.y * d.y))};
 }
 
 }  // namespace
@@ -166,6 +177,37 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   facet_light_.assign(facet_first_.back(), kLightByRays);
   facet_out_.assign(facet_first_.back(), Contribution{});
   frame_world_from_body_.assign(desc.objects.size(), glm::dmat4(1.0));
+  frame_box_.assign(desc.objects.size(), scene::PaddedBox{});
+}
+
+bool SbrTracer::intersect(const scene::Ray& ray, scene::Hit& hit) const noexcept {
+  if (query_log_ != nullptr) {
+    const std::size_t i = query_log_->n_intersects.fetch_add(1, std::memory_order_relaxed);
+    if (i < query_log_->intersects.size())
+      query_log_->intersects[i] = ray;
+  }
+  return scene_->intersect(ray, hit);
+}
+
+void SbrTracer::intersect(std::span<const scene::Ray> rays, std::span<scene::Hit> hits,
+                          std::span<std::uint8_t> found) const noexcept {
+  if (query_log_ != nullptr) {
+    for (const scene::Ray& ray : rays) {
+      const std::size_t i = query_log_->n_intersects.fetch_add(1, std::memory_order_relaxed);
+      if (i < query_log_->intersects.size())
+        query_log_->intersects[i] = ray;
+    }
+  }
+  scene_->intersect(rays, hits, found);
+}
+
+bool SbrTracer::occluded(const scene::Ray& ray) const noexcept {
+  if (query_log_ != nullptr) {
+    const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
+    if (i < query_log_->occlusions.size())
+      query_log_->occlusions[i] = ray;
+  }
+  return scene_->occluded(ray);
 }
 
 std::size_t SbrTracer::max_contributions() const noexcept {
@@ -286,7 +328,7 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
     ray.origin_m = p;
     ray.direction = to / ray.t_far_m;
     ray.t_near_m = 0.0;
-    return scene_->occluded(ray);
+    return occluded(ray);
   };
   // TraceKnobs::facet_centroid_only: the centroid's sample alone decides, lit or dark whole.
   const FacetLight light =
@@ -415,7 +457,7 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   ray.t_far_m = glm::length(to);
   ray.direction = to / ray.t_far_m;
   ray.t_near_m = 0.0;
-  if (scene_->occluded(ray))
+  if (occluded(ray))
     return kShadowed;
   // edges.hpp: S = c L sinc(k taper) exp(j k (s - d).centre); here the phase is the spherical
   // wave's two-way path to the midpoint, as a facet's is to its centroid.
@@ -551,20 +593,18 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
 
 bool SbrTracer::may_reach_owner(const scene::Ray& ray, const Frame& frame, std::uint32_t owner,
                                 bool terrain) const noexcept {
-  const auto objects = scene_->objects();
   if (!terrain)
-    return scene::ray_crosses_box(ray, objects[owner].bounds_min_m, objects[owner].bounds_max_m);
+    return scene::ray_crosses_box(ray, frame_box_[owner]);
   for (const std::uint32_t id : frame.unbundled_in_range) {
-    if (scene::ray_crosses_box(ray, objects[id].bounds_min_m, objects[id].bounds_max_m))
+    if (scene::ray_crosses_box(ray, frame_box_[id]))
       return true;
   }
   return false;
 }
 
-void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, double el,
-                          double daz, double del, std::uint32_t owner, bool terrain,
-                          Contribution* slot, std::uint8_t& count,
-                          TraceStats& stats) const noexcept {
+void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, const RayStart& start,
+                          std::uint32_t owner, bool terrain, Contribution* slot,
+                          std::uint8_t& count, TraceStats& stats) const noexcept {
   const SbrConfig& c = config_;
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const glm::dmat3& r = pose.world_from_antenna;
@@ -573,13 +613,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
   const glm::dmat3 antenna_from_world = glm::transpose(r);
   const bool tx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kVH;
   const bool rx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kHV;
-  const double ce = std::cos(el), se = std::sin(el), ca = std::cos(az), sa = std::sin(az);
-  glm::dvec3 d = r * glm::dvec3(ce * ca, ce * sa, -se);
-  // Tube edge vectors per unit distance: derivatives of the direction times the spacings
-  // (Ling, Chou & Lee 1989: ray tubes). |u x v| = cos(el) daz del, the tube's solid angle; the
-  // spherical wave's tube at unfolded distance L has edges L u, L v.
-  glm::dvec3 u = r * glm::dvec3(-ce * sa, ce * ca, 0.0) * daz;
-  glm::dvec3 v = r * glm::dvec3(-se * ca, -se * sa, -ce) * del;
+  glm::dvec3 d = start.d, u = start.u, v = start.v;
   // Transmitted field, unit amplitude at every hit (the range term is the sensor's).
   CVec e{pol_vector(tx_h, up, boresight, d), glm::dvec3(0.0)};
   glm::dvec3 origin = pose.position_m;
@@ -591,22 +625,28 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
   count = 0;
   glm::dvec3 last_hit = origin;
   for (int bounce = 0; bounce < frame.max_bounces; ++bounce) {
-    scene::Ray ray;
-    ray.origin_m = origin;
-    ray.direction = d;
-    ray.t_near_m = 0.0;  // reflected rays start lifted off the surface (below)
-    // Range budget: a return counts only if half its total path is within max_range, so the
-    // first segment may run max_range and later ones what is left of 2 max_range.
-    ray.t_far_m = bounce == 0 ? c.max_range_m : 2.0 * c.max_range_m - path_m;
-    if (ray.t_far_m <= ray.t_near_m)
-      return;
-    if (bounce > 0 && !met_target && !may_reach_owner(ray, frame, owner, terrain)) {
-      ++stats.pruned_paths;
-      return;
-    }
     scene::Hit hit;
-    if (!scene_->intersect(ray, hit))
-      return;
+    if (bounce == 0) {  // the first segment, radar to max_range, was queried with its chunk
+      if (!start.found)
+        return;
+      hit = start.hit;
+    } else {
+      scene::Ray ray;
+      ray.origin_m = origin;
+      ray.direction = d;
+      ray.t_near_m = 0.0;  // reflected rays start lifted off the surface (below)
+      // Range budget: a return counts only if half its total path is within max_range, so the
+      // first segment runs max_range and later ones what is left of 2 max_range.
+      ray.t_far_m = 2.0 * c.max_range_m - path_m;
+      if (ray.t_far_m <= ray.t_near_m)
+        return;
+      if (!met_target && !may_reach_owner(ray, frame, owner, terrain)) {
+        ++stats.pruned_paths;
+        return;
+      }
+      if (!intersect(ray, hit))
+        return;
+    }
     ++stats.hits;
     const bool hit_target = is_target_[hit.object_id] != 0;
     if (hit_target && !met_target) {
@@ -651,7 +691,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       out.range_m = path_m;
       out.range_spread_m = std::abs(glm::dot(fp.u_m, d)) + std::abs(glm::dot(fp.v_m, d));
       out.radial_velocity_mps = path_rate;  // out and back along the same line
-      const AzEl ae = azel_from_direction(antenna_from_world * d);
+      const AzEl ae = arrival_azel(antenna_from_world * d);
       out.azimuth_rad = ae.azimuth_rad;
       out.elevation_rad = ae.elevation_rad;
       out.object_id = hit.object_id;
@@ -662,7 +702,14 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
       return;  // no target without a bundle within range: this terrain path can radiate nothing
     const SurfaceModel& sm = surface.specular;
     const bool pec = sm.kind == SurfaceModel::Kind::kPec;
-    const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
+    const bool last = bounce + 1 == frame.max_bounces;
+    if (last && !met_target) {  // nothing radiates here, and no reflection follows
+      if (!pec)
+        ++stats.dielectric_reflections;  // counted as if reflected, as before this shortcut
+      return;
+    }
+    const ReflectionCoefficients rc =
+        pec ? ReflectionCoefficients{} : reflection_coefficients(sm, cos_i, k);
     const double off = surface_offset_m(hit.position_m);
     if (met_target) {
       // PO radiation of the footprint back to the radar (sbr_core.hpp).
@@ -685,7 +732,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
           shadow.t_far_m = glm::length(to);
           shadow.direction = to / shadow.t_far_m;
           shadow.t_near_m = 0.0;
-          visible = !scene_->occluded(shadow);
+          visible = !occluded(shadow);
         }
       }
       if (visible) {
@@ -699,7 +746,7 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
         out.range_m = 0.5 * total_m;
         out.range_spread_m = 0.0;
         out.radial_velocity_mps = 0.5 * (path_rate + glm::dot(pose.velocity_mps - v_obj, s));
-        const AzEl ae = azel_from_direction(antenna_from_world * (-s));
+        const AzEl ae = arrival_azel(antenna_from_world * (-s));
         out.azimuth_rad = ae.azimuth_rad;
         out.elevation_rad = ae.elevation_rad;
         out.object_id = path_owner;
@@ -708,11 +755,14 @@ void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, 
         out.coherent = true;
       }
     }
-    // Specular reflection (law of reflection) of direction, tube and field (sbr_core.hpp).
-    const glm::dvec3 d_r = mirror(d, n);
-    e = reflect_field(e, d, d_r, n, rc, pec);
+    // Specular reflection (law of reflection) of direction, tube and field (sbr_core.hpp); none
+    // after the last hit (only counted).
     if (!pec)
       ++stats.dielectric_reflections;
+    if (last)
+      return;
+    const glm::dvec3 d_r = mirror(d, n);
+    e = reflect_field(e, d, d_r, n, rc, pec);
     d = d_r;
     u = mirror(u, n);
     v = mirror(v, n);
@@ -758,6 +808,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     bundled_[id] = 0;
     if (!is_target_[id])
       continue;
+    frame_box_[id] = scene::padded_box(objects[id].bounds_min_m, objects[id].bounds_max_m);
     Bundle b;
     bool coarsened = false;
     const double spacing_m = target_spacing(knobs, id, &stats);
@@ -845,25 +896,68 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       [&](const tbb::blocked_range<std::size_t>& range) {
         TraceStats local;
         std::size_t b = 0;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          Contribution* slot = out.data() + i * per_ray;
-          if (i < terrain_rays) {
-            const std::size_t ia = i % frame.terrain_n_az, ie = i / frame.terrain_n_az;
-            trace_ray(pose, frame,
-                      c.azimuth_min_rad + (static_cast<double>(ia) + 0.5) * frame.terrain_daz_rad,
-                      c.elevation_min_rad + (static_cast<double>(ie) + 0.5) * frame.terrain_del_rad,
-                      frame.terrain_daz_rad, frame.terrain_del_rad, 0, true, slot, counts_[i],
-                      local);
-            continue;
+        // The rays go in batches of neighbours (a row of a grid, mostly): their first
+        // segments, all from the radar, as one coherent query (scene::Scene's batched
+        // intersect, Embree ray streams), then each ray on alone.
+        constexpr std::size_t kBatch = 64;
+        std::array<RayStart, kBatch> starts;
+        std::array<scene::Ray, kBatch> segments;
+        std::array<scene::Hit, kBatch> first_hits;
+        std::array<std::uint8_t, kBatch> found;
+        std::array<std::uint32_t, kBatch> owners;
+        const glm::dmat3& rot = pose.world_from_antenna;
+        double row_el = std::numeric_limits<double>::quiet_NaN(), ce = 0.0, se = 0.0;
+        for (std::size_t i0 = range.begin(); i0 < range.end(); i0 += kBatch) {
+          const std::size_t n_batch = std::min(kBatch, range.end() - i0);
+          for (std::size_t q = 0; q < n_batch; ++q) {
+            const std::size_t i = i0 + q;
+            double az = 0.0, el = 0.0, daz = 0.0, del = 0.0;
+            if (i < terrain_rays) {
+              const std::size_t ia = i % frame.terrain_n_az, ie = i / frame.terrain_n_az;
+              az = c.azimuth_min_rad + (static_cast<double>(ia) + 0.5) * frame.terrain_daz_rad;
+              el = c.elevation_min_rad + (static_cast<double>(ie) + 0.5) * frame.terrain_del_rad;
+              daz = frame.terrain_daz_rad;
+              del = frame.terrain_del_rad;
+              owners[q] = 0;
+            } else {
+              while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_ray)
+                ++b;
+              const Bundle& bd = bundles_[b];
+              const std::size_t j = i - bd.first_ray;
+              const std::size_t ia = j % bd.n_az, ie = j / bd.n_az;
+              az = bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad;
+              el = bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad;
+              daz = bd.daz_rad;
+              del = bd.del_rad;
+              owners[q] = bd.object_id;
+            }
+            if (el != row_el) {  // one elevation per row of a grid
+              row_el = el;
+              ce = std::cos(el);
+              se = std::sin(el);
+            }
+            const double ca = std::cos(az), sa = std::sin(az);
+            RayStart& st = starts[q];
+            st.d = rot * glm::dvec3(ce * ca, ce * sa, -se);
+            // Tube edge vectors per unit distance: derivatives of the direction times the
+            // spacings (Ling, Chou & Lee 1989: ray tubes). |u x v| = cos(el) daz del, the
+            // tube's solid angle; the spherical wave's tube at unfolded distance L has edges
+            // L u, L v.
+            st.u = rot * glm::dvec3(-ce * sa, ce * ca, 0.0) * daz;
+            st.v = rot * glm::dvec3(-se * ca, -se * sa, -ce) * del;
+            segments[q] = scene::Ray{pose.position_m, st.d, 0.0, c.max_range_m};
           }
-          while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_ray)
-            ++b;
-          const Bundle& bd = bundles_[b];
-          const std::size_t j = i - bd.first_ray;
-          const std::size_t ia = j % bd.n_az, ie = j / bd.n_az;
-          trace_ray(pose, frame, bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad,
-                    bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad, bd.daz_rad,
-                    bd.del_rad, bd.object_id, false, slot, counts_[i], local);
+          intersect(std::span<const scene::Ray>(segments.data(), n_batch),
+                    std::span<scene::Hit>(first_hits.data(), n_batch),
+                    std::span<std::uint8_t>(found.data(), n_batch));
+          for (std::size_t q = 0; q < n_batch; ++q) {
+            const std::size_t i = i0 + q;
+            RayStart& st = starts[q];
+            st.found = found[q] != 0;
+            st.hit = first_hits[q];
+            trace_ray(pose, frame, st, owners[q], i < terrain_rays, out.data() + i * per_ray,
+                      counts_[i], local);
+          }
         }
         hits += local.hits;
         grazing += local.grazing_skipped;
