@@ -258,6 +258,7 @@ class SbrTracer {
   [[nodiscard]] bool occluded(const scene::Ray& ray) const noexcept;
   void intersect(std::span<const scene::Ray> rays, std::span<scene::Hit> hits,
                  std::span<std::uint8_t> found) const noexcept;
+  void occluded(std::span<const scene::Ray> rays, std::span<std::uint8_t> blocked) const noexcept;
   /// Per scene material at the carrier: specular model, sigma0 row (issue 4's models, "total":
   /// surface + volume), conductor flag; resolved once here.
   SurfaceSet surfaces_;
@@ -266,9 +267,10 @@ class SbrTracer {
     double spacing_m = 0;  ///< the configured (or knob) spacing at the target, before coarsening
     double az0_rad = 0, el0_rad = 0, daz_rad = 0, del_rad = 0;
     std::size_t n_az = 0, n_el = 0, first_ray = 0;
-    std::size_t first_facet = 0;  ///< in this frame's run over the bundled targets' facets
-    std::size_t first_edge = 0;   ///< in this frame's run over the bundled targets' edges
-    std::size_t first_pair = 0;   ///< the same for their edge pairs (double diffraction)
+    std::size_t first_facet = 0;   ///< in this frame's run over the bundled targets' facets
+    std::size_t first_edge = 0;    ///< in this frame's run over the bundled targets' edges
+    std::size_t first_pair = 0;    ///< the same for their edge pairs (double diffraction)
+    std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame
   };
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
@@ -283,16 +285,16 @@ class SbrTracer {
                                 Bundle& b, bool& coarsened) const noexcept;
   [[nodiscard]] double target_spacing(const TraceKnobs& knobs, std::uint32_t id,
                                       TraceStats* stats) const noexcept;
-  /// A ray's start: its direction d from the radar, its tube edges per unit distance (u, v),
-  /// and what its first segment met (found, hit), from the batched query of its chunk of rays.
-  struct RayStart {
-    glm::dvec3 d{0.0}, u{0.0}, v{0.0};
-    scene::Hit hit{};
-    bool found = false;
-  };
-  void trace_ray(const RadarPose& pose, const Frame& frame, const RayStart& start,
-                 std::uint32_t owner, bool terrain, Contribution* slot, std::uint8_t& count,
-                 TraceStats& stats) const noexcept;
+  /// One ray of a batch between its hits (defined in sbr.cpp): trace_batch follows a batch of
+  /// neighbouring rays hit by hit, each segment of all of them as one coherent scene query, and
+  /// the shadow rays of their returns likewise.
+  struct RayState;
+  void trace_batch(const RadarPose& pose, const Frame& frame, std::span<RayState> rays,
+                   TraceStats& stats) const noexcept;
+  /// Per frame: cos and sin of every grid column's azimuth (the terrain grid's from 0, bundle
+  /// b's from its first_column), computed once per column instead of once per ray; capacity
+  /// for the terrain grid and a full bundle per target.
+  std::vector<double> column_cos_, column_sin_;
   /// Per object, this frame: its world box padded for scene::ray_crosses_box (targets only).
   std::vector<scene::PaddedBox> frame_box_;
 
