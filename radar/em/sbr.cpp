@@ -638,6 +638,12 @@ struct SbrTracer::RayState {
   bool terrain = false;           ///< a terrain-grid ray
   bool met_target = false;
   bool active = true;  ///< still travelling
+  /// The field's reflection at the last hit, left until the field is needed (a path that ends
+  /// before it radiates or reflects again never needs it): the surface (null: none pending),
+  /// the incident direction, the face's normal and cos(theta_i) there.
+  const SurfaceModel* pending_surface = nullptr;
+  glm::dvec3 pending_d{0.0}, pending_n{0.0};
+  double pending_cos = 0.0;
 };
 
 namespace {
@@ -658,6 +664,18 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
   std::array<std::uint8_t, kBatch> found, blocked;
   std::array<std::uint32_t, kBatch> segment_of, shadow_of;
   const std::size_t n_rays = std::min(rays.size(), kBatch);
+  // The pending reflection of a ray's field (RayState), applied: d_r = mirror(d, n) is the
+  // ray's direction since.
+  auto settle_field = [&](RayState& st) {
+    if (st.pending_surface == nullptr)
+      return;
+    const SurfaceModel& sm = *st.pending_surface;
+    const bool pec = sm.kind == SurfaceModel::Kind::kPec;
+    const ReflectionCoefficients rc =
+        pec ? ReflectionCoefficients{} : reflection_coefficients(sm, st.pending_cos, k);
+    st.e = reflect_field(st.e, st.pending_d, st.d, st.pending_n, rc, pec);
+    st.pending_surface = nullptr;
+  };
   for (int bounce = 0; bounce < frame.max_bounces; ++bounce) {
     // This bounce's segments of the rays still travelling, queried together.
     std::size_t n_seg = 0;
@@ -767,8 +785,11 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         st.active = false;
         continue;
       }
+      // The local reflection coefficients, now when this hit radiates, else with the
+      // field's reflection when it is needed (settle_field).
+      settle_field(st);
       const ReflectionCoefficients rc =
-          pec ? ReflectionCoefficients{} : reflection_coefficients(sm, cos_i, k);
+          !st.met_target || pec ? ReflectionCoefficients{} : reflection_coefficients(sm, cos_i, k);
       const double off = surface_offset_m(hit.position_m);
       if (st.met_target) {
         // PO radiation of the footprint back to the radar (sbr_core.hpp).
@@ -828,7 +849,14 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         continue;
       }
       const glm::dvec3 d_r = mirror(d, n);
-      st.e = reflect_field(st.e, d, d_r, n, rc, pec);
+      if (st.met_target) {
+        st.e = reflect_field(st.e, d, d_r, n, rc, pec);
+      } else {  // no return yet: the field may never be needed (pruned, lost, owned by another)
+        st.pending_surface = &sm;
+        st.pending_d = d;
+        st.pending_n = n;
+        st.pending_cos = cos_i;
+      }
       st.d = d_r;
       st.u = mirror(st.u, n);
       st.v = mirror(st.v, n);
