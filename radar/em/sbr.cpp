@@ -63,6 +63,12 @@ glm::dvec3 direction_from_azel(const AzEl& a) noexcept {
   return {ce * std::cos(a.azimuth_rad), ce * std::sin(a.azimuth_rad), -std::sin(a.elevation_rad)};
 }
 
+namespace {
+// The column table (SbrTracer::column_cos_): columns held per target, and a bundle without any.
+constexpr std::size_t kColumnsPerTarget = 4096;
+constexpr std::size_t kNoColumns = static_cast<std::size_t>(-1);
+}  // namespace
+
 SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     : scene_(&scene), config_(config) {
   const SbrConfig& c = config;
@@ -178,9 +184,9 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   facet_out_.assign(facet_first_.back(), Contribution{});
   frame_world_from_body_.assign(desc.objects.size(), glm::dmat4(1.0));
   frame_box_.assign(desc.objects.size(), scene::PaddedBox{});
-  // Columns: the terrain grid's (knobs only coarsen it) and a bundle's (n_az x n_el is at most
-  // max_rays_per_target) per target.
-  column_cos_.assign(n_az_ + n_targets_ * c.max_rays_per_target, 0.0);
+  // Columns: the terrain grid's (knobs only coarsen it) and up to kColumnsPerTarget per target
+  // (a wider bundle takes its cos and sin per ray).
+  column_cos_.assign(n_az_ + n_targets_ * std::min(kColumnsPerTarget, c.max_rays_per_target), 0.0);
   column_sin_.assign(column_cos_.size(), 0.0);
 }
 
@@ -996,6 +1002,10 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       column_sin_[col] = std::sin(az);
     }
     for (Bundle& bd : bundles_) {
+      if (col + bd.n_az > column_cos_.size()) {  // beyond the table: per ray (same values)
+        bd.first_column = kNoColumns;
+        continue;
+      }
       bd.first_column = col;
       for (std::size_t ia = 0; ia < bd.n_az; ++ia, ++col) {
         const double az = bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad;
@@ -1031,14 +1041,14 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
             const std::size_t i = i0 + q;
             RayState& st = batch[q];
             st = RayState{};
-            double el = 0.0, daz = 0.0, del = 0.0;
-            std::size_t column = 0;
+            double el = 0.0, daz = 0.0, del = 0.0, ca = 0.0, sa = 0.0;
             if (i < terrain_rays) {
               const std::size_t ia = i % frame.terrain_n_az, ie = i / frame.terrain_n_az;
               el = c.elevation_min_rad + (static_cast<double>(ie) + 0.5) * frame.terrain_del_rad;
               daz = frame.terrain_daz_rad;
               del = frame.terrain_del_rad;
-              column = ia;
+              ca = column_cos_[ia];
+              sa = column_sin_[ia];
               st.terrain = true;
             } else {
               while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_ray)
@@ -1049,7 +1059,14 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
               el = bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad;
               daz = bd.daz_rad;
               del = bd.del_rad;
-              column = bd.first_column + ia;
+              if (bd.first_column != kNoColumns) {
+                ca = column_cos_[bd.first_column + ia];
+                sa = column_sin_[bd.first_column + ia];
+              } else {
+                const double az = bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad;
+                ca = std::cos(az);
+                sa = std::sin(az);
+              }
               st.owner = bd.object_id;
             }
             if (el != row_el) {  // one elevation per row of a grid
@@ -1057,7 +1074,6 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
               ce = std::cos(el);
               se = std::sin(el);
             }
-            const double ca = column_cos_[column], sa = column_sin_[column];
             st.d = rot * glm::dvec3(ce * ca, ce * sa, -se);
             st.u = rot * glm::dvec3(-ce * sa, ce * ca, 0.0) * daz;
             st.v = rot * glm::dvec3(-se * ca, -se * sa, -ce) * del;

@@ -270,7 +270,7 @@ class SbrTracer {
     std::size_t first_facet = 0;   ///< in this frame's run over the bundled targets' facets
     std::size_t first_edge = 0;    ///< in this frame's run over the bundled targets' edges
     std::size_t first_pair = 0;    ///< the same for their edge pairs (double diffraction)
-    std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame
+    std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame (or none)
   };
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
@@ -293,7 +293,8 @@ class SbrTracer {
                    TraceStats& stats) const noexcept;
   /// Per frame: cos and sin of every grid column's azimuth (the terrain grid's from 0, bundle
   /// b's from its first_column), computed once per column instead of once per ray; capacity
-  /// for the terrain grid and a full bundle per target.
+  /// for the terrain grid and 4096 columns per target (a bundle beyond it computes them per
+  /// ray: the same values).
   std::vector<double> column_cos_, column_sin_;
   /// Per object, this frame: its world box padded for scene::ray_crosses_box (targets only).
   std::vector<scene::PaddedBox> frame_box_;
