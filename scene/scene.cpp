@@ -129,13 +129,19 @@ bool to_embree(const Ray& ray, RTCRay& r) noexcept {
   return true;
 }
 
-// Does the ray cross the box [lo, hi] somewhere in [t0, t1]? (ray_crosses_box)
-bool crosses_box(const Ray& ray, const glm::dvec3& lo, const glm::dvec3& hi, double t0,
-                 double t1) noexcept {
-  const double pad = 1e-6 * (1.0 + std::max(glm::length(lo), glm::length(hi)));
+// The box [lo, hi] padded by a relative 1e-6 (ray_crosses_box). One square root: the larger of
+// the two squared lengths first (sqrt is monotonic and correctly rounded, so this is exactly
+// max(|lo|, |hi|)).
+PaddedBox pad(const glm::dvec3& lo, const glm::dvec3& hi) noexcept {
+  const double margin_m = 1e-6 * (1.0 + std::sqrt(std::max(glm::dot(lo, lo), glm::dot(hi, hi))));
+  return {lo - margin_m, hi + margin_m};
+}
+
+// Does the ray cross the padded box somewhere in [t0, t1]? (ray_crosses_box)
+bool crosses_box(const Ray& ray, const PaddedBox& box, double t0, double t1) noexcept {
   for (glm::length_t k = 0; k < 3; ++k) {
     const double o = ray.origin_m[k], d = ray.direction[k];
-    const double a = lo[k] - pad, b = hi[k] + pad;
+    const double a = box.lo_m[k], b = box.hi_m[k];
     if (d == 0.0) {
       if (o < a || o > b)
         return false;
@@ -287,7 +293,15 @@ struct Scene::Impl {
 
   SceneDescription desc;
   std::vector<ObjectState> states;
-  std::vector<glm::dmat4> world_from_body;       // current, per object
+  std::vector<glm::dmat4> world_from_body;  // current, per object
+  // Per object: its current world box padded as ray_crosses_box pads it (kept for the movers,
+  // whose boxes every query tests: refresh_padded_bounds after each move).
+  std::vector<PaddedBox> padded_bounds;
+  void refresh_padded_bounds() noexcept {
+    for (const Mover& mv : movers)
+      padded_bounds[mv.object] =
+          pad(states[mv.object].bounds_min_m, states[mv.object].bounds_max_m);
+  }
   std::vector<glm::dvec3> bounds_min_at_zero_m;  // world bounds at t = 0, per object
   std::vector<glm::dvec3> bounds_max_at_zero_m;
   std::vector<std::uint32_t> object_of_static_geometry;  // static_scene geomID -> object id
@@ -691,6 +705,8 @@ Scene::Scene(SceneDescription description) : impl_(std::make_unique<Impl>()) {
   }
   rtcSetDeviceErrorFunction(m.device, device_error, &m.errors);
   m.build();
+  m.padded_bounds.assign(m.states.size(), PaddedBox{});
+  m.refresh_padded_bounds();
 }
 
 Scene::~Scene() = default;
@@ -698,7 +714,15 @@ Scene::Scene(Scene&&) noexcept = default;
 Scene& Scene::operator=(Scene&&) noexcept = default;
 
 bool ray_crosses_box(const Ray& ray, const glm::dvec3& lo, const glm::dvec3& hi) noexcept {
-  return crosses_box(ray, lo, hi, ray.t_near_m, ray.t_far_m);
+  return crosses_box(ray, pad(lo, hi), ray.t_near_m, ray.t_far_m);
+}
+
+PaddedBox padded_box(const glm::dvec3& lo, const glm::dvec3& hi) noexcept {
+  return pad(lo, hi);
+}
+
+bool ray_crosses_box(const Ray& ray, const PaddedBox& box) noexcept {
+  return crosses_box(ray, box, ray.t_near_m, ray.t_far_m);
 }
 
 namespace {
@@ -741,9 +765,8 @@ bool Scene::Impl::finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) cons
     }
   }
   for (const Impl::Mover& mv : m.movers) {
-    const ObjectState& st = m.states[mv.object];
     // rh.ray.tfar is the best hit so far (or the ray's t_far): only nearer movers can win.
-    if (!crosses_box(ray, st.bounds_min_m, st.bounds_max_m, static_cast<double>(rh.ray.tnear),
+    if (!crosses_box(ray, m.padded_bounds[mv.object], static_cast<double>(rh.ray.tnear),
                      static_cast<double>(rh.ray.tfar))) {
       continue;
     }
@@ -869,8 +892,7 @@ bool Scene::Impl::occluded_beyond_static(const Ray& ray, const RTCRay& r) const 
       return true;
   }
   for (const Impl::Mover& mv : m.movers) {
-    const ObjectState& st = m.states[mv.object];
-    if (!crosses_box(ray, st.bounds_min_m, st.bounds_max_m, static_cast<double>(r.tnear),
+    if (!crosses_box(ray, m.padded_bounds[mv.object], static_cast<double>(r.tnear),
                      static_cast<double>(r.tfar))) {
       continue;
     }
@@ -970,6 +992,7 @@ void Scene::set_time(double t_s) noexcept {
     m.states[mv.object].bounds_min_m = m.bounds_min_at_zero_m[mv.object] + shift;
     m.states[mv.object].bounds_max_m = m.bounds_max_at_zero_m[mv.object] + shift;
   }
+  m.refresh_padded_bounds();
 }
 
 double Scene::time_s() const noexcept {

@@ -158,5 +158,13 @@ class Scene {
 /// cannot be culled wrongly). Cheap: used to cull queries that cannot reach an object.
 [[nodiscard]] bool ray_crosses_box(const Ray& ray, const glm::dvec3& lo,
                                    const glm::dvec3& hi) noexcept;
+/// The padded box ray_crosses_box tests, prepared once (e.g. per frame for a box that many rays
+/// test): padded_box(lo, hi) pads as ray_crosses_box does, and ray_crosses_box(ray, box) then
+/// gives its answer without recomputing the padding. Real-time safe.
+struct PaddedBox {
+  glm::dvec3 lo_m{0.0}, hi_m{0.0};
+};
+[[nodiscard]] PaddedBox padded_box(const glm::dvec3& lo, const glm::dvec3& hi) noexcept;
+[[nodiscard]] bool ray_crosses_box(const Ray& ray, const PaddedBox& box) noexcept;
 
 }  // namespace radar_emu::scene

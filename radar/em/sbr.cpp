@@ -4,8 +4,10 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -23,22 +25,31 @@ void require(bool ok, const char* field, const char* what) {
 }
 
 // Vertical polarisation for a wave along `d`: antenna "up" projected perpendicular to d.
-glm::dvec3 v_pol(const glm::dvec3& up, const glm::dvec3& boresight, const glm::dvec3& d) {
+inline glm::dvec3 v_pol(const glm::dvec3& up, const glm::dvec3& boresight, const glm::dvec3& d) {
   glm::dvec3 v = up - glm::dot(up, d) * d;
-  double n = glm::length(v);
-  if (n < 1e-9) {  // looking along "up": fall back to the boresight's projection
+  double n2 = glm::dot(v, v);
+  if (n2 < 1e-18) {  // looking along "up" (|v| < 1e-9): fall back to the boresight's projection
     v = boresight - glm::dot(boresight, d) * d;
-    n = glm::length(v);
+    n2 = glm::dot(v, v);
   }
-  return v / n;
+  return v * (1.0 / std::sqrt(n2));
 }
 
 // The antenna's polarisation vector of channel `h` (H: true, V: false) for a wave along `d`
 // (from the radar): V as above, H = V x d (SbrConfig::polarisation).
-glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
-                      const glm::dvec3& d) {
+inline glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
+                             const glm::dvec3& d) {
   const glm::dvec3 v = v_pol(up, boresight, d);
-  return h ? glm::normalize(glm::cross(v, d)) : v;
+  if (!h)
+    return v;
+  const glm::dvec3 x = glm::cross(v, d);
+  return x * (1.0 / std::sqrt(glm::dot(x, x)));
+}
+
+// azel_from_direction for a return's direction of arrival (an output, no decision rests on
+// it): sqrt(x^2 + y^2) for hypot(x, y), whose overflow guard a unit vector does not need.
+inline AzEl arrival_azel(const glm::dvec3& d) noexcept {
+  return {std::atan2(d.y, d.x), std::atan2(-d.z, std::sqrt(d.x * d.x + d.y * d.y))};
 }
 
 }  // namespace
@@ -51,6 +62,12 @@ glm::dvec3 direction_from_azel(const AzEl& a) noexcept {
   const double ce = std::cos(a.elevation_rad);
   return {ce * std::cos(a.azimuth_rad), ce * std::sin(a.azimuth_rad), -std::sin(a.elevation_rad)};
 }
+
+namespace {
+// The column table (SbrTracer::column_cos_): columns held per target, and a bundle without any.
+constexpr std::size_t kColumnsPerTarget = 4096;
+constexpr std::size_t kNoColumns = static_cast<std::size_t>(-1);
+}  // namespace
 
 SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     : scene_(&scene), config_(config) {
@@ -166,6 +183,53 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   facet_light_.assign(facet_first_.back(), kLightByRays);
   facet_out_.assign(facet_first_.back(), Contribution{});
   frame_world_from_body_.assign(desc.objects.size(), glm::dmat4(1.0));
+  frame_box_.assign(desc.objects.size(), scene::PaddedBox{});
+  // Columns: the terrain grid's (knobs only coarsen it) and up to kColumnsPerTarget per target
+  // (a wider bundle takes its cos and sin per ray).
+  column_cos_.assign(n_az_ + n_targets_ * std::min(kColumnsPerTarget, c.max_rays_per_target), 0.0);
+  column_sin_.assign(column_cos_.size(), 0.0);
+}
+
+bool SbrTracer::intersect(const scene::Ray& ray, scene::Hit& hit) const noexcept {
+  if (query_log_ != nullptr) {
+    const std::size_t i = query_log_->n_intersects.fetch_add(1, std::memory_order_relaxed);
+    if (i < query_log_->intersects.size())
+      query_log_->intersects[i] = ray;
+  }
+  return scene_->intersect(ray, hit);
+}
+
+void SbrTracer::intersect(std::span<const scene::Ray> rays, std::span<scene::Hit> hits,
+                          std::span<std::uint8_t> found) const noexcept {
+  if (query_log_ != nullptr) {
+    for (const scene::Ray& ray : rays) {
+      const std::size_t i = query_log_->n_intersects.fetch_add(1, std::memory_order_relaxed);
+      if (i < query_log_->intersects.size())
+        query_log_->intersects[i] = ray;
+    }
+  }
+  scene_->intersect(rays, hits, found);
+}
+
+void SbrTracer::occluded(std::span<const scene::Ray> rays,
+                         std::span<std::uint8_t> blocked) const noexcept {
+  if (query_log_ != nullptr) {
+    for (const scene::Ray& ray : rays) {
+      const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
+      if (i < query_log_->occlusions.size())
+        query_log_->occlusions[i] = ray;
+    }
+  }
+  scene_->occluded(rays, blocked);
+}
+
+bool SbrTracer::occluded(const scene::Ray& ray) const noexcept {
+  if (query_log_ != nullptr) {
+    const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
+    if (i < query_log_->occlusions.size())
+      query_log_->occlusions[i] = ray;
+  }
+  return scene_->occluded(ray);
 }
 
 std::size_t SbrTracer::max_contributions() const noexcept {
@@ -286,7 +350,7 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
     ray.origin_m = p;
     ray.direction = to / ray.t_far_m;
     ray.t_near_m = 0.0;
-    return scene_->occluded(ray);
+    return occluded(ray);
   };
   // TraceKnobs::facet_centroid_only: the centroid's sample alone decides, lit or dark whole.
   const FacetLight light =
@@ -415,7 +479,7 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   ray.t_far_m = glm::length(to);
   ray.direction = to / ray.t_far_m;
   ray.t_near_m = 0.0;
-  if (scene_->occluded(ray))
+  if (occluded(ray))
     return kShadowed;
   // edges.hpp: S = c L sinc(k taper) exp(j k (s - d).centre); here the phase is the spherical
   // wave's two-way path to the midpoint, as a facet's is to its centroid.
@@ -551,173 +615,269 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
 
 bool SbrTracer::may_reach_owner(const scene::Ray& ray, const Frame& frame, std::uint32_t owner,
                                 bool terrain) const noexcept {
-  const auto objects = scene_->objects();
   if (!terrain)
-    return scene::ray_crosses_box(ray, objects[owner].bounds_min_m, objects[owner].bounds_max_m);
+    return scene::ray_crosses_box(ray, frame_box_[owner]);
   for (const std::uint32_t id : frame.unbundled_in_range) {
-    if (scene::ray_crosses_box(ray, objects[id].bounds_min_m, objects[id].bounds_max_m))
+    if (scene::ray_crosses_box(ray, frame_box_[id]))
       return true;
   }
   return false;
 }
 
-void SbrTracer::trace_ray(const RadarPose& pose, const Frame& frame, double az, double el,
-                          double daz, double del, std::uint32_t owner, bool terrain,
-                          Contribution* slot, std::uint8_t& count,
-                          TraceStats& stats) const noexcept {
+// A ray between its hits (trace_batch): where it is, what it carries, where its returns go.
+struct SbrTracer::RayState {
+  glm::dvec3 d{0.0};  ///< direction of the next segment
+  /// Tube edge vectors per unit distance: derivatives of the direction times the spacings
+  /// (Ling, Chou & Lee 1989: ray tubes). |u x v| = cos(el) daz del, the tube's solid angle; the
+  /// spherical wave's tube at unfolded distance L has edges L u, L v.
+  glm::dvec3 u{0.0}, v{0.0};
+  CVec e;                         ///< field, unit amplitude at every hit (range: the sensor's)
+  glm::dvec3 origin{0.0};         ///< of the next segment (lifted off the last hit)
+  glm::dvec3 v_prev{0.0};         ///< velocity of what the ray last left [m/s]
+  glm::dvec3 last_hit{0.0};       ///< the last hit, on the unlifted path
+  double path_m = 0.0;            ///< unfolded path length from the radar to the last hit
+  double path_rate = 0.0;         ///< d(path)/dt so far [m/s]
+  Contribution* slot = nullptr;   ///< the ray's max_bounces output slots
+  std::uint8_t* count = nullptr;  ///< how many of them hold returns
+  std::uint32_t owner = 0;        ///< the bundle's target (terrain rays: none)
+  std::uint32_t path_owner = 0;   ///< the first target met (header: ownership)
+  bool terrain = false;           ///< a terrain-grid ray
+  bool met_target = false;
+  bool active = true;  ///< still travelling
+  /// The field's reflection at the last hit, left until the field is needed (a path that ends
+  /// before it radiates or reflects again never needs it): the surface (null: none pending),
+  /// the incident direction, the face's normal and cos(theta_i) there.
+  const SurfaceModel* pending_surface = nullptr;
+  glm::dvec3 pending_d{0.0}, pending_n{0.0};
+  double pending_cos = 0.0;
+};
+
+namespace {
+constexpr std::size_t kBatch = 64;  // rays per trace_batch (stack arrays: no allocation)
+}  // namespace
+
+void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span<RayState> rays,
+                            TraceStats& stats) const noexcept {
   const SbrConfig& c = config_;
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const glm::dmat3& r = pose.world_from_antenna;
   const glm::dvec3 boresight = r[0];
   const glm::dvec3 up = -r[2];  // antenna z is down
   const glm::dmat3 antenna_from_world = glm::transpose(r);
-  const bool tx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kVH;
   const bool rx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kHV;
-  const double ce = std::cos(el), se = std::sin(el), ca = std::cos(az), sa = std::sin(az);
-  glm::dvec3 d = r * glm::dvec3(ce * ca, ce * sa, -se);
-  // Tube edge vectors per unit distance: derivatives of the direction times the spacings
-  // (Ling, Chou & Lee 1989: ray tubes). |u x v| = cos(el) daz del, the tube's solid angle; the
-  // spherical wave's tube at unfolded distance L has edges L u, L v.
-  glm::dvec3 u = r * glm::dvec3(-ce * sa, ce * ca, 0.0) * daz;
-  glm::dvec3 v = r * glm::dvec3(-se * ca, -se * sa, -ce) * del;
-  // Transmitted field, unit amplitude at every hit (the range term is the sensor's).
-  CVec e{pol_vector(tx_h, up, boresight, d), glm::dvec3(0.0)};
-  glm::dvec3 origin = pose.position_m;
-  glm::dvec3 v_prev = pose.velocity_mps;
-  double path_m = 0.0;     // unfolded path length from the radar to the current hit
-  double path_rate = 0.0;  // d(path)/dt so far [m/s]
-  bool met_target = false;
-  std::uint32_t path_owner = owner;  // the first target met (header: ownership)
-  count = 0;
-  glm::dvec3 last_hit = origin;
-  for (int bounce = 0; bounce < frame.max_bounces; ++bounce) {
-    scene::Ray ray;
-    ray.origin_m = origin;
-    ray.direction = d;
-    ray.t_near_m = 0.0;  // reflected rays start lifted off the surface (below)
-    // Range budget: a return counts only if half its total path is within max_range, so the
-    // first segment may run max_range and later ones what is left of 2 max_range.
-    ray.t_far_m = bounce == 0 ? c.max_range_m : 2.0 * c.max_range_m - path_m;
-    if (ray.t_far_m <= ray.t_near_m)
+  std::array<scene::Ray, kBatch> segments, shadows;
+  std::array<scene::Hit, kBatch> hits;
+  std::array<std::uint8_t, kBatch> found, blocked;
+  std::array<std::uint32_t, kBatch> segment_of, shadow_of;
+  const std::size_t n_rays = std::min(rays.size(), kBatch);
+  // The pending reflection of a ray's field (RayState), applied: d_r = mirror(d, n) is the
+  // ray's direction since.
+  auto settle_field = [&](RayState& st) {
+    if (st.pending_surface == nullptr)
       return;
-    if (bounce > 0 && !met_target && !may_reach_owner(ray, frame, owner, terrain)) {
-      ++stats.pruned_paths;
-      return;
-    }
-    scene::Hit hit;
-    if (!scene_->intersect(ray, hit))
-      return;
-    ++stats.hits;
-    const bool hit_target = is_target_[hit.object_id] != 0;
-    if (hit_target && !met_target) {
-      // Ownership (header): the first target on the path decides which grid counts it.
-      if (terrain ? bundled_[hit.object_id] != 0 : hit.object_id != owner)
-        return;
-      met_target = true;
-      path_owner = hit.object_id;
-    }
-    const Surface& surface = surfaces_.surfaces[hit.material_id];
-    const glm::dvec3 v_obj = scene_->objects()[hit.object_id].velocity_mps;
-    hit.position_m =
-        extend_path(bounce == 0, hit.t_m, last_hit, d, hit.position_m, hit.normal, path_m);
-    last_hit = hit.position_m;
-    path_rate += glm::dot(v_obj - v_prev, d);
-    glm::dvec3 n = hit.normal;
-    if (glm::dot(n, d) > 0.0)
-      n = -n;  // the face the ray meets
-    const double n_dot_d = glm::dot(n, d);
-    const double cos_i = -n_dot_d;
-    if (cos_i < kGrazingCos) {
-      ++stats.grazing_skipped;
-      return;
-    }
-    if (bounce == 0 && terrain && !hit_target && !surface.conductor) {
-      // Diffuse clutter: sigma = sigma0(theta_i) * footprint area, footprint = dA_perp /
-      // cos(theta_i) with dA_perp = L^2 dOmega; sigma0 of the antenna's channel from the
-      // material's setup-time table (radar/clutter/terrain.hpp; every non-conductor has a row).
-      const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, -d);
-      const double d_omega = glm::length(glm::cross(u, v));
-      std::uint32_t sigma0_flags = 0u;
-      const double sigma_m2 =
-          static_cast<double>(surfaces_.sigma0(hit.material_id, cos_i, sigma0_flags)) * path_m *
-          path_m * d_omega / cos_i;
-      ++stats.terrain_returns;  // issue 28: the flagged sigma0 values the terrain read
-      if (sigma0_flags != 0u) {
-        ++stats.terrain_returns_flagged;
-        stats.terrain_sigma0_flags |= sigma0_flags;
-      }
-      Contribution& out = slot[count++];
-      out.amplitude = {std::sqrt(sigma_m2), 0.0};
-      out.range_m = path_m;
-      out.range_spread_m = std::abs(glm::dot(fp.u_m, d)) + std::abs(glm::dot(fp.v_m, d));
-      out.radial_velocity_mps = path_rate;  // out and back along the same line
-      const AzEl ae = azel_from_direction(antenna_from_world * d);
-      out.azimuth_rad = ae.azimuth_rad;
-      out.elevation_rad = ae.elevation_rad;
-      out.object_id = hit.object_id;
-      out.bounces = 1;
-      out.coherent = false;
-    }
-    if (terrain && !met_target && frame.unbundled_in_range.empty())
-      return;  // no target without a bundle within range: this terrain path can radiate nothing
-    const SurfaceModel& sm = surface.specular;
+    const SurfaceModel& sm = *st.pending_surface;
     const bool pec = sm.kind == SurfaceModel::Kind::kPec;
-    const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
-    const double off = surface_offset_m(hit.position_m);
-    if (met_target) {
-      // PO radiation of the footprint back to the radar (sbr_core.hpp).
-      const glm::dvec3 to_radar = pose.position_m - hit.position_m;
-      const double back_m = glm::length(to_radar);
-      const glm::dvec3 s = to_radar / back_m;
-      bool visible = true;
-      if (bounce == 0) {
-        // A bundle's first hit on its own target: the facet pass has bounce 1 (header) unless
-        // it left this facet to the rays.
-        visible =
-            terrain || facet_light_[facet_first_[hit.object_id] + hit.primitive_id] == kLightByRays;
-      } else {
-        // Later bounces: the radar must see the lit side of the hit (sbr_core.hpp, kGrazingCos).
-        visible = glm::dot(n, s) >= kGrazingCos;
-        if (visible) {
-          scene::Ray shadow;
-          shadow.origin_m = hit.position_m + off * n;
-          const glm::dvec3 to = pose.position_m - shadow.origin_m;
-          shadow.t_far_m = glm::length(to);
-          shadow.direction = to / shadow.t_far_m;
-          shadow.t_near_m = 0.0;
-          visible = !scene_->occluded(shadow);
-        }
+    const ReflectionCoefficients rc =
+        pec ? ReflectionCoefficients{} : reflection_coefficients(sm, st.pending_cos, k);
+    st.e = reflect_field(st.e, st.pending_d, st.d, st.pending_n, rc, pec);
+    st.pending_surface = nullptr;
+  };
+  for (int bounce = 0; bounce < frame.max_bounces; ++bounce) {
+    // This bounce's segments of the rays still travelling, queried together.
+    std::size_t n_seg = 0;
+    for (std::size_t q = 0; q < n_rays; ++q) {
+      RayState& st = rays[q];
+      if (!st.active)
+        continue;
+      scene::Ray ray;
+      ray.origin_m = st.origin;
+      ray.direction = st.d;
+      ray.t_near_m = 0.0;  // reflected rays start lifted off the surface (below)
+      // Range budget: a return counts only if half its total path is within max_range, so the
+      // first segment may run max_range and later ones what is left of 2 max_range.
+      ray.t_far_m = bounce == 0 ? c.max_range_m : 2.0 * c.max_range_m - st.path_m;
+      if (ray.t_far_m <= ray.t_near_m) {
+        st.active = false;
+        continue;
       }
-      if (visible) {
-        const TubeFootprint fp = tube_footprint(u * path_m, v * path_m, d, n, s);
-        const glm::dvec3 p = pol_vector(rx_h, up, boresight, -s);
-        const double total_m = path_m + back_m;
-        Contribution& out = slot[count++];
-        out.amplitude =
-            po_amplitude_m(k, p, po_source(e, d, n, s, rc, pec), footprint_integral(fp, k)) *
-            std::polar(1.0, -k * total_m);
-        out.range_m = 0.5 * total_m;
-        out.range_spread_m = 0.0;
-        out.radial_velocity_mps = 0.5 * (path_rate + glm::dot(pose.velocity_mps - v_obj, s));
-        const AzEl ae = azel_from_direction(antenna_from_world * (-s));
+      if (bounce > 0 && !st.met_target && !may_reach_owner(ray, frame, st.owner, st.terrain)) {
+        ++stats.pruned_paths;
+        st.active = false;
+        continue;
+      }
+      segments[n_seg] = ray;
+      segment_of[n_seg++] = static_cast<std::uint32_t>(q);
+    }
+    if (n_seg == 0)
+      return;
+    intersect(std::span<const scene::Ray>(segments.data(), n_seg),
+              std::span<scene::Hit>(hits.data(), n_seg),
+              std::span<std::uint8_t>(found.data(), n_seg));
+    // Each hit: returns (a shadowed one waits for its shadow ray's answer), then the reflection.
+    std::size_t n_shadow = 0;
+    for (std::size_t j = 0; j < n_seg; ++j) {
+      RayState& st = rays[segment_of[j]];
+      if (found[j] == 0) {
+        st.active = false;
+        continue;
+      }
+      scene::Hit& hit = hits[j];
+      ++stats.hits;
+      const bool hit_target = is_target_[hit.object_id] != 0;
+      if (hit_target && !st.met_target) {
+        // Ownership (header): the first target on the path decides which grid counts it.
+        if (st.terrain ? bundled_[hit.object_id] != 0 : hit.object_id != st.owner) {
+          st.active = false;
+          continue;
+        }
+        st.met_target = true;
+        st.path_owner = hit.object_id;
+      }
+      const Surface& surface = surfaces_.surfaces[hit.material_id];
+      const glm::dvec3 v_obj = scene_->objects()[hit.object_id].velocity_mps;
+      const glm::dvec3 d = st.d;
+      hit.position_m =
+          extend_path(bounce == 0, hit.t_m, st.last_hit, d, hit.position_m, hit.normal, st.path_m);
+      st.last_hit = hit.position_m;
+      st.path_rate += glm::dot(v_obj - st.v_prev, d);
+      const double path_m = st.path_m;
+      glm::dvec3 n = hit.normal;
+      if (glm::dot(n, d) > 0.0)
+        n = -n;  // the face the ray meets
+      const double n_dot_d = glm::dot(n, d);
+      const double cos_i = -n_dot_d;
+      if (cos_i < kGrazingCos) {
+        ++stats.grazing_skipped;
+        st.active = false;
+        continue;
+      }
+      if (bounce == 0 && st.terrain && !hit_target && !surface.conductor) {
+        // Diffuse clutter: sigma = sigma0(theta_i) * footprint area, footprint = dA_perp /
+        // cos(theta_i) with dA_perp = L^2 dOmega; sigma0 of the antenna's channel from the
+        // material's setup-time table (radar/clutter/terrain.hpp; every non-conductor has a row).
+        const TubeFootprint fp = tube_footprint(st.u * path_m, st.v * path_m, d, n, -d);
+        const double d_omega = glm::length(glm::cross(st.u, st.v));
+        std::uint32_t sigma0_flags = 0u;
+        const double sigma_m2 =
+            static_cast<double>(surfaces_.sigma0(hit.material_id, cos_i, sigma0_flags)) * path_m *
+            path_m * d_omega / cos_i;
+        ++stats.terrain_returns;  // issue 28: the flagged sigma0 values the terrain read
+        if (sigma0_flags != 0u) {
+          ++stats.terrain_returns_flagged;
+          stats.terrain_sigma0_flags |= sigma0_flags;
+        }
+        Contribution& out = st.slot[(*st.count)++];
+        out.amplitude = {std::sqrt(sigma_m2), 0.0};
+        out.range_m = path_m;
+        out.range_spread_m = std::abs(glm::dot(fp.u_m, d)) + std::abs(glm::dot(fp.v_m, d));
+        out.radial_velocity_mps = st.path_rate;  // out and back along the same line
+        const AzEl ae = arrival_azel(antenna_from_world * d);
         out.azimuth_rad = ae.azimuth_rad;
         out.elevation_rad = ae.elevation_rad;
-        out.object_id = path_owner;
-        out.radiated_by_owner = hit.object_id == path_owner;
-        out.bounces = static_cast<std::uint8_t>(bounce + 1);
-        out.coherent = true;
+        out.object_id = hit.object_id;
+        out.bounces = 1;
+        out.coherent = false;
+      }
+      if (st.terrain && !st.met_target && frame.unbundled_in_range.empty()) {
+        st.active = false;  // no target without a bundle within range: nothing can radiate
+        continue;
+      }
+      const SurfaceModel& sm = surface.specular;
+      const bool pec = sm.kind == SurfaceModel::Kind::kPec;
+      const bool last = bounce + 1 == frame.max_bounces;
+      if (last && !st.met_target) {  // nothing radiates here, and no reflection follows
+        if (!pec)
+          ++stats.dielectric_reflections;  // counted as if reflected, as before this shortcut
+        st.active = false;
+        continue;
+      }
+      // The local reflection coefficients, now when this hit radiates, else with the
+      // field's reflection when it is needed (settle_field).
+      settle_field(st);
+      const ReflectionCoefficients rc =
+          !st.met_target || pec ? ReflectionCoefficients{} : reflection_coefficients(sm, cos_i, k);
+      const double off = surface_offset_m(hit.position_m);
+      if (st.met_target) {
+        // PO radiation of the footprint back to the radar (sbr_core.hpp).
+        const glm::dvec3 to_radar = pose.position_m - hit.position_m;
+        const double back_m = glm::length(to_radar);
+        const glm::dvec3 s = to_radar / back_m;
+        bool visible = true;
+        bool shadowed_later = false;  // visible unless its shadow ray (below) is blocked
+        if (bounce == 0) {
+          // A bundle's first hit on its own target: the facet pass has bounce 1 (header)
+          // unless it left this facet to the rays.
+          visible = st.terrain ||
+                    facet_light_[facet_first_[hit.object_id] + hit.primitive_id] == kLightByRays;
+        } else {
+          // Later bounces: the radar must see the lit side of the hit (sbr_core.hpp,
+          // kGrazingCos) along a clear path.
+          visible = glm::dot(n, s) >= kGrazingCos;
+          if (visible) {
+            scene::Ray& shadow = shadows[n_shadow];
+            shadow.origin_m = hit.position_m + off * n;
+            const glm::dvec3 to = pose.position_m - shadow.origin_m;
+            shadow.t_far_m = glm::length(to);
+            shadow.direction = to / shadow.t_far_m;
+            shadow.t_near_m = 0.0;
+            shadow_of[n_shadow++] = segment_of[j];
+            shadowed_later = true;
+          }
+        }
+        if (visible) {  // written now, kept (counted) once its shadow ray is known to be clear
+          const TubeFootprint fp = tube_footprint(st.u * path_m, st.v * path_m, d, n, s);
+          const glm::dvec3 p = pol_vector(rx_h, up, boresight, -s);
+          const double total_m = path_m + back_m;
+          Contribution& out = st.slot[*st.count];
+          out.amplitude =
+              po_amplitude_m(k, p, po_source(st.e, d, n, s, rc, pec), footprint_integral(fp, k)) *
+              std::polar(1.0, -k * total_m);
+          out.range_m = 0.5 * total_m;
+          out.range_spread_m = 0.0;
+          out.radial_velocity_mps = 0.5 * (st.path_rate + glm::dot(pose.velocity_mps - v_obj, s));
+          const AzEl ae = arrival_azel(antenna_from_world * (-s));
+          out.azimuth_rad = ae.azimuth_rad;
+          out.elevation_rad = ae.elevation_rad;
+          out.object_id = st.path_owner;
+          out.radiated_by_owner = hit.object_id == st.path_owner;
+          out.bounces = static_cast<std::uint8_t>(bounce + 1);
+          out.coherent = true;
+          if (!shadowed_later)
+            ++*st.count;
+        }
+      }
+      // Specular reflection (law of reflection) of direction, tube and field (sbr_core.hpp);
+      // none after the last hit (only counted).
+      if (!pec)
+        ++stats.dielectric_reflections;
+      if (last) {
+        st.active = false;
+        continue;
+      }
+      const glm::dvec3 d_r = mirror(d, n);
+      if (st.met_target) {
+        st.e = reflect_field(st.e, d, d_r, n, rc, pec);
+      } else {  // no return yet: the field may never be needed (pruned, lost, owned by another)
+        st.pending_surface = &sm;
+        st.pending_d = d;
+        st.pending_n = n;
+        st.pending_cos = cos_i;
+      }
+      st.d = d_r;
+      st.u = mirror(st.u, n);
+      st.v = mirror(st.v, n);
+      st.origin = hit.position_m + off * n;  // lifted to the lit side: no self-hit
+      st.v_prev = v_obj;
+    }
+    // The shadow rays of this bounce's returns, together: a clear one keeps its return.
+    if (n_shadow > 0) {
+      occluded(std::span<const scene::Ray>(shadows.data(), n_shadow),
+               std::span<std::uint8_t>(blocked.data(), n_shadow));
+      for (std::size_t j = 0; j < n_shadow; ++j) {
+        if (blocked[j] == 0)
+          ++*rays[shadow_of[j]].count;
       }
     }
-    // Specular reflection (law of reflection) of direction, tube and field (sbr_core.hpp).
-    const glm::dvec3 d_r = mirror(d, n);
-    e = reflect_field(e, d, d_r, n, rc, pec);
-    if (!pec)
-      ++stats.dielectric_reflections;
-    d = d_r;
-    u = mirror(u, n);
-    v = mirror(v, n);
-    origin = hit.position_m + off * n;  // lifted to the lit side: no self-hit, however grazing
-    v_prev = v_obj;
   }
 }
 
@@ -758,6 +918,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     bundled_[id] = 0;
     if (!is_target_[id])
       continue;
+    frame_box_[id] = scene::padded_box(objects[id].bounds_min_m, objects[id].bounds_max_m);
     Bundle b;
     bool coarsened = false;
     const double spacing_m = target_spacing(knobs, id, &stats);
@@ -832,6 +993,27 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                         }
                       });
   }
+  // Each grid column's azimuth, once (RayState's direction and tube edges take its cos, sin).
+  {
+    std::size_t col = 0;
+    for (std::size_t ia = 0; ia < frame.terrain_n_az; ++ia, ++col) {
+      const double az = c.azimuth_min_rad + (static_cast<double>(ia) + 0.5) * frame.terrain_daz_rad;
+      column_cos_[col] = std::cos(az);
+      column_sin_[col] = std::sin(az);
+    }
+    for (Bundle& bd : bundles_) {
+      if (col + bd.n_az > column_cos_.size()) {  // beyond the table: per ray (same values)
+        bd.first_column = kNoColumns;
+        continue;
+      }
+      bd.first_column = col;
+      for (std::size_t ia = 0; ia < bd.n_az; ++ia, ++col) {
+        const double az = bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad;
+        column_cos_[col] = std::cos(az);
+        column_sin_[col] = std::sin(az);
+      }
+    }
+  }
   const std::size_t rays = next_ray;
   const auto per_ray = static_cast<std::size_t>(c.max_bounces);
   const std::size_t usable_rays = std::min({rays, out.size() / per_ray, counts_.size()});
@@ -845,25 +1027,66 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       [&](const tbb::blocked_range<std::size_t>& range) {
         TraceStats local;
         std::size_t b = 0;
-        for (std::size_t i = range.begin(); i != range.end(); ++i) {
-          Contribution* slot = out.data() + i * per_ray;
-          if (i < terrain_rays) {
-            const std::size_t ia = i % frame.terrain_n_az, ie = i / frame.terrain_n_az;
-            trace_ray(pose, frame,
-                      c.azimuth_min_rad + (static_cast<double>(ia) + 0.5) * frame.terrain_daz_rad,
-                      c.elevation_min_rad + (static_cast<double>(ie) + 0.5) * frame.terrain_del_rad,
-                      frame.terrain_daz_rad, frame.terrain_del_rad, 0, true, slot, counts_[i],
-                      local);
-            continue;
+        // The rays go in batches of neighbours (a row of a grid, mostly), traced together
+        // (trace_batch).
+        std::array<RayState, kBatch> batch;
+        const glm::dmat3& rot = pose.world_from_antenna;
+        const glm::dvec3 boresight = rot[0], up = -rot[2];  // antenna z is down
+        const bool tx_h =
+            c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kVH;
+        double row_el = std::numeric_limits<double>::quiet_NaN(), ce = 0.0, se = 0.0;
+        for (std::size_t i0 = range.begin(); i0 < range.end(); i0 += kBatch) {
+          const std::size_t n_batch = std::min(kBatch, range.end() - i0);
+          for (std::size_t q = 0; q < n_batch; ++q) {
+            const std::size_t i = i0 + q;
+            RayState& st = batch[q];
+            st = RayState{};
+            double el = 0.0, daz = 0.0, del = 0.0, ca = 0.0, sa = 0.0;
+            if (i < terrain_rays) {
+              const std::size_t ia = i % frame.terrain_n_az, ie = i / frame.terrain_n_az;
+              el = c.elevation_min_rad + (static_cast<double>(ie) + 0.5) * frame.terrain_del_rad;
+              daz = frame.terrain_daz_rad;
+              del = frame.terrain_del_rad;
+              ca = column_cos_[ia];
+              sa = column_sin_[ia];
+              st.terrain = true;
+            } else {
+              while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_ray)
+                ++b;
+              const Bundle& bd = bundles_[b];
+              const std::size_t j = i - bd.first_ray;
+              const std::size_t ia = j % bd.n_az, ie = j / bd.n_az;
+              el = bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad;
+              daz = bd.daz_rad;
+              del = bd.del_rad;
+              if (bd.first_column != kNoColumns) {
+                ca = column_cos_[bd.first_column + ia];
+                sa = column_sin_[bd.first_column + ia];
+              } else {
+                const double az = bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad;
+                ca = std::cos(az);
+                sa = std::sin(az);
+              }
+              st.owner = bd.object_id;
+            }
+            if (el != row_el) {  // one elevation per row of a grid
+              row_el = el;
+              ce = std::cos(el);
+              se = std::sin(el);
+            }
+            st.d = rot * glm::dvec3(ce * ca, ce * sa, -se);
+            st.u = rot * glm::dvec3(-ce * sa, ce * ca, 0.0) * daz;
+            st.v = rot * glm::dvec3(-se * ca, -se * sa, -ce) * del;
+            st.e = CVec{pol_vector(tx_h, up, boresight, st.d), glm::dvec3(0.0)};
+            st.origin = pose.position_m;
+            st.v_prev = pose.velocity_mps;
+            st.last_hit = pose.position_m;
+            st.slot = out.data() + i * per_ray;
+            st.count = &counts_[i];
+            st.path_owner = st.owner;
+            counts_[i] = 0;
           }
-          while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_ray)
-            ++b;
-          const Bundle& bd = bundles_[b];
-          const std::size_t j = i - bd.first_ray;
-          const std::size_t ia = j % bd.n_az, ie = j / bd.n_az;
-          trace_ray(pose, frame, bd.az0_rad + (static_cast<double>(ia) + 0.5) * bd.daz_rad,
-                    bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad, bd.daz_rad,
-                    bd.del_rad, bd.object_id, false, slot, counts_[i], local);
+          trace_batch(pose, frame, std::span<RayState>(batch.data(), n_batch), local);
         }
         hits += local.hits;
         grazing += local.grazing_skipped;

@@ -46,6 +46,7 @@
 //   - Every return is labelled with its path's owner (Contribution::object_id), whichever
 //     surface the path last met: radar -> target -> ground -> radar is the target's echo.
 
+#include <atomic>
 #include <complex>
 #include <cstddef>
 #include <cstdint>
@@ -171,6 +172,19 @@ struct Contribution {
   bool radiated_by_owner = true;
 };
 
+/// Diagnostics (bench_frame's BM_TraceRaw, which replays a frame's queries through Embree alone
+/// to measure the tracer against the raw rate on the same rays): while SbrTracer::set_query_log
+/// holds one, trace() copies every scene query it makes into it, closest-hit queries (the rays'
+/// segments) into `intersects` and occlusion queries (bounce 1's facet samples, the edges'
+/// probes, the shadow rays of later bounces) into `occlusions`, while there is room; the counts
+/// go on past the spans' ends. Thread-safe (atomic counters), so the order is the threads'.
+struct QueryLog {
+  std::span<scene::Ray> intersects{};
+  std::span<scene::Ray> occlusions{};
+  std::atomic<std::size_t> n_intersects{0};
+  std::atomic<std::size_t> n_occlusions{0};
+};
+
 struct TraceStats {
   std::uint64_t rays = 0;
   std::uint64_t target_bundles = 0;     ///< targets inside the field of view
@@ -223,6 +237,10 @@ class SbrTracer {
   [[nodiscard]] TracePlan plan(const RadarPose& pose, const TraceKnobs& knobs = {},
                                std::span<std::size_t> rays_per_object = {}) const noexcept;
 
+  /// Diagnostics: trace() records its queries into `log` (QueryLog) until set back to nullptr.
+  /// Not for the frame path (each query then also writes the log).
+  void set_query_log(QueryLog* log) noexcept { query_log_ = log; }
+
   [[nodiscard]] const SbrConfig& config() const noexcept { return config_; }
   /// The scene's materials as this tracer resolved them (at its carrier, in its channel).
   [[nodiscard]] const SurfaceSet& surfaces() const noexcept { return surfaces_; }
@@ -234,6 +252,13 @@ class SbrTracer {
  private:
   const scene::Scene* scene_;
   SbrConfig config_;
+  QueryLog* query_log_ = nullptr;  ///< set_query_log (diagnostics)
+  /// The scene's queries, through the query log when one is set.
+  [[nodiscard]] bool intersect(const scene::Ray& ray, scene::Hit& hit) const noexcept;
+  [[nodiscard]] bool occluded(const scene::Ray& ray) const noexcept;
+  void intersect(std::span<const scene::Ray> rays, std::span<scene::Hit> hits,
+                 std::span<std::uint8_t> found) const noexcept;
+  void occluded(std::span<const scene::Ray> rays, std::span<std::uint8_t> blocked) const noexcept;
   /// Per scene material at the carrier: specular model, sigma0 row (issue 4's models, "total":
   /// surface + volume), conductor flag; resolved once here.
   SurfaceSet surfaces_;
@@ -242,9 +267,10 @@ class SbrTracer {
     double spacing_m = 0;  ///< the configured (or knob) spacing at the target, before coarsening
     double az0_rad = 0, el0_rad = 0, daz_rad = 0, del_rad = 0;
     std::size_t n_az = 0, n_el = 0, first_ray = 0;
-    std::size_t first_facet = 0;  ///< in this frame's run over the bundled targets' facets
-    std::size_t first_edge = 0;   ///< in this frame's run over the bundled targets' edges
-    std::size_t first_pair = 0;   ///< the same for their edge pairs (double diffraction)
+    std::size_t first_facet = 0;   ///< in this frame's run over the bundled targets' facets
+    std::size_t first_edge = 0;    ///< in this frame's run over the bundled targets' edges
+    std::size_t first_pair = 0;    ///< the same for their edge pairs (double diffraction)
+    std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame (or none)
   };
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
@@ -259,9 +285,19 @@ class SbrTracer {
                                 Bundle& b, bool& coarsened) const noexcept;
   [[nodiscard]] double target_spacing(const TraceKnobs& knobs, std::uint32_t id,
                                       TraceStats* stats) const noexcept;
-  void trace_ray(const RadarPose& pose, const Frame& frame, double az, double el, double daz,
-                 double del, std::uint32_t owner, bool terrain, Contribution* slot,
-                 std::uint8_t& count, TraceStats& stats) const noexcept;
+  /// One ray of a batch between its hits (defined in sbr.cpp): trace_batch follows a batch of
+  /// neighbouring rays hit by hit, each segment of all of them as one coherent scene query, and
+  /// the shadow rays of their returns likewise.
+  struct RayState;
+  void trace_batch(const RadarPose& pose, const Frame& frame, std::span<RayState> rays,
+                   TraceStats& stats) const noexcept;
+  /// Per frame: cos and sin of every grid column's azimuth (the terrain grid's from 0, bundle
+  /// b's from its first_column), computed once per column instead of once per ray; capacity
+  /// for the terrain grid and 4096 columns per target (a bundle beyond it computes them per
+  /// ray: the same values).
+  std::vector<double> column_cos_, column_sin_;
+  /// Per object, this frame: its world box padded for scene::ray_crosses_box (targets only).
+  std::vector<scene::PaddedBox> frame_box_;
 
   /// The bounce-1 light (FacetLight, or kLightByRays) of triangle t of target `id` this frame,
   /// and its contribution when lit or partly lit, at facet_first_[id] + t;

@@ -295,6 +295,55 @@ TEST(Sbr, OutputIsIdenticalAcrossRunsAndThreadCounts) {
   }
 }
 
+// The query log (bench_frame's BM_TraceRaw replays it against raw Embree): it changes no output,
+// and its segments and shadow rays, asked again one by one of the scene, give the trace's own
+// hit count and as many clear shadow rays as the trace kept later-bounce returns.
+TEST(Sbr, QueryLogHoldsTheFramesQueriesAndChangesNothing) {
+  const double f = 10e9, range = 500.0;
+  sc::Scene scene(with({dihedral(1.0, 0.5), plate(0.5, 0.2, {2.0, 1.0, 0.0}, "p2")}));
+  rd::SbrTracer tracer(scene, narrow(f, 5e-3, 0.02));
+  std::vector<rd::Contribution> a(tracer.max_contributions()), b(a.size());
+  rd::TraceStats sa, sb;
+  const std::size_t na = tracer.trace(pose_at(range), a, sa);
+  rd::QueryLog sizing;
+  tracer.set_query_log(&sizing);
+  (void)tracer.trace(pose_at(range), b, sb);
+  std::vector<sc::Ray> intersects(sizing.n_intersects.load()),
+      occlusions(sizing.n_occlusions.load());
+  rd::QueryLog log;
+  log.intersects = intersects;
+  log.occlusions = occlusions;
+  tracer.set_query_log(&log);
+  sb = {};
+  const std::size_t nb = tracer.trace(pose_at(range), b, sb);
+  tracer.set_query_log(nullptr);
+  ASSERT_EQ(na, nb);
+  for (std::size_t i = 0; i < na; ++i) {
+    ASSERT_EQ(a[i].amplitude, b[i].amplitude) << i;
+    ASSERT_EQ(a[i].range_m, b[i].range_m) << i;
+  }
+  ASSERT_EQ(log.n_intersects.load(), intersects.size());
+  ASSERT_EQ(log.n_occlusions.load(), occlusions.size());
+  ASSERT_GT(intersects.size(), 100u);
+  std::uint64_t hits = 0;
+  for (const sc::Ray& r : intersects) {
+    sc::Hit h;
+    hits += scene.intersect(r, h) ? 1u : 0u;
+  }
+  EXPECT_EQ(hits, sb.hits);
+  // Occlusion queries: bounce 1's facet samples (facet_queries) and one shadow ray per
+  // later-bounce return that faced the radar; the clear ones are the kept returns.
+  std::size_t later_returns = 0;
+  for (std::size_t i = 0; i < nb; ++i)
+    later_returns += b[i].bounces > 1 ? 1u : 0u;
+  ASSERT_GE(occlusions.size(), sb.facet_queries);
+  std::size_t clear_shadows = 0;
+  for (std::size_t i = sb.facet_queries; i < occlusions.size(); ++i)
+    clear_shadows += scene.occluded(occlusions[i]) ? 0u : 1u;
+  EXPECT_GT(later_returns, 0u);
+  EXPECT_EQ(clear_shadows, later_returns);
+}
+
 TEST(Sbr, NothingOutsideTheFieldOfView) {
   // A plate 10 m to the side at 100 m (5.7 deg) with a +-2 deg field of view: no rays, no returns.
   sc::Scene scene(with({plate(1.0, 0.0, {10.0, 0.0, 0.0})}));
