@@ -140,8 +140,8 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
               c.processing.kernel_half_width_bins <= (Footprint::kMaxBins - 1) / 2,
           "kernel_half_width_bins", "must be in [0, 32] for the sensor");
   processor_ = std::make_unique<RangeDopplerProcessor>(c.processing);
-  // One workspace per beam (the beams of a scan are accumulated together); workers take beams
-  // w, w + W, ...
+  // One workspace per beam (the beams of a scan are accumulated together); worker w takes the
+  // w-th of W contiguous blocks of beams.
   // As many workers as threads TBB may run (the result does not depend on it: every beam adds
   // the items in the same order and draws from its own random streams).
   n_workers_ = std::clamp<std::size_t>(
@@ -306,6 +306,9 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
   const auto [dj0, dj1] = proc.velocity_support(proc.config().kernel_half_width_bins);
   const auto nv = static_cast<std::size_t>(nvl);
+  // This worker's beams: a contiguous block (a return reaches a few neighbouring beams, so most
+  // returns are prepared by one worker only).
+  const std::size_t beam_begin = w * n_beams / n_workers, beam_end = (w + 1) * n_beams / n_workers;
   // Each return's response is prepared once and added to every beam of this worker that sees it
   // with that beam's two-way gain. Targets: exact response (coherent). Clutter: mean power a
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
@@ -325,16 +328,19 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
     // and taps; `span` is the bins they cover.
     DiffusePieces pieces;
     // The beams within the azimuth extent of the return (gains_of() tests it again).
-    std::size_t b_first = w, b_end = n_beams;
+    std::size_t b_first = beam_begin, b_end = beam_end;
     if (beams_ascending_) {
       const std::vector<double>& az = config_.antenna.beam_azimuth_rad;
-      const auto lo = static_cast<std::size_t>(
-          std::lower_bound(az.begin(), az.end(), item.azimuth_rad - az_extent_rad_) - az.begin());
-      b_end = static_cast<std::size_t>(
-          std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) - az.begin());
-      b_first = lo + (w + n_workers - lo % n_workers) % n_workers;  // first b >= lo, b = w mod W
+      b_first = std::max(
+          beam_begin, static_cast<std::size_t>(std::lower_bound(az.begin(), az.end(),
+                                                                item.azimuth_rad - az_extent_rad_) -
+                                               az.begin()));
+      b_end = std::min(
+          beam_end, static_cast<std::size_t>(
+                        std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) -
+                        az.begin()));
     }
-    for (std::size_t b = b_first; b < b_end; b += n_workers) {
+    for (std::size_t b = b_first; b < b_end; ++b) {
       Gains g;
       if (!gains_of(item, b, g))
         continue;
@@ -394,7 +400,7 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
       }
     }
   }
-  for (std::size_t b = w; b < n_beams; b += n_workers)
+  for (std::size_t b = beam_begin; b < beam_end; ++b)
     detect_beam(b, *workspaces_[b]);
 }
 
@@ -667,21 +673,24 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     it.usable = false;
     ++stats.merged_returns;
   }
-  // Each merged cell's representative independently (in parallel): its mean position.
+  // Each merged cell's representative independently (in parallel): its mean position, and its
+  // elevation channels there.
   auto finish = [&](std::size_t u) {
     const std::uint32_t slot = merge_used_[u];
     const auto rep = static_cast<std::size_t>(merge_table_[slot]);
     merge_table_[slot] = -1;
     const MergeSums& a = merge_sums_[rep];
-    if (a.count < 2 || !(a.weight > 0.0))
-      return;
     Item& r = items_[rep];
-    r.pos.range_bin = a.range_bin / a.weight;
-    r.pos.velocity_bin = a.velocity_bin / a.weight;
-    r.range_m = a.range_m / a.weight;
-    r.radial_velocity_mps = a.velocity_mps / a.weight;
-    r.azimuth_rad = a.azimuth_rad / a.weight;
-    r.elevation_rad = a.elevation_rad / a.weight;
+    if (a.count >= 2 && a.weight > 0.0) {
+      r.pos.range_bin = a.range_bin / a.weight;
+      r.pos.velocity_bin = a.velocity_bin / a.weight;
+      r.range_m = a.range_m / a.weight;
+      r.radial_velocity_mps = a.velocity_mps / a.weight;
+      r.azimuth_rad = a.azimuth_rad / a.weight;
+      r.elevation_rad = a.elevation_rad / a.weight;
+    }
+    antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el,
+                         r.delta_el);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_used, 2048),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -771,8 +780,13 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
       return;
     }
     it.usable = true;
+    // The elevation channels: of a coherent return once merged (merge_returns(), at the merged
+    // elevation), of the others now.
     if (it.coherent && !merge_table_.empty())
       merge_key(i);
+    else
+      antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
+                           it.delta_el);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -785,17 +799,6 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   }
   if (config_.merge_step_bins > 0.0)
     merge_returns(stats);
-  // The elevation channels of the returns left after merging (at their merged elevation).
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, item_count_, 4096),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        Item& it = items_[i];
-                        if (it.usable)
-                          antenna_.channels_el(
-                              it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
-                              it.delta_el);
-                      }
-                    });
   for (std::size_t i = 0; i < item_count_; ++i) {
     if (items_[i].usable) {
       max_half_bins_ = std::max(max_half_bins_, items_[i].half_bins);
@@ -831,8 +834,8 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
 
   for (auto& ws : workspaces_)
     ws->crossings = ws->overflowed = ws->synthesised = 0;
-  // Beams are independent; worker w handles beams w, w + W, ... Every random stream is keyed by
-  // (seed, frame, beam, ...), so the result does not depend on the schedule.
+  // Beams are independent; worker w handles the w-th block of beams. Every random stream is keyed
+  // by (seed, frame, beam, ...), so the result does not depend on the schedule.
   tbb::parallel_for(std::size_t{0}, n_workers_,
                     [&](std::size_t w) { process_worker(w, n_workers_); });
   for (auto& ws : workspaces_) {

@@ -251,7 +251,8 @@ class Sensor {
   std::vector<MergeSums> merge_sums_;      ///< ... its own weighted position, then the cell's
   /// Item i's merge key, hash and weighted position (prepare step, in parallel).
   void merge_key(std::size_t i) noexcept;
-  /// Worker w: accumulates every item into its beams (w, w + W, ...), then detects in them.
+  /// Worker w: accumulates every item into its beams (the w-th of W contiguous blocks), then
+  /// detects in them.
   void process_worker(std::size_t w, std::size_t n_workers) noexcept;
   void detect_beam(std::size_t beam, Workspace& ws) noexcept;
   /// Share of a diffuse item's power in range bin l, and its velocity-leakage weight in bin j.
