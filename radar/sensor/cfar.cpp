@@ -152,7 +152,31 @@ std::size_t Cfar2d::detect(std::span<const double> power, std::span<const RowSpa
         window_rows_[k] = prefix_.data() + wrap(j + dj) * w;
         window_guard_[k] = dj >= -gv && dj <= gv ? 1 : 0;
       }
+      // Cells whose window lies inside the swath: the full window, no clipping (the same sums
+      // as below, in the same order).
+      const long in0 = std::max<long>(c.begin, tr + grd);
+      const long in1 = std::min<long>(c.end, nr - tr - grd);
+      const double alpha_full = alpha_[n_full_], inv_full = inv_n_[n_full_];
+      auto full_window = [&](long l) {
+        const long o0 = l - tr - grd, o1 = l + tr + grd, g0 = l - grd, g1 = l + grd;
+        double sum = 0.0;
+        for (std::size_t k = 0; k < n_rows; ++k) {
+          const double* p = window_rows_[k];
+          sum += p[o1 + 1] - p[o0];
+          if (window_guard_[k] != 0)
+            sum -= p[g1 + 1] - p[g0];
+        }
+        const double mean = sum * inv_full;
+        if (row[l] > alpha_full * mean)
+          emit(j, l, row[l], mean);
+      };
       for (long l = c.begin; l < static_cast<long>(c.end); ++l) {
+        if (l == in0 && in0 < in1) {
+          for (; l < in1; ++l)
+            full_window(l);
+          if (l >= static_cast<long>(c.end))
+            break;
+        }
         const long o0 = std::max<long>(0, l - tr - grd), o1 = std::min<long>(nr - 1, l + tr + grd);
         const long g0 = std::max<long>(0, l - grd), g1 = std::min<long>(nr - 1, l + grd);
         // training_at(l), from the bounds at hand

@@ -104,8 +104,10 @@ struct Sensor::Workspace {
         synth(p.velocity_bins()) {}
   // image and clutter are zero outside `dirty` between frames: a beam clears what it wrote.
   std::vector<std::complex<double>> image;  ///< coherent signal, then the Sigma channel
-  std::vector<double> clutter;              ///< mean clutter power a cell, N_r + 1 a row
-  std::vector<double> power;                ///< valid on `synth` only
+  /// Mean clutter power as a difference array along range, transposed: [range bin][velocity
+  /// row], N_r + 1 bins (a diffuse return's taps are neighbouring rows: contiguous here).
+  std::vector<double> clutter;
+  std::vector<double> power;  ///< valid on `synth` only
   Cfar2d cfar;
   std::vector<CfarHit> hits;
   std::vector<FalseAlarm> alarms;
@@ -138,8 +140,8 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
               c.processing.kernel_half_width_bins <= (Footprint::kMaxBins - 1) / 2,
           "kernel_half_width_bins", "must be in [0, 32] for the sensor");
   processor_ = std::make_unique<RangeDopplerProcessor>(c.processing);
-  // One workspace per beam (the beams of a scan are accumulated together); workers take beams
-  // w, w + W, ...
+  // One workspace per beam (the beams of a scan are accumulated together); worker w takes the
+  // w-th of W contiguous blocks of beams.
   // As many workers as threads TBB may run (the result does not depend on it: every beam adds
   // the items in the same order and draws from its own random streams).
   n_workers_ = std::clamp<std::size_t>(
@@ -155,6 +157,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     merge_table_.assign(cap, -1);
     merge_used_.resize(c.max_contributions);
     merge_keys_.resize(c.max_contributions);
+    merge_hash_.resize(c.max_contributions);
     merge_sums_.resize(c.max_contributions);
   }
   by_range_.resize(c.max_contributions);
@@ -253,13 +256,59 @@ double Sensor::velocity_weight(const Item& item, long j) const noexcept {
                                     item.pos.velocity_bin);
 }
 
+namespace {
+
+// A diffuse return's range footprint for the difference array of clutter power: at most three
+// pieces (the partly covered bins at each end, then the bins between, in that order), each
+// [a, c] clipped to the swath; a piece's value is density * share (ends) or density (between),
+// density = power / extent. One piece (`single`) when the footprint lies in one bin: the whole
+// power on it.
+struct DiffusePieces {
+  long a[3] = {0, 0, 0}, c[3] = {-1, -1, -1};
+  double share[2] = {0.0, 0.0};
+  double extent = 1.0;
+  bool single = false;
+  long span_begin = 0, span_end = 0;  ///< bins the pieces cover, [begin, end)
+};
+
+DiffusePieces make_pieces(double range_bin, double half_bins, long nrl) noexcept {
+  DiffusePieces d;
+  const double lo = range_bin - half_bins, hi = range_bin + half_bins;
+  const long l0 = std::lround(lo), l1 = std::lround(hi);
+  auto clip = [&](int k, long a, long c) {
+    d.a[k] = std::max<long>(a, 0);
+    d.c[k] = std::min<long>(c, nrl - 1);
+    if (d.a[k] > d.c[k])
+      return;
+    d.span_begin = d.span_begin < d.span_end ? std::min(d.span_begin, d.a[k]) : d.a[k];
+    d.span_end = std::max(d.span_end, d.c[k] + 1);
+  };
+  if (half_bins <= 0.0 || l0 == l1) {
+    d.single = true;
+    clip(0, l0, l0);
+    return d;
+  }
+  d.extent = hi - lo;
+  d.share[0] = static_cast<double>(l0) + 0.5 - lo;
+  d.share[1] = hi - (static_cast<double>(l1) - 0.5);
+  clip(0, l0, l0);
+  clip(1, l1, l1);
+  clip(2, l0 + 1, l1 - 1);
+  return d;
+}
+
+}  // namespace
+
 void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t n_beams = antenna_.beams();
   const std::size_t nr = proc.range_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
   const auto [dj0, dj1] = proc.velocity_support(proc.config().kernel_half_width_bins);
-  const std::size_t stride = nr + 1;
+  const auto nv = static_cast<std::size_t>(nvl);
+  // This worker's beams: a contiguous block (a return reaches a few neighbouring beams, so most
+  // returns are prepared by one worker only).
+  const std::size_t beam_begin = w * n_beams / n_workers, beam_end = (w + 1) * n_beams / n_workers;
   // Each return's response is prepared once and added to every beam of this worker that sees it
   // with that beam's two-way gain. Targets: exact response (coherent). Clutter: mean power a
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
@@ -267,23 +316,31 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
   Footprint fp;
   double taps[Footprint::kMaxBins];
   std::uint32_t tap_rows[Footprint::kMaxBins];
+  double values[3][Footprint::kMaxBins];  // a diffuse return's pieces, tap by tap
   for (std::size_t i = 0; i < item_count_; ++i) {
     const Item& item = items_[i];
     if (!item.usable)
       continue;
     bool prepared = false;
     int n_taps = 0;
+    // Diffuse: its range footprint as up to three pieces of the difference array (the bins it
+    // partly covers at each end, and the bins between), clipped to the swath once for all beams
+    // and taps; `span` is the bins they cover.
+    DiffusePieces pieces;
     // The beams within the azimuth extent of the return (gains_of() tests it again).
-    std::size_t b_first = w, b_end = n_beams;
+    std::size_t b_first = beam_begin, b_end = beam_end;
     if (beams_ascending_) {
       const std::vector<double>& az = config_.antenna.beam_azimuth_rad;
-      const auto lo = static_cast<std::size_t>(
-          std::lower_bound(az.begin(), az.end(), item.azimuth_rad - az_extent_rad_) - az.begin());
-      b_end = static_cast<std::size_t>(
-          std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) - az.begin());
-      b_first = lo + (w + n_workers - lo % n_workers) % n_workers;  // first b >= lo, b = w mod W
+      b_first = std::max(
+          beam_begin, static_cast<std::size_t>(std::lower_bound(az.begin(), az.end(),
+                                                                item.azimuth_rad - az_extent_rad_) -
+                                               az.begin()));
+      b_end = std::min(
+          beam_end, static_cast<std::size_t>(
+                        std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) -
+                        az.begin()));
     }
-    for (std::size_t b = b_first; b < b_end; b += n_workers) {
+    for (std::size_t b = b_first; b < b_end; ++b) {
       Gains g;
       if (!gains_of(item, b, g))
         continue;
@@ -297,41 +354,53 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
           cover(ws.dirty[fp.rows[r]], fp.l0, fp.l1 + 1);
         continue;
       }
-      const long jc = std::lround(item.pos.velocity_bin);
       if (!prepared) {
         proc.velocity_power_taps(item.pos.velocity_bin, dj0, dj1, taps);
-        for (long dj = dj0; dj <= dj1; ++dj)
-          tap_rows[n_taps++] = static_cast<std::uint32_t>(((jc + dj) % nvl + nvl) % nvl);
+        // The taps' rows, wrapping (one modulo an item).
+        long row = ((std::lround(item.pos.velocity_bin) + dj0) % nvl + nvl) % nvl;
+        for (long dj = dj0; dj <= dj1; ++dj) {
+          tap_rows[n_taps++] = static_cast<std::uint32_t>(row);
+          row = row + 1 == nvl ? 0 : row + 1;
+        }
+        pieces = make_pieces(item.pos.range_bin, item.half_bins, nrl);
         prepared = true;
       }
+      if (pieces.span_begin >= pieces.span_end)
+        continue;
+      // The values of the pieces, tap by tap, then each piece's two ends added to the taps'
+      // rows (contiguous in the transposed array; two runs where the rows wrap).
       const double p = std::norm(item.amplitude) * g.sum * g.sum * range_energy_;
-      const double lo = item.pos.range_bin - item.half_bins,
-                   hi = item.pos.range_bin + item.half_bins;
-      const long l0 = std::lround(lo), l1 = std::lround(hi);
       for (int t = 0; t < n_taps; ++t) {
-        double* row = ws.clutter.data() + static_cast<std::size_t>(tap_rows[t]) * stride;
-        RowSpan& dirty = ws.dirty[tap_rows[t]];
-        auto add = [&](long a, long c, double v) {  // v on bins a..c (clipped)
-          a = std::max<long>(a, 0);
-          c = std::min<long>(c, nrl - 1);
-          if (a > c)
-            return;
-          row[a] += v;
-          row[c + 1] -= v;
-          cover(dirty, a, c + 1);
-        };
-        if (item.half_bins <= 0.0 || l0 == l1) {
-          add(l0, l0, p * taps[t]);
+        cover(ws.dirty[tap_rows[t]], pieces.span_begin, pieces.span_end);
+        const double v = p * taps[t];
+        if (pieces.single) {
+          values[0][t] = v;
           continue;
         }
-        const double density = p * taps[t] / (hi - lo);
-        add(l0, l0, density * (static_cast<double>(l0) + 0.5 - lo));
-        add(l1, l1, density * (hi - (static_cast<double>(l1) - 0.5)));
-        add(l0 + 1, l1 - 1, density);
+        const double density = v / pieces.extent;
+        values[0][t] = density * pieces.share[0];
+        values[1][t] = density * pieces.share[1];
+        values[2][t] = density;
+      }
+      const int n_first = std::min(n_taps, static_cast<int>(nvl - tap_rows[0]));
+      for (int k = 0; k < (pieces.single ? 1 : 3); ++k) {
+        if (pieces.a[k] > pieces.c[k])
+          continue;
+        double* on = ws.clutter.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
+        double* off = ws.clutter.data() + static_cast<std::size_t>(pieces.c[k] + 1) * nv;
+        const double* x = values[k];
+        for (int t = 0, c = static_cast<int>(tap_rows[0]); t < n_first; ++t, ++c) {
+          on[c] += x[t];
+          off[c] -= x[t];
+        }
+        for (int t = n_first, c = 0; t < n_taps; ++t, ++c) {
+          on[c] += x[t];
+          off[c] -= x[t];
+        }
       }
     }
   }
-  for (std::size_t b = w; b < n_beams; b += n_workers)
+  for (std::size_t b = beam_begin; b < beam_end; ++b)
     detect_beam(b, *workspaces_[b]);
 }
 
@@ -339,7 +408,6 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t nr = proc.range_bins(), nv = proc.velocity_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(nv);
-  const std::size_t stride = nr + 1;
   // 1. Where to synthesise: the returns' cells widened by the CFAR margins once (cells under
   // test whose window or neighbours hold a return) and twice (the cells those windows read).
   if (config_.synthesise_every_cell) {
@@ -350,16 +418,6 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
     dilate(ws.dirty, ws.cuts, mr, mv, nrl);
     dilate(ws.cuts, ws.synth, mr, mv, nrl);
   }
-  // Clutter power from its difference array, over the bins it reaches.
-  for (std::size_t j = 0; j < nv; ++j) {
-    const RowSpan d = ws.dirty[j];
-    double* row = ws.clutter.data() + j * stride;
-    double run = 0.0;
-    for (std::uint32_t l = d.begin; l < d.end; ++l) {
-      run += row[l];
-      row[l] = std::max(run, 0.0);  // rounding of the running sum must not go negative
-    }
-  }
 
   // 2. Receiver noise and clutter speckle (a complex Gaussian of variance 1 + clutter a cell).
   // Where no target adds a coherent signal only the power is needed: it is exponential.
@@ -369,11 +427,9 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
     if (sp.empty())
       continue;
     NoiseRng rng(stream_key(config_.noise_seed, frame_, kChannelSum, beam, j));
-    const double* clutter = ws.clutter.data() + j * stride;
     std::complex<double>* image = ws.image.data() + j * nr;
     double* power = ws.power.data() + j * nr;
-    for (std::uint32_t l = sp.begin; l < sp.end; ++l) {
-      const double var = floor_var + (l >= d.begin && l < d.end ? clutter[l] : 0.0);
+    auto synthesise = [&](std::uint32_t l, double var) {
       if (image[l] == std::complex<double>{0.0, 0.0}) {
         power[l] = var > 0.0 ? -var * std::log(rng.uniform()) : 0.0;
       } else {
@@ -381,7 +437,24 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
           image[l] += std::sqrt(var) * rng.complex_normal();
         power[l] = std::norm(image[l]);
       }
+    };
+    // Clutter power: the running sum of its difference array over the bins it reaches (read
+    // once, and cleared for the next frame as it is read).
+    const std::uint32_t d0 = d.empty() ? sp.end : d.begin, d1 = d.empty() ? sp.end : d.end;
+    for (std::uint32_t l = sp.begin; l < d0; ++l)
+      synthesise(l, floor_var);
+    double run = 0.0;
+    double* diff = ws.clutter.data() + j;
+    for (std::uint32_t l = d0; l < d1; ++l) {
+      run += diff[l * nv];
+      diff[l * nv] = 0.0;
+      // rounding of the running sum must not go negative
+      synthesise(l, floor_var + std::max(run, 0.0));
     }
+    if (!d.empty())
+      diff[static_cast<std::size_t>(d.end) * nv] = 0.0;
+    for (std::uint32_t l = d1; l < sp.end; ++l)
+      synthesise(l, floor_var);
     ws.synthesised += sp.end - sp.begin;
   }
 
@@ -462,15 +535,14 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
   if (capturing_)
     capture_beam(beam, ws, n_fa);
 
-  // 5. Leave the image and the clutter rows zero for the next frame: clear what was written.
+  // 5. Leave the image zero for the next frame: clear what was written (the clutter was cleared
+  // as step 2 read it).
   for (std::size_t j = 0; j < nv; ++j) {
     RowSpan& d = ws.dirty[j];
     if (d.empty())
       continue;
     std::fill(ws.image.begin() + static_cast<long>(j * nr + d.begin),
               ws.image.begin() + static_cast<long>(j * nr + d.end), std::complex<double>{});
-    std::fill(ws.clutter.begin() + static_cast<long>(j * stride + d.begin),
-              ws.clutter.begin() + static_cast<long>(j * stride + d.end + 1), 0.0);
     d = RowSpan{};
   }
 }
@@ -567,75 +639,88 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
   // return, with the sum of their amplitudes at their amplitude-weighted mean position. Open
   // addressing on a table of twice the contributions; the first return of a cell represents it,
   // so the result does not depend on anything but the input order.
-  const double q = 1.0 / config_.merge_step_bins;
-  const double da = config_.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad();
-  const double de = config_.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad();
+  // The keys, hashes and weighted positions are computed per item in parallel beforehand
+  // (merge_key()); only the table is walked here, in input order.
   const std::size_t mask = merge_table_.size() - 1;
   std::size_t n_used = 0;
   for (std::size_t i = 0; i < item_count_; ++i) {
     Item& it = items_[i];
     if (!it.usable || !it.coherent)
       continue;
-    const MergeKey key{it.object_id, std::llround(std::floor(it.pos.range_bin * q)),
-                       std::llround(std::floor(it.pos.velocity_bin * q)),
-                       std::llround(std::floor(it.azimuth_rad / da)),
-                       std::llround(std::floor(it.elevation_rad / de))};
-    std::uint64_t h = stream_key(key.object_id, static_cast<std::uint64_t>(key.range),
-                                 static_cast<std::uint64_t>(key.velocity),
-                                 static_cast<std::uint64_t>(key.azimuth),
-                                 static_cast<std::uint64_t>(key.elevation));
-    std::size_t slot = static_cast<std::size_t>(h) & mask;
+    const MergeKey& key = merge_keys_[i];
+    std::size_t slot = static_cast<std::size_t>(merge_hash_[i]) & mask;
     while (merge_table_[slot] >= 0 &&
            !(merge_keys_[static_cast<std::size_t>(merge_table_[slot])] == key))
       slot = (slot + 1) & mask;
-    const double w = std::abs(it.amplitude);
-    MergeSums& m = merge_sums_[i];
     if (merge_table_[slot] < 0) {  // the first return of its cell represents it
       merge_table_[slot] = static_cast<std::int32_t>(i);
       merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
-      merge_keys_[i] = key;
-      m = {w,
-           w * it.pos.range_bin,
-           w * it.pos.velocity_bin,
-           w * it.range_m,
-           w * it.radial_velocity_mps,
-           w * it.azimuth_rad,
-           w * it.elevation_rad,
-           1};
       continue;
     }
+    const MergeSums& m = merge_sums_[i];
     const auto rep = static_cast<std::size_t>(merge_table_[slot]);
     Item& r = items_[rep];
     MergeSums& a = merge_sums_[rep];
     r.amplitude += it.amplitude;
-    a.weight += w;
-    a.range_bin += w * it.pos.range_bin;
-    a.velocity_bin += w * it.pos.velocity_bin;
-    a.range_m += w * it.range_m;
-    a.velocity_mps += w * it.radial_velocity_mps;
-    a.azimuth_rad += w * it.azimuth_rad;
-    a.elevation_rad += w * it.elevation_rad;
+    a.weight += m.weight;
+    a.range_bin += m.range_bin;
+    a.velocity_bin += m.velocity_bin;
+    a.range_m += m.range_m;
+    a.velocity_mps += m.velocity_mps;
+    a.azimuth_rad += m.azimuth_rad;
+    a.elevation_rad += m.elevation_rad;
     ++a.count;
     it.usable = false;
     ++stats.merged_returns;
   }
-  for (std::size_t u = 0; u < n_used; ++u) {
+  // Each merged cell's representative independently (in parallel): its mean position, and its
+  // elevation channels there.
+  auto finish = [&](std::size_t u) {
     const std::uint32_t slot = merge_used_[u];
     const auto rep = static_cast<std::size_t>(merge_table_[slot]);
     merge_table_[slot] = -1;
     const MergeSums& a = merge_sums_[rep];
-    if (a.count < 2 || !(a.weight > 0.0))
-      continue;
     Item& r = items_[rep];
-    r.pos.range_bin = a.range_bin / a.weight;
-    r.pos.velocity_bin = a.velocity_bin / a.weight;
-    r.range_m = a.range_m / a.weight;
-    r.radial_velocity_mps = a.velocity_mps / a.weight;
-    r.azimuth_rad = a.azimuth_rad / a.weight;
-    r.elevation_rad = a.elevation_rad / a.weight;
+    if (a.count >= 2 && a.weight > 0.0) {
+      r.pos.range_bin = a.range_bin / a.weight;
+      r.pos.velocity_bin = a.velocity_bin / a.weight;
+      r.range_m = a.range_m / a.weight;
+      r.radial_velocity_mps = a.velocity_mps / a.weight;
+      r.azimuth_rad = a.azimuth_rad / a.weight;
+      r.elevation_rad = a.elevation_rad / a.weight;
+    }
     antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el,
                          r.delta_el);
-  }
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_used, 2048),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t u = r.begin(); u != r.end(); ++u)
+                        finish(u);
+                    });
+}
+
+void Sensor::merge_key(std::size_t i) noexcept {
+  const Item& it = items_[i];
+  const double q = 1.0 / config_.merge_step_bins;
+  const double da = config_.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad();
+  const double de = config_.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad();
+  auto cell = [](double x) { return static_cast<long long>(std::floor(x)); };  // x is finite
+  const MergeKey key{it.object_id, cell(it.pos.range_bin * q), cell(it.pos.velocity_bin * q),
+                     cell(it.azimuth_rad / da), cell(it.elevation_rad / de)};
+  merge_keys_[i] = key;
+  merge_hash_[i] =
+      stream_key(key.object_id, static_cast<std::uint64_t>(key.range),
+                 static_cast<std::uint64_t>(key.velocity), static_cast<std::uint64_t>(key.azimuth),
+                 static_cast<std::uint64_t>(key.elevation));
+  const double w = std::abs(it.amplitude);
+  merge_sums_[i] = {w,
+                    w * it.pos.range_bin,
+                    w * it.pos.velocity_bin,
+                    w * it.range_m,
+                    w * it.radial_velocity_mps,
+                    w * it.azimuth_rad,
+                    w * it.elevation_rad,
+                    1};
 }
 
 std::size_t Sensor::process(std::span<const Contribution> contributions, std::span<Detection> out,
@@ -687,8 +772,6 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     it.radial_velocity_mps = c.radial_velocity_mps;
     it.azimuth_rad = c.azimuth_rad;
     it.elevation_rad = c.elevation_rad;
-    antenna_.channels_el(c.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
-                         it.delta_el);
     const double lo = it.pos.range_bin - it.half_bins, hi = it.pos.range_bin + it.half_bins;
     const bool visible =
         it.coherent ? it.pos.in_swath : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5;
@@ -697,6 +780,13 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
       return;
     }
     it.usable = true;
+    // The elevation channels: of a coherent return once merged (merge_returns(), at the merged
+    // elevation), of the others now.
+    if (it.coherent && !merge_table_.empty())
+      merge_key(i);
+    else
+      antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
+                           it.delta_el);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -744,8 +834,8 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
 
   for (auto& ws : workspaces_)
     ws->crossings = ws->overflowed = ws->synthesised = 0;
-  // Beams are independent; worker w handles beams w, w + W, ... Every random stream is keyed by
-  // (seed, frame, beam, ...), so the result does not depend on the schedule.
+  // Beams are independent; worker w handles the w-th block of beams. Every random stream is keyed
+  // by (seed, frame, beam, ...), so the result does not depend on the schedule.
   tbb::parallel_for(std::size_t{0}, n_workers_,
                     [&](std::size_t w) { process_worker(w, n_workers_); });
   for (auto& ws : workspaces_) {

@@ -246,9 +246,13 @@ class Sensor {
   };
   std::vector<std::int32_t> merge_table_;  ///< open addressing: item index or -1
   std::vector<std::uint32_t> merge_used_;  ///< slots taken this frame
-  std::vector<MergeKey> merge_keys_;       ///< per representative item
-  std::vector<MergeSums> merge_sums_;
-  /// Worker w: accumulates every item into its beams (w, w + W, ...), then detects in them.
+  std::vector<MergeKey> merge_keys_;       ///< per usable coherent item
+  std::vector<std::uint64_t> merge_hash_;  ///< ... its key's hash
+  std::vector<MergeSums> merge_sums_;      ///< ... its own weighted position, then the cell's
+  /// Item i's merge key, hash and weighted position (prepare step, in parallel).
+  void merge_key(std::size_t i) noexcept;
+  /// Worker w: accumulates every item into its beams (the w-th of W contiguous blocks), then
+  /// detects in them.
   void process_worker(std::size_t w, std::size_t n_workers) noexcept;
   void detect_beam(std::size_t beam, Workspace& ws) noexcept;
   /// Share of a diffuse item's power in range bin l, and its velocity-leakage weight in bin j.

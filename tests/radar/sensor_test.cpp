@@ -1,11 +1,13 @@
 // The radar sensor against radar theory: range resolution c/2B and sidelobes of the processed
 // point-target response (exact data-cube path), window sidelobe levels (Harris 1978), the direct
 // image path against the data cube, Doppler measurement and folding, 1/R^4 and the radar
-// equation, monopulse angle accuracy, and two-target resolution.
+// equation, monopulse angle accuracy, two-target resolution, and detections that do not depend on
+// the number of worker threads.
 
 #include "radar/sensor/sensor.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -590,5 +592,85 @@ TEST(Sensor, MergedCoherentReturnsGiveTheImageOfTheSeparateReturns) {
     EXPECT_NEAR(db(merged[i].snr), db(separate[i].snr), 0.01);
     EXPECT_NEAR(merged[i].range_m, separate[i].range_m, 0.02);  // 1/150 of a bin
     EXPECT_EQ(merged[i].object_id, 4u);
+  }
+}
+
+TEST(Sensor, DetectionsDoNotDependOnTheNumberOfWorkers) {
+  // The frame path splits the beams among as many workers as TBB may run (contiguous blocks) and
+  // prepares and merges the returns in parallel; every beam adds its returns in input order and
+  // draws from its own random streams, so 1, 2, 3 or 4 workers give the same detections, bit for
+  // bit. Seven beams (uneven blocks), monopulse, diffuse clutter patches over the whole swath
+  // (some at its ends, some folding in velocity) and coherent returns of a few objects (merged).
+  rd::SensorConfig c = sensor_config();
+  c.antenna.monopulse = true;
+  c.antenna.beam_azimuth_rad.clear();
+  for (int b = -3; b <= 3; ++b)
+    c.antenna.beam_azimuth_rad.push_back(b * 2.0 * kPi / 180.0);
+  const rd::RangeDopplerProcessor p(c.processing);
+  const double v_ua = rd::unambiguous_velocity_mps(c.processing.waveform);
+  rd::NoiseRng rng(20261127);
+  std::printf("seed 20261127\n");
+  std::vector<rd::Contribution> in;
+  for (int i = 0; i < 600; ++i) {
+    const double bin = -2.0 + 131.0 * rng.uniform();
+    const double v = (2.0 * rng.uniform() - 1.0) * v_ua;
+    const double az = (2.0 * rng.uniform() - 1.0) * 8.0 * kPi / 180.0;
+    const double spread_m = 12.0 * rng.uniform();
+    rd::Contribution r = point(3e-3 * rng.uniform(), p.range_of_bin(bin), v, az);
+    r.coherent = false;
+    r.range_spread_m = spread_m;
+    r.object_id = 1;
+    in.push_back(r);
+  }
+  for (int i = 0; i < 300; ++i) {
+    const int object = i % 5;
+    const double bin = 10.0 + 20.0 * object + 0.5 * rng.uniform();
+    const double v = -v_ua + 0.4 * v_ua * object;
+    const double az = (object - 2) * 2.5 * kPi / 180.0 + 0.002 * rng.uniform();
+    const double phase = 2.0 * kPi * rng.uniform();
+    rd::Contribution r = point(5.0 * rng.uniform(), p.range_of_bin(bin), v, az, 0.0, phase);
+    r.object_id = 10 + static_cast<std::uint32_t>(object);
+    in.push_back(r);
+  }
+  struct Run {
+    std::vector<rd::Detection> out = std::vector<rd::Detection>(64);
+    std::size_t n[2] = {0, 0};
+    rd::SensorStats stats;
+  };
+  auto run = [&](int threads) {
+    Run r;
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      rd::Sensor sensor(c);
+      std::vector<rd::Detection> first(64);
+      r.n[0] = sensor.process(in, first, r.stats);  // two frames: the second's noise differs
+      r.n[1] = sensor.process(in, r.out, r.stats);
+    });
+    return r;
+  };
+  const Run one = run(1);
+  ASSERT_GE(one.n[1], 5u);
+  EXPECT_GT(one.stats.merged_returns, 100u);
+  for (int threads : {2, 3, 4}) {
+    const Run r = run(threads);
+    std::printf("%d workers: %zu and %zu detections (1 worker: %zu and %zu)\n", threads, r.n[0],
+                r.n[1], one.n[0], one.n[1]);
+    EXPECT_EQ(r.n[0], one.n[0]);
+    ASSERT_EQ(r.n[1], one.n[1]);
+    EXPECT_EQ(r.stats.cells_synthesised, one.stats.cells_synthesised);
+    EXPECT_EQ(r.stats.cfar_crossings, one.stats.cfar_crossings);
+    EXPECT_EQ(r.stats.merged_returns, one.stats.merged_returns);
+    for (std::size_t i = 0; i < r.n[1]; ++i) {
+      const rd::Detection& a = r.out[i];
+      const rd::Detection& b = one.out[i];
+      EXPECT_EQ(a.range_m, b.range_m);
+      EXPECT_EQ(a.radial_velocity_mps, b.radial_velocity_mps);
+      EXPECT_EQ(a.azimuth_rad, b.azimuth_rad);
+      EXPECT_EQ(a.elevation_rad, b.elevation_rad);
+      EXPECT_EQ(a.snr, b.snr);
+      EXPECT_EQ(a.rcs_m2, b.rcs_m2);
+      EXPECT_EQ(a.azimuth_cell, b.azimuth_cell);
+      EXPECT_EQ(a.object_id, b.object_id);
+    }
   }
 }
