@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -183,6 +184,29 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   az_extent_rad_ = antenna_.extent_az_rad(0.5 * c.beam_floor_db);
   beams_ascending_ =
       std::is_sorted(c.antenna.beam_azimuth_rad.begin(), c.antenna.beam_azimuth_rad.end());
+  // Gaussian azimuth pattern, beams evenly spaced to within rounding (16 ulp of the largest
+  // azimuth): the sum channel's gains across a return's beams by a recurrence (process_worker).
+  const std::vector<double>& az = c.antenna.beam_azimuth_rad;
+  if (c.antenna.azimuth.kind == PatternKind::kGaussian && beams_ascending_ && az.size() >= 2 &&
+      az.back() > az.front()) {
+    const double step = (az.back() - az.front()) / static_cast<double>(az.size() - 1);
+    const double tol = 16.0 * std::numeric_limits<double>::epsilon() *
+                       std::max(std::abs(az.front()), std::abs(az.back()));
+    bool even = true;
+    for (std::size_t b = 0; b < az.size(); ++b)
+      even = even && std::abs(az[b] - (az.front() + static_cast<double>(b) * step)) <= tol;
+    if (even) {
+      const double bw = c.antenna.azimuth.beamwidth_rad;
+      az_rec_.on = true;
+      az_rec_.c = 2.0 * std::log(2.0) / (bw * bw);
+      az_rec_.squint = c.antenna.monopulse ? c.antenna.squint_fraction * bw : 0.0;
+      az_rec_.step = step;
+      az_rec_.norm =
+          c.antenna.monopulse ? 1.0 / (2.0 * antenna_.component_az(az_rec_.squint)) : 1.0;
+      az_rec_.q = std::exp(-2.0 * az_rec_.c * step * step);
+      az_rec_.k = std::exp(4.0 * az_rec_.c * step * az_rec_.squint);
+    }
+  }
 }
 
 Sensor::~Sensor() = default;
@@ -329,21 +353,59 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
     DiffusePieces pieces;
     // The beams within the azimuth extent of the return (gains_of() tests it again).
     std::size_t b_first = beam_begin, b_end = beam_end;
+    std::size_t b_lowest = 0;  // the return's first beam in the whole scan
     if (beams_ascending_) {
       const std::vector<double>& az = config_.antenna.beam_azimuth_rad;
-      b_first = std::max(
-          beam_begin, static_cast<std::size_t>(std::lower_bound(az.begin(), az.end(),
-                                                                item.azimuth_rad - az_extent_rad_) -
-                                               az.begin()));
+      b_lowest = static_cast<std::size_t>(
+          std::lower_bound(az.begin(), az.end(), item.azimuth_rad - az_extent_rad_) - az.begin());
+      b_first = std::max(beam_begin, b_lowest);
       b_end = std::min(
           beam_end, static_cast<std::size_t>(
                         std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) -
                         az.begin()));
     }
+    // Gaussian pattern on evenly spaced beams (az_rec_): with E(t) = exp(-c t^2) and t the
+    // offset from beam b's boresight, t_{b+1} = t_b - Delta, so E(t - Delta) = E(t) r(t) with
+    // r(t) = exp(2 c Delta t - c Delta^2) and r(t - Delta) = r(t) exp(-2 c Delta^2): the two
+    // component beams E(t -+ d) of every beam from the first one's by products (three `exp` a
+    // return instead of two a beam; exact in real arithmetic, rounding-level otherwise). Only
+    // the sum channel is needed here. The recurrence starts at the return's first beam of the
+    // whole scan whatever this worker's block, so the result does not depend on the number of
+    // workers.
+    double rec_a = 0.0, rec_ra = 0.0, rec_b = 0.0, rec_rb = 0.0;
+    if (az_rec_.on && b_first < b_end) {
+      const double t0 = item.azimuth_rad - config_.antenna.beam_azimuth_rad[b_lowest];
+      const double ta = t0 - az_rec_.squint, tb = t0 + az_rec_.squint;
+      const double cs = az_rec_.c * az_rec_.step;
+      rec_a = std::exp(-az_rec_.c * ta * ta);
+      rec_b = std::exp(-az_rec_.c * tb * tb);
+      rec_ra = std::exp(cs * (2.0 * ta - az_rec_.step));
+      rec_rb = rec_ra * az_rec_.k;
+      for (std::size_t b = b_lowest; b < b_first; ++b) {
+        rec_a *= rec_ra;
+        rec_b *= rec_rb;
+        rec_ra *= az_rec_.q;
+        rec_rb *= az_rec_.q;
+      }
+    }
     for (std::size_t b = b_first; b < b_end; ++b) {
       Gains g;
-      if (!gains_of(item, b, g))
+      if (az_rec_.on) {
+        const double s_az = (rec_a + (az_rec_.squint > 0.0 ? rec_b : 0.0)) * az_rec_.norm;
+        rec_a *= rec_ra;
+        rec_b *= rec_rb;
+        rec_ra *= az_rec_.q;
+        rec_rb *= az_rec_.q;
+        if (std::abs(item.azimuth_rad - config_.antenna.beam_azimuth_rad[b]) > az_extent_rad_)
+          continue;
+        const double tx = s_az * item.sum_el;
+        const double two_way = tx * tx;
+        if (!(two_way * two_way >= gain_floor_))
+          continue;
+        g.sum = two_way;
+      } else if (!gains_of(item, b, g)) {
         continue;
+      }
       Workspace& ws = *workspaces_[b];
       if (item.coherent) {
         if (!prepared && !proc.footprint(item.amplitude, item.pos, item.radial_velocity_mps, fp))

@@ -286,6 +286,17 @@ class Sensor {
   /// The scan's beam azimuths ascend: a return's beams are found by bisection, not by testing
   /// every beam.
   bool beams_ascending_ = false;
+  /// Gaussian azimuth pattern on evenly spaced beams: a return's sum-channel gains across beams
+  /// by a recurrence (AzRecurrence in sensor.cpp) instead of two `exp` a beam.
+  struct AzRecurrence {
+    bool on = false;
+    double c = 0.0;       ///< 2 ln 2 / theta3^2 [1/rad^2]: E(t) = exp(-c t^2)
+    double squint = 0.0;  ///< d [rad] (0 without monopulse: one component beam)
+    double step = 0.0;    ///< beam spacing Delta [rad]
+    double norm = 1.0;    ///< the sum channel's 1 / (2 E(d)), or 1 without monopulse
+    double q = 1.0;       ///< exp(-2 c Delta^2): the step ratio's own ratio
+    double k = 1.0;       ///< exp(4 c Delta d): the step ratio of E(t + d) over that of E(t - d)
+  } az_rec_;
   double range_energy_ = 1.0;
   std::uint64_t frame_ = 0;
   SensorCapture* capture_ = nullptr;            ///< armed by capture_next() for one process() call

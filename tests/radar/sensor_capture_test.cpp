@@ -239,3 +239,54 @@ TEST(SensorCapture, ChangesNoDetection) {
     }
   }
 }
+
+// A Gaussian azimuth pattern on evenly spaced beams (the sensor takes each return's gains across
+// beams by a recurrence): the captured peak power of an on-grid point target in each of nine
+// beams, relative to the beam nearest it, equals the closed-form two-way pattern ratio
+// (Sensor::two_way_gain, the antenna's direct formula), with and without monopulse, to the
+// float image's precision.
+TEST(SensorCapture, GaussianGainsAcrossEvenlySpacedBeamsFollowTheDirectPattern) {
+  for (const bool monopulse : {true, false}) {
+    rd::SensorConfig c = three_beams();
+    c.antenna.monopulse = monopulse;
+    c.antenna.beam_azimuth_rad.clear();
+    for (int b = 0; b < 9; ++b)
+      c.antenna.beam_azimuth_rad.push_back(-0.04 + 0.01 * b);
+    c.thermal_noise = false;
+    rd::Sensor sensor(c);
+    Storage st(sensor);
+    rd::Contribution x;
+    x.amplitude = {3e3, 0.0};
+    x.range_m = sensor.processor().range_of_bin(61.0);
+    x.azimuth_rad = 0.0137;
+    std::vector<rd::Detection> out(8);
+    rd::SensorStats stats;
+    sensor.capture_next(&st.capture);
+    ASSERT_GE(sensor.process(std::span(&x, 1), out, stats), 1u);
+    ASSERT_TRUE(st.capture.filled);
+    const rd::CaptureShape& sh = st.shape;
+    const std::size_t cells = sh.velocity_bins * sh.range_bins, ref = 5;  // beam at 0.01 rad
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < cells; ++i)
+      if (st.capture.power[ref * cells + i] > st.capture.power[ref * cells + k])
+        k = i;
+    const std::size_t j = k / sh.range_bins, l = k % sh.range_bins;
+    EXPECT_EQ(l, 61u);
+    const double g_ref = sensor.two_way_gain(x.azimuth_rad - c.antenna.beam_azimuth_rad[ref], 0.0);
+    int checked = 0;
+    for (std::size_t b = 0; b < 9; ++b) {
+      const rd::RowSpan sp = st.capture.synthesised[b * sh.velocity_bins + j];
+      if (sp.empty() || l < sp.begin || l >= sp.end)
+        continue;
+      const double ratio = static_cast<double>(st.capture.power[b * cells + k]) /
+                           static_cast<double>(st.capture.power[ref * cells + k]);
+      const double expected =
+          sensor.two_way_gain(x.azimuth_rad - c.antenna.beam_azimuth_rad[b], 0.0) / g_ref;
+      EXPECT_NEAR(ratio, expected, 1e-5 * expected) << "beam " << b << " monopulse " << monopulse;
+      ++checked;
+    }
+    std::printf("monopulse %d: %d beams checked against the direct pattern\n", monopulse ? 1 : 0,
+                checked);
+    EXPECT_GE(checked, 5);
+  }
+}
