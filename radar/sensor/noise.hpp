@@ -2,8 +2,12 @@
 // Reproducible random numbers for the sensor: xoshiro256** (Blackman and Vigna, "Scrambled
 // linear pseudorandom number generators", ACM TOMS 47(4), 2021) seeded through splitmix64, and
 // exact complex Gaussian samples by Marsaglia's polar method (Marsaglia and Bray, SIAM Review
-// 6(3), 1964). Streams are keyed by (seed, frame, beam, channel, ...) so that a result does not
-// depend on the order in which threads run. Header-only, allocation-free.
+// 6(3), 1964), and exact exponential variates by the ziggurat method (Marsaglia and Tsang, "The
+// ziggurat method for generating random variables", J. Stat. Softw. 5(8), 2000; the layer
+// index and the uniform from disjoint bits of one 64-bit draw, as Doornik, "An improved ziggurat
+// method to generate normal random samples", 2005, recommends). Streams are keyed by (seed, frame,
+// beam, channel, ...) so that a result does not depend on the order in which threads run.
+// Header-only, allocation-free.
 
 #include <cmath>
 #include <complex>
@@ -30,6 +34,28 @@ constexpr std::uint64_t stream_key(std::uint64_t seed, std::uint64_t a, std::uin
   return h;
 }
 
+/// The ziggurat of the unit exponential density f(x) = exp(-x) (Marsaglia and Tsang 2000, sec. 2
+/// and their exponential set-up): 256 layers of equal area v, the base layer holding the tail
+/// beyond r. Layer i (0..255) is [0, x[i]] x [f(x[i]), f(x[i + 1])], x[1] = r > x[2] > ... >
+/// x[256] = 0, and x[0] = v / f(r) the base layer's width as if its tail were a rectangle. Built
+/// once at setup (log and exp); read-only afterwards.
+struct ExponentialZiggurat {
+  static constexpr int kLayers = 256;
+  static constexpr double kR = 7.69711747013104972;   ///< Marsaglia and Tsang's r for 256 layers
+  static constexpr double kV = 3.949659822581572e-3;  ///< their v: each layer's area
+  double x[kLayers + 1];
+  double f[kLayers + 1];  ///< exp(-x[i])
+  ExponentialZiggurat() noexcept {
+    x[0] = kV / std::exp(-kR);
+    x[1] = kR;
+    for (int i = 1; i < kLayers - 1; ++i)
+      x[i + 1] = -std::log(kV / x[i] + std::exp(-x[i]));
+    x[kLayers] = 0.0;
+    for (int i = 0; i <= kLayers; ++i)
+      f[i] = std::exp(-x[i]);
+  }
+};
+
 class NoiseRng {
  public:
   explicit NoiseRng(std::uint64_t key) noexcept {
@@ -54,6 +80,29 @@ class NoiseRng {
   }
   /// Uniform in (0, 1).
   double uniform() noexcept { return (static_cast<double>(next() >> 11) + 0.5) * 0x1.0p-53; }
+  /// Unit exponential (mean 1) by the ziggurat `z`: about 99 % of the draws take one 64-bit
+  /// number, a table look-up, a product and a comparison; the rest test the layer's wedge
+  /// against exp(-x) or, in the base layer beyond r, add r to a fresh variate (the exponential
+  /// is memoryless). The law is exactly the exponential one, as -log(U) (up to the 53-bit
+  /// uniform's resolution); the draws differ.
+  double exponential(const ExponentialZiggurat& z) noexcept {
+    double offset = 0.0;
+    for (;;) {
+      const std::uint64_t bits = next();
+      const auto i = static_cast<int>(bits & 0xff);
+      const double u = static_cast<double>(bits >> 11) * 0x1.0p-53;  // [0, 1)
+      const double xv = u * z.x[i];
+      if (xv < z.x[i + 1])
+        return offset + xv;
+      if (i == 0) {  // beyond r: r plus an exponential
+        offset += ExponentialZiggurat::kR;
+        continue;
+      }
+      const double y = z.f[i] + uniform() * (z.f[i + 1] - z.f[i]);
+      if (y < std::exp(-xv))
+        return offset + xv;
+    }
+  }
   /// Circular complex Gaussian with E|z|^2 = 1 (each part variance 1/2).
   std::complex<double> complex_normal() noexcept {
     double u, v, s;

@@ -482,7 +482,8 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
   }
 
   // 2. Receiver noise and clutter speckle (a complex Gaussian of variance 1 + clutter a cell).
-  // Where no target adds a coherent signal only the power is needed: it is exponential.
+  // Where no target adds a coherent signal only the power is needed: it is exponential (drawn by
+  // the ziggurat, NoiseRng::exponential: the same law as -log(U) without the log).
   const double floor_var = config_.thermal_noise ? 1.0 : 0.0;
   for (std::size_t j = 0; j < nv; ++j) {
     const RowSpan sp = ws.synth[j], d = ws.dirty[j];
@@ -493,7 +494,7 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
     double* power = ws.power.data() + j * nr;
     auto synthesise = [&](std::uint32_t l, double var) {
       if (image[l] == std::complex<double>{0.0, 0.0}) {
-        power[l] = var > 0.0 ? -var * std::log(rng.uniform()) : 0.0;
+        power[l] = var > 0.0 ? var * rng.exponential(exp_ziggurat_) : 0.0;
       } else {
         if (var > 0.0)
           image[l] += std::sqrt(var) * rng.complex_normal();

@@ -29,6 +29,7 @@
 #include "radar/antenna/antenna.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/cfar.hpp"
+#include "radar/sensor/noise.hpp"
 #include "radar/sensor/range_doppler.hpp"
 
 namespace radar_emu::radar {
@@ -298,6 +299,7 @@ class Sensor {
     double k = 1.0;       ///< exp(4 c Delta d): the step ratio of E(t + d) over that of E(t - d)
   } az_rec_;
   double range_energy_ = 1.0;
+  ExponentialZiggurat exp_ziggurat_;  ///< the noise-only cells' exponential variates
   std::uint64_t frame_ = 0;
   SensorCapture* capture_ = nullptr;            ///< armed by capture_next() for one process() call
   bool capturing_ = false;                      ///< this frame fills capture_

@@ -336,3 +336,48 @@ TEST(NoiseCells, DetectionsNameTheObjectThatDominatesTheirCell) {
       EXPECT_EQ(out[i].object_id, rd::kNoObject);  // a false alarm: noise
   }
 }
+
+// The ziggurat's exponential variates (NoiseRng::exponential, used for the noise-only cells)
+// against the unit exponential law: every layer of the table has the area v (Marsaglia and Tsang
+// 2000, the method's definition); the mean and variance are 1; P(X > t) = exp(-t) at points
+// inside the layers, at the base layer's edge r and in the tail beyond it (within 5 binomial
+// standard deviations); and the one-sample Kolmogorov-Smirnov distance to 1 - exp(-x) is below
+// its 1 % critical value 1.628 / sqrt(n) (Stephens 1970).
+TEST(NoiseRng, ZigguratExponentialFollowsTheExponentialLaw) {
+  const rd::ExponentialZiggurat z;
+  constexpr double v = rd::ExponentialZiggurat::kV;
+  EXPECT_NEAR(z.x[0] * z.f[1], v, 1e-9 * v);  // base layer: the rectangle plus the tail
+  for (int i = 1; i < rd::ExponentialZiggurat::kLayers; ++i)
+    EXPECT_NEAR(z.x[i] * (z.f[i + 1] - z.f[i]), v, 1e-9 * v) << "layer " << i;
+
+  constexpr std::uint64_t seed = 20261128;
+  std::printf("seed %llu\n", static_cast<unsigned long long>(seed));
+  rd::NoiseRng rng(seed);
+  constexpr std::size_t n = 4'000'000;
+  std::vector<double> x(n);
+  double sum = 0.0, sum2 = 0.0;
+  for (double& e : x) {
+    e = rng.exponential(z);
+    ASSERT_GE(e, 0.0);
+    sum += e;
+    sum2 += e * e;
+  }
+  const auto nd = static_cast<double>(n);
+  const double mean = sum / nd, var = sum2 / nd - mean * mean;
+  EXPECT_NEAR(mean, 1.0, 5.0 / std::sqrt(nd));       // sd of the mean 1 / sqrt(n)
+  EXPECT_NEAR(var, 1.0, 5.0 * std::sqrt(8.0 / nd));  // mu4 - sigma^4 = 9 - 1
+  std::sort(x.begin(), x.end());
+  for (double t :
+       {0.01, 0.1, 0.5, 1.0, 2.0, 4.0, 7.0, rd::ExponentialZiggurat::kR, 8.0, 10.0, 12.0}) {
+    const double p = std::exp(-t);
+    const double frac = static_cast<double>(x.end() - std::upper_bound(x.begin(), x.end(), t)) / nd;
+    EXPECT_NEAR(frac, p, 5.0 * std::sqrt(p * (1.0 - p) / nd) + 1.0 / nd) << "P(X > " << t << ")";
+  }
+  double d = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double cdf = 1.0 - std::exp(-x[i]);
+    d = std::max({d, static_cast<double>(i + 1) / nd - cdf, cdf - static_cast<double>(i) / nd});
+  }
+  std::printf("KS distance %.3g (1 %% critical %.3g)\n", d, 1.628 / std::sqrt(nd));
+  EXPECT_LT(d, 1.628 / std::sqrt(nd));
+}
