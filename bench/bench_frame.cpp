@@ -36,10 +36,22 @@ namespace radar = radar_emu::radar;
 
 namespace {
 
+// The default scenario with the tracer's terrain rays ([radar] terrain = "rays"): the frame the
+// fixture's benchmarks (BM_Trace, BM_Sensor, BM_SensorCapture, ...) measured before the terrain
+// engine became the default, so that their history in docs/performance.md stays comparable
+// (without it they would trace no terrain at all: the engine is not part of the fixture).
+// BM_TraceTerrain and BM_TerrainCompute compare the two ways.
+loop::Scenario rays_scenario() {
+  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
+  s.terrain_engine = false;
+  s.sbr.terrain_rays = true;
+  return s;
+}
+
 struct Fixture {
   explicit Fixture(radar_emu::scene::SceneDescription d) : scene(std::move(d)) { init(); }
   Fixture() : Fixture(radar_emu::scene::default_scene()) {}
-  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
+  loop::Scenario s = rays_scenario();
   radar_emu::scene::Scene scene;
   radar::SbrTracer tracer{scene, s.sbr};
   radar::Sensor sensor{s.sensor};
