@@ -763,11 +763,12 @@ void frame_case(bool quick, const Log& log, std::vector<Row>& rows) {
                 "no thermal noise (%zu detections)",
                 ref_setting.target_spacing_m, terrain_text, ref_setting.bounces, ref_setting.pulses,
                 cap, ref.detections.size());
-  log("  reference: %s; %llu rays (%llu bundles coarsened), trace %.0f ms, sensor %.0f ms; "
-      "gates %.2f m, %.2f deg\n",
+  log("  reference: %s; %llu rays (%llu bundles coarsened), %llu terrain engine cells, trace %.0f "
+      "ms, sensor %.0f ms; gates %.2f m, %.2f deg\n",
       ref_text, static_cast<unsigned long long>(ref.rays),
-      static_cast<unsigned long long>(ref.coarsened), ref.trace_ms, ref.sensor_ms, range_gate_m,
-      az_gate_rad / common::kRadPerDeg);
+      static_cast<unsigned long long>(ref.coarsened),
+      static_cast<unsigned long long>(ref.terrain_returns), ref.trace_ms, ref.sensor_ms,
+      range_gate_m, az_gate_rad / common::kRadPerDeg);
   for (const FrameKnob& k : knobs) {
     for (std::size_t i = 0; i < k.values.size(); ++i) {
       const bool is_ref = i + 1 == k.values.size();
