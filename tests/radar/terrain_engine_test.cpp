@@ -78,6 +78,22 @@ double ks_exponential(std::vector<double> xs) {
   return d;
 }
 
+// Closed form of a flat field seen from height h_m: the integral of sigma0(theta(rho)) rho drho
+// over the ground ranges of the slant-range bin [r1_m, r2_m], rho = sqrt(R^2 - h^2),
+// cos theta = h / R (midpoint rule, 1 mm steps), per radian of azimuth [m^2]; sigma0 is read from
+// the catalogue's table (row 0, VV), independently of the engine.
+double ring_integral_m2(const SurfaceSet& set, double h_m, double r1_m, double r2_m) {
+  const double rho1 = std::sqrt(r1_m * r1_m - h_m * h_m);
+  const double rho2 = std::sqrt(r2_m * r2_m - h_m * h_m);
+  double ring = 0.0;
+  const double step = 1e-3;
+  for (double rho = rho1 + step / 2; rho < rho2; rho += step)
+    ring += static_cast<double>(
+                set.sigma0_table.lookup(0, cl::Sigma0Table::kVV, h_m / std::hypot(rho, h_m))) *
+            rho * step;
+  return ring;
+}
+
 TEST(TerrainEngine, HomogeneousFieldCellMeanAndExponentialIntensity) {
   constexpr double kF = 35e9, kH = 100.0;
   scene::SceneDescription d;
@@ -117,20 +133,12 @@ TEST(TerrainEngine, HomogeneousFieldCellMeanAndExponentialIntensity) {
   EXPECT_EQ(st.patches_shadowed, 0u);
   EXPECT_EQ(st.budget_cut, 0u);
 
-  // Closed form per cell: dphi * integral of sigma0(theta(rho)) rho drho over the ground ranges
-  // of the slant bin, rho = sqrt(R^2 - H^2), cos theta = H / R (midpoint rule, 1 mm steps).
+  // Closed form per cell: dphi times the ring integral of the slant bin.
   double worst_db = 0.0;
   std::vector<double> normalised;
   for (std::size_t b = 0; b < grid.bins; ++b) {
-    const double rho1 = std::sqrt(edges[b] * edges[b] - kH * kH);
-    const double rho2 = std::sqrt(edges[b + 1] * edges[b + 1] - kH * kH);
-    double ring = 0.0;
-    const double step = 1e-3;
-    for (double rho = rho1 + step / 2; rho < rho2; rho += step)
-      ring += static_cast<double>(
-                  set.sigma0_table.lookup(0, cl::Sigma0Table::kVV, kH / std::hypot(rho, kH))) *
-              rho * step;
-    const double expected = ring * grid.azimuth_step_rad;
+    const double expected =
+        ring_integral_m2(set, kH, edges[b], edges[b + 1]) * grid.azimuth_step_rad;
     for (std::size_t c = 0; c < grid.columns; ++c) {
       const std::size_t cell = b * grid.columns + c;
       worst_db = std::max(worst_db, std::abs(db(mean[cell] / expected)));
@@ -216,15 +224,7 @@ TEST(TerrainEngine, PatchesLongerThanABinAreSpreadOverTheBinsTheyCover) {
   // columns' edges is not under test), against the closed form of the annulus (as above).
   double worst_whole_db = 0.0, worst_spread_db = 0.0, total_whole = 0.0, total_spread = 0.0;
   for (std::size_t b = 0; b < grid.bins; ++b) {
-    const double rho1 = std::sqrt(edges[b] * edges[b] - kH * kH);
-    const double rho2 = std::sqrt(edges[b + 1] * edges[b + 1] - kH * kH);
-    double ring = 0.0;
-    const double step = 1e-3;
-    for (double rho = rho1 + step / 2; rho < rho2; rho += step)
-      ring += static_cast<double>(
-                  set.sigma0_table.lookup(0, cl::Sigma0Table::kVV, kH / std::hypot(rho, kH))) *
-              rho * step;
-    const double expected = ring * 20.0 * kDeg;
+    const double expected = ring_integral_m2(set, kH, edges[b], edges[b + 1]) * 20.0 * kDeg;
     double w = 0.0, sp = 0.0;
     for (std::size_t c = 0; c < grid.columns; ++c) {
       w += whole[b * grid.columns + c];
