@@ -20,7 +20,6 @@
 #include <vector>
 
 #include "loop/closed_loop.hpp"
-#include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/products/terrain_returns.hpp"
@@ -59,13 +58,7 @@ struct Fixture {
       std::vector<radar::Contribution>(tracer.max_contributions());
   std::vector<radar::Detection> detections = std::vector<radar::Detection>(s.sensor.max_detections);
   radar::RadarPose pose;
-  void init() {
-    pose.position_m = s.ownship_start_enu_m;
-    pose.velocity_mps = s.ownship_velocity_enu_mps;
-    pose.world_from_antenna =
-        loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-        loop::body_from_antenna(s.antenna_depression_rad);
-  }
+  void init() { pose = loop::scripted_pose(s); }
 };
 
 Fixture& fixture() {
@@ -341,11 +334,7 @@ void BM_TraceTerrain(benchmark::State& state) {
     radar::RadarPose pose;
     explicit Case(loop::Scenario sc) : s(std::move(sc)), scene(loop::scene_description(s)) {
       scene.set_time(0.0);
-      pose.position_m = s.ownship_start_enu_m;
-      pose.velocity_mps = s.ownship_velocity_enu_mps;
-      pose.world_from_antenna =
-          loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-          loop::body_from_antenna(s.antenna_depression_rad);
+      pose = loop::scripted_pose(s);
     }
   };
   static Case cases[] = {
@@ -466,12 +455,7 @@ void BM_TraceRaw(benchmark::State& state) {
       loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
   static scene::Scene world(loop::scene_description(s));
   world.set_time(0.0);
-  radar::RadarPose pose;
-  pose.position_m = s.ownship_start_enu_m;
-  pose.velocity_mps = s.ownship_velocity_enu_mps;
-  pose.world_from_antenna =
-      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      loop::body_from_antenna(s.antenna_depression_rad);
+  const radar::RadarPose pose = loop::scripted_pose(s);
   tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
   radar::SbrConfig cfg = s.sbr;
   cfg.terrain_rays = state.range(0) == 0;
@@ -610,12 +594,7 @@ void BM_TerrainCompute(benchmark::State& state) {
           : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
   radar_emu::scene::Scene scene(loop::scene_description(s));
   scene.set_time(0.0);
-  radar::RadarPose pose;
-  pose.position_m = s.ownship_start_enu_m;
-  pose.velocity_mps = s.ownship_velocity_enu_mps;
-  pose.world_from_antenna =
-      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      loop::body_from_antenna(s.antenna_depression_rad);
+  const radar::RadarPose pose = loop::scripted_pose(s);
   radar::SbrConfig cfg = s.sbr;
   cfg.terrain_rays = false;
   radar::SbrTracer tracer(scene, cfg);

@@ -16,6 +16,7 @@
 #include "config/memory_limit.hpp"
 #include "config/toml_reader.hpp"
 #include "loop/outputs/cube_writer.hpp"
+#include "loop/ownship.hpp"
 #include "radar/em/surfaces.hpp"
 #include "radar/sensor/waveform.hpp"
 #include "scene/targets.hpp"
@@ -1079,6 +1080,16 @@ radar::TerrainReturnsConfig terrain_returns_config(const Scenario& s) {
   c.range_max_m = std::max(s.sensor.max_range_m, c.range_min_m + c.range_cell_m);
   c.carrier_hz = s.sbr.carrier_hz;
   return c;
+}
+
+radar::RadarPose scripted_pose(const Scenario& s, double t_s) noexcept {
+  radar::RadarPose pose;
+  pose.position_m = s.ownship_start_enu_m + t_s * s.ownship_velocity_enu_mps;
+  pose.velocity_mps = s.ownship_velocity_enu_mps;
+  pose.world_from_antenna =
+      enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
+      body_from_antenna(s.antenna_depression_rad);
+  return pose;
 }
 
 }  // namespace radar_emu::loop

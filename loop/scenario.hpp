@@ -183,4 +183,10 @@ struct Scenario {
 /// terrain_cell_range_bins range bins, at the carrier.
 [[nodiscard]] radar::TerrainReturnsConfig terrain_returns_config(const Scenario& s);
 
+/// The radar's pose on the scenario's scripted flight at scenario time t_s, read from the
+/// scenario alone (no bus): position start + t_s x velocity, the ownship's attitude, the
+/// antenna's depression. What the offline tools, benchmarks and tests trace from; the loop takes
+/// its pose from the decoded bus state instead.
+[[nodiscard]] radar::RadarPose scripted_pose(const Scenario& s, double t_s = 0.0) noexcept;
+
 }  // namespace radar_emu::loop

@@ -21,7 +21,6 @@
 #include "config/output_paths.hpp"
 #include "config/progress.hpp"
 #include "loop/closed_loop.hpp"
-#include "loop/ownship.hpp"
 #include "plot/charts.hpp"
 #include "radar/constants.hpp"
 #include "radar/products/sar_terrain.hpp"
@@ -31,13 +30,12 @@
 namespace radar_emu::tools {
 
 using config::check_output_dir;
-using loop::body_from_antenna;
 using loop::default_scenario_toml;
-using loop::enu_from_body;
 using loop::load_scenario;
 using loop::parse_scenario;
 using loop::Scenario;
 using loop::scene_description;
+using loop::scripted_pose;
 using loop::WeatherSpec;
 using plot::Figure;
 using plot::Heatmap;
@@ -221,11 +219,7 @@ EvImageProduct compute_ev_image(const Scenario& s, double time_s, int looks, std
   scene.set_time(time_s);
   radar::SbrTracer tracer(scene, s.sbr);
 
-  p.pose.position_m = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * time_s;
-  p.pose.velocity_mps = s.ownship_velocity_enu_mps;
-  p.pose.world_from_antenna =
-      enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      body_from_antenna(s.antenna_depression_rad);
+  p.pose = scripted_pose(s, time_s);
 
   radar::EvImageConfig& g = p.config;
   g.azimuth_min_rad = s.sbr.azimuth_min_rad;

@@ -24,7 +24,6 @@
 #include "common/units.hpp"
 #include "config/progress.hpp"
 #include "loop/closed_loop.hpp"
-#include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
 #include "plot/charts.hpp"
 #include "radar/clutter/surface.hpp"
@@ -42,13 +41,12 @@
 
 namespace radar_emu::tools {
 
-using loop::body_from_antenna;
 using loop::default_scenario_toml;
-using loop::enu_from_body;
 using loop::FidelityGovernor;
 using loop::parse_scenario;
 using loop::Scenario;
 using loop::scene_description;
+using loop::scripted_pose;
 using loop::terrain_returns_config;
 using plot::LineChart;
 using plot::Series;
@@ -544,19 +542,14 @@ class FrameBench {
   FrameBench(std::size_t max_rays_per_target)
       : s_(parse_scenario(default_scenario_toml(), "<default scenario>")),
         scene_(scene_description(s_)),
+        pose_(scripted_pose(s_)),
         max_rays_per_target_(max_rays_per_target) {
-    // The scenario's start pose (bench/bench_frame.cpp).
-    pose_.position_m = s_.ownship_start_enu_m;
-    pose_.velocity_mps = s_.ownship_velocity_enu_mps;
-    pose_.world_from_antenna =
-        enu_from_body(s_.ownship_heading_rad, s_.ownship_pitch_rad, s_.ownship_roll_rad) *
-        body_from_antenna(s_.antenna_depression_rad);
     scene_.set_time(0.0);
   }
 
   /// The pose and the scene at scenario time t_s along the ownship's straight flight.
   void set_time(double t_s) {
-    pose_.position_m = s_.ownship_start_enu_m + t_s * s_.ownship_velocity_enu_mps;
+    pose_ = scripted_pose(s_, t_s);
     scene_.set_time(t_s);
   }
 

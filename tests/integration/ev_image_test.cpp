@@ -24,7 +24,6 @@
 
 #include "common/units.hpp"
 #include "loop/closed_loop.hpp"
-#include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "scene/scene.hpp"
@@ -287,12 +286,7 @@ TEST_F(EvImageScenario, TracerReturnsDoNotDependOnTheThreads) {
   radar_emu::scene::Scene scene(loop::scene_description(s));
   scene.set_time(kTimeS);
   radar_emu::radar::SbrTracer tracer(scene, s.sbr);
-  radar_emu::radar::RadarPose pose;
-  pose.position_m = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * kTimeS;
-  pose.velocity_mps = s.ownship_velocity_enu_mps;
-  pose.world_from_antenna =
-      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      loop::body_from_antenna(s.antenna_depression_rad);
+  const radar_emu::radar::RadarPose pose = loop::scripted_pose(s, kTimeS);
   auto run = [&](std::size_t threads) {
     std::optional<tbb::global_control> limit;
     if (threads > 0)

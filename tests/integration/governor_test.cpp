@@ -12,7 +12,6 @@
 
 #include "io/detection_icd.hpp"
 #include "loop/closed_loop.hpp"
-#include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/sensor/sensor.hpp"
@@ -29,13 +28,7 @@ loop::Scenario default_scenario() {
 }
 
 radar::RadarPose start_pose(const loop::Scenario& s) {
-  radar::RadarPose pose;
-  pose.position_m = s.ownship_start_enu_m;
-  pose.velocity_mps = s.ownship_velocity_enu_mps;
-  pose.world_from_antenna =
-      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      loop::body_from_antenna(s.antenna_depression_rad);
-  return pose;
+  return loop::scripted_pose(s);
 }
 
 // The default scenario's scene, tracer and sensor at the start pose.

@@ -17,7 +17,6 @@
 #include <vector>
 
 #include "loop/closed_loop.hpp"
-#include "loop/ownship.hpp"
 #include "loop/scenario.hpp"
 #include "radar/em/sbr.hpp"
 #include "radar/products/terrain_returns.hpp"
@@ -39,13 +38,7 @@ loop::Scenario movers_scenario() {
 }
 
 radar::RadarPose first_pose(const loop::Scenario& s) {
-  radar::RadarPose p;
-  p.position_m = s.ownship_start_enu_m;
-  p.velocity_mps = s.ownship_velocity_enu_mps;
-  p.world_from_antenna =
-      loop::enu_from_body(s.ownship_heading_rad, s.ownship_pitch_rad, s.ownship_roll_rad) *
-      loop::body_from_antenna(s.antenna_depression_rad);
-  return p;
+  return loop::scripted_pose(s);
 }
 
 // Diffuse power per range bin [m^2]: each diffuse return's |A|^2 spread uniformly over
