@@ -65,6 +65,25 @@ cl::TerrainEngine engine_of(const scene::Scene& s, const SurfaceSet& set,
                            structures, spec);
 }
 
+// A level antenna at height h_m over the origin looking north (antenna x north, y east, z down:
+// azimuth is the horizontal angle), at carrier_hz, patches of patch_m.
+cl::TerrainView north_view(double h_m, double carrier_hz, double patch_m) {
+  cl::TerrainView view;
+  view.position_m = {0.0, 0.0, h_m};
+  view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
+  view.wavelength_m = kC / carrier_hz;
+  view.patch_min_m = patch_m;
+  return view;
+}
+
+// bins + 1 slant-range edges from r0_m, step_m apart.
+std::vector<double> range_edges(double r0_m, double step_m, std::size_t bins) {
+  std::vector<double> edges;
+  for (std::size_t b = 0; b <= bins; ++b)
+    edges.push_back(r0_m + step_m * static_cast<double>(b));
+  return edges;
+}
+
 // Kolmogorov-Smirnov distance of samples against Exp(1).
 double ks_exponential(std::vector<double> xs) {
   std::sort(xs.begin(), xs.end());
@@ -109,12 +128,7 @@ TEST(TerrainEngine, HomogeneousFieldCellMeanAndExponentialIntensity) {
   std::cout << "speckle seed " << kSeed << "\n";
   const cl::TerrainEngine eng = engine_of(s, set, spec);
 
-  // Antenna level, looking north: x north, y east, z down; azimuth is the horizontal angle.
-  cl::TerrainView view;
-  view.position_m = {0.0, 0.0, kH};
-  view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
-  view.wavelength_m = kC / kF;
-  view.patch_min_m = 1.0;
+  cl::TerrainView view = north_view(kH, kF, 1.0);
   view.looks = 4;
   constexpr double kDeg = kPi / 180.0;
   cl::CellGrid grid;
@@ -122,9 +136,7 @@ TEST(TerrainEngine, HomogeneousFieldCellMeanAndExponentialIntensity) {
   grid.azimuth_step_rad = 2.0 * kDeg;
   grid.columns = 10;
   grid.bins = 50;
-  std::vector<double> edges;
-  for (std::size_t b = 0; b <= grid.bins; ++b)
-    edges.push_back(300.0 + 10.0 * static_cast<double>(b));
+  const std::vector<double> edges = range_edges(300.0, 10.0, grid.bins);
   grid.range_edges_m = edges;
   const std::size_t cells = grid.columns * grid.bins;
   std::vector<std::complex<double>> field(view.looks * cells);
@@ -199,19 +211,13 @@ TEST(TerrainEngine, PatchesLongerThanABinAreSpreadOverTheBinsTheyCover) {
   const scene::Scene s(d);
   const SurfaceSet set = resolve_surfaces(s.materials(), {kF, Polarisation::kVV, {}});
   const cl::TerrainEngine eng = engine_of(s, set, {});
-  cl::TerrainView view;
-  view.position_m = {0.0, 0.0, kH};
-  view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
-  view.wavelength_m = kC / kF;
-  view.patch_min_m = 10.0;  // five 2 m bins
+  const cl::TerrainView view = north_view(kH, kF, 10.0);  // patches of five 2 m bins
   cl::CellGrid grid;
   grid.azimuth_min_rad = -10.0 * kDeg;
   grid.azimuth_step_rad = 5.0 * kDeg;
   grid.columns = 4;
   grid.bins = 100;
-  std::vector<double> edges;
-  for (std::size_t b = 0; b <= grid.bins; ++b)
-    edges.push_back(400.0 + 2.0 * static_cast<double>(b));
+  const std::vector<double> edges = range_edges(400.0, 2.0, grid.bins);
   grid.range_edges_m = edges;
   const std::size_t cells = grid.columns * grid.bins;
   std::vector<double> whole(cells, 0.0), spread(cells, 0.0);
@@ -256,16 +262,12 @@ struct NorthGrid {
   cl::CellGrid grid;
   std::vector<double> edges;
   NorthGrid() {
-    view.position_m = {0.0, 0.0, kH};
-    view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
-    view.wavelength_m = kC / kF;
-    view.patch_min_m = 2.0;
+    view = north_view(kH, kF, 2.0);
     grid.azimuth_min_rad = -5.0 * kPi / 180.0;
     grid.azimuth_step_rad = 1.0 * kPi / 180.0;
     grid.columns = 10;
     grid.bins = 450;
-    for (std::size_t b = 0; b <= grid.bins; ++b)
-      edges.push_back(kR0_m + kBin_m * static_cast<double>(b));
+    edges = range_edges(kR0_m, kBin_m, grid.bins);
     grid.range_edges_m = edges;
   }
   // Cell means with the given shadowing; the statistics in `st`.
@@ -591,11 +593,7 @@ TEST(TerrainEngine, FlaggedSigma0ValuesAreCountedWhereTheCatalogueFlagsThem) {
   const scene::Scene s(d);
   const SurfaceSet set = resolve_surfaces(s.materials(), {kF, Polarisation::kVV, {}});
   const cl::TerrainEngine eng = engine_of(s, set, {});
-  cl::TerrainView view;
-  view.position_m = {0.0, 0.0, kH};
-  view.world_from_antenna = glm::dmat3({0, 1, 0}, {1, 0, 0}, {0, 0, -1});
-  view.wavelength_m = kC / kF;
-  view.patch_min_m = 1.0;
+  cl::TerrainView view = north_view(kH, kF, 1.0);
   view.shadowing = false;
   auto run = [&](double r0, double r1, std::vector<cl::Sigma0Use>& use,
                  std::vector<std::uint32_t>& cell_flags, std::vector<double>& mean) {
