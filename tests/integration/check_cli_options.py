@@ -360,6 +360,11 @@ ISSUE32 = [
      ["run", sc32["incomplete"], "--frames", "1"], {}, "stderr",
      "radar-emu: warning: " + incomplete_glb + ": an incomplete scene database (import stopped "
      "by SIGINT: test)"),
+    ("a scene of metal alone with the default terrain engine failed with 'the scene has no "
+     "terrain' (it now runs without terrain clutter and says so)",
+     ["run", sc32["incomplete"], "--frames", "1"], {}, "stderr",
+     "radar-emu: warning: terrain engine: the scene has no terrain: no static non-structure "
+     "triangle of a material with a sigma0 (materials: metal (no sigma0)): no terrain clutter"),
     ("scene info of a stopped import",
      ["scene", "info", incomplete_glb], {}, "stdout",
      "  INCOMPLETE        import stopped by SIGINT: test"),
