@@ -736,6 +736,57 @@ BENCHMARK(BM_FrameBudget)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// Issue 29's acceptance frame: whole closed-loop runs at full physics ([governor] off: level 0
+// every frame), the frame's and the stages' p50 / p99 [ms] (stage times of the loop's own clock),
+// and cpu_all_ms, the CPU time of all the process's threads per frame. Argument 0: the default
+// scenario (0, 200 frames: its whole flight) or examples/terrain_movers.toml (1, its first 60
+// frames); argument 1: [radar] reuse_static_paths off (0) or as the scenario has it (1). The
+// first frame traces every bundle (nothing is kept yet): it is in the percentiles.
+void BM_FrameLevel0(benchmark::State& state) {
+  loop::Scenario s =
+      state.range(0) == 0
+          ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
+          : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
+  s.frames = state.range(0) == 0 ? 200 : 60;
+  s.governor.enabled = false;
+  if (state.range(1) == 0)
+    s.sbr.reuse_static_paths = false;
+  loop::RunResult r;
+  double cpu_s = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    loop::ClosedLoop loop(s, {});
+    timespec t0{}, t1{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
+    state.ResumeTiming();
+    r = loop.run();
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
+    cpu_s += static_cast<double>(t1.tv_sec - t0.tv_sec) +
+             1e-9 * static_cast<double>(t1.tv_nsec - t0.tv_nsec);
+  }
+  const double frames =
+      static_cast<double>(s.frames) *
+      static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  using radar_emu::timing::Stage;
+  auto stage = [&](Stage st) { return r.stages[static_cast<std::size_t>(st)]; };
+  state.counters["cpu_all_ms"] = 1e3 * cpu_s / frames;
+  state.counters["frame_p50_ms"] = 1e3 * stage(Stage::kFrame).p50_s;
+  state.counters["frame_p99_ms"] = 1e3 * stage(Stage::kFrame).p99_s;
+  state.counters["trace_p50_ms"] = 1e3 * stage(Stage::kTrace).p50_s;
+  state.counters["trace_p99_ms"] = 1e3 * stage(Stage::kTrace).p99_s;
+  state.counters["sensor_p50_ms"] = 1e3 * stage(Stage::kSensor).p50_s;
+  state.counters["sensor_p99_ms"] = 1e3 * stage(Stage::kSensor).p99_s;
+  state.counters["rays"] = static_cast<double>(r.trace.rays) / frames;
+  state.counters["reused_rays"] = static_cast<double>(r.trace.reused_rays) / frames;
+  state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") +
+                 (s.sbr.reuse_static_paths ? ", static paths reused" : ", every ray traced"));
+}
+BENCHMARK(BM_FrameLevel0)
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 }  // namespace
 
 BENCHMARK_MAIN();

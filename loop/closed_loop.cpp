@@ -620,7 +620,7 @@ void ClosedLoop::Impl::update_scene(Frame& f) {
 void ClosedLoop::Impl::trace(Frame& f) {
   RunState& rs = accounting.run();
   RunResult& r = rs.r;
-  f.rays_before = r.trace.rays;
+  f.rays_before = r.trace.rays + r.trace.reused_rays;
   f.cells_before = r.sensor.cells_synthesised;
   timing::ScopedStage stage(accounting.profiler, rs.wall, timing::Stage::kTrace);
   if (f.valid) {
@@ -676,7 +676,7 @@ void ClosedLoop::Impl::sense(Frame& f) {
     const timing::StageProfiler& p = accounting.profiler;
     governor.observe(static_cast<double>(p.last_ns(timing::Stage::kTrace)) * 1e-6,
                      static_cast<double>(p.last_ns(timing::Stage::kSensor)) * 1e-6,
-                     r.trace.rays - f.rays_before, f.contributions,
+                     r.trace.rays + r.trace.reused_rays - f.rays_before, f.contributions,
                      r.sensor.cells_synthesised - f.cells_before, f.terrain_patches,
                      f.terrain_returns);
     ++r.governor.level_frames[static_cast<std::size_t>(d->level)];

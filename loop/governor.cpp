@@ -45,6 +45,8 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
           "compute_fraction", "must be in (0, 1]");
   require(std::isfinite(config.trace_ns_per_ray) && config.trace_ns_per_ray > 0.0,
           "trace_ns_per_ray", "must be > 0");
+  require(std::isfinite(config.trace_ns_per_kept_return) && config.trace_ns_per_kept_return >= 0.0,
+          "trace_ns_per_kept_return", "must be >= 0");
   require(std::isfinite(config.sensor_ns_per_cell) && config.sensor_ns_per_cell >= 0.0,
           "sensor_ns_per_cell", "must be >= 0");
   require(std::isfinite(config.sensor_ns_per_return) && config.sensor_ns_per_return >= 0.0,
@@ -88,26 +90,29 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
   decision_.knobs.target_ray_spacing_m = spacing_m_;
 }
 
-double FidelityGovernor::model_trace_ms(double rays) const noexcept {
-  // The rays, and the terrain engine's patches: the previous frame's, as the square of the patch
-  // size scale it used over this level's (TerrainReturns::compute's patch_scale).
+double FidelityGovernor::model_trace_ms(const radar::TracePlan& plan) const noexcept {
+  // The rays and the kept returns, and the terrain engine's patches: the previous frame's, as
+  // the square of the patch size scale it used over this level's (TerrainReturns::compute's
+  // patch_scale).
   const double s = prev_terrain_scale_ / decision_.knobs.terrain_spacing_scale;
-  return 1e-6 * (config_.trace_ns_per_ray * rays +
+  return 1e-6 * (config_.trace_ns_per_ray * static_cast<double>(plan.rays()) +
+                 config_.trace_ns_per_kept_return * static_cast<double>(plan.reused_contributions) +
                  config_.terrain_ns_per_patch * prev_terrain_patches_ * s * s);
 }
 
-double FidelityGovernor::model_sensor_ms(double rays) const noexcept {
+double FidelityGovernor::model_sensor_ms(const radar::TracePlan& plan) const noexcept {
   // The sensor's work follows the previous frame's: its cells (set by the clutter's extent, not
-  // by the rays), its ray returns (in proportion to the rays) and the engine's returns.
+  // by the rays), its ray returns (in proportion to the rays, traced or kept) and the engine's
+  // returns.
+  const auto rays = static_cast<double>(plan.rays() + plan.reused_rays);
   const double ray_returns = std::max(0.0, prev_returns_ - prev_terrain_returns_);
   const double returns =
       (prev_rays_ > 0.0 ? ray_returns * rays / prev_rays_ : 0.0) + prev_terrain_returns_;
   return 1e-6 * (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
 }
 
-double FidelityGovernor::predict_ms(std::size_t rays) const noexcept {
-  const auto r = static_cast<double>(rays);
-  return trace_factor_ * model_trace_ms(r) + sensor_factor_ * model_sensor_ms(r);
+double FidelityGovernor::predict_ms(const radar::TracePlan& plan) const noexcept {
+  return trace_factor_ * model_trace_ms(plan) + sensor_factor_ * model_sensor_ms(plan);
 }
 
 void FidelityGovernor::knobs_for(int level) noexcept {
@@ -165,24 +170,25 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
                                                  int max_level) noexcept {
   GovernorDecision& d = decision_;
   knobs_for(0);
-  d.full_rays = tracer_->plan(pose, d.knobs).rays();
+  const radar::TracePlan full = tracer_->plan(pose, d.knobs);
+  d.full_rays = full.rays();
   int level = min_level;
   if (level > 0)
     knobs_for(level);
-  std::size_t rays = level > 0 ? tracer_->plan(pose, d.knobs).rays() : d.full_rays;
-  double predicted = predict_ms(rays);
+  radar::TracePlan plan = level > 0 ? tracer_->plan(pose, d.knobs) : full;
+  double predicted = predict_ms(plan);
   // The finest level that fits (the cost falls with the level: one plan per level tried).
   std::array<double, kMaxLevel + 1> predicted_at{};
-  std::array<std::size_t, kMaxLevel + 1> rays_at{};
+  std::array<radar::TracePlan, kMaxLevel + 1> plan_at{};
   predicted_at[static_cast<std::size_t>(level)] = predicted;
-  rays_at[static_cast<std::size_t>(level)] = rays;
+  plan_at[static_cast<std::size_t>(level)] = plan;
   while (predicted > deadline_ms_ && level < max_level) {
     ++level;
     knobs_for(level);
-    rays = tracer_->plan(pose, d.knobs).rays();
-    predicted = predict_ms(rays);
+    plan = tracer_->plan(pose, d.knobs);
+    predicted = predict_ms(plan);
     predicted_at[static_cast<std::size_t>(level)] = predicted;
-    rays_at[static_cast<std::size_t>(level)] = rays;
+    plan_at[static_cast<std::size_t>(level)] = plan;
   }
   if (predicted > deadline_ms_) {
     // Nothing fits: the part of the cost the levels do not reach (the sensor's cells) is over
@@ -192,18 +198,17 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
       --level;
     knobs_for(level);
     predicted = predicted_at[static_cast<std::size_t>(level)];
-    rays = rays_at[static_cast<std::size_t>(level)];
+    plan = plan_at[static_cast<std::size_t>(level)];
   }
   d.level = level;
   d.degraded = level > 0;
   d.over_deadline = predicted > deadline_ms_;
   d.predicted_ms = predicted;
-  d.rays = rays;
+  d.rays = plan.rays();
   d.estimated_snr_error_db =
       kLevelSnrError_db[static_cast<std::size_t>(std::min(level, kMaxLevel))];
-  const auto r = static_cast<double>(rays);
-  last_predicted_trace_ms_ = model_trace_ms(r);
-  last_predicted_sensor_ms_ = model_sensor_ms(r);
+  last_predicted_trace_ms_ = model_trace_ms(plan);
+  last_predicted_sensor_ms_ = model_sensor_ms(plan);
   return d;
 }
 

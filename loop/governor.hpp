@@ -23,11 +23,14 @@
 //
 // Cost model. predicted = trace + sensor, with
 //   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
+//          + trace_ns_per_kept_return x the kept returns it re-evaluates instead
+//            ([radar] reuse_static_paths: SbrTracer::plan() counts them too)
 //          + terrain_ns_per_patch x the terrain engine's patches of the previous frame
 //            x (its patch scale / this level's)^2 ([radar] terrain = "engine")
 //   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
 //          + sensor_ns_per_return x (the previous frame's ray returns x (rays / its rays)
 //                                    + its terrain engine returns)
+//            (rays: traced and kept alike, each stands for its returns)
 // The frame takes the finest level whose prediction is within the deadline (compute_fraction of
 // the frame period); if none is, the finest level within 5 % of the deadline of the coarsest
 // level's cost (degrading further would buy less than that). In "model" mode the coefficients are
@@ -66,7 +69,9 @@ struct GovernorConfig {
   /// kModel: fixed coefficients, reproducible; kMeasured: cost factors learnt from the measured
   /// stage times; kAuto: kMeasured with --realtime, kModel otherwise (the loop resolves it).
   enum class Mode { kAuto, kModel, kMeasured } mode = Mode::kAuto;
-  double trace_ns_per_ray = 180.0;      ///< wall time of the frame's tracing per ray [ns]
+  double trace_ns_per_ray = 180.0;  ///< wall time of the frame's tracing per ray [ns]
+  /// Wall time per kept return re-evaluated instead of traced ([radar] reuse_static_paths) [ns].
+  double trace_ns_per_kept_return = 35.0;
   double sensor_ns_per_cell = 18.0;     ///< sensor wall time per cell synthesised [ns]
   double sensor_ns_per_return = 110.0;  ///< sensor wall time per return (contribution) [ns]
   /// Wall time of the terrain engine ([radar] terrain = "engine") per patch it evaluates [ns]
@@ -111,9 +116,9 @@ class FidelityGovernor {
   /// The same at a given level (clamped to 0..kMaxLevel), whatever it costs: for measuring what
   /// a level gives (radar-emu tradeoff, tests).
   [[nodiscard]] const GovernorDecision& decide_at(const radar::RadarPose& pose, int level) noexcept;
-  /// What the frame decided last cost: stage wall times [ms] and what it processed (`returns`
-  /// all of them, `terrain_returns` of those the terrain engine's, `terrain_patches` the
-  /// engine's patches; both 0 without the engine).
+  /// What the frame decided last cost: stage wall times [ms] and what it processed (`rays` the
+  /// rays traced and those kept paths stood for, `returns` all of them, `terrain_returns` of those
+  /// the terrain engine's, `terrain_patches` the engine's patches; both 0 without the engine).
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
                std::uint64_t cells_synthesised, std::uint64_t terrain_patches = 0,
                std::uint64_t terrain_returns = 0) noexcept;
@@ -124,7 +129,7 @@ class FidelityGovernor {
   [[nodiscard]] double sensor_factor() const noexcept { return sensor_factor_; }
 
  private:
-  [[nodiscard]] double predict_ms(std::size_t rays) const noexcept;
+  [[nodiscard]] double predict_ms(const radar::TracePlan& plan) const noexcept;
   /// The finest level in [min_level, max_level] predicted within the deadline (else max_level).
   const GovernorDecision& choose(const radar::RadarPose& pose, int min_level,
                                  int max_level) noexcept;
@@ -144,9 +149,9 @@ class FidelityGovernor {
   double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;
   double prev_terrain_patches_ = 0.0, prev_terrain_returns_ = 0.0;
   double prev_terrain_scale_ = 1.0;  ///< the engine's patch scale of the previous frame
-  /// The model's trace and sensor terms [ms] at `rays` (factors not applied).
-  [[nodiscard]] double model_trace_ms(double rays) const noexcept;
-  [[nodiscard]] double model_sensor_ms(double rays) const noexcept;
+  /// The model's trace and sensor terms [ms] for a plan (factors not applied).
+  [[nodiscard]] double model_trace_ms(const radar::TracePlan& plan) const noexcept;
+  [[nodiscard]] double model_sensor_ms(const radar::TracePlan& plan) const noexcept;
   double trace_factor_ = 1.0, sensor_factor_ = 1.0;
   double last_predicted_trace_ms_ = 0.0, last_predicted_sensor_ms_ = 0.0;
 };

@@ -114,6 +114,11 @@ target_ray_spacing_m = 0.1
 max_rays_per_target = 20000 # bundles of larger targets (the parked transports) coarsen (counted)
 edges = true                # edge diffraction (PTD fringe edge currents) of the targets' wedges
 edge_turn_deg = 30.0        # shared edges turning by more than this diffract
+reuse_static_paths = true   # targets that do not move keep their rays' paths between frames,
+                            # re-evaluated for each pose (single bounces exact; multiple bounces
+                            # within the phase below); traced again once the aspect has changed
+reuse_max_phase_deg = 22.5  # (docs/performance.md, "Static path reuse")
+reuse_refresh_frames = 16   # about 1/16 of the kept rays are traced again every frame
 
 [detector]
 cfar = "ca"                 # ca | os
@@ -155,6 +160,7 @@ enabled = true
 compute_fraction = 0.4      # the rest of the period absorbs the cost model's error and jitter
 mode = "auto"               # auto (measured with --realtime, else model) | model | measured
 trace_ns_per_ray = 180.0    # cost model, measured on the project's 2-core machine
+trace_ns_per_kept_return = 35.0 # a kept path re-evaluated ([radar] reuse_static_paths)
 sensor_ns_per_cell = 18.0
 sensor_ns_per_return = 110.0
 terrain_ns_per_patch = 110.0 # the terrain engine ([radar] terrain = "engine"), per patch
@@ -229,8 +235,9 @@ void apply_weather(Scenario& s, const Table& root) {
 void apply_governor(Scenario& s, const Table& root) {
   GovernorConfig& g = s.governor;
   const Table t = root.table("governor");
-  t.refuse_unknown({"enabled", "compute_fraction", "mode", "trace_ns_per_ray", "sensor_ns_per_cell",
-                    "sensor_ns_per_return", "terrain_ns_per_patch", "max_level"});
+  t.refuse_unknown({"enabled", "compute_fraction", "mode", "trace_ns_per_ray",
+                    "trace_ns_per_kept_return", "sensor_ns_per_cell", "sensor_ns_per_return",
+                    "terrain_ns_per_patch", "max_level"});
   t.boolean("enabled", g.enabled);
   t.number("compute_fraction", g.compute_fraction, {0.01, 1.0});
   std::string mode;
@@ -242,6 +249,7 @@ void apply_governor(Scenario& s, const Table& root) {
   else if (mode == "measured")
     g.mode = GovernorConfig::Mode::kMeasured;
   t.number("trace_ns_per_ray", g.trace_ns_per_ray, {1e-3, 1e6});
+  t.number("trace_ns_per_kept_return", g.trace_ns_per_kept_return, {0.0, 1e6});
   t.number("sensor_ns_per_cell", g.sensor_ns_per_cell, {0.0, 1e6});
   t.number("sensor_ns_per_return", g.sensor_ns_per_return, {0.0, 1e6});
   t.number("terrain_ns_per_patch", g.terrain_ns_per_patch, {0.0, 1e6});
@@ -666,7 +674,10 @@ void read_radar(Scenario& s, const Table& root) {
                       "target_ray_spacing_m",
                       "max_rays_per_target",
                       "edges",
-                      "edge_turn_deg"});
+                      "edge_turn_deg",
+                      "reuse_static_paths",
+                      "reuse_max_phase_deg",
+                      "reuse_refresh_frames"});
   std::string waveform = radar::waveform_name(w.kind);
   rad.string("waveform", waveform);
   if (!radar::parse_waveform_kind(waveform, w.kind))
@@ -721,6 +732,13 @@ void read_radar(Scenario& s, const Table& root) {
   rad.degrees("edge_turn_deg", s.sbr.edge_min_turn_rad, {0.0, 179.0});
   if (!s.sbr.edges && rad.has("edge_turn_deg"))
     rad.fail("edge_turn_deg", "is read with edges = true only");
+  rad.boolean("reuse_static_paths", s.sbr.reuse_static_paths);
+  rad.degrees("reuse_max_phase_deg", s.sbr.reuse_max_phase_rad, {0.01, 180.0});
+  rad.integer("reuse_refresh_frames", s.sbr.reuse_refresh_frames, 1, 100000);
+  if (!s.sbr.reuse_static_paths)
+    for (const char* key : {"reuse_max_phase_deg", "reuse_refresh_frames"})
+      if (rad.has(key))
+        rad.fail(key, "is read with reuse_static_paths = true only");
 }
 
 // [detector]: CFAR and the detection list.

@@ -392,7 +392,14 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"edges_shadowed", r.trace.edges_shadowed},
                   {"edges_skipped", r.trace.edges_skipped},
                   {"edges_double", r.trace.edges_double},
-                  {"knob_fallbacks", r.trace.knob_fallbacks}};
+                  {"knob_fallbacks", r.trace.knob_fallbacks},
+                  {"reuse_static_paths", s.sbr.reuse_static_paths},
+                  {"reused_bundles", r.trace.reused_bundles},
+                  {"reused_rays", r.trace.reused_rays},
+                  {"reused_contributions", r.trace.reused_contributions},
+                  {"refreshed_bundles", r.trace.refreshed_bundles},
+                  {"reuse_max_angle_fraction", r.trace.reuse_max_angle_fraction},
+                  {"reuse_max_age_frames", r.trace.reuse_max_age_frames}};
   rep["terrain"] = {{"source", s.terrain_engine ? "engine" : "rays"},
                     {"facets_considered", r.terrain.facets_considered},
                     {"patches", r.terrain.patches},
@@ -592,6 +599,22 @@ void print_governor_line(const RunReport& p, std::FILE* out) {
                g.max_level);
 }
 
+// Static path reuse ([radar] reuse_static_paths): how much of the targets' rays came from kept
+// paths, how old and how far from their limit (radar/em/sbr.hpp).
+void print_reuse_line(const RunReport& p, std::FILE* out) {
+  const RunResult& r = *p.result;
+  const radar::TraceStats& t = r.trace;
+  if (t.reused_rays == 0)
+    return;
+  const double all = static_cast<double>(t.rays + t.reused_rays);
+  std::fprintf(out,
+               "  reuse       %.1f %% of the rays' paths kept from earlier frames (static targets; "
+               "oldest %llu frames, aspect change <= %.2f of its limit, phase error <= %.1f deg)\n",
+               100.0 * static_cast<double>(t.reused_rays) / all,
+               static_cast<ull>(t.reuse_max_age_frames), t.reuse_max_angle_fraction,
+               p.scenario->sbr.reuse_max_phase_rad * 180.0 / std::numbers::pi);
+}
+
 // The outcome per target: one row per object that was in the beam, then the false alarms.
 void print_outcome_lines(const RunReport& p, std::FILE* out) {
   const OutcomeTotals& o = p.result->outcome;
@@ -722,6 +745,7 @@ void write_report_json(const RunReport& report, const std::filesystem::path& pat
 void print_summary(const RunReport& report, std::FILE* out) {
   print_run_lines(report, out);
   print_governor_line(report, out);
+  print_reuse_line(report, out);
   print_exception_lines(report, out);
   print_outcome_lines(report, out);
   print_output_lines(report, out);

@@ -8,8 +8,10 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "radar/constants.hpp"
 #include "radar/em/facet_po.hpp"
@@ -67,6 +69,8 @@ namespace {
 // The column table (SbrTracer::column_cos_): columns held per target, and a bundle without any.
 constexpr std::size_t kColumnsPerTarget = 4096;
 constexpr std::size_t kNoColumns = static_cast<std::size_t>(-1);
+// A target without a region of kept paths (SbrTracer::kept_region_).
+constexpr std::size_t kNoRegion = static_cast<std::size_t>(-1);
 }  // namespace
 
 SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
@@ -188,6 +192,31 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   // (a wider bundle takes its cos and sin per ray).
   column_cos_.assign(n_az_ + n_targets_ * std::min(kColumnsPerTarget, c.max_rays_per_target), 0.0);
   column_sin_.assign(column_cos_.size(), 0.0);
+  plan_bundles_.reserve(n_targets_);
+  // Static path reuse: a region of kept paths per target that does not move.
+  kept_.assign(desc.objects.size(), Kept{});
+  kept_region_.assign(desc.objects.size(), kNoRegion);
+  met_mover_ = std::make_unique<std::atomic<std::uint8_t>[]>(desc.objects.size());
+  for (std::uint32_t i = 0; i < desc.objects.size(); ++i) {
+    if (scene.objects()[i].moving)
+      movers_.push_back(i);
+  }
+  if (c.reuse_static_paths) {
+    require(std::isfinite(c.reuse_max_phase_rad) && c.reuse_max_phase_rad > 0.0,
+            "reuse_max_phase_rad", "must be > 0");
+    require(c.reuse_refresh_frames >= 1, "reuse_refresh_frames", "must be >= 1");
+    const std::size_t per_target = c.max_rays_per_target * static_cast<std::size_t>(c.max_bounces);
+    std::size_t n_slots = 0;
+    for (std::uint32_t i = 0; i < desc.objects.size(); ++i) {
+      if (is_target_[i] && !scene.objects()[i].moving) {
+        kept_region_[i] = n_slots;
+        n_slots += per_target;
+      }
+    }
+    static_assert(std::is_trivially_default_constructible_v<KeptPath>);
+    kept_paths_ = std::make_unique_for_overwrite<KeptPath[]>(n_slots);
+    kept_facet_by_rays_.assign(facet_first_.back(), 0);
+  }
 }
 
 bool SbrTracer::intersect(const scene::Ray& ray, scene::Hit& hit) const noexcept {
@@ -590,6 +619,8 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
     el_lo = c.elevation_min_rad;
     el_hi = c.elevation_max_rad;
   }
+  b.clipped = behind || az_lo < c.azimuth_min_rad || az_hi > c.azimuth_max_rad ||
+              el_lo < c.elevation_min_rad || el_hi > c.elevation_max_rad;
   az_lo = std::max(az_lo, c.azimuth_min_rad);
   az_hi = std::min(az_hi, c.azimuth_max_rad);
   el_lo = std::max(el_lo, c.elevation_min_rad);
@@ -632,6 +663,133 @@ bool SbrTracer::may_reach_owner(const scene::Ray& ray, const Frame& frame, std::
   return false;
 }
 
+namespace {
+// A static target's box with its ground image (SbrConfig::target_ground_image): where its
+// bundle's paths run.
+void target_region(const scene::ObjectState& o, bool ground_image, glm::dvec3& lo,
+                   glm::dvec3& hi) noexcept {
+  lo = o.bounds_min_m;
+  hi = o.bounds_max_m;
+  if (ground_image)
+    lo.z = 2.0 * o.bounds_min_m.z - o.bounds_max_m.z;
+}
+}  // namespace
+
+bool SbrTracer::mover_near(const RadarPose& pose, std::uint32_t id) const noexcept {
+  const auto objects = scene_->objects();
+  glm::dvec3 lo, hi;
+  target_region(objects[id], config_.target_ground_image, lo, hi);
+  const glm::dvec3 centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  scene::Ray sight;  // the target's centre to the radar
+  sight.origin_m = centre;
+  const glm::dvec3 to = pose.position_m - centre;
+  sight.t_far_m = glm::length(to);
+  sight.direction = sight.t_far_m > 0.0 ? to / sight.t_far_m : glm::dvec3(0.0, 0.0, 1.0);
+  sight.t_near_m = 0.0;
+  for (const std::uint32_t m : movers_) {
+    const scene::ObjectState& o = objects[m];
+    // Within the target's region, or across the line of sight (the mover's box grown by the
+    // region's half extent: any line from the region to the radar).
+    if (glm::all(glm::lessThanEqual(o.bounds_min_m, hi)) &&
+        glm::all(glm::lessThanEqual(lo, o.bounds_max_m)))
+      return true;
+    if (scene::ray_crosses_box(sight, o.bounds_min_m - half, o.bounds_max_m + half))
+      return true;
+  }
+  return false;
+}
+
+void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<Bundle> bundles,
+                             bool check_facets, double& credit, TraceStats* stats) const noexcept {
+  const SbrConfig& c = config_;
+  for (Bundle& b : bundles) {
+    b.trace = true;
+    b.keep = false;
+  }
+  if (!c.reuse_static_paths)
+    return;
+  const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
+  const auto objects = scene_->objects();
+  std::size_t forced_rays = 0, kept_rays = 0;  // static bundles traced / kept this frame
+  double worst_fraction = 0.0;
+  std::uint64_t oldest = 0;
+  for (Bundle& b : bundles) {
+    const std::uint32_t id = b.object_id;
+    const std::size_t rays = b.n_az * b.n_el;
+    b.keep =
+        kept_region_[id] != kNoRegion && !objects[id].moving && !b.clipped && !mover_near(pose, id);
+    if (!b.keep)
+      continue;
+    const Kept& kp = kept_[id];
+    bool reuse = kp.valid && kp.spacing_m == b.spacing_m && kp.max_bounces == max_bounces;
+    double fraction = 0.0;
+    if (reuse) {
+      // The aspect change, against its limit (SbrConfig::reuse_static_paths).
+      glm::dvec3 lo, hi;
+      target_region(objects[id], c.target_ground_image, lo, hi);
+      const glm::dvec3 centre = 0.5 * (lo + hi);
+      const double extent_m = glm::length(hi - lo);
+      const glm::dvec3 now = pose.position_m - centre, then = kp.radar_m - centre;
+      const double dtheta = std::atan2(glm::length(glm::cross(now, then)), glm::dot(now, then));
+      // The spacing at the target: the bundle's angular step at its nearest range.
+      const glm::dvec3 nearest =
+          glm::clamp(pose.position_m, objects[id].bounds_min_m, objects[id].bounds_max_m);
+      const double tube_m = std::min(b.daz_rad, b.del_rad) * glm::length(nearest - pose.position_m);
+      const double limit =
+          std::min(0.5 * tube_m / extent_m, std::sqrt(c.reuse_max_phase_rad / (k * extent_m)));
+      // The antenna's turn (its polarisation basis): the largest change of its axes.
+      double turn = 0.0;
+      for (int a = 0; a < 3; ++a)
+        turn = std::max(turn, glm::length(pose.world_from_antenna[a] - kp.world_from_antenna[a]));
+      fraction = std::max(dtheta, turn) / limit;
+      reuse = fraction <= 1.0;
+    }
+    if (reuse && check_facets) {
+      for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1] && reuse; ++f)
+        reuse = (facet_light_[f] == kLightByRays ? 1 : 0) == kept_facet_by_rays_[f];
+    }
+    if (reuse) {
+      b.trace = false;
+      b.kept_fraction = fraction;
+      kept_rays += rays;
+    } else {
+      forced_rays += rays;
+    }
+  }
+  // The refresh: a credit of 1 / reuse_refresh_frames of the kept rays a frame, less the rays
+  // of static bundles traced anyway, pays for tracing again the longest kept bundle (then the
+  // lowest id) once it covers its rays, so each is traced about every reuse_refresh_frames.
+  credit += static_cast<double>(kept_rays) / static_cast<double>(c.reuse_refresh_frames);
+  credit = std::max(0.0, credit - static_cast<double>(forced_rays));
+  for (;;) {
+    Bundle* pick = nullptr;
+    for (Bundle& b : bundles) {
+      if (!b.trace &&
+          (pick == nullptr || kept_[b.object_id].traced_at < kept_[pick->object_id].traced_at))
+        pick = &b;
+    }
+    if (pick == nullptr || credit < static_cast<double>(pick->n_az * pick->n_el))
+      break;
+    pick->trace = true;
+    credit -= static_cast<double>(pick->n_az * pick->n_el);
+    if (stats != nullptr)
+      ++stats->refreshed_bundles;
+  }
+  if (stats == nullptr)
+    return;
+  for (const Bundle& b : bundles) {
+    if (b.trace)
+      continue;
+    ++stats->reused_bundles;
+    stats->reused_rays += b.n_az * b.n_el;
+    stats->reused_contributions += kept_[b.object_id].count;
+    worst_fraction = std::max(worst_fraction, b.kept_fraction);
+    oldest = std::max(oldest, frame_count_ - kept_[b.object_id].traced_at);
+  }
+  stats->reuse_max_angle_fraction = std::max(stats->reuse_max_angle_fraction, worst_fraction);
+  stats->reuse_max_age_frames = std::max(stats->reuse_max_age_frames, oldest);
+}
+
 // A ray between its hits (trace_batch): where it is, what it carries, where its returns go.
 struct SbrTracer::RayState {
   glm::dvec3 d{0.0};  ///< direction of the next segment
@@ -639,12 +797,15 @@ struct SbrTracer::RayState {
   /// (Ling, Chou & Lee 1989: ray tubes). |u x v| = cos(el) daz del, the tube's solid angle; the
   /// spherical wave's tube at unfolded distance L has edges L u, L v.
   glm::dvec3 u{0.0}, v{0.0};
-  CVec e;                         ///< field, unit amplitude at every hit (range: the sensor's)
-  glm::dvec3 origin{0.0};         ///< of the next segment (lifted off the last hit)
-  glm::dvec3 v_prev{0.0};         ///< velocity of what the ray last left [m/s]
-  glm::dvec3 last_hit{0.0};       ///< the last hit, on the unlifted path
-  double path_m = 0.0;            ///< unfolded path length from the radar to the last hit
-  double path_rate = 0.0;         ///< d(path)/dt so far [m/s]
+  CVec e;                     ///< field, unit amplitude at every hit (range: the sensor's)
+  glm::dvec3 origin{0.0};     ///< of the next segment (lifted off the last hit)
+  glm::dvec3 v_prev{0.0};     ///< velocity of what the ray last left [m/s]
+  glm::dvec3 last_hit{0.0};   ///< the last hit, on the unlifted path
+  double path_m = 0.0;        ///< unfolded path length from the radar to the last hit
+  double path_rate = 0.0;     ///< d(path)/dt so far [m/s]
+  glm::dvec3 first_hit{0.0};  ///< the path's first hit (static path reuse)
+  /// Static path reuse: the ray's max_bounces slots of kept paths (null: its bundle keeps none).
+  KeptPath* kept = nullptr;
   Contribution* slot = nullptr;   ///< the ray's max_bounces output slots
   std::uint8_t* count = nullptr;  ///< how many of them hold returns
   std::uint32_t owner = 0;        ///< the bundle's target (terrain rays: none)
@@ -747,6 +908,10 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
       hit.position_m =
           extend_path(bounce == 0, hit.t_m, st.last_hit, d, hit.position_m, hit.normal, st.path_m);
       st.last_hit = hit.position_m;
+      if (bounce == 0)
+        st.first_hit = hit.position_m;
+      if (st.kept != nullptr && scene_->objects()[hit.object_id].moving)
+        met_mover_[st.owner].store(1, std::memory_order_relaxed);  // its paths are not kept
       st.path_rate += glm::dot(v_obj - st.v_prev, d);
       const double path_m = st.path_m;
       glm::dvec3 n = hit.normal;
@@ -837,9 +1002,19 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
           const glm::dvec3 p = pol_vector(rx_h, up, boresight, -s);
           const double total_m = path_m + back_m;
           Contribution& out = st.slot[*st.count];
-          out.amplitude =
-              po_amplitude_m(k, p, po_source(st.e, d, n, s, rc, pec), footprint_integral(fp, k)) *
-              std::polar(1.0, -k * total_m);
+          const std::complex<double> a =
+              po_amplitude_m(k, p, po_source(st.e, d, n, s, rc, pec), footprint_integral(fp, k));
+          out.amplitude = a * std::polar(1.0, -k * total_m);
+          if (st.kept != nullptr) {
+            KeptPath& kp = st.kept[*st.count];
+            kp.first_hit_m = st.first_hit;
+            kp.last_hit_m = hit.position_m;
+            kp.inner_m = path_m - glm::length(st.first_hit - pose.position_m);
+            kp.amplitude_re_m = a.real();
+            kp.amplitude_im_m = a.imag();
+            kp.bounces = static_cast<std::uint8_t>(bounce + 1);
+            kp.radiated_by_owner = hit.object_id == st.path_owner;
+          }
           out.range_m = 0.5 * total_m;
           out.range_spread_m = 0.0;
           out.radial_velocity_mps = 0.5 * (st.path_rate + glm::dot(pose.velocity_mps - v_obj, s));
@@ -896,18 +1071,32 @@ TracePlan SbrTracer::plan(const RadarPose& pose, const TraceKnobs& knobs,
   p.terrain_rays = f.terrain_n_az * f.terrain_n_el;
   p.max_bounces = f.max_bounces;
   const auto objects = scene_->objects();
+  plan_bundles_.clear();
   for (std::uint32_t id = 0; id < objects.size(); ++id) {
-    std::size_t rays = 0;
+    if (id < rays_per_object.size())
+      rays_per_object[id] = 0;
     Bundle b;
     bool coarsened = false;
-    if (is_target_[id] && bundle_for(pose, id, target_spacing(knobs, id, nullptr), b, coarsened)) {
-      rays = b.n_az * b.n_el;
+    const double spacing_m = target_spacing(knobs, id, nullptr);
+    if (is_target_[id] && bundle_for(pose, id, spacing_m, b, coarsened)) {
+      b.spacing_m = spacing_m;
+      plan_bundles_.push_back(b);  // within the capacity reserved at setup
       ++p.target_bundles;
       p.coarsened_bundles += coarsened ? 1 : 0;
     }
+  }
+  double credit = refresh_credit_;
+  choose_reuse(pose, f.max_bounces, plan_bundles_, false, credit, nullptr);
+  for (const Bundle& b : plan_bundles_) {
+    const std::size_t rays = b.n_az * b.n_el;
+    if (!b.trace) {
+      p.reused_rays += rays;
+      p.reused_contributions += kept_[b.object_id].count;
+      continue;
+    }
     p.target_rays += rays;
-    if (id < rays_per_object.size())
-      rays_per_object[id] = rays;
+    if (b.object_id < rays_per_object.size())
+      rays_per_object[b.object_id] = rays;
   }
   return p;
 }
@@ -916,6 +1105,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                              const TraceKnobs& knobs) noexcept {
   const SbrConfig& c = config_;
   Frame frame = frame_for(knobs, &stats);
+  ++frame_count_;
   // Bundles for targets inside the field of view.
   bundles_.clear();
   unbundled_in_range_.clear();
@@ -938,9 +1128,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       continue;
     }
     stats.coarsened_bundles += coarsened ? 1 : 0;
-    b.first_ray = next_ray;
     b.spacing_m = spacing_m;
-    next_ray += b.n_az * b.n_el;
     bundles_.push_back(b);
     bundled_[id] = 1;
     ++stats.target_bundles;
@@ -1001,6 +1189,16 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                         }
                       });
   }
+  // Static path reuse: which bundles shoot their rays this frame (the others' kept paths are
+  // re-evaluated below); the rays of those that do, laid end to end after the terrain grid's.
+  choose_reuse(pose, frame.max_bounces, bundles_, true, refresh_credit_, &stats);
+  for (Bundle& bd : bundles_) {
+    bd.first_ray = next_ray;
+    if (bd.trace)
+      next_ray += bd.n_az * bd.n_el;
+    if (bd.keep)
+      met_mover_[bd.object_id].store(0, std::memory_order_relaxed);
+  }
   // Each grid column's azimuth, once (RayState's direction and tube edges take its cos, sin).
   {
     std::size_t col = 0;
@@ -1010,6 +1208,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       column_sin_[col] = std::sin(az);
     }
     for (Bundle& bd : bundles_) {
+      if (!bd.trace)
+        continue;
       if (col + bd.n_az > column_cos_.size()) {  // beyond the table: per ray (same values)
         bd.first_column = kNoColumns;
         continue;
@@ -1076,6 +1276,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                 sa = std::sin(az);
               }
               st.owner = bd.object_id;
+              if (bd.keep)
+                st.kept = kept_paths_.get() + kept_region_[bd.object_id] + j * per_ray;
             }
             if (el != row_el) {  // one elevation per row of a grid
               row_el = el;
@@ -1118,6 +1320,80 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   for (std::size_t i = 0; i < usable_rays; ++i) {
     for (std::uint8_t k = 0; k < counts_[i]; ++k)
       out[n++] = out[i * per_ray + k];
+  }
+  // Static path reuse: the traced bundles that keep their paths compact them (the first ones of
+  // each ray, in ray order) and remember the frame; then the others' kept paths are evaluated
+  // for this pose, in bundle order, after the rays' returns.
+  if (c.reuse_static_paths) {
+    std::size_t n_kept = 0;
+    for (Bundle& bd : bundles_) {
+      const std::uint32_t id = bd.object_id;
+      bd.first_kept = n_kept;
+      if (!bd.trace) {
+        n_kept += kept_[id].count;
+        continue;
+      }
+      Kept& kp = kept_[id];
+      const std::size_t rays_b = bd.n_az * bd.n_el;
+      kp.valid = bd.keep && bd.first_ray + rays_b <= usable_rays &&
+                 met_mover_[id].load(std::memory_order_relaxed) == 0;
+      if (!kp.valid)
+        continue;
+      KeptPath* region = kept_paths_.get() + kept_region_[id];
+      std::size_t m = 0;
+      for (std::size_t j = 0; j < rays_b; ++j) {
+        for (std::uint8_t q = 0; q < counts_[bd.first_ray + j]; ++q)
+          region[m++] = region[j * per_ray + q];
+      }
+      kp.radar_m = pose.position_m;
+      kp.world_from_antenna = pose.world_from_antenna;
+      kp.spacing_m = bd.spacing_m;
+      kp.max_bounces = frame.max_bounces;
+      kp.rays = rays_b;
+      kp.count = m;
+      kp.traced_at = frame_count_;
+      for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1]; ++f)
+        kept_facet_by_rays_[f] = facet_light_[f] == kLightByRays ? 1 : 0;
+    }
+    const std::size_t room = out.size() - n;
+    const std::size_t n_eval = std::min(n_kept, room);
+    stats.dropped_contributions += n_kept - n_eval;
+    const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
+    const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+    const glm::dvec3 v = pose.velocity_mps;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n_eval, 256),
+        [&](const tbb::blocked_range<std::size_t>& range) {
+          std::size_t b = 0;
+          for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_kept)
+              ++b;
+            const Bundle& bd = bundles_[b];
+            const KeptPath& kp = kept_paths_[kept_region_[bd.object_id] + (i - bd.first_kept)];
+            // The kept path for this pose (SbrConfig::reuse_static_paths): exact end segments.
+            const glm::dvec3 to_first = kp.first_hit_m - pose.position_m;
+            const double first_m = glm::length(to_first);
+            const glm::dvec3 to_radar = pose.position_m - kp.last_hit_m;
+            const double back_m = glm::length(to_radar);
+            const glm::dvec3 s = to_radar / back_m;
+            const double total_m = first_m + kp.inner_m + back_m;
+            Contribution& x = out[n + i];
+            x.amplitude = std::complex<double>(kp.amplitude_re_m, kp.amplitude_im_m) *
+                          std::polar(1.0, -k * total_m);
+            x.range_m = 0.5 * total_m;
+            x.range_spread_m = 0.0;
+            // Static path: d(path)/dt = -v . d1 + v . s (the radar's velocity on its two ends).
+            x.radial_velocity_mps = 0.5 * (-glm::dot(v, to_first / first_m) + glm::dot(v, s));
+            const AzEl ae = arrival_azel(antenna_from_world * (-s));
+            x.azimuth_rad = ae.azimuth_rad;
+            x.elevation_rad = ae.elevation_rad;
+            x.object_id = bd.object_id;
+            x.radiated_by_owner = kp.radiated_by_owner;
+            x.bounces = kp.bounces;
+            x.coherent = true;
+          }
+        });
+    n += n_eval;
   }
   // Then the bounce-1 terms (each appended while there is room, else counted as dropped): the
   // lit and partly lit facets, in object and triangle order.

@@ -51,6 +51,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -119,6 +120,30 @@ struct SbrConfig {
   /// diffraction between parallel edges across a flat face (edges.hpp), one contribution per
   /// pair at the middle of its receiving segment when both edges radiate this frame.
   int edge_order = 2;
+  /// Static path reuse (the temporal lever of issue 29): the rays of a target that does not
+  /// move are not traced every frame. Their returns' paths (first hit P1, radiating hit Pn and
+  /// the path between them) are kept from the frame that traced them and re-evaluated for each
+  /// new pose R: length L = |P1 - R| + L(P1..Pn) + |Pn - R|, phase exp(-j k L), range L / 2, the
+  /// arrival direction of Pn and the Doppler of the two end segments, all exact; the amplitude
+  /// without its path phase is kept. A single bounce (P1 = Pn) is then exact; for more, the
+  /// kept reflection points differ from those of the ray that reaches Pn from R by about
+  /// D dtheta (D: the target's extent with its ground image, dtheta: the change in the
+  /// direction from the target to the radar), and since a reflected path's length is
+  /// stationary in its reflection points (Fermat's principle; Born & Wolf, Principles of
+  /// Optics, 7th ed., sec. 3.3.2) the length is off by the second order, at most about
+  /// D dtheta^2 (a right dihedral: 0.26 D dtheta^2, tests/radar/sbr_reuse_test.cpp).
+  /// Kept paths are used while dtheta <= min(spacing / (2 D), sqrt(reuse_max_phase_rad /
+  /// (k D))) (the hit points move by less than half a tube, the phase by less than
+  /// reuse_max_phase_rad), the antenna has turned by no more than that angle (polarisation
+  /// basis), the bundle's spacing and bounces are unchanged, it was and is whole inside the
+  /// field of view, the same facets are left to its rays (FacetLight::kLightByRays), no path
+  /// met a moving object and no moving object comes near the target or its line of sight to
+  /// the radar; else the bundle is traced again. Besides, about 1 / reuse_refresh_frames of the
+  /// kept rays are traced again each frame, the longest kept first, so a kept path is at most
+  /// about that many frames old (a frame is a trace() call). Off: every bundle every frame.
+  bool reuse_static_paths = false;
+  double reuse_max_phase_rad = 0.39269908169872414;  ///< pi / 8
+  int reuse_refresh_frames = 16;                     ///< >= 1
 };
 
 /// Per-frame overrides for the fidelity governor. Defaults leave the configuration as it is.
@@ -144,7 +169,11 @@ struct TracePlan {
   std::size_t target_rays = 0;        ///< all bundles together
   std::size_t target_bundles = 0;     ///< targets inside the field of view
   std::size_t coarsened_bundles = 0;  ///< bundles held at max_rays_per_target
-  int max_bounces = 0;                ///< hits per ray the knobs give
+  /// Rays of bundles whose kept paths would be reused (SbrConfig::reuse_static_paths; not in
+  /// target_rays), and their kept returns.
+  std::size_t reused_rays = 0;
+  std::size_t reused_contributions = 0;
+  int max_bounces = 0;  ///< hits per ray the knobs give
   [[nodiscard]] std::size_t rays() const noexcept { return terrain_rays + target_rays; }
 };
 
@@ -210,6 +239,16 @@ struct TraceStats {
   std::uint64_t terrain_returns = 0;
   std::uint64_t terrain_returns_flagged = 0;
   std::uint32_t terrain_sigma0_flags = 0;
+  /// Static path reuse (SbrConfig::reuse_static_paths): bundles whose returns came from kept
+  /// paths, the rays they did not shoot, the returns re-evaluated, the kept bundles traced again
+  /// by the refresh rule alone, the largest aspect change of a reused bundle as a fraction of
+  /// its limit (<= 1), and the oldest kept paths used [frames].
+  std::uint64_t reused_bundles = 0;
+  std::uint64_t reused_rays = 0;
+  std::uint64_t reused_contributions = 0;
+  std::uint64_t refreshed_bundles = 0;
+  double reuse_max_angle_fraction = 0.0;
+  std::uint64_t reuse_max_age_frames = 0;
 };
 
 class SbrTracer {
@@ -271,6 +310,15 @@ class SbrTracer {
     std::size_t first_edge = 0;    ///< in this frame's run over the bundled targets' edges
     std::size_t first_pair = 0;    ///< the same for their edge pairs (double diffraction)
     std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame (or none)
+    /// Its box (with the ground image) reached past the field of view and was cut to it.
+    bool clipped = false;
+    /// Static path reuse (SbrConfig::reuse_static_paths, choose_reuse): traced this frame (else
+    /// its kept paths are re-evaluated), its paths kept once traced, and where its re-evaluated
+    /// returns start in this frame's run of them.
+    bool trace = true;
+    bool keep = false;
+    double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
+    std::size_t first_kept = 0;
   };
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
@@ -285,6 +333,51 @@ class SbrTracer {
                                 Bundle& b, bool& coarsened) const noexcept;
   [[nodiscard]] double target_spacing(const TraceKnobs& knobs, std::uint32_t id,
                                       TraceStats* stats) const noexcept;
+  /// Static path reuse (SbrConfig::reuse_static_paths): per bundle, whether it is traced this
+  /// frame or re-evaluates its kept paths, and whether it keeps its paths once traced (the rule
+  /// at SbrConfig::reuse_static_paths, then the refresh of the longest kept, paid from `credit`
+  /// [rays], which it updates). `check_facets`: also require the same facets left to the rays
+  /// as when the paths were kept (facet_light_ holds this frame's: trace(), after the facet
+  /// pass; plan() cannot know it). Adds to `stats` when given.
+  void choose_reuse(const RadarPose& pose, int max_bounces, std::span<Bundle> bundles,
+                    bool check_facets, double& credit, TraceStats* stats) const noexcept;
+  double refresh_credit_ = 0.0;  ///< the refresh's credit [rays] (choose_reuse)
+  /// Whether a moving object is near static target `id` or its line of sight to the radar.
+  [[nodiscard]] bool mover_near(const RadarPose& pose, std::uint32_t id) const noexcept;
+  /// One kept return of a static target's rays (trivial: the pool is left uninitialised).
+  struct KeptPath {
+    glm::dvec3 first_hit_m;                 ///< the path's first hit (P1)
+    glm::dvec3 last_hit_m;                  ///< the hit that radiates (Pn)
+    double inner_m;                         ///< path length from P1 to Pn
+    double amplitude_re_m, amplitude_im_m;  ///< the amplitude without the path phase
+    std::uint8_t bounces;
+    bool radiated_by_owner;
+  };
+  /// Per object: its kept paths and the frame they were traced in.
+  struct Kept {
+    bool valid = false;
+    glm::dvec3 radar_m{0.0};
+    glm::dmat3 world_from_antenna{1.0};
+    double spacing_m = 0.0;  ///< the bundle's spacing (before coarsening) and bounces then
+    int max_bounces = 0;
+    std::size_t rays = 0;         ///< the bundle's rays
+    std::size_t count = 0;        ///< kept returns, at the front of its region of kept_paths_
+    std::uint64_t traced_at = 0;  ///< frame_count_ then
+  };
+  std::vector<Kept> kept_;
+  /// Each static target's region of kept_paths_ (max_rays_per_target x max_bounces slots: the
+  /// rays write their returns' paths at their slots, compacted after the trace); kNoRegion for
+  /// the others. Allocated at setup with reuse on, left uninitialised (pages touched as used).
+  std::vector<std::size_t> kept_region_;
+  std::unique_ptr<KeptPath[]> kept_paths_;
+  /// Per facet of a kept target: left to the rays (kLightByRays) when its paths were kept.
+  std::vector<std::uint8_t> kept_facet_by_rays_;
+  /// Per object, this frame: a kept bundle's path met a moving object (not kept then).
+  std::unique_ptr<std::atomic<std::uint8_t>[]> met_mover_;
+  std::vector<std::uint32_t> movers_;  ///< the scene's moving objects
+  std::uint64_t frame_count_ = 0;      ///< trace() calls
+  /// plan()'s bundles (scratch, capacity n_targets_).
+  mutable std::vector<Bundle> plan_bundles_;
   /// One ray of a batch between its hits (defined in sbr.cpp): trace_batch follows a batch of
   /// neighbouring rays hit by hit, each segment of all of them as one coherent scene query, and
   /// the shadow rays of their returns likewise.

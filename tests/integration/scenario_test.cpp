@@ -159,6 +159,12 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
   EXPECT_NE(error_of("[radar]\nedges = false\nedge_turn_deg = 20.0\n")
                 .find("[radar] edge_turn_deg: is read with edges = true only"),
             std::string::npos);
+  EXPECT_NE(error_of("[radar]\nreuse_static_paths = false\nreuse_refresh_frames = 8\n")
+                .find("[radar] reuse_refresh_frames: is read with reuse_static_paths = true only"),
+            std::string::npos);
+  EXPECT_NE(error_of("[radar]\nreuse_refresh_frames = 0\n").find("[radar] reuse_refresh_frames"),
+            std::string::npos);
+  EXPECT_EQ(error_of("[radar]\nreuse_max_phase_deg = 10.0\n"), "");  // reuse is the default
   EXPECT_EQ(error_of("[radar]\nterrain = \"dem\"\n"),
             "test.toml: [radar] terrain: unknown value \"dem\" (known: rays, engine)");
   EXPECT_NE(error_of("[radar]\nterrain = \"rays\"\nterrain_cell_range_bins = 4\n")
