@@ -342,6 +342,15 @@ struct TracerSide {
       }
     }
     contributions.resize(tracer.max_contributions() + (terrain ? terrain->max_returns() : 0));
+    // Static path reuse: the static targets' paths traced once at setup, from the scenario's
+    // scripted start (frame 0's pose on the software bus), so that the first frame re-evaluates
+    // them instead of tracing every bundle within its period; a first pose elsewhere (a real
+    // bus) is traced in its frame as usual.
+    if (s.sbr.reuse_static_paths) {
+      radar::TraceStats setup;
+      (void)tracer.trace(scripted_pose(s, 0.0),
+                         std::span(contributions).first(tracer.max_contributions()), setup);
+    }
   }
   radar::SbrTracer tracer;
   std::optional<radar::TerrainReturns> terrain;
