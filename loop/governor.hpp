@@ -23,11 +23,16 @@
 //
 // Cost model. predicted = trace + sensor, with
 //   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
-//          + terrain_ns_per_patch x the terrain engine's patches of the previous frame
-//            x (its patch scale / this level's)^2 ([radar] terrain = "engine")
+//          + terrain_ns_per_patch x max(F, P x (s' / s)^2) ([radar] terrain = "engine"),
+//            P and F the engine's patches and facets of the previous frame, s' its patch scale,
+//            s this level's (terrain_spacing_scale): the patches fall as the square of the
+//            scale down to one a facet (a facet smaller than a patch stays one)
 //   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
 //          + sensor_ns_per_return x (the previous frame's ray returns x (rays / its rays)
-//                                    + its terrain engine returns)
+//                                    + T x m' / m)
+//            T the engine's returns (lit cells) of the previous frame, m' and m the cells its
+//            coarse cells merged then and at this level (radar::TerrainReturns::cell_merge:
+//            the returns fall as the cells merge; set_terrain_cells gives the columns' limit)
 // The frame takes the finest level whose prediction is within the deadline (compute_fraction of
 // the frame period); if none is, the finest level within 5 % of the deadline of the coarsest
 // level's cost (degrading further would buy less than that). In "model" mode the coefficients are
@@ -45,6 +50,7 @@
 //
 // Real-time: decide() and observe() do not allocate, block or throw.
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -114,9 +120,18 @@ class FidelityGovernor {
   /// What the frame decided last cost: stage wall times [ms] and what it processed (`returns`
   /// all of them, `terrain_returns` of those the terrain engine's, `terrain_patches` the
   /// engine's patches; both 0 without the engine).
+  /// `terrain_facets`: the facets the engine cut into those patches (0: unknown, no floor).
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
                std::uint64_t cells_synthesised, std::uint64_t terrain_patches = 0,
-               std::uint64_t terrain_returns = 0) noexcept;
+               std::uint64_t terrain_returns = 0, std::uint64_t terrain_facets = 0) noexcept;
+  /// Setup: the terrain engine's widest merge of columns
+  /// (radar::TerrainReturns::azimuth_merge_max(); 1 until set), for the returns' prediction.
+  void set_terrain_cells(std::size_t azimuth_merge_max) noexcept {
+    terrain_azimuth_merge_max_ = std::max<std::size_t>(1, azimuth_merge_max);
+  }
+  /// The engine's cells merged into one at `level` (radar::TerrainReturns::cell_merge of its
+  /// terrain knob). Real-time safe.
+  [[nodiscard]] std::size_t terrain_cells_merged(int level) const noexcept;
 
   [[nodiscard]] const GovernorConfig& config() const noexcept { return config_; }
   /// Cost factors of measured mode (1 in model mode).
@@ -144,6 +159,9 @@ class FidelityGovernor {
   double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;
   double prev_terrain_patches_ = 0.0, prev_terrain_returns_ = 0.0;
   double prev_terrain_scale_ = 1.0;  ///< the engine's patch scale of the previous frame
+  double prev_terrain_facets_ = 0.0;
+  double prev_terrain_merge_ = 1.0;  ///< cells merged by the engine in the previous frame
+  std::size_t terrain_azimuth_merge_max_ = 1;
   /// The model's trace and sensor terms [ms] at `rays` (factors not applied).
   [[nodiscard]] double model_trace_ms(double rays) const noexcept;
   [[nodiscard]] double model_sensor_ms(double rays) const noexcept;
