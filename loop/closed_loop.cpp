@@ -473,7 +473,7 @@ struct ClosedLoop::Impl {
     if (!tracer.no_terrain.empty())
       warnings.push_back(tracer.no_terrain);
     if (tracer.terrain)  // the governor predicts the engine's returns as its cells merge
-      governor.set_terrain_cells(tracer.terrain->azimuth_merge_max());
+      governor.set_terrain_cells(tracer.terrain->coarsening());
     if (!scene.scene.incomplete().empty()) {  // a `scene import` stopped early
       warnings.push_back((s.scene_file.empty() ? std::string("the scene") : s.scene_file.string()) +
                          ": an incomplete scene database (" + scene.scene.incomplete() + ")");

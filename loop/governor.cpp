@@ -5,7 +5,6 @@
 #include <stdexcept>
 
 #include "common/units.hpp"
-#include "radar/products/terrain_returns.hpp"
 
 namespace radar_emu::loop {
 
@@ -93,15 +92,31 @@ double FidelityGovernor::model_trace_ms(double rays) const noexcept {
   // The rays, and the terrain engine's patches: the previous frame's, as the square of the patch
   // size it used over this level's (TerrainReturns::compute's patch_scale).
   // size scale it used over this level's (TerrainReturns::compute's scale), at least one a facet.
+  // The facets, those of the level of detail the engine takes at this level.
   const double s = prev_terrain_scale_ / decision_.knobs.terrain_spacing_scale;
-  const double patches = std::max(prev_terrain_facets_, prev_terrain_patches_ * s * s);
+  const double facets = prev_terrain_facets_ *
+                        terrain_facet_ratio_at(decision_.knobs.terrain_spacing_scale) /
+                        prev_terrain_facet_ratio_;
+  const double patches = std::max(facets, prev_terrain_patches_ * s * s);
   return 1e-6 * (config_.trace_ns_per_ray * rays + config_.terrain_ns_per_patch * patches);
 }
 
 std::size_t FidelityGovernor::terrain_cells_merged(int level) const noexcept {
   return radar::TerrainReturns::cell_merge(std::pow(2.0, 0.25 * std::clamp(level, 0, kMaxLevel)),
-                                           terrain_azimuth_merge_max_)
+                                           terrain_.azimuth_merge_max)
       .cells();
+}
+
+double FidelityGovernor::terrain_facet_ratio_at(double scale) const noexcept {
+  const radar::TerrainCellMerge m =
+      radar::TerrainReturns::cell_merge(scale, terrain_.azimuth_merge_max);
+  return terrain_.lod_merge > 0 && m.range >= terrain_.lod_merge && terrain_.lod_facet_ratio > 0.0
+             ? terrain_.lod_facet_ratio
+             : 1.0;
+}
+
+double FidelityGovernor::terrain_facet_ratio(int level) const noexcept {
+  return terrain_facet_ratio_at(std::pow(2.0, 0.25 * std::clamp(level, 0, kMaxLevel)));
 }
 
 double FidelityGovernor::model_sensor_ms(double rays) const noexcept {
@@ -111,7 +126,7 @@ double FidelityGovernor::model_sensor_ms(double rays) const noexcept {
   const double ray_returns = std::max(0.0, prev_returns_ - prev_terrain_returns_);
   const double merge =
       static_cast<double>(radar::TerrainReturns::cell_merge(decision_.knobs.terrain_spacing_scale,
-                                                            terrain_azimuth_merge_max_)
+                                                            terrain_.azimuth_merge_max)
                               .cells());
   const double returns = (prev_rays_ > 0.0 ? ray_returns * rays / prev_rays_ : 0.0) +
                          prev_terrain_returns_ * prev_terrain_merge_ / merge;
@@ -243,7 +258,8 @@ void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t 
   prev_terrain_facets_ = static_cast<double>(terrain_facets);
   prev_terrain_scale_ = decision_.knobs.terrain_spacing_scale;  // the level that frame ran at
   prev_terrain_merge_ = static_cast<double>(
-      radar::TerrainReturns::cell_merge(prev_terrain_scale_, terrain_azimuth_merge_max_).cells());
+      radar::TerrainReturns::cell_merge(prev_terrain_scale_, terrain_.azimuth_merge_max).cells());
+  prev_terrain_facet_ratio_ = terrain_facet_ratio_at(prev_terrain_scale_);
   prev_terrain_returns_ = static_cast<double>(std::min(terrain_returns, returns));
 }
 

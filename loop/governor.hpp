@@ -23,10 +23,12 @@
 //
 // Cost model. predicted = trace + sensor, with
 //   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
-//          + terrain_ns_per_patch x max(F, P x (s' / s)^2) ([radar] terrain = "engine"),
-//            P and F the engine's patches and facets of the previous frame, s' its patch scale,
-//            s this level's (terrain_spacing_scale): the patches fall as the square of the
-//            scale down to one a facet (a facet smaller than a patch stays one)
+//          + terrain_ns_per_patch x max(F x f / f', P x (s' / s)^2) ([radar] terrain =
+//            "engine"), P and F the engine's patches and facets of the previous frame, s' its
+//            patch scale, s this level's (terrain_spacing_scale): the patches fall as the square
+//            of the scale down to one a facet (a facet smaller than a patch stays one); f' and f
+//            the facets of the level of detail the engine took then and takes at this level
+//            (1, or lod_facet_ratio from its coarse level on: radar::TerrainCoarsening)
 //   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
 //          + sensor_ns_per_return x (the previous frame's ray returns x (rays / its rays)
 //                                    + T x m' / m)
@@ -59,6 +61,7 @@
 #include <vector>
 
 #include "radar/em/sbr.hpp"
+#include "radar/products/terrain_returns.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "scene/scene.hpp"
 
@@ -124,11 +127,15 @@ class FidelityGovernor {
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
                std::uint64_t cells_synthesised, std::uint64_t terrain_patches = 0,
                std::uint64_t terrain_returns = 0, std::uint64_t terrain_facets = 0) noexcept;
-  /// Setup: the terrain engine's widest merge of columns
-  /// (radar::TerrainReturns::azimuth_merge_max(); 1 until set), for the returns' prediction.
-  void set_terrain_cells(std::size_t azimuth_merge_max) noexcept {
-    terrain_azimuth_merge_max_ = std::max<std::size_t>(1, azimuth_merge_max);
+  /// Setup: what the terrain engine coarsens with the level (radar::TerrainReturns::
+  /// coarsening(); until set: no columns merged, no coarse level of detail), for its cost.
+  void set_terrain_cells(const radar::TerrainCoarsening& c) noexcept {
+    terrain_ = c;
+    terrain_.azimuth_merge_max = std::max<std::size_t>(1, c.azimuth_merge_max);
   }
+  /// The facets of the level of detail the engine takes at `level`, over the finest's.
+  [[nodiscard]] double terrain_facet_ratio(int level) const noexcept;
+  [[nodiscard]] double terrain_facet_ratio_at(double scale) const noexcept;
   /// The engine's cells merged into one at `level` (radar::TerrainReturns::cell_merge of its
   /// terrain knob). Real-time safe.
   [[nodiscard]] std::size_t terrain_cells_merged(int level) const noexcept;
@@ -160,8 +167,9 @@ class FidelityGovernor {
   double prev_terrain_patches_ = 0.0, prev_terrain_returns_ = 0.0;
   double prev_terrain_scale_ = 1.0;  ///< the engine's patch scale of the previous frame
   double prev_terrain_facets_ = 0.0;
-  double prev_terrain_merge_ = 1.0;  ///< cells merged by the engine in the previous frame
-  std::size_t terrain_azimuth_merge_max_ = 1;
+  double prev_terrain_merge_ = 1.0;        ///< cells merged by the engine in the previous frame
+  double prev_terrain_facet_ratio_ = 1.0;  ///< its level of detail's terrain_facet_ratio
+  radar::TerrainCoarsening terrain_{};
   /// The model's trace and sensor terms [ms] at `rays` (factors not applied).
   [[nodiscard]] double model_trace_ms(double rays) const noexcept;
   [[nodiscard]] double model_sensor_ms(double rays) const noexcept;

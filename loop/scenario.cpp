@@ -1079,7 +1079,6 @@ radar::TerrainReturnsConfig terrain_returns_config(const Scenario& s) {
   c.range_min_m = std::max(0.0, radar::first_range_m(w) - 0.5 * radar::range_bin_m(w));
   c.range_max_m = std::max(s.sensor.max_range_m, c.range_min_m + c.range_cell_m);
   c.carrier_hz = s.sbr.carrier_hz;
-  c.coarse_azimuth_max_rad = s.beam_spacing_rad;  // the governor's merged columns: one a beam
   return c;
 }
 

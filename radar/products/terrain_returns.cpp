@@ -39,6 +39,8 @@ const TerrainReturnsConfig& validated(const TerrainReturnsConfig& c) {
   require_field(c.slices >= 1, "slices", "must be >= 1");
   require_field(std::isfinite(c.coarse_azimuth_max_rad) && c.coarse_azimuth_max_rad >= 0.0,
                 "coarse_azimuth_max_rad", "must be finite, >= 0");
+  require_field(c.coarse_lod_merge == 0 || c.coarse_lod_level >= 1, "coarse_lod_level",
+                "must be >= 1 (with coarse_lod_merge > 0)");
   return c;
 }
 
@@ -52,6 +54,17 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
                                const TerrainReturnsConfig& config)
     : config_(validated(config)), engine_(make_terrain_engine(scene, tracer, {})) {
   const TerrainReturnsConfig& c = config_;
+  // The coarse level of detail's engine, where the scene has LOD levels above 0: facets as large
+  // as the level's (20.8 m x 2^level cells on the generated terrain; max_facet_m 50 m x 2^level,
+  // so that they are not split again).
+  if (c.coarse_lod_merge > 0 &&
+      std::any_of(scene.description().objects.begin(), scene.description().objects.end(),
+                  [](const scene::ObjectDesc& o) { return o.lod_group >= 0 && o.lod_level > 0; })) {
+    clutter::TerrainEngineSpec spec;
+    spec.lod_level = c.coarse_lod_level;
+    spec.max_facet_m *= std::ldexp(1.0, std::min(c.coarse_lod_level, 8));
+    coarse_engine_.emplace(make_terrain_engine(scene, tracer, spec));
+  }
   columns_ = cells_along(c.azimuth_max_rad - c.azimuth_min_rad, c.azimuth_cell_rad);
   bins_ = cells_along(c.range_max_m - c.range_min_m, c.range_cell_m);
   require_field(columns_ * bins_ <= c.max_cells, "cells",
@@ -90,7 +103,9 @@ TerrainReturns::TerrainReturns(const scene::Scene& scene, const SbrTracer& trace
     sl.sigma0_use.resize(engine_.materials().table.materials());
     if (c.shadowing && c.horizon) {
       sl.horizon.assign(clutter::TerrainEngine::horizon_scratch_size(slice_grid(sl), view()), 0.0);
-      sl.facet_list.assign(engine_.facets().size(), 0);
+      sl.facet_list.assign(
+          std::max(engine_.facets().size(), coarse_engine_ ? coarse_engine_->facets().size() : 0),
+          0);
     }
   }
   // The object holding most of the terrain area labels the returns (Contribution::object_id).
@@ -107,6 +122,17 @@ TerrainCellMerge TerrainReturns::cell_merge(double scale, std::size_t azimuth_me
     while (2 * k <= kMaxMerge && static_cast<double>(2 * k) <= scale * (1.0 + 1e-12))
       k *= 2;
   return {k, std::clamp<std::size_t>(azimuth_merge_max, 1, k)};
+}
+
+TerrainCoarsening TerrainReturns::coarsening() const noexcept {
+  TerrainCoarsening t;
+  t.azimuth_merge_max = azimuth_merge_max_;
+  if (coarse_engine_) {
+    t.lod_merge = config_.coarse_lod_merge;
+    t.lod_facet_ratio = static_cast<double>(coarse_engine_->facets().size()) /
+                        static_cast<double>(std::max<std::size_t>(1, engine_.facets().size()));
+  }
+  return t;
 }
 
 clutter::TerrainView TerrainReturns::view(TerrainCellMerge m) const noexcept {
@@ -160,15 +186,17 @@ std::size_t TerrainReturns::compute(const RadarPose& pose, std::span<Contributio
   if (m.range > 1)  // every m.range-th fine edge, the last past range_max_m (the same formula)
     for (std::size_t b = 0; b <= bins; ++b)
       merged_edges_m_[b] = c.range_min_m + static_cast<double>(b * m.range) * c.range_cell_m;
+  const clutter::TerrainEngine& engine =
+      coarse_engine_ && m.range >= c.coarse_lod_merge ? *coarse_engine_ : engine_;
   tbb::parallel_for(std::size_t{0}, slices_.size(), [&](std::size_t s) {
     Slice& sl = slices_[s];
     const std::size_t cells = bins * (sl.columns / m.azimuth);
     std::fill_n(sl.mean.begin(), cells, 0.0);
     std::fill_n(sl.elevation_power.begin(), cells, 0.0);
     std::fill(sl.sigma0_use.begin(), sl.sigma0_use.end(), clutter::Sigma0Use{});
-    sl.stats = engine_.integrate(v, slice_grid(sl, m), {}, std::span(sl.mean).first(cells),
-                                 std::span(sl.elevation_power).first(cells), sl.horizon,
-                                 sl.facet_list, sl.sigma0_use);
+    sl.stats = engine.integrate(v, slice_grid(sl, m), {}, std::span(sl.mean).first(cells),
+                                std::span(sl.elevation_power).first(cells), sl.horizon,
+                                sl.facet_list, sl.sigma0_use);
   });
   const std::span<const double> edges =
       m.range > 1 ? std::span<const double>(merged_edges_m_) : std::span<const double>(edges_m_);

@@ -40,8 +40,17 @@
 // may reach past range_max_m by less than a merged bin (the terrain there is counted too; the
 // sensor keeps what lies in its swath). The engine's patches, the horizon's samples and the
 // returns handed to the sensor fall as the level rises: the returns as 1 / (range merge x
-// azimuth merge). Columns no wider than a beam position by default, so that the beams still
-// see the clutter of their own azimuths.
+// azimuth merge). The columns do not merge by default: the loop's are half a beamwidth wide,
+// and merged to one beam position (1 deg) they raised the default run's false alarms from 2.0 to
+// 4.5 a frame at its governor levels 4-5 (merged range bins lowered them: docs/performance.md).
+// Coarse level of detail. From a range merge of coarse_lod_merge on (the governor's level 12
+// by default) the cells are a few facets of the finest level wide, and the engine's work, one
+// patch a facet at least, no longer falls with the patch size: a second engine holds the
+// terrain's tiles at their coarser level coarse_lod_level (the scene's own LOD meshes: every
+// 2nd node of the level-0 grid for level 1, a quarter of the facets; scene/terrain_gen.hpp), and
+// integrates those instead. The same surface sampled more coarsely: its area and sigma0 dA
+// integral about the same, its shadows those of the coarser surface (the crests between the
+// coarse nodes are lost), what the level's estimated error stands for.
 //
 // Costs. The constructor allocates and throws (std::invalid_argument; the engine's "no terrain"
 // included). compute() allocates nothing and does not throw: the columns are cut into `slices`
@@ -51,6 +60,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -83,9 +93,13 @@ struct TerrainReturnsConfig {
   /// any number of threads; each slice sweeps the horizon of its own columns, so more slices
   /// than cores repeat that work for nothing (2: the project's 2-core target).
   std::size_t slices = 2;
-  /// Widest column the coarse cells may merge to [rad] (compute()'s scale); at most the field
-  /// of view. The closed loop sets the scan's beam spacing.
-  double coarse_azimuth_max_rad = 0.0175;
+  /// Widest column the coarse cells may merge to [rad] (compute()'s scale); 0 (or less than two
+  /// columns): the columns never merge, only the range bins (the closed loop's choice: header).
+  double coarse_azimuth_max_rad = 0.0;
+  /// From this merge along range on (compute()'s scale; 0: never) the engine integrates the
+  /// terrain's coarser level of detail coarse_lod_level (header). 8: the governor's level 12.
+  std::size_t coarse_lod_merge = 8;
+  int coarse_lod_level = 1;  ///< >= 1 (the scene's LOD levels, scene/types.hpp)
 };
 
 /// How many fine cells a coarse cell merges, along each axis (TerrainReturns::cell_merge).
@@ -93,6 +107,15 @@ struct TerrainCellMerge {
   std::size_t range = 1;    ///< range bins per cell, a power of two
   std::size_t azimuth = 1;  ///< columns per column, a power of two
   [[nodiscard]] std::size_t cells() const noexcept { return range * azimuth; }
+};
+
+/// What coarsens with the governor's terrain knob, for its cost model (loop/governor.hpp).
+struct TerrainCoarsening {
+  std::size_t azimuth_merge_max = 1;  ///< TerrainReturns::azimuth_merge_max()
+  /// From this range merge on the coarse level of detail (0: none), whose facets are
+  /// lod_facet_ratio of the fine ones (the whole database's).
+  std::size_t lod_merge = 0;
+  double lod_facet_ratio = 1.0;
 };
 
 class TerrainReturns {
@@ -114,6 +137,13 @@ class TerrainReturns {
                                                    std::size_t azimuth_merge_max) noexcept;
   /// The most columns a coarse column merges (a power of two; header).
   [[nodiscard]] std::size_t azimuth_merge_max() const noexcept { return azimuth_merge_max_; }
+  /// The coarse cells and level of detail, for the governor's cost model.
+  [[nodiscard]] TerrainCoarsening coarsening() const noexcept;
+  /// The engine at coarse_lod_level (none: the scene has no LOD group above level 0, or
+  /// coarse_lod_merge is 0).
+  [[nodiscard]] const clutter::TerrainEngine* coarse_engine() const noexcept {
+    return coarse_engine_ ? &*coarse_engine_ : nullptr;
+  }
 
   /// Returns per frame at most: the cells of the grid.
   [[nodiscard]] std::size_t max_returns() const noexcept { return columns_ * bins_; }
@@ -158,6 +188,7 @@ class TerrainReturns {
   }
   TerrainReturnsConfig config_;
   clutter::TerrainEngine engine_;
+  std::optional<clutter::TerrainEngine> coarse_engine_;  ///< coarse_lod_level's facets
   std::size_t columns_ = 0, bins_ = 0;
   std::vector<double> edges_m_;         ///< bins + 1
   std::vector<double> merged_edges_m_;  ///< bins + 1 (the frame's merged bins use the first)

@@ -257,16 +257,18 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
 
 TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
   // The closed forms of the engine's terms (loop/governor.hpp) at the levels of a heavy scene:
-  // with the columns merging up to two ways (the loop's set_terrain_cells: one beam position of
-  // two engine columns), level L merges k = 2^floor(L/4) range bins (up to 16) and min(k, 2)
-  // columns a cell, so returns T counted at level 0 predict level L at T / (k min(k, 2)); patches
-  // P counted at level 0 predict level L at P / 2^(L/2), but never fewer than the F facets they
-  // were cut from (one patch a facet at least).
+  // for an engine whose columns merge up to two ways (TerrainReturnsConfig::
+  // coarse_azimuth_max_rad two columns wide; the loop's do not merge), level L merges k =
+  // 2^floor(L/4) range bins (up to 16) and min(k, 2) columns a cell, so returns T counted at level
+  // 0 predict level L at T / (k min(k, 2)); patches P counted at level 0 predict level L at P /
+  // 2^(L/2), but never fewer than the F facets they were cut from (one patch a facet at least).
   DefaultFrame& f = default_frame();
   loop::GovernorConfig g = f.s.governor;
   g.mode = loop::GovernorConfig::Mode::kModel;
   loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
-  gov.set_terrain_cells(2);
+  radar::TerrainCoarsening tc;
+  tc.azimuth_merge_max = 2;
+  gov.set_terrain_cells(tc);
   EXPECT_EQ(gov.terrain_cells_merged(0), 1u);
   EXPECT_EQ(gov.terrain_cells_merged(3), 1u);
   EXPECT_EQ(gov.terrain_cells_merged(4), 4u);    // 2 x 2
@@ -306,6 +308,46 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
   EXPECT_NEAR(engine_4 - rays_4,
               1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kFacets) * 16.0 +
                       g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 4.0),
+              1e-9);
+  // A coarse level of detail with a quarter of the facets from the range merge 8 on (level 12,
+  // radar::TerrainReturnsConfig::coarse_lod_merge): facets F counted at level 0 predict F / 4
+  // from level 12 on, and F counted at level 12 predict 4 F below it.
+  tc.lod_merge = 8;
+  tc.lod_facet_ratio = 0.25;
+  gov.set_terrain_cells(tc);
+  EXPECT_EQ(gov.terrain_facet_ratio(11), 1.0);
+  EXPECT_EQ(gov.terrain_facet_ratio(12), 0.25);
+  for (const int level : {8, 12, 16}) {
+    const double k = std::pow(2.0, std::floor(level / 4.0));
+    const double s2 = std::pow(2.0, 0.5 * level);
+    (void)gov.decide_at(f.pose, 0);
+    gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+    const double rays_ms = gov.decide_at(f.pose, level).predicted_ms;
+    (void)gov.decide_at(f.pose, 0);
+    gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns,
+                kFacets);
+    const double engine_ms = gov.decide_at(f.pose, level).predicted_ms;
+    const double facets = static_cast<double>(kFacets) * (level >= 12 ? 0.25 : 1.0);
+    EXPECT_NEAR(engine_ms - rays_ms,
+                1e-6 * (g.terrain_ns_per_patch * std::max(facets, kPatches / s2) +
+                        g.sensor_ns_per_return * static_cast<double>(kEngineReturns) /
+                            (k * std::min(k, 2.0))),
+                1e-9)
+        << "level " << level;
+  }
+  constexpr std::uint64_t kCoarseFacets = kFacets / 4;
+  (void)gov.decide_at(f.pose, 12);
+  gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+  const double rays_8 = gov.decide_at(f.pose, 8).predicted_ms;
+  (void)gov.decide_at(f.pose, 12);
+  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kCoarseFacets, kEngineReturns,
+              kCoarseFacets);
+  const double engine_8 = gov.decide_at(f.pose, 8).predicted_ms;
+  // Level 8 from level 12: patch scale 4 against 8 (4 times the patches), 4 times the facets;
+  // cells merged 8 against 16.
+  EXPECT_NEAR(engine_8 - rays_8,
+              1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kCoarseFacets) * 4.0 +
+                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 2.0),
               1e-9);
 }
 

@@ -313,11 +313,10 @@ TEST(LoopTerrain, GovernorPatchScaleCutsThePatchesAndKeepsThePower) {
 
 TEST(LoopTerrain, GovernorScaleMergesTheCellsAndKeepsThePower) {
   // From scale 2 on the knob also merges the engine's cells (TerrainReturns::cell_merge): at the
-  // governor's level 8 (scale 2^(8/4) = 4) four range bins and two columns (the loop's widest
-  // column, one beam position of 1 deg, is two of 0.5 deg) a cell, so at most 1/8 of the returns
-  // of level 0 (about that many where the lit cells are dense), and the total mean power the
-  // same sum of sigma0 dA within 0.5 dB (patches 4 times larger too: their shadows and grazing
-  // differ a little).
+  // governor's level 8 (scale 2^(8/4) = 4) four range bins a cell (the loop's columns do not
+  // merge), so at most 1/4 of the returns of level 0 (about that many where the lit cells are
+  // dense), and the total mean power the same sum of sigma0 dA within 0.5 dB (patches 4 times
+  // larger too: their shadows and grazing differ a little).
   const loop::Scenario s = default_scenario();
   radar_emu::scene::Scene scene(loop::scene_description(s));
   scene.set_time(0.0);
@@ -325,10 +324,14 @@ TEST(LoopTerrain, GovernorScaleMergesTheCellsAndKeepsThePower) {
   cfg.terrain_rays = false;
   const radar::SbrTracer tracer(scene, cfg);
   radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
-  ASSERT_EQ(terrain.azimuth_merge_max(), 2u);
-  const radar::TerrainCellMerge m = radar::TerrainReturns::cell_merge(4.0, 2);
+  ASSERT_EQ(terrain.azimuth_merge_max(), 1u);
+  const radar::TerrainCellMerge m = radar::TerrainReturns::cell_merge(4.0, 1);
   EXPECT_EQ(m.range, 4u);
-  EXPECT_EQ(m.azimuth, 2u);
+  EXPECT_EQ(m.azimuth, 1u);
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(4.0, 2).azimuth, 2u);  // where columns may merge
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(8.0, 2).range, 8u);
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(1.99, 4).cells(), 1u);
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(1e9, 1).range, radar::TerrainReturns::kMaxMerge);
   std::vector<radar::Contribution> out(terrain.max_returns());
   auto run = [&](double scale, double& power) {
     radar::clutter::TerrainStats st;
@@ -343,11 +346,67 @@ TEST(LoopTerrain, GovernorScaleMergesTheCellsAndKeepsThePower) {
   double p1 = 0.0, p4 = 0.0;
   const std::size_t n1 = run(1.0, p1), n4 = run(4.0, p4);
   const double ratio = static_cast<double>(n4) / static_cast<double>(n1);
-  std::printf("scale 4 (cells merged 4 x 2): %zu -> %zu returns (x %.3f), total power %+.3f dB\n",
-              n1, n4, ratio, 10.0 * std::log10(p4 / p1));
-  EXPECT_LE(ratio, 1.0 / 8.0 + 0.02);  // a merged cell is lit when one of its 8 is
-  EXPECT_GT(ratio, 0.08);
+  std::printf(
+      "scale 4 (range bins merged 4 a cell): %zu -> %zu returns (x %.3f), total power "
+      "%+.3f dB\n",
+      n1, n4, ratio, 10.0 * std::log10(p4 / p1));
+  EXPECT_LE(ratio, 1.0 / 4.0 + 0.02);  // a merged cell is lit when one of its 4 is
+  EXPECT_GT(ratio, 0.18);
   EXPECT_NEAR(10.0 * std::log10(p4 / p1), 0.0, 0.5);
+}
+
+TEST(LoopTerrain, CoarseLevelOfDetailCutsTheFacetsAndKeepsThePower) {
+  // examples/terrain_movers.toml's database (tiles at three levels of detail): at the governor's
+  // level 12 (scale 8, range merge 8 = coarse_lod_merge) the engine integrates the tiles' level 1
+  // (every second node of the level-0 grid): under a third of the database's facets (the roads,
+  // outside the tiles, stay as they are), and under 0.6 of those in the field of view (the larger
+  // facets' bounds take in more of them at its edges), each one patch; and the same sum of sigma0
+  // dA over the field of view within 1 dB (the same surface sampled more coarsely: its facets'
+  // tilts and shadows differ).
+  const loop::Scenario s = movers_scenario();
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  const radar::SbrTracer tracer(scene, cfg);
+  radar::TerrainReturnsConfig tc = loop::terrain_returns_config(s);
+  radar::TerrainReturns coarse(scene, tracer, tc);
+  ASSERT_NE(coarse.coarse_engine(), nullptr);
+  tc.coarse_lod_merge = 0;
+  radar::TerrainReturns fine(scene, tracer, tc);
+  EXPECT_EQ(fine.coarse_engine(), nullptr);
+  const radar::TerrainCoarsening c = coarse.coarsening();
+  std::printf("facets: %zu at level 0, %zu at level 1 (ratio %.3f)\n",
+              coarse.engine().facets().size(), coarse.coarse_engine()->facets().size(),
+              c.lod_facet_ratio);
+  EXPECT_EQ(c.lod_merge, 8u);
+  EXPECT_LT(c.lod_facet_ratio, 1.0 / 3.0);
+  std::vector<radar::Contribution> out(fine.max_returns());
+  auto run = [&](radar::TerrainReturns& t, double scale, radar::clutter::TerrainStats& st) {
+    std::uint64_t dropped = 0;
+    const std::size_t n = t.compute(first_pose(s), out, st, dropped, scale);
+    EXPECT_EQ(dropped, 0u);
+    double power = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      power += std::norm(out[i].amplitude);
+    return power;
+  };
+  radar::clutter::TerrainStats s_fine, s_coarse, s_below;
+  const double p_fine = run(fine, 8.0, s_fine), p_coarse = run(coarse, 8.0, s_coarse);
+  std::printf(
+      "level 12: %llu facets, %llu patches (level 0) -> %llu facets, %llu patches "
+      "(level 1); total power %+.3f dB\n",
+      static_cast<unsigned long long>(s_fine.facets_considered),
+      static_cast<unsigned long long>(s_fine.patches),
+      static_cast<unsigned long long>(s_coarse.facets_considered),
+      static_cast<unsigned long long>(s_coarse.patches), 10.0 * std::log10(p_coarse / p_fine));
+  EXPECT_LT(static_cast<double>(s_coarse.patches), 0.6 * static_cast<double>(s_fine.patches));
+  EXPECT_NEAR(10.0 * std::log10(p_coarse / p_fine), 0.0, 1.0);
+  // Below the coarse merge (level 11, scale 6.7, merge 4) the fine level of detail, as before.
+  const double p_below = run(coarse, std::pow(2.0, 11.0 / 4.0), s_below);
+  EXPECT_GT(p_below, 0.0);
+  EXPECT_GT(static_cast<double>(s_below.facets_considered),
+            0.9 * static_cast<double>(s_fine.facets_considered));
 }
 
 TEST(LoopTerrain, MergedCellsHoldTheSumOfTheCellsTheyMerge) {
