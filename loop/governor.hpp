@@ -5,7 +5,9 @@
 // Levels. Level 0 is the scenario's own fidelity ([radar] ray spacings, bounces). Each level up
 // halves the rays of a target bundle (bundle spacing x sqrt 2) and coarsens the terrain grid by
 // 2^(1/4) (its rays x 0.71), or with the terrain engine its patches by the same factor (their
-// count x 0.71; the cells and their mean power stay); from level kBounceLevel on, rays bounce one
+// count x 0.71, down to one a facet), its range cells merged 2^floor(level / 4) a cell (their total
+// mean power stays) and from level 12 the terrain's coarser level of detail
+// (radar/products/terrain_returns.hpp); from level kBounceLevel on, rays bounce one
 // time less (at least twice: the target-ground double bounce and dihedrals stay); from level
 // kFacetLevel on, bounce 1 judges each facet by its centroid's visibility alone
 // (TraceKnobs::facet_centroid_only: a seventh of the facet pass's occlusion queries, which dominate
