@@ -362,7 +362,7 @@ TEST(LoopTerrain, CoarseLevelOfDetailCutsTheFacetsAndKeepsThePower) {
   // outside the tiles, stay as they are), and under 0.6 of those in the field of view (the larger
   // facets' bounds take in more of them at its edges), each one patch; and the same sum of sigma0
   // dA over the field of view within 1 dB (the same surface sampled more coarsely: its facets'
-  // tilts and shadows differ).
+  // tilts and shadows differ); compute() allocates nothing at any of these scales.
   const loop::Scenario s = movers_scenario();
   radar_emu::scene::Scene scene(loop::scene_description(s));
   scene.set_time(0.0);
@@ -407,6 +407,14 @@ TEST(LoopTerrain, CoarseLevelOfDetailCutsTheFacetsAndKeepsThePower) {
   EXPECT_GT(p_below, 0.0);
   EXPECT_GT(static_cast<double>(s_below.facets_considered),
             0.9 * static_cast<double>(s_fine.facets_considered));
+  // Merged cells and the coarse level of detail allocate nothing per frame (buffers sized at
+  // setup for the finest grid and the larger facet list).
+  radar::clutter::TerrainStats s_again;
+  radar_emu::test::start_counting_allocations();
+  (void)run(coarse, 8.0, s_again);
+  (void)run(coarse, 2.0, s_again);
+  (void)run(coarse, 1.0, s_again);
+  EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u);
 }
 
 TEST(LoopTerrain, MergedCellsHoldTheSumOfTheCellsTheyMerge) {
