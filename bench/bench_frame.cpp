@@ -7,6 +7,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
+#include <cmath>
 #include <complex>
 #include <cstdint>
 #include <cstring>
@@ -433,6 +434,77 @@ void BM_TraceTerrain(benchmark::State& state) {
 }
 BENCHMARK(BM_TraceTerrain)
     ->ArgsProduct({{0, 1}, {0, 1, 2, 3, 4, 5, 6}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// The terrain engine at the fidelity governor's levels (issue 29, "a scene heavier than the
+// machine"): examples/terrain_movers.toml's first pose, the engine alone (no rays), one thread,
+// TerrainReturns::compute at level L's terrain knob (patch scale 2^(L/4), loop/governor.hpp), then
+// the scenario's sensor on those returns alone. Argument: L. Counters (per frame, the thread's CPU
+// time): engine_ms, sensor_ms, patches, horizon_samples, returns (the lit cells), columns and bins
+// of the cell grid the engine used at that level.
+void BM_TerrainLevel(benchmark::State& state) {
+  struct Case {
+    loop::Scenario s =
+        loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
+    radar_emu::scene::Scene scene{loop::scene_description(s)};
+    radar::RadarPose pose;
+    std::optional<radar::SbrTracer> tracer;
+    std::optional<radar::TerrainReturns> terrain;
+    std::optional<radar::Sensor> sensor;
+    Case() {
+      scene.set_time(0.0);
+      pose = loop::scripted_pose(s);
+      radar::SbrConfig cfg = s.sbr;
+      cfg.terrain_rays = false;
+      tracer.emplace(scene, cfg);
+      terrain.emplace(scene, *tracer, loop::terrain_returns_config(s));
+      radar::SensorConfig sc = s.sensor;
+      sc.max_contributions = terrain->max_returns();
+      sensor.emplace(sc);
+    }
+  };
+  static Case c;
+  const tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
+  const double scale = std::pow(2.0, 0.25 * static_cast<double>(state.range(0)));
+  std::vector<radar::Contribution> out(c.terrain->max_returns());
+  std::vector<radar::Detection> detections(c.s.sensor.max_detections);
+  auto cpu_s = [] {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+  };
+  radar::clutter::TerrainStats es;
+  radar::SensorStats ss;
+  std::uint64_t dropped = 0;
+  std::size_t n = 0;
+  double engine_s = 0.0, sensor_s = 0.0;
+  for (auto _ : state) {
+    es = {};
+    ss = {};
+    const double t0 = cpu_s();
+    n = c.terrain->compute(c.pose, out, es, dropped, scale);
+    const double t1 = cpu_s();
+    benchmark::DoNotOptimize(
+        c.sensor->process(std::span<const radar::Contribution>(out.data(), n), detections, ss));
+    sensor_s += cpu_s() - t1;
+    engine_s += t1 - t0;
+  }
+  const double per_ms =
+      1e3 / static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  state.counters["engine_ms"] = engine_s * per_ms;
+  state.counters["sensor_ms"] = sensor_s * per_ms;
+  state.counters["patches"] = static_cast<double>(es.patches);
+  state.counters["horizon_samples"] = static_cast<double>(es.horizon_patches);
+  state.counters["returns"] = static_cast<double>(n);
+  state.counters["dropped"] = static_cast<double>(dropped);
+}
+BENCHMARK(BM_TerrainLevel)
+    ->Arg(0)
+    ->Arg(4)
+    ->Arg(8)
+    ->Arg(12)
+    ->Arg(16)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

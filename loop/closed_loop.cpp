@@ -382,6 +382,7 @@ struct Frame {
   const GovernorDecision* decision = nullptr;  ///< null: nothing traced
   std::uint64_t rays_before = 0, cells_before = 0, truncated_before = 0;
   std::uint64_t terrain_patches = 0, terrain_returns = 0;  ///< the engine's, this frame
+  std::uint64_t terrain_facets = 0;                        ///< the facets cut into its patches
   std::size_t contributions = 0, detections = 0, truth = 0;
   FrameRecord record{};
 };
@@ -480,6 +481,8 @@ struct ClosedLoop::Impl {
     warn_targets_never_in_beam(s, scene.scene, warnings);
     if (!tracer.no_terrain.empty())
       warnings.push_back(tracer.no_terrain);
+    if (tracer.terrain)  // the governor predicts the engine's returns as its cells merge
+      governor.set_terrain_cells(tracer.terrain->coarsening());
     if (!scene.scene.incomplete().empty()) {  // a `scene import` stopped early
       warnings.push_back((s.scene_file.empty() ? std::string("the scene") : s.scene_file.string()) +
                          ": an incomplete scene database (" + scene.scene.incomplete() + ")");
@@ -643,13 +646,15 @@ void ClosedLoop::Impl::trace(Frame& f) {
       const std::span<radar::Contribution> all(tracer.contributions);
       const std::size_t cap = tracer.tracer.max_contributions();
       const std::uint64_t patches_before = r.terrain.patches;
+      const std::uint64_t facets_before = r.terrain.facets_considered;
       tbb::parallel_invoke(
           [&] {
             f.contributions =
                 tracer.tracer.trace(f.pose, all.first(cap), r.trace, f.decision->knobs);  // adds
           },
           [&] {
-            // The governor's terrain knob coarsens the engine's patches as the terrain rays.
+            // The governor's terrain knob coarsens the engine's patches as the terrain rays,
+            // and from level 4 on merges its cells (fewer returns for the sensor).
             f.terrain_returns =
                 tracer.terrain->compute(f.pose, all.subspan(cap), r.terrain, r.terrain_dropped,
                                         f.decision->knobs.terrain_spacing_scale);
@@ -657,6 +662,7 @@ void ClosedLoop::Impl::trace(Frame& f) {
       std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), f.terrain_returns,
                   all.begin() + static_cast<std::ptrdiff_t>(f.contributions));
       f.terrain_patches = r.terrain.patches - patches_before;
+      f.terrain_facets = r.terrain.facets_considered - facets_before;
       f.contributions += f.terrain_returns;
     } else {
       f.contributions =
@@ -687,7 +693,7 @@ void ClosedLoop::Impl::sense(Frame& f) {
                      static_cast<double>(p.last_ns(timing::Stage::kSensor)) * 1e-6,
                      r.trace.rays + r.trace.reused_rays - f.rays_before, f.contributions,
                      r.sensor.cells_synthesised - f.cells_before, f.terrain_patches,
-                     f.terrain_returns);
+                     f.terrain_returns, f.terrain_facets);
     ++r.governor.level_frames[static_cast<std::size_t>(d->level)];
     r.governor.frames_degraded += d->degraded ? 1 : 0;
     r.governor.frames_predicted_late += d->over_deadline ? 1 : 0;

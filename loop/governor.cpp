@@ -93,21 +93,48 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
 double FidelityGovernor::model_trace_ms(const radar::TracePlan& plan) const noexcept {
   // The rays and the kept returns, and the terrain engine's patches: the previous frame's, as
   // the square of the patch size scale it used over this level's (TerrainReturns::compute's
-  // patch_scale).
+  // scale), at least one a facet. The facets, those of the level of detail the engine takes at
+  // this level.
   const double s = prev_terrain_scale_ / decision_.knobs.terrain_spacing_scale;
+  const double facets = prev_terrain_facets_ *
+                        terrain_facet_ratio_at(decision_.knobs.terrain_spacing_scale) /
+                        prev_terrain_facet_ratio_;
+  const double patches = std::max(facets, prev_terrain_patches_ * s * s);
   return 1e-6 * (config_.trace_ns_per_ray * static_cast<double>(plan.rays()) +
                  config_.trace_ns_per_kept_return * static_cast<double>(plan.reused_contributions) +
-                 config_.terrain_ns_per_patch * prev_terrain_patches_ * s * s);
+                 config_.terrain_ns_per_patch * patches);
+}
+
+std::size_t FidelityGovernor::terrain_cells_merged(int level) const noexcept {
+  return radar::TerrainReturns::cell_merge(std::pow(2.0, 0.25 * std::clamp(level, 0, kMaxLevel)),
+                                           terrain_.azimuth_merge_max)
+      .cells();
+}
+
+double FidelityGovernor::terrain_facet_ratio_at(double scale) const noexcept {
+  const radar::TerrainCellMerge m =
+      radar::TerrainReturns::cell_merge(scale, terrain_.azimuth_merge_max);
+  return terrain_.lod_merge > 0 && m.range >= terrain_.lod_merge && terrain_.lod_facet_ratio > 0.0
+             ? terrain_.lod_facet_ratio
+             : 1.0;
+}
+
+double FidelityGovernor::terrain_facet_ratio(int level) const noexcept {
+  return terrain_facet_ratio_at(std::pow(2.0, 0.25 * std::clamp(level, 0, kMaxLevel)));
 }
 
 double FidelityGovernor::model_sensor_ms(const radar::TracePlan& plan) const noexcept {
   // The sensor's work follows the previous frame's: its cells (set by the clutter's extent, not
   // by the rays), its ray returns (in proportion to the rays, traced or kept) and the engine's
-  // returns.
+  // returns (in inverse proportion to the cells its coarse cells merge).
   const auto rays = static_cast<double>(plan.rays() + plan.reused_rays);
   const double ray_returns = std::max(0.0, prev_returns_ - prev_terrain_returns_);
-  const double returns =
-      (prev_rays_ > 0.0 ? ray_returns * rays / prev_rays_ : 0.0) + prev_terrain_returns_;
+  const double merge =
+      static_cast<double>(radar::TerrainReturns::cell_merge(decision_.knobs.terrain_spacing_scale,
+                                                            terrain_.azimuth_merge_max)
+                              .cells());
+  const double returns = (prev_rays_ > 0.0 ? ray_returns * rays / prev_rays_ : 0.0) +
+                         prev_terrain_returns_ * prev_terrain_merge_ / merge;
   return 1e-6 * (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
 }
 
@@ -214,8 +241,8 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
 
 void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t rays,
                                std::uint64_t returns, std::uint64_t cells_synthesised,
-                               std::uint64_t terrain_patches,
-                               std::uint64_t terrain_returns) noexcept {
+                               std::uint64_t terrain_patches, std::uint64_t terrain_returns,
+                               std::uint64_t terrain_facets) noexcept {
   if (config_.mode == GovernorConfig::Mode::kMeasured) {
     // Factors of measured over modelled cost: up at once, down by an exponential average (a
     // tenth a frame), bounded so one odd frame cannot stall the governor.
@@ -232,7 +259,11 @@ void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t 
   prev_returns_ = static_cast<double>(returns);
   prev_cells_ = static_cast<double>(cells_synthesised);
   prev_terrain_patches_ = static_cast<double>(terrain_patches);
+  prev_terrain_facets_ = static_cast<double>(terrain_facets);
   prev_terrain_scale_ = decision_.knobs.terrain_spacing_scale;  // the level that frame ran at
+  prev_terrain_merge_ = static_cast<double>(
+      radar::TerrainReturns::cell_merge(prev_terrain_scale_, terrain_.azimuth_merge_max).cells());
+  prev_terrain_facet_ratio_ = terrain_facet_ratio_at(prev_terrain_scale_);
   prev_terrain_returns_ = static_cast<double>(std::min(terrain_returns, returns));
 }
 

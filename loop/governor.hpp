@@ -5,7 +5,9 @@
 // Levels. Level 0 is the scenario's own fidelity ([radar] ray spacings, bounces). Each level up
 // halves the rays of a target bundle (bundle spacing x sqrt 2) and coarsens the terrain grid by
 // 2^(1/4) (its rays x 0.71), or with the terrain engine its patches by the same factor (their
-// count x 0.71; the cells and their mean power stay); from level kBounceLevel on, rays bounce one
+// count x 0.71, down to one a facet), its range cells merged 2^floor(level / 4) a cell (their total
+// mean power stays) and from level 12 the terrain's coarser level of detail
+// (radar/products/terrain_returns.hpp); from level kBounceLevel on, rays bounce one
 // time less (at least twice: the target-ground double bounce and dihedrals stay); from level
 // kFacetLevel on, bounce 1 judges each facet by its centroid's visibility alone
 // (TraceKnobs::facet_centroid_only: a seventh of the facet pass's occlusion queries, which dominate
@@ -25,12 +27,19 @@
 //   trace  = trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
 //          + trace_ns_per_kept_return x the kept returns it re-evaluates instead
 //            ([radar] reuse_static_paths: SbrTracer::plan() counts them too)
-//          + terrain_ns_per_patch x the terrain engine's patches of the previous frame
-//            x (its patch scale / this level's)^2 ([radar] terrain = "engine")
+//          + terrain_ns_per_patch x max(F x f / f', P x (s' / s)^2) ([radar] terrain =
+//            "engine"), P and F the engine's patches and facets of the previous frame, s' its
+//            patch scale, s this level's (terrain_spacing_scale): the patches fall as the square
+//            of the scale down to one a facet (a facet smaller than a patch stays one); f' and f
+//            the facets of the level of detail the engine took then and takes at this level
+//            (1, or lod_facet_ratio from its coarse level on: radar::TerrainCoarsening)
 //   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
 //          + sensor_ns_per_return x (the previous frame's ray returns x (rays / its rays)
-//                                    + its terrain engine returns)
+//                                    + T x m' / m)
 //            (rays: traced and kept alike, each stands for its returns)
+//            T the engine's returns (lit cells) of the previous frame, m' and m the cells its
+//            coarse cells merged then and at this level (radar::TerrainReturns::cell_merge:
+//            the returns fall as the cells merge; set_terrain_cells gives the columns' limit)
 // The frame takes the finest level whose prediction is within the deadline (compute_fraction of
 // the frame period); if none is, the finest level within 5 % of the deadline of the coarsest
 // level's cost (degrading further would buy less than that). In "model" mode the coefficients are
@@ -48,6 +57,7 @@
 //
 // Real-time: decide() and observe() do not allocate, block or throw.
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -56,6 +66,7 @@
 #include <vector>
 
 #include "radar/em/sbr.hpp"
+#include "radar/products/terrain_returns.hpp"
 #include "radar/sensor/sensor.hpp"
 #include "scene/scene.hpp"
 
@@ -119,9 +130,22 @@ class FidelityGovernor {
   /// What the frame decided last cost: stage wall times [ms] and what it processed (`rays` the
   /// rays traced and those kept paths stood for, `returns` all of them, `terrain_returns` of those
   /// the terrain engine's, `terrain_patches` the engine's patches; both 0 without the engine).
+  /// `terrain_facets`: the facets the engine cut into those patches (0: unknown, no floor).
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
                std::uint64_t cells_synthesised, std::uint64_t terrain_patches = 0,
-               std::uint64_t terrain_returns = 0) noexcept;
+               std::uint64_t terrain_returns = 0, std::uint64_t terrain_facets = 0) noexcept;
+  /// Setup: what the terrain engine coarsens with the level (radar::TerrainReturns::
+  /// coarsening(); until set: no columns merged, no coarse level of detail), for its cost.
+  void set_terrain_cells(const radar::TerrainCoarsening& c) noexcept {
+    terrain_ = c;
+    terrain_.azimuth_merge_max = std::max<std::size_t>(1, c.azimuth_merge_max);
+  }
+  /// The facets of the level of detail the engine takes at `level`, over the finest's.
+  [[nodiscard]] double terrain_facet_ratio(int level) const noexcept;
+  [[nodiscard]] double terrain_facet_ratio_at(double scale) const noexcept;
+  /// The engine's cells merged into one at `level` (radar::TerrainReturns::cell_merge of its
+  /// terrain knob). Real-time safe.
+  [[nodiscard]] std::size_t terrain_cells_merged(int level) const noexcept;
 
   [[nodiscard]] const GovernorConfig& config() const noexcept { return config_; }
   /// Cost factors of measured mode (1 in model mode).
@@ -149,6 +173,10 @@ class FidelityGovernor {
   double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;
   double prev_terrain_patches_ = 0.0, prev_terrain_returns_ = 0.0;
   double prev_terrain_scale_ = 1.0;  ///< the engine's patch scale of the previous frame
+  double prev_terrain_facets_ = 0.0;
+  double prev_terrain_merge_ = 1.0;        ///< cells merged by the engine in the previous frame
+  double prev_terrain_facet_ratio_ = 1.0;  ///< its level of detail's terrain_facet_ratio
+  radar::TerrainCoarsening terrain_{};
   /// The model's trace and sensor terms [ms] for a plan (factors not applied).
   [[nodiscard]] double model_trace_ms(const radar::TracePlan& plan) const noexcept;
   [[nodiscard]] double model_sensor_ms(const radar::TracePlan& plan) const noexcept;

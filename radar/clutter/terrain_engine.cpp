@@ -124,10 +124,22 @@ TerrainEngine::TerrainEngine(const scene::Scene& scene, TerrainMaterials materia
     if (row >= 0 && static_cast<std::size_t>(row) >= materials_.table.materials())
       fail("a sigma0 row is outside the table");
 
+  if (spec_.lod_level < 0)
+    fail("lod_level must be >= 0");
   const scene::SceneDescription& d = scene.description();
+  // Each LOD group's level: spec.lod_level, or its coarsest below that.
+  for (const scene::ObjectDesc& o : d.objects) {
+    if (o.lod_group < 0)
+      continue;
+    const auto g = static_cast<std::size_t>(o.lod_group);
+    if (lod_taken_.size() <= g)
+      lod_taken_.resize(g + 1, 0);
+    if (o.lod_level <= spec_.lod_level)
+      lod_taken_[g] = std::max(lod_taken_[g], static_cast<int>(o.lod_level));
+  }
   for (std::uint32_t id = 0; id < d.objects.size(); ++id) {
     const scene::ObjectDesc& o = d.objects[id];
-    if (o.motion || o.trajectory || (o.lod_group >= 0 && o.lod_level != 0))
+    if (o.motion || o.trajectory || other_lod(o))
       continue;
     if (id < structures.size() && structures[id] != 0)
       continue;
@@ -279,8 +291,8 @@ void TerrainEngine::collect_occluders(std::span<const std::uint8_t> structures) 
       dynamic_occluders_.push_back(id);
       continue;
     }
-    if (o.lod_group >= 0 && o.lod_level != 0)
-      continue;  // a coarser level of terrain the engine holds at level 0
+    if (other_lod(o))
+      continue;  // another level of the terrain the engine holds at its own
     const bool structure = id < structures.size() && structures[id] != 0;
     const glm::dmat4 w = scene_->world_from_body(id);
     for (std::size_t t = 0; t < o.mesh.triangles.size(); ++t) {

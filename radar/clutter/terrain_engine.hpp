@@ -90,6 +90,12 @@ struct TerrainEngineSpec {
   bool clip_to_region = false;
   glm::dvec2 region_min_m{0.0};
   glm::dvec2 region_max_m{0.0};
+  /// Which level of detail of each LOD group (a terrain tile held at several, scene.hpp) the
+  /// engine takes: this one, or the group's coarsest where it has no such level. 0: the finest.
+  /// >= 0. A coarser level holds fewer, larger facets of the same surface (with max_facet_m
+  /// above their size, so that they are not split again): the engine's work, one patch a facet
+  /// at least, falls with them.
+  int lod_level = 0;
   SpeckleSpec speckle;                          ///< per-patch texture (kNone: every I = 1, phi = 0)
   Sigma0Table::Pol channel = Sigma0Table::kVV;  ///< receive-transmit channel read from the table
 };
@@ -209,8 +215,8 @@ class NoTerrain : public std::invalid_argument {
 class TerrainEngine {
  public:
   /// Collects the terrain facets of `scene`: every static object (no motion, no trajectory),
-  /// level 0 of each LOD group, not listed in `structures` (per object id: 1 = a structure or
-  /// target left to the rays), its triangles whose material has a sigma0 row. Throws
+  /// level spec.lod_level of each LOD group (above), not listed in `structures` (per object id: 1 =
+  /// a structure or target left to the rays), its triangles whose material has a sigma0 row. Throws
   /// std::invalid_argument: materials that do not match the scene's, a spec out of range, no
   /// terrain at all ("the scene has no terrain ..."; the caller decides on a fallback), or more
   /// than 2e7 facets. Keeps a reference to `scene` (occlusion queries): it must outlive the
@@ -298,6 +304,12 @@ class TerrainEngine {
   std::vector<Occluder> occluders_;
   std::vector<std::uint32_t> dynamic_occluders_;  ///< object ids
   void collect_occluders(std::span<const std::uint8_t> structures);
+  /// Per LOD group: the level the engine takes (spec.lod_level, or the group's coarsest).
+  std::vector<int> lod_taken_;
+  [[nodiscard]] bool other_lod(const scene::ObjectDesc& o) const noexcept {
+    return o.lod_group >= 0 && static_cast<std::size_t>(o.lod_group) < lod_taken_.size() &&
+           o.lod_level != lod_taken_[static_cast<std::size_t>(o.lod_group)];
+  }
   void mark_layers();
 };
 

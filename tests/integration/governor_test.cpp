@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <vector>
@@ -229,7 +230,9 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
             << with_engine.predicted_ms << " ms with the engine's " << kPatches << " patches\n";
   EXPECT_NEAR(with_engine.predicted_ms - rays_only.predicted_ms, expected_extra_ms, 1e-9);
   // Patches counted at level 0 predict level 6 at 1 / (2^(6/4))^2 = 1/8 of them (the engine's
-  // patches grow with the level as the terrain rays' spacing); the returns stay.
+  // patches grow with the level as the terrain rays' spacing); the returns at half as many: at
+  // scale 2^(6/4) = 2.83 the engine merges its cells two range bins a cell
+  // (radar::TerrainReturns::cell_merge; the columns stay, set_terrain_cells not called).
   gov.observe(10.0, 5.0, kRays, kReturns, kCells);
   const loop::GovernorDecision coarse_rays = gov.decide_at(f.pose, 6);
   (void)gov.decide_at(f.pose, 0);
@@ -237,9 +240,10 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   const loop::GovernorDecision coarse_engine = gov.decide_at(f.pose, 6);
   const double coarse_extra_ms =
       1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) / 8.0 +
-              g.sensor_ns_per_return * static_cast<double>(kEngineReturns));
+              g.sensor_ns_per_return * static_cast<double>(kEngineReturns) / 2.0);
   EXPECT_NEAR(coarse_engine.predicted_ms - coarse_rays.predicted_ms, coarse_extra_ms, 1e-9);
-  // And patches counted at level 6 predict level 6 as they are, level 0 at 8 times as many.
+  // And patches counted at level 6 predict level 6 as they are, level 0 at 8 times as many (and
+  // returns counted in cells merged two ways, twice as many).
   gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns);
   const loop::GovernorDecision again_6 = gov.decide_at(f.pose, 6);
   EXPECT_NEAR(again_6.predicted_ms - coarse_rays.predicted_ms, expected_extra_ms, 1e-9);
@@ -247,7 +251,103 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   const loop::GovernorDecision fine = gov.decide_at(f.pose, 0);
   EXPECT_NEAR(fine.predicted_ms - rays_only.predicted_ms,
               1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) * 8.0 +
-                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns)),
+                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 2.0),
+              1e-9);
+}
+
+TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
+  // The closed forms of the engine's terms (loop/governor.hpp) at the levels of a heavy scene:
+  // for an engine whose columns merge up to two ways (TerrainReturnsConfig::
+  // coarse_azimuth_max_rad two columns wide; the loop's do not merge), level L merges k =
+  // 2^floor(L/4) range bins (up to 16) and min(k, 2) columns a cell, so returns T counted at level
+  // 0 predict level L at T / (k min(k, 2)); patches P counted at level 0 predict level L at P /
+  // 2^(L/2), but never fewer than the F facets they were cut from (one patch a facet at least).
+  DefaultFrame& f = default_frame();
+  loop::GovernorConfig g = f.s.governor;
+  g.mode = loop::GovernorConfig::Mode::kModel;
+  loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
+  radar::TerrainCoarsening tc;
+  tc.azimuth_merge_max = 2;
+  gov.set_terrain_cells(tc);
+  EXPECT_EQ(gov.terrain_cells_merged(0), 1u);
+  EXPECT_EQ(gov.terrain_cells_merged(3), 1u);
+  EXPECT_EQ(gov.terrain_cells_merged(4), 4u);    // 2 x 2
+  EXPECT_EQ(gov.terrain_cells_merged(8), 8u);    // 4 x 2
+  EXPECT_EQ(gov.terrain_cells_merged(12), 16u);  // 8 x 2
+  EXPECT_EQ(gov.terrain_cells_merged(16), 32u);  // 16 x 2
+  constexpr std::uint64_t kCells = 300'000, kRays = 100'000, kReturns = 20'000;
+  constexpr std::uint64_t kPatches = 160'000, kFacets = 40'000, kEngineReturns = 32'000;
+  for (const int level : {0, 4, 8, 12, 16}) {
+    const double k = std::pow(2.0, std::floor(level / 4.0));
+    const double merged = k * std::min(k, 2.0);
+    const double s2 = std::pow(2.0, 0.5 * level);  // (patch scale)^2
+    // Rays only, then the same with the engine's figures counted at level 0.
+    (void)gov.decide_at(f.pose, 0);
+    gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+    const double rays_ms = gov.decide_at(f.pose, level).predicted_ms;
+    (void)gov.decide_at(f.pose, 0);
+    gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns,
+                kFacets);
+    const double engine_ms = gov.decide_at(f.pose, level).predicted_ms;
+    const double patches = std::max(static_cast<double>(kFacets), kPatches / s2);
+    const double expected_ms =
+        1e-6 * (g.terrain_ns_per_patch * patches +
+                g.sensor_ns_per_return * static_cast<double>(kEngineReturns) / merged);
+    std::cout << "level " << level << ": engine " << patches << " patches, "
+              << kEngineReturns / merged << " returns, " << engine_ms - rays_ms << " ms\n";
+    EXPECT_NEAR(engine_ms - rays_ms, expected_ms, 1e-9) << "level " << level;
+  }
+  // Counted at level 12 (16 cells merged): level 4 (4 merged) predicts 4 times the returns.
+  (void)gov.decide_at(f.pose, 12);
+  gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+  const double rays_4 = gov.decide_at(f.pose, 4).predicted_ms;
+  (void)gov.decide_at(f.pose, 12);
+  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kFacets, kEngineReturns,
+              kFacets);
+  const double engine_4 = gov.decide_at(f.pose, 4).predicted_ms;
+  EXPECT_NEAR(engine_4 - rays_4,
+              1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kFacets) * 16.0 +
+                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 4.0),
+              1e-9);
+  // A coarse level of detail with a quarter of the facets from the range merge 8 on (level 12,
+  // radar::TerrainReturnsConfig::coarse_lod_merge): facets F counted at level 0 predict F / 4
+  // from level 12 on, and F counted at level 12 predict 4 F below it.
+  tc.lod_merge = 8;
+  tc.lod_facet_ratio = 0.25;
+  gov.set_terrain_cells(tc);
+  EXPECT_EQ(gov.terrain_facet_ratio(11), 1.0);
+  EXPECT_EQ(gov.terrain_facet_ratio(12), 0.25);
+  for (const int level : {8, 12, 16}) {
+    const double k = std::pow(2.0, std::floor(level / 4.0));
+    const double s2 = std::pow(2.0, 0.5 * level);
+    (void)gov.decide_at(f.pose, 0);
+    gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+    const double rays_ms = gov.decide_at(f.pose, level).predicted_ms;
+    (void)gov.decide_at(f.pose, 0);
+    gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns,
+                kFacets);
+    const double engine_ms = gov.decide_at(f.pose, level).predicted_ms;
+    const double facets = static_cast<double>(kFacets) * (level >= 12 ? 0.25 : 1.0);
+    EXPECT_NEAR(engine_ms - rays_ms,
+                1e-6 * (g.terrain_ns_per_patch * std::max(facets, kPatches / s2) +
+                        g.sensor_ns_per_return * static_cast<double>(kEngineReturns) /
+                            (k * std::min(k, 2.0))),
+                1e-9)
+        << "level " << level;
+  }
+  constexpr std::uint64_t kCoarseFacets = kFacets / 4;
+  (void)gov.decide_at(f.pose, 12);
+  gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+  const double rays_8 = gov.decide_at(f.pose, 8).predicted_ms;
+  (void)gov.decide_at(f.pose, 12);
+  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kCoarseFacets, kEngineReturns,
+              kCoarseFacets);
+  const double engine_8 = gov.decide_at(f.pose, 8).predicted_ms;
+  // Level 8 from level 12: patch scale 4 against 8 (4 times the patches), 4 times the facets;
+  // cells merged 8 against 16.
+  EXPECT_NEAR(engine_8 - rays_8,
+              1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kCoarseFacets) * 4.0 +
+                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 2.0),
               1e-9);
 }
 

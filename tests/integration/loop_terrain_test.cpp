@@ -311,6 +311,193 @@ TEST(LoopTerrain, GovernorPatchScaleCutsThePatchesAndKeepsThePower) {
   EXPECT_NEAR(10.0 * std::log10(p2 / p1), 0.0, 0.5);
 }
 
+TEST(LoopTerrain, GovernorScaleMergesTheCellsAndKeepsThePower) {
+  // From scale 2 on the knob also merges the engine's cells (TerrainReturns::cell_merge): at the
+  // governor's level 8 (scale 2^(8/4) = 4) four range bins a cell (the loop's columns do not
+  // merge), so at most 1/4 of the returns of level 0 (about that many where the lit cells are
+  // dense), and the total mean power the same sum of sigma0 dA within 0.5 dB (patches 4 times
+  // larger too: their shadows and grazing differ a little).
+  const loop::Scenario s = default_scenario();
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  const radar::SbrTracer tracer(scene, cfg);
+  radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
+  ASSERT_EQ(terrain.azimuth_merge_max(), 1u);
+  const radar::TerrainCellMerge m = radar::TerrainReturns::cell_merge(4.0, 1);
+  EXPECT_EQ(m.range, 4u);
+  EXPECT_EQ(m.azimuth, 1u);
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(4.0, 2).azimuth, 2u);  // where columns may merge
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(8.0, 2).range, 8u);
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(1.99, 4).cells(), 1u);
+  EXPECT_EQ(radar::TerrainReturns::cell_merge(1e9, 1).range, radar::TerrainReturns::kMaxMerge);
+  std::vector<radar::Contribution> out(terrain.max_returns());
+  auto run = [&](double scale, double& power) {
+    radar::clutter::TerrainStats st;
+    std::uint64_t dropped = 0;
+    const std::size_t n = terrain.compute(first_pose(s), out, st, dropped, scale);
+    EXPECT_EQ(dropped, 0u);
+    power = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      power += std::norm(out[i].amplitude);
+    return n;
+  };
+  double p1 = 0.0, p4 = 0.0;
+  const std::size_t n1 = run(1.0, p1), n4 = run(4.0, p4);
+  const double ratio = static_cast<double>(n4) / static_cast<double>(n1);
+  std::printf(
+      "scale 4 (range bins merged 4 a cell): %zu -> %zu returns (x %.3f), total power "
+      "%+.3f dB\n",
+      n1, n4, ratio, 10.0 * std::log10(p4 / p1));
+  EXPECT_LE(ratio, 1.0 / 4.0 + 0.02);  // a merged cell is lit when one of its 4 is
+  EXPECT_GT(ratio, 0.18);
+  EXPECT_NEAR(10.0 * std::log10(p4 / p1), 0.0, 0.5);
+}
+
+TEST(LoopTerrain, CoarseLevelOfDetailCutsTheFacetsAndKeepsThePower) {
+  // examples/terrain_movers.toml's database (tiles at three levels of detail): at the governor's
+  // level 12 (scale 8, range merge 8 = coarse_lod_merge) the engine integrates the tiles' level 1
+  // (every second node of the level-0 grid): under a third of the database's facets (the roads,
+  // outside the tiles, stay as they are), and under 0.6 of those in the field of view (the larger
+  // facets' bounds take in more of them at its edges), each one patch; and the same sum of sigma0
+  // dA over the field of view within 1 dB (the same surface sampled more coarsely: its facets'
+  // tilts and shadows differ); compute() allocates nothing at any of these scales.
+  const loop::Scenario s = movers_scenario();
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  const radar::SbrTracer tracer(scene, cfg);
+  radar::TerrainReturnsConfig tc = loop::terrain_returns_config(s);
+  radar::TerrainReturns coarse(scene, tracer, tc);
+  ASSERT_NE(coarse.coarse_engine(), nullptr);
+  tc.coarse_lod_merge = 0;
+  radar::TerrainReturns fine(scene, tracer, tc);
+  EXPECT_EQ(fine.coarse_engine(), nullptr);
+  const radar::TerrainCoarsening c = coarse.coarsening();
+  std::printf("facets: %zu at level 0, %zu at level 1 (ratio %.3f)\n",
+              coarse.engine().facets().size(), coarse.coarse_engine()->facets().size(),
+              c.lod_facet_ratio);
+  EXPECT_EQ(c.lod_merge, 8u);
+  EXPECT_LT(c.lod_facet_ratio, 1.0 / 3.0);
+  std::vector<radar::Contribution> out(fine.max_returns());
+  auto run = [&](radar::TerrainReturns& t, double scale, radar::clutter::TerrainStats& st) {
+    std::uint64_t dropped = 0;
+    const std::size_t n = t.compute(first_pose(s), out, st, dropped, scale);
+    EXPECT_EQ(dropped, 0u);
+    double power = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      power += std::norm(out[i].amplitude);
+    return power;
+  };
+  radar::clutter::TerrainStats s_fine, s_coarse, s_below;
+  const double p_fine = run(fine, 8.0, s_fine), p_coarse = run(coarse, 8.0, s_coarse);
+  std::printf(
+      "level 12: %llu facets, %llu patches (level 0) -> %llu facets, %llu patches "
+      "(level 1); total power %+.3f dB\n",
+      static_cast<unsigned long long>(s_fine.facets_considered),
+      static_cast<unsigned long long>(s_fine.patches),
+      static_cast<unsigned long long>(s_coarse.facets_considered),
+      static_cast<unsigned long long>(s_coarse.patches), 10.0 * std::log10(p_coarse / p_fine));
+  EXPECT_LT(static_cast<double>(s_coarse.patches), 0.6 * static_cast<double>(s_fine.patches));
+  EXPECT_NEAR(10.0 * std::log10(p_coarse / p_fine), 0.0, 1.0);
+  // Below the coarse merge (level 11, scale 6.7, merge 4) the fine level of detail, as before.
+  const double p_below = run(coarse, std::pow(2.0, 11.0 / 4.0), s_below);
+  EXPECT_GT(p_below, 0.0);
+  EXPECT_GT(static_cast<double>(s_below.facets_considered),
+            0.9 * static_cast<double>(s_fine.facets_considered));
+  // Merged cells and the coarse level of detail allocate nothing per frame (buffers sized at
+  // setup for the finest grid and the larger facet list).
+  radar::clutter::TerrainStats s_again;
+  radar_emu::test::start_counting_allocations();
+  (void)run(coarse, 8.0, s_again);
+  (void)run(coarse, 2.0, s_again);
+  (void)run(coarse, 1.0, s_again);
+  EXPECT_EQ(radar_emu::test::stop_counting_allocations(), 0u);
+}
+
+TEST(LoopTerrain, MergedCellsHoldTheSumOfTheCellsTheyMerge) {
+  // The same patches on a grid and merged 4 x 4: each merged cell's power is the sum of the 16
+  // cells it covers, its elevation their power-weighted one (sum p sin el / sum p), its range
+  // and azimuth the merged cell's centre and its range spread the merged width. Without shadows,
+  // so that the horizon's resolution (half a cell, merged or not) plays no part: the same sum of
+  // sigma0 dA, to rounding. Fine: patch fraction 1 at scale 1 (patches one cell: R x 0.5 deg,
+  // 6 m); merged: fraction 1/4 at scale 4, the same patch sizes, widest column 4 x 0.5 deg.
+  const loop::Scenario s = default_scenario();
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  const radar::SbrTracer tracer(scene, cfg);
+  radar::TerrainReturnsConfig fine_cfg = loop::terrain_returns_config(s);
+  fine_cfg.shadowing = false;
+  radar::TerrainReturnsConfig merged_cfg = fine_cfg;
+  merged_cfg.patch_fraction = 0.25;
+  merged_cfg.coarse_azimuth_max_rad = 4.0 * fine_cfg.azimuth_cell_rad;
+  radar::TerrainReturns fine(scene, tracer, fine_cfg), merged(scene, tracer, merged_cfg);
+  ASSERT_EQ(fine.columns() % 4, 0u);
+  ASSERT_EQ(merged.azimuth_merge_max(), 4u);
+  const radar::RadarPose pose = first_pose(s);
+  std::vector<radar::Contribution> a(fine.max_returns()), b(merged.max_returns());
+  radar::clutter::TerrainStats sa, sb;
+  std::uint64_t dropped = 0;
+  a.resize(fine.compute(pose, a, sa, dropped, 1.0));
+  b.resize(merged.compute(pose, b, sb, dropped, 4.0));
+  EXPECT_EQ(dropped, 0u);
+  EXPECT_GE(sb.patches_lit, sa.patches_lit);  // the same, and those past range_max_m
+  const double c_m = fine_cfg.range_cell_m, c_rad = fine_cfg.azimuth_cell_rad;
+  const std::size_t columns4 = fine.columns() / 4;
+  // The fine cells summed by merged cell, over the merged bins that end a facet's length (50 m,
+  // the engine's max_facet_m) short of the fine grid's far edge: the merged grid's last bin
+  // reaches past it, and holds the patches centred there, whose power spreads back by up to half
+  // their length (the fine grid leaves them out whole, as every patch centred outside it).
+  const auto bins4 = static_cast<std::size_t>(
+      std::floor((static_cast<double>(fine.bins()) * c_m - 50.0) / (4.0 * c_m)));
+  std::vector<double> power(bins4 * columns4, 0.0), el_power(bins4 * columns4, 0.0);
+  double fine_total = 0.0;
+  for (const radar::Contribution& x : a) {
+    const auto bin = static_cast<std::size_t>(std::floor((x.range_m - fine_cfg.range_min_m) / c_m));
+    const auto col =
+        static_cast<std::size_t>(std::floor((x.azimuth_rad - fine_cfg.azimuth_min_rad) / c_rad));
+    ASSERT_LT(col, fine.columns());
+    if (bin / 4 >= bins4)
+      continue;
+    const double p = std::norm(x.amplitude);
+    power[(bin / 4) * columns4 + col / 4] += p;
+    el_power[(bin / 4) * columns4 + col / 4] += p * std::sin(x.elevation_rad);
+    fine_total += p;
+  }
+  std::size_t compared = 0, lit = 0;
+  double merged_total = 0.0, worst = 0.0;
+  for (const radar::Contribution& x : b) {
+    const double bf = (x.range_m - fine_cfg.range_min_m) / (4.0 * c_m);
+    const double cf = (x.azimuth_rad - fine_cfg.azimuth_min_rad) / (4.0 * c_rad);
+    // Centred in its merged cell, 4 cells wide.
+    EXPECT_NEAR(bf - std::floor(bf), 0.5, 1e-9);
+    EXPECT_NEAR(cf - std::floor(cf), 0.5, 1e-9);
+    EXPECT_NEAR(x.range_spread_m, 4.0 * c_m, 1e-9);
+    const auto bin = static_cast<std::size_t>(bf), col = static_cast<std::size_t>(cf);
+    if (bin >= bins4)
+      continue;
+    const double p = std::norm(x.amplitude), q = power[bin * columns4 + col];
+    merged_total += p;
+    ++compared;
+    worst = std::max(worst, std::abs(p - q) / q);
+    EXPECT_NEAR(std::sin(x.elevation_rad), el_power[bin * columns4 + col] / q, 1e-9);
+  }
+  for (double q : power)
+    lit += q > 0.0 ? 1 : 0;
+  std::printf(
+      "%zu fine returns, %zu merged (%zu compared, %zu merged cells lit by the fine ones); "
+      "total %.6g m^2 merged, %.6g m^2 summed; worst cell %.2g relative\n",
+      a.size(), b.size(), compared, lit, merged_total, fine_total, worst);
+  EXPECT_EQ(compared, lit);
+  EXPECT_GT(compared, 100u);
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_NEAR(merged_total / fine_total, 1.0, 1e-12 * static_cast<double>(compared));
+}
+
 TEST(LoopTerrain, EngineReturnsAreTheSameForAnyNumberOfThreads) {
   // The slices are the configuration's, not the threads': one thread and all of them give the
   // same returns, value for value and in the same order (the sensor draws its speckle in that
