@@ -245,11 +245,14 @@ class Sensor {
     double azimuth_rad = 0, elevation_rad = 0;
     std::uint32_t count = 0;
   };
-  std::vector<std::int32_t> merge_table_;  ///< open addressing: item index or -1
-  std::vector<std::uint32_t> merge_used_;  ///< slots taken this frame
-  std::vector<MergeKey> merge_keys_;       ///< per usable coherent item
-  std::vector<std::uint64_t> merge_hash_;  ///< ... its key's hash
-  std::vector<MergeSums> merge_sums_;      ///< ... its own weighted position, then the cell's
+  /// Open addressing, the first 2^k >= 2 x (the frame's coherent returns) entries: 0 empty,
+  /// else (the key hash's upper 32 bits << 32) | (item index + 1).
+  std::vector<std::uint64_t> merge_table_;
+  std::vector<std::uint32_t> merge_used_;   ///< slots taken this frame
+  std::vector<MergeKey> merge_keys_;        ///< per usable coherent item
+  std::vector<std::uint64_t> merge_hash_;   ///< ... its key's hash
+  std::vector<std::uint8_t> merge_hashed_;  ///< per item: 1 when it has a key (usable, coherent)
+  std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position, then the cell's
   /// Item i's merge key, hash and weighted position (prepare step, in parallel).
   void merge_key(std::size_t i) noexcept;
   /// Worker w: accumulates every item into its beams (the w-th of W contiguous blocks), then
@@ -269,7 +272,17 @@ class Sensor {
   Antenna antenna_;
   std::unique_ptr<RangeDopplerProcessor> processor_;  ///< const after setup: shared by workers
   std::vector<std::unique_ptr<Workspace>> workspaces_;
-  std::vector<Item> items_;                 ///< this frame's contributions
+  std::vector<Item> items_;  ///< this frame's contributions
+  /// Per item: the beams [first, end) of the whole scan whose azimuth extent holds it (every
+  /// beam when the beams do not ascend; none when the item is not usable), so that a worker
+  /// skips the items outside its beams without reading them.
+  struct BeamSpan {
+    std::uint32_t first = 0, end = 0;
+  };
+  std::vector<BeamSpan> item_beams_;
+  /// Item i's beam span from its azimuth (usable items).
+  [[nodiscard]] BeamSpan beam_span(const Item& item) const noexcept;
+  std::vector<std::uint32_t> item_bucket_;  ///< per item: its nearest range bin, or ~0 (unusable)
   std::vector<std::uint32_t> by_range_;     ///< item indices sorted by nearest range bin
   std::vector<std::uint32_t> range_start_;  ///< by_range_ offset of each range bin (+1 entry)
   std::size_t item_count_ = 0;
