@@ -96,6 +96,7 @@ struct Sensor::Workspace {
   Workspace(const CfarConfig& cfar_config, const RangeDopplerProcessor& p, std::size_t max_hits)
       : image(p.image_cells()),
         clutter((p.range_bins() + 1) * p.velocity_bins()),
+        direct(p.range_bins() * p.velocity_bins()),
         power(p.image_cells()),
         cfar(cfar_config, p.range_bins(), p.velocity_bins()),
         hits(max_hits),
@@ -108,6 +109,10 @@ struct Sensor::Workspace {
   /// Mean clutter power as a difference array along range, transposed: [range bin][velocity
   /// row], N_r + 1 bins (a diffuse return's taps are neighbouring rows: contiguous here).
   std::vector<double> clutter;
+  /// Mean clutter power of the pieces one bin long (most diffuse returns: a terrain cell's
+  /// return covers two bins partly), added to their bin directly (one row an end instead of
+  /// two); same layout, N_r bins. The cell's clutter power is the sum of both.
+  std::vector<double> direct;
   std::vector<double> power;  ///< valid on `synth` only
   Cfar2d cfar;
   std::vector<CfarHit> hits;
@@ -456,6 +461,15 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
       for (int k = 0; k < (pieces.single ? 1 : 3); ++k) {
         if (pieces.a[k] > pieces.c[k])
           continue;
+        if (pieces.a[k] == pieces.c[k]) {  // one bin: added to it directly
+          double* at = ws.direct.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
+          const double* x = values[k];
+          for (int t = 0, c = static_cast<int>(tap_rows[0]); t < n_first; ++t, ++c)
+            at[c] += x[t];
+          for (int t = n_first, c = 0; t < n_taps; ++t, ++c)
+            at[c] += x[t];
+          continue;
+        }
         double* on = ws.clutter.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
         double* off = ws.clutter.data() + static_cast<std::size_t>(pieces.c[k] + 1) * nv;
         const double* x = values[k];
@@ -509,18 +523,21 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
         power[l] = std::norm(image[l]);
       }
     };
-    // Clutter power: the running sum of its difference array over the bins it reaches (read
-    // once, and cleared for the next frame as it is read).
+    // Clutter power: the running sum of its difference array over the bins it reaches, plus
+    // the one-bin pieces' power (both read once, and cleared for the next frame as read).
     const std::uint32_t d0 = d.empty() ? sp.end : d.begin, d1 = d.empty() ? sp.end : d.end;
     for (std::uint32_t l = sp.begin; l < d0; ++l)
       synthesise(l, floor_var);
     double run = 0.0;
     double* diff = ws.clutter.data() + j;
+    double* direct = ws.direct.data() + j;
     for (std::uint32_t l = d0; l < d1; ++l) {
       run += diff[l * nv];
       diff[l * nv] = 0.0;
+      const double one_bin = direct[l * nv];
+      direct[l * nv] = 0.0;
       // rounding of the running sum must not go negative
-      synthesise(l, floor_var + std::max(run, 0.0));
+      synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
     }
     if (!d.empty())
       diff[static_cast<std::size_t>(d.end) * nv] = 0.0;
