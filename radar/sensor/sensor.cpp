@@ -152,6 +152,8 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   // the items in the same order and draws from its own random streams).
   n_workers_ = std::clamp<std::size_t>(
       static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1, antenna_.beams());
+  worker_beams_.resize(n_workers_ + 1);
+  beam_work_.resize(antenna_.beams() + 1);
   gain_floor_ = std::pow(10.0, c.beam_floor_db / 10.0);
   for (std::size_t i = 0; i < antenna_.beams(); ++i)
     workspaces_.push_back(std::make_unique<Workspace>(c.cfar, *processor_, c.max_hits_per_beam));
@@ -331,6 +333,31 @@ DiffusePieces make_pieces(double range_bin, double half_bins, long nrl) noexcept
 
 }  // namespace
 
+void Sensor::split_beams() noexcept {
+  // beam_work_ holds the frame's returns' work as a difference array over the beams: its running
+  // sum is each beam's, plus each beam's own detection work. The workers' blocks cut the
+  // cumulative work at equal shares (contiguous, so a return's beams stay together). Any split
+  // gives the same result: each beam adds its returns in input order and draws its own streams.
+  const std::size_t n_beams = antenna_.beams();
+  double run = 0.0, total = 0.0;
+  for (std::size_t b = 0; b < n_beams; ++b) {
+    run += beam_work_[b];
+    beam_work_[b] = std::max(run, 0.0) + kBeamWork;
+    total += beam_work_[b];
+  }
+  worker_beams_[0] = 0;
+  double done = 0.0;
+  std::size_t b = 0;
+  for (std::size_t w = 1; w < n_workers_; ++w) {
+    const double share = total * static_cast<double>(w) / static_cast<double>(n_workers_);
+    // Take beams while the block's end is nearer the share with the next beam than without it.
+    while (b < n_beams && done + 0.5 * beam_work_[b] <= share)
+      done += beam_work_[b++];
+    worker_beams_[w] = b;
+  }
+  worker_beams_[n_workers_] = n_beams;
+}
+
 Sensor::BeamSpan Sensor::beam_span(const Item& item) const noexcept {
   const std::size_t n_beams = antenna_.beams();
   if (!beams_ascending_)
@@ -343,16 +370,15 @@ Sensor::BeamSpan Sensor::beam_span(const Item& item) const noexcept {
           std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) - az.begin())};
 }
 
-void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
+void Sensor::process_worker(std::size_t w) noexcept {
   const RangeDopplerProcessor& proc = *processor_;
-  const std::size_t n_beams = antenna_.beams();
   const std::size_t nr = proc.range_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
   const auto [dj0, dj1] = proc.velocity_support(proc.config().kernel_half_width_bins);
   const auto nv = static_cast<std::size_t>(nvl);
   // This worker's beams: a contiguous block (a return reaches a few neighbouring beams, so most
-  // returns are prepared by one worker only).
-  const std::size_t beam_begin = w * n_beams / n_workers, beam_end = (w + 1) * n_beams / n_workers;
+  // returns are prepared by one worker only), of about equal work (split_beams()).
+  const std::size_t beam_begin = worker_beams_[w], beam_end = worker_beams_[w + 1];
   // Each return's response is prepared once and added to every beam of this worker that sees it
   // with that beam's two-way gain. Targets: exact response (coherent). Clutter: mean power a
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
@@ -924,6 +950,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   // One pass over the items (the counts, then each usable item's bucket, kept for the second
   // pass, which then reads 4 bytes an item).
   constexpr std::uint32_t kNoBucket = 0xFFFFFFFFu;
+  std::fill(beam_work_.begin(), beam_work_.end(), 0.0);
   for (std::size_t i = 0; i < item_count_; ++i) {
     const Item& it = items_[i];
     stats.rejected_input += it.reject == 1 ? 1u : 0u;
@@ -934,8 +961,14 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
       const std::size_t bucket = bucket_of(it);
       item_bucket_[i] = static_cast<std::uint32_t>(bucket);
       ++range_start_[bucket + 1];
+      // The work it brings to each beam of its span (a difference array over the beams).
+      const BeamSpan span = item_beams_[i];
+      const double work = it.coherent ? kCoherentWork : kDiffuseWork;
+      beam_work_[span.first] += work;
+      beam_work_[span.end] -= work;
     }
   }
+  split_beams();
   for (std::size_t b = 0; b + 1 < range_start_.size(); ++b)
     range_start_[b + 1] += range_start_[b];
   for (std::size_t i = 0; i < item_count_; ++i)
@@ -967,8 +1000,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     ws->crossings = ws->overflowed = ws->synthesised = 0;
   // Beams are independent; worker w handles the w-th block of beams. Every random stream is keyed
   // by (seed, frame, beam, ...), so the result does not depend on the schedule.
-  tbb::parallel_for(std::size_t{0}, n_workers_,
-                    [&](std::size_t w) { process_worker(w, n_workers_); });
+  tbb::parallel_for(std::size_t{0}, n_workers_, [&](std::size_t w) { process_worker(w); });
   for (auto& ws : workspaces_) {
     stats.cfar_crossings += ws->crossings;
     stats.hits_overflowed += ws->overflowed;

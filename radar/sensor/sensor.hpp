@@ -255,9 +255,9 @@ class Sensor {
   std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position, then the cell's
   /// Item i's merge key, hash and weighted position (prepare step, in parallel).
   void merge_key(std::size_t i) noexcept;
-  /// Worker w: accumulates every item into its beams (the w-th of W contiguous blocks), then
-  /// detects in them.
-  void process_worker(std::size_t w, std::size_t n_workers) noexcept;
+  /// Worker w: accumulates every item into its beams (the w-th of the contiguous blocks of
+  /// worker_beams_), then detects in them.
+  void process_worker(std::size_t w) noexcept;
   void detect_beam(std::size_t beam, Workspace& ws) noexcept;
   /// Share of a diffuse item's power in range bin l, and its velocity-leakage weight in bin j.
   [[nodiscard]] double range_share(const Item& item, long l) const noexcept;
@@ -297,6 +297,17 @@ class Sensor {
   double az_extent_rad_ = 0.0;
   double gain_floor_ = 0.0;  ///< beam_floor_db as a linear two-way power ratio
   std::size_t n_workers_ = 1;
+  /// Worker w takes beams [worker_beams_[w], worker_beams_[w + 1]) (split_beams(), per frame).
+  std::vector<std::size_t> worker_beams_;
+  /// Per beam, this frame's work estimate (a difference array while the items are counted).
+  std::vector<double> beam_work_;
+  /// The work model of split_beams(), in units of a coherent return's work in one beam: a
+  /// diffuse return's (its map rows, and the cells it makes the beam synthesise and test) and a
+  /// beam's own (its noise-only cells' false alarms, its CFAR bookkeeping). From the profile of
+  /// BM_SensorLoopFrame (coherent only and diffuse only); only the split depends on them.
+  static constexpr double kCoherentWork = 1.0, kDiffuseWork = 2.5, kBeamWork = 200.0;
+  /// Splits the beams into the workers' contiguous blocks of about equal work (beam_work_).
+  void split_beams() noexcept;
   /// The scan's beam azimuths ascend: a return's beams are found by bisection, not by testing
   /// every beam.
   bool beams_ascending_ = false;
