@@ -314,6 +314,64 @@ BENCHMARK(BM_SensorReturns)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// The sensor on the default closed loop's own frame (issue 29: "the sensor's synthesis within
+// 5 ms"): the default scenario as `radar-emu run` flies it ([radar] terrain = "engine"): the
+// tracer's returns (no terrain rays) followed by the terrain engine's cells, one diffuse return
+// per lit range-azimuth cell, traced once at the scenario's first pose (argument 1 = 0) or 5 s
+// into the flight (1). Argument 0: threads (0: as many as TBB runs, 1: one, so that the CPU time
+// of the benchmark's thread is the sensor's whole work however loaded the machine).
+struct LoopFrame {
+  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
+  radar_emu::scene::Scene scene{loop::scene_description(s)};
+  std::vector<radar::Contribution> contributions;
+  std::size_t coherent = 0;
+  explicit LoopFrame(double t_s) {
+    scene.set_time(t_s);
+    const radar::RadarPose pose = loop::scripted_pose(s, t_s);
+    radar::SbrConfig cfg = s.sbr;
+    cfg.terrain_rays = false;
+    radar::SbrTracer tracer(scene, cfg);
+    radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
+    const std::size_t cap = tracer.max_contributions();
+    contributions.resize(cap + terrain.max_returns());
+    radar::TraceStats ts;
+    radar::clutter::TerrainStats es;
+    std::uint64_t dropped = 0;
+    const std::span<radar::Contribution> all(contributions);
+    const std::size_t n = tracer.trace(pose, all.first(cap), ts);
+    const std::size_t m = terrain.compute(pose, all.subspan(cap), es, dropped);
+    std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), m,
+                all.begin() + static_cast<std::ptrdiff_t>(n));
+    contributions.resize(n + m);
+    for (const radar::Contribution& c : contributions)
+      coherent += c.coherent ? 1u : 0u;
+  }
+};
+
+void BM_SensorLoopFrame(benchmark::State& state) {
+  static LoopFrame frames[] = {LoopFrame(0.0), LoopFrame(5.0)};
+  const LoopFrame& f = frames[state.range(1)];
+  std::optional<tbb::global_control> serial;
+  if (state.range(0) == 1)
+    serial.emplace(tbb::global_control::max_allowed_parallelism, 1);
+  radar::Sensor sensor(f.s.sensor);
+  std::vector<radar::Detection> detections(f.s.sensor.max_detections);
+  radar::SensorStats ss;
+  for (auto _ : state) {
+    ss = {};
+    benchmark::DoNotOptimize(sensor.process(f.contributions, detections, ss));
+  }
+  state.counters["returns"] = static_cast<double>(f.contributions.size());
+  state.counters["coherent"] = static_cast<double>(f.coherent);
+  state.counters["cells_synthesised"] = static_cast<double>(ss.cells_synthesised);
+  state.counters["detections"] = static_cast<double>(ss.detections);
+  state.SetLabel(serial ? "1 thread" : "all threads");
+}
+BENCHMARK(BM_SensorLoopFrame)
+    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
 // Terrain clutter on the same frame, two ways (issue 28 item 2, issue 29's first lever): the
 // trace with the tracer's terrain rays (argument 1 = 0, [radar] terrain = "rays") against the
 // trace without them plus the terrain engine's cells (1, terrain = "engine": shadows by the

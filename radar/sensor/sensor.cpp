@@ -96,6 +96,7 @@ struct Sensor::Workspace {
   Workspace(const CfarConfig& cfar_config, const RangeDopplerProcessor& p, std::size_t max_hits)
       : image(p.image_cells()),
         clutter((p.range_bins() + 1) * p.velocity_bins()),
+        direct(p.range_bins() * p.velocity_bins()),
         power(p.image_cells()),
         cfar(cfar_config, p.range_bins(), p.velocity_bins()),
         hits(max_hits),
@@ -108,6 +109,10 @@ struct Sensor::Workspace {
   /// Mean clutter power as a difference array along range, transposed: [range bin][velocity
   /// row], N_r + 1 bins (a diffuse return's taps are neighbouring rows: contiguous here).
   std::vector<double> clutter;
+  /// Mean clutter power of the pieces one bin long (most diffuse returns: a terrain cell's
+  /// return covers two bins partly), added to their bin directly (one row an end instead of
+  /// two); same layout, N_r bins. The cell's clutter power is the sum of both.
+  std::vector<double> direct;
   std::vector<double> power;  ///< valid on `synth` only
   Cfar2d cfar;
   std::vector<CfarHit> hits;
@@ -147,18 +152,23 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   // the items in the same order and draws from its own random streams).
   n_workers_ = std::clamp<std::size_t>(
       static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1, antenna_.beams());
+  worker_beams_.resize(n_workers_ + 1);
+  beam_work_.resize(antenna_.beams() + 1);
   gain_floor_ = std::pow(10.0, c.beam_floor_db / 10.0);
   for (std::size_t i = 0; i < antenna_.beams(); ++i)
     workspaces_.push_back(std::make_unique<Workspace>(c.cfar, *processor_, c.max_hits_per_beam));
   items_.resize(c.max_contributions);
+  item_beams_.resize(c.max_contributions);
+  item_bucket_.resize(c.max_contributions);
   if (c.merge_step_bins > 0.0) {
-    std::size_t cap = 1;
+    std::size_t cap = 2;
     while (cap < 2 * c.max_contributions)
       cap <<= 1;
-    merge_table_.assign(cap, -1);
+    merge_table_.assign(cap, 0);
     merge_used_.resize(c.max_contributions);
     merge_keys_.resize(c.max_contributions);
     merge_hash_.resize(c.max_contributions);
+    merge_hashed_.resize(c.max_contributions);
     merge_sums_.resize(c.max_contributions);
   }
   by_range_.resize(c.max_contributions);
@@ -323,16 +333,52 @@ DiffusePieces make_pieces(double range_bin, double half_bins, long nrl) noexcept
 
 }  // namespace
 
-void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
-  const RangeDopplerProcessor& proc = *processor_;
+void Sensor::split_beams() noexcept {
+  // beam_work_ holds the frame's returns' work as a difference array over the beams: its running
+  // sum is each beam's, plus each beam's own detection work. The workers' blocks cut the
+  // cumulative work at equal shares (contiguous, so a return's beams stay together). Any split
+  // gives the same result: each beam adds its returns in input order and draws its own streams.
   const std::size_t n_beams = antenna_.beams();
+  double run = 0.0, total = 0.0;
+  for (std::size_t b = 0; b < n_beams; ++b) {
+    run += beam_work_[b];
+    beam_work_[b] = std::max(run, 0.0) + kBeamWork;
+    total += beam_work_[b];
+  }
+  worker_beams_[0] = 0;
+  double done = 0.0;
+  std::size_t b = 0;
+  for (std::size_t w = 1; w < n_workers_; ++w) {
+    const double share = total * static_cast<double>(w) / static_cast<double>(n_workers_);
+    // Take beams while the block's end is nearer the share with the next beam than without it.
+    while (b < n_beams && done + 0.5 * beam_work_[b] <= share)
+      done += beam_work_[b++];
+    worker_beams_[w] = b;
+  }
+  worker_beams_[n_workers_] = n_beams;
+}
+
+Sensor::BeamSpan Sensor::beam_span(const Item& item) const noexcept {
+  const std::size_t n_beams = antenna_.beams();
+  if (!beams_ascending_)
+    return {0, static_cast<std::uint32_t>(n_beams)};
+  const std::vector<double>& az = config_.antenna.beam_azimuth_rad;
+  return {
+      static_cast<std::uint32_t>(
+          std::lower_bound(az.begin(), az.end(), item.azimuth_rad - az_extent_rad_) - az.begin()),
+      static_cast<std::uint32_t>(
+          std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) - az.begin())};
+}
+
+void Sensor::process_worker(std::size_t w) noexcept {
+  const RangeDopplerProcessor& proc = *processor_;
   const std::size_t nr = proc.range_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
   const auto [dj0, dj1] = proc.velocity_support(proc.config().kernel_half_width_bins);
   const auto nv = static_cast<std::size_t>(nvl);
   // This worker's beams: a contiguous block (a return reaches a few neighbouring beams, so most
-  // returns are prepared by one worker only).
-  const std::size_t beam_begin = w * n_beams / n_workers, beam_end = (w + 1) * n_beams / n_workers;
+  // returns are prepared by one worker only), of about equal work (split_beams()).
+  const std::size_t beam_begin = worker_beams_[w], beam_end = worker_beams_[w + 1];
   // Each return's response is prepared once and added to every beam of this worker that sees it
   // with that beam's two-way gain. Targets: exact response (coherent). Clutter: mean power a
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
@@ -342,28 +388,21 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
   std::uint32_t tap_rows[Footprint::kMaxBins];
   double values[3][Footprint::kMaxBins];  // a diffuse return's pieces, tap by tap
   for (std::size_t i = 0; i < item_count_; ++i) {
-    const Item& item = items_[i];
-    if (!item.usable)
+    // The beams within the azimuth extent of the return (gains_of() tests it again), from the
+    // return's span of the whole scan; items outside this worker's beams are not read.
+    const BeamSpan span = item_beams_[i];
+    const std::size_t b_lowest = span.first;  // the return's first beam in the whole scan
+    const std::size_t b_first = std::max<std::size_t>(beam_begin, span.first),
+                      b_end = std::min<std::size_t>(beam_end, span.end);
+    if (b_first >= b_end)
       continue;
+    const Item& item = items_[i];
     bool prepared = false;
     int n_taps = 0;
     // Diffuse: its range footprint as up to three pieces of the difference array (the bins it
     // partly covers at each end, and the bins between), clipped to the swath once for all beams
     // and taps; `span` is the bins they cover.
     DiffusePieces pieces;
-    // The beams within the azimuth extent of the return (gains_of() tests it again).
-    std::size_t b_first = beam_begin, b_end = beam_end;
-    std::size_t b_lowest = 0;  // the return's first beam in the whole scan
-    if (beams_ascending_) {
-      const std::vector<double>& az = config_.antenna.beam_azimuth_rad;
-      b_lowest = static_cast<std::size_t>(
-          std::lower_bound(az.begin(), az.end(), item.azimuth_rad - az_extent_rad_) - az.begin());
-      b_first = std::max(beam_begin, b_lowest);
-      b_end = std::min(
-          beam_end, static_cast<std::size_t>(
-                        std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) -
-                        az.begin()));
-    }
     // Gaussian pattern on evenly spaced beams (az_rec_): with E(t) = exp(-c t^2) and t the
     // offset from beam b's boresight, t_{b+1} = t_b - Delta, so E(t - Delta) = E(t) r(t) with
     // r(t) = exp(2 c Delta t - c Delta^2) and r(t - Delta) = r(t) exp(-2 c Delta^2): the two
@@ -373,7 +412,7 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
     // whole scan whatever this worker's block, so the result does not depend on the number of
     // workers.
     double rec_a = 0.0, rec_ra = 0.0, rec_b = 0.0, rec_rb = 0.0;
-    if (az_rec_.on && b_first < b_end) {
+    if (az_rec_.on) {
       const double t0 = item.azimuth_rad - config_.antenna.beam_azimuth_rad[b_lowest];
       const double ta = t0 - az_rec_.squint, tb = t0 + az_rec_.squint;
       const double cs = az_rec_.c * az_rec_.step;
@@ -448,6 +487,15 @@ void Sensor::process_worker(std::size_t w, std::size_t n_workers) noexcept {
       for (int k = 0; k < (pieces.single ? 1 : 3); ++k) {
         if (pieces.a[k] > pieces.c[k])
           continue;
+        if (pieces.a[k] == pieces.c[k]) {  // one bin: added to it directly
+          double* at = ws.direct.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
+          const double* x = values[k];
+          for (int t = 0, c = static_cast<int>(tap_rows[0]); t < n_first; ++t, ++c)
+            at[c] += x[t];
+          for (int t = n_first, c = 0; t < n_taps; ++t, ++c)
+            at[c] += x[t];
+          continue;
+        }
         double* on = ws.clutter.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
         double* off = ws.clutter.data() + static_cast<std::size_t>(pieces.c[k] + 1) * nv;
         const double* x = values[k];
@@ -501,18 +549,21 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
         power[l] = std::norm(image[l]);
       }
     };
-    // Clutter power: the running sum of its difference array over the bins it reaches (read
-    // once, and cleared for the next frame as it is read).
+    // Clutter power: the running sum of its difference array over the bins it reaches, plus
+    // the one-bin pieces' power (both read once, and cleared for the next frame as read).
     const std::uint32_t d0 = d.empty() ? sp.end : d.begin, d1 = d.empty() ? sp.end : d.end;
     for (std::uint32_t l = sp.begin; l < d0; ++l)
       synthesise(l, floor_var);
     double run = 0.0;
     double* diff = ws.clutter.data() + j;
+    double* direct = ws.direct.data() + j;
     for (std::uint32_t l = d0; l < d1; ++l) {
       run += diff[l * nv];
       diff[l * nv] = 0.0;
+      const double one_bin = direct[l * nv];
+      direct[l * nv] = 0.0;
       // rounding of the running sum must not go negative
-      synthesise(l, floor_var + std::max(run, 0.0));
+      synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
     }
     if (!d.empty())
       diff[static_cast<std::size_t>(d.end) * nv] = 0.0;
@@ -700,28 +751,47 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
   // and velocity, merge_step_beamwidths of the sum beam in azimuth and elevation) reach the image
   // through responses that differ by less than the direct path's own table step: they are one
   // return, with the sum of their amplitudes at their amplitude-weighted mean position. Open
-  // addressing on a table of twice the contributions; the first return of a cell represents it,
-  // so the result does not depend on anything but the input order.
+  // addressing on a table of at least twice the frame's coherent returns (a power of two); the
+  // first return of a cell represents it, so the result does not depend on anything but the
+  // input order (not on the table's size or the hash).
   // The keys, hashes and weighted positions are computed per item in parallel beforehand
-  // (merge_key()); only the table is walked here, in input order.
-  const std::size_t mask = merge_table_.size() - 1;
+  // (merge_key()); only the table is walked here, in input order. An entry holds the upper half
+  // of its key's hash beside the item, so that a probe of another cell seldom reads its key.
+  std::size_t n_mergeable = 0;
+  for (std::size_t i = 0; i < item_count_; ++i)
+    n_mergeable += merge_hashed_[i];
+  std::size_t size = 2;
+  while (size < 2 * n_mergeable)
+    size <<= 1;
+  const std::size_t mask = size - 1;  // size <= merge_table_.size(): set up for every return
+  std::uint64_t* table = merge_table_.data();
+  // The table's lines are random: fetched kAhead returns ahead of the walk.
+  constexpr std::size_t kAhead = 16;
   std::size_t n_used = 0;
   for (std::size_t i = 0; i < item_count_; ++i) {
-    Item& it = items_[i];
-    if (!it.usable || !it.coherent)
+    if (i + kAhead < item_count_ && merge_hashed_[i + kAhead])
+      __builtin_prefetch(table + (static_cast<std::size_t>(merge_hash_[i + kAhead]) & mask));
+    if (!merge_hashed_[i])
       continue;
     const MergeKey& key = merge_keys_[i];
+    const std::uint64_t tag = merge_hash_[i] >> 32;
     std::size_t slot = static_cast<std::size_t>(merge_hash_[i]) & mask;
-    while (merge_table_[slot] >= 0 &&
-           !(merge_keys_[static_cast<std::size_t>(merge_table_[slot])] == key))
-      slot = (slot + 1) & mask;
-    if (merge_table_[slot] < 0) {  // the first return of its cell represents it
-      merge_table_[slot] = static_cast<std::int32_t>(i);
+    std::size_t rep = 0;
+    bool found = false;
+    for (std::uint64_t e = table[slot]; e != 0; slot = (slot + 1) & mask, e = table[slot]) {
+      rep = static_cast<std::size_t>(e & 0xFFFFFFFFu) - 1;
+      if ((e >> 32) == tag && merge_keys_[rep] == key) {
+        found = true;
+        break;
+      }
+    }
+    if (!found) {  // the first return of its cell represents it
+      table[slot] = (tag << 32) | static_cast<std::uint64_t>(i + 1);
       merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
       continue;
     }
+    Item& it = items_[i];
     const MergeSums& m = merge_sums_[i];
-    const auto rep = static_cast<std::size_t>(merge_table_[slot]);
     Item& r = items_[rep];
     MergeSums& a = merge_sums_[rep];
     r.amplitude += it.amplitude;
@@ -734,14 +804,15 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     a.elevation_rad += m.elevation_rad;
     ++a.count;
     it.usable = false;
+    item_beams_[i] = {};
     ++stats.merged_returns;
   }
   // Each merged cell's representative independently (in parallel): its mean position, and its
   // elevation channels there.
   auto finish = [&](std::size_t u) {
     const std::uint32_t slot = merge_used_[u];
-    const auto rep = static_cast<std::size_t>(merge_table_[slot]);
-    merge_table_[slot] = -1;
+    const auto rep = static_cast<std::size_t>(merge_table_[slot] & 0xFFFFFFFFu) - 1;
+    merge_table_[slot] = 0;
     const MergeSums& a = merge_sums_[rep];
     Item& r = items_[rep];
     if (a.count >= 2 && a.weight > 0.0) {
@@ -754,6 +825,7 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     }
     antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el,
                          r.delta_el);
+    item_beams_[rep] = beam_span(r);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_used, 2048),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -767,14 +839,26 @@ void Sensor::merge_key(std::size_t i) noexcept {
   const double q = 1.0 / config_.merge_step_bins;
   const double da = config_.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad();
   const double de = config_.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad();
-  auto cell = [](double x) { return static_cast<long long>(std::floor(x)); };  // x is finite
+  // floor(x) for finite x within +-2^63: truncation, one less below zero off the integers
+  // (std::floor is a library call without SSE4.1).
+  auto cell = [](double x) {
+    const auto t = static_cast<long long>(x);
+    return t - (x < static_cast<double>(t) ? 1 : 0);
+  };
   const MergeKey key{it.object_id, cell(it.pos.range_bin * q), cell(it.pos.velocity_bin * q),
                      cell(it.azimuth_rad / da), cell(it.elevation_rad / de)};
   merge_keys_[i] = key;
-  merge_hash_[i] =
-      stream_key(key.object_id, static_cast<std::uint64_t>(key.range),
-                 static_cast<std::uint64_t>(key.velocity), static_cast<std::uint64_t>(key.azimuth),
-                 static_cast<std::uint64_t>(key.elevation));
+  // The hash places the key in the table only (the result does not depend on it): one
+  // multiply a field, then splitmix64's finaliser (Steele, Lea and Flood, "Fast splittable
+  // pseudorandom number generators", OOPSLA 2014).
+  std::uint64_t h = key.object_id * 0x9e3779b97f4a7c15ull;
+  for (long long v : {key.range, key.velocity, key.azimuth, key.elevation})
+    h = (h ^ static_cast<std::uint64_t>(v)) * 0xd1342543de82ef95ull;
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  h ^= h >> 31;
+  merge_hash_[i] = h;
+  merge_hashed_[i] = 1;
   const double w = std::abs(it.amplitude);
   merge_sums_[i] = {w,
                     w * it.pos.range_bin,
@@ -822,6 +906,9 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     Item& it = items_[i];
     it.usable = false;
     it.reject = 0;
+    item_beams_[i] = {};
+    if (!merge_hashed_.empty())
+      merge_hashed_[i] = 0;
     if (!finite(c) || !(c.range_m > 0.0)) {
       it.reject = 1;
       return;
@@ -845,34 +932,48 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     it.usable = true;
     // The elevation channels: of a coherent return once merged (merge_returns(), at the merged
     // elevation), of the others now.
-    if (it.coherent && !merge_table_.empty())
+    if (it.coherent && !merge_table_.empty()) {
       merge_key(i);
-    else
+    } else {
       antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
                            it.delta_el);
+      item_beams_[i] = beam_span(it);
+    }
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       for (std::size_t i = r.begin(); i != r.end(); ++i)
                         prepare(i);
                     });
-  for (std::size_t i = 0; i < contributions.size(); ++i) {
-    stats.rejected_input += items_[i].reject == 1 ? 1u : 0u;
-    stats.out_of_grid += items_[i].reject == 2 ? 1u : 0u;
-  }
   if (config_.merge_step_bins > 0.0)
     merge_returns(stats);
+  // One pass over the items (the counts, then each usable item's bucket, kept for the second
+  // pass, which then reads 4 bytes an item).
+  constexpr std::uint32_t kNoBucket = 0xFFFFFFFFu;
+  std::fill(beam_work_.begin(), beam_work_.end(), 0.0);
   for (std::size_t i = 0; i < item_count_; ++i) {
-    if (items_[i].usable) {
-      max_half_bins_ = std::max(max_half_bins_, items_[i].half_bins);
-      ++range_start_[bucket_of(items_[i]) + 1];
+    const Item& it = items_[i];
+    stats.rejected_input += it.reject == 1 ? 1u : 0u;
+    stats.out_of_grid += it.reject == 2 ? 1u : 0u;
+    item_bucket_[i] = kNoBucket;
+    if (it.usable) {
+      max_half_bins_ = std::max(max_half_bins_, it.half_bins);
+      const std::size_t bucket = bucket_of(it);
+      item_bucket_[i] = static_cast<std::uint32_t>(bucket);
+      ++range_start_[bucket + 1];
+      // The work it brings to each beam of its span (a difference array over the beams).
+      const BeamSpan span = item_beams_[i];
+      const double work = it.coherent ? kCoherentWork : kDiffuseWork;
+      beam_work_[span.first] += work;
+      beam_work_[span.end] -= work;
     }
   }
+  split_beams();
   for (std::size_t b = 0; b + 1 < range_start_.size(); ++b)
     range_start_[b + 1] += range_start_[b];
   for (std::size_t i = 0; i < item_count_; ++i)
-    if (items_[i].usable)
-      by_range_[range_start_[bucket_of(items_[i])]++] = static_cast<std::uint32_t>(i);
+    if (item_bucket_[i] != kNoBucket)
+      by_range_[range_start_[item_bucket_[i]]++] = static_cast<std::uint32_t>(i);
   for (std::size_t b = range_start_.size() - 1; b > 0; --b)  // restore the starts
     range_start_[b] = range_start_[b - 1];
   range_start_[0] = 0;
@@ -899,8 +1000,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     ws->crossings = ws->overflowed = ws->synthesised = 0;
   // Beams are independent; worker w handles the w-th block of beams. Every random stream is keyed
   // by (seed, frame, beam, ...), so the result does not depend on the schedule.
-  tbb::parallel_for(std::size_t{0}, n_workers_,
-                    [&](std::size_t w) { process_worker(w, n_workers_); });
+  tbb::parallel_for(std::size_t{0}, n_workers_, [&](std::size_t w) { process_worker(w); });
   for (auto& ws : workspaces_) {
     stats.cfar_crossings += ws->crossings;
     stats.hits_overflowed += ws->overflowed;

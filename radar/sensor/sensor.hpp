@@ -245,16 +245,19 @@ class Sensor {
     double azimuth_rad = 0, elevation_rad = 0;
     std::uint32_t count = 0;
   };
-  std::vector<std::int32_t> merge_table_;  ///< open addressing: item index or -1
-  std::vector<std::uint32_t> merge_used_;  ///< slots taken this frame
-  std::vector<MergeKey> merge_keys_;       ///< per usable coherent item
-  std::vector<std::uint64_t> merge_hash_;  ///< ... its key's hash
-  std::vector<MergeSums> merge_sums_;      ///< ... its own weighted position, then the cell's
+  /// Open addressing, the first 2^k >= 2 x (the frame's coherent returns) entries: 0 empty,
+  /// else (the key hash's upper 32 bits << 32) | (item index + 1).
+  std::vector<std::uint64_t> merge_table_;
+  std::vector<std::uint32_t> merge_used_;   ///< slots taken this frame
+  std::vector<MergeKey> merge_keys_;        ///< per usable coherent item
+  std::vector<std::uint64_t> merge_hash_;   ///< ... its key's hash
+  std::vector<std::uint8_t> merge_hashed_;  ///< per item: 1 when it has a key (usable, coherent)
+  std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position, then the cell's
   /// Item i's merge key, hash and weighted position (prepare step, in parallel).
   void merge_key(std::size_t i) noexcept;
-  /// Worker w: accumulates every item into its beams (the w-th of W contiguous blocks), then
-  /// detects in them.
-  void process_worker(std::size_t w, std::size_t n_workers) noexcept;
+  /// Worker w: accumulates every item into its beams (the w-th of the contiguous blocks of
+  /// worker_beams_), then detects in them.
+  void process_worker(std::size_t w) noexcept;
   void detect_beam(std::size_t beam, Workspace& ws) noexcept;
   /// Share of a diffuse item's power in range bin l, and its velocity-leakage weight in bin j.
   [[nodiscard]] double range_share(const Item& item, long l) const noexcept;
@@ -269,7 +272,17 @@ class Sensor {
   Antenna antenna_;
   std::unique_ptr<RangeDopplerProcessor> processor_;  ///< const after setup: shared by workers
   std::vector<std::unique_ptr<Workspace>> workspaces_;
-  std::vector<Item> items_;                 ///< this frame's contributions
+  std::vector<Item> items_;  ///< this frame's contributions
+  /// Per item: the beams [first, end) of the whole scan whose azimuth extent holds it (every
+  /// beam when the beams do not ascend; none when the item is not usable), so that a worker
+  /// skips the items outside its beams without reading them.
+  struct BeamSpan {
+    std::uint32_t first = 0, end = 0;
+  };
+  std::vector<BeamSpan> item_beams_;
+  /// Item i's beam span from its azimuth (usable items).
+  [[nodiscard]] BeamSpan beam_span(const Item& item) const noexcept;
+  std::vector<std::uint32_t> item_bucket_;  ///< per item: its nearest range bin, or ~0 (unusable)
   std::vector<std::uint32_t> by_range_;     ///< item indices sorted by nearest range bin
   std::vector<std::uint32_t> range_start_;  ///< by_range_ offset of each range bin (+1 entry)
   std::size_t item_count_ = 0;
@@ -284,6 +297,17 @@ class Sensor {
   double az_extent_rad_ = 0.0;
   double gain_floor_ = 0.0;  ///< beam_floor_db as a linear two-way power ratio
   std::size_t n_workers_ = 1;
+  /// Worker w takes beams [worker_beams_[w], worker_beams_[w + 1]) (split_beams(), per frame).
+  std::vector<std::size_t> worker_beams_;
+  /// Per beam, this frame's work estimate (a difference array while the items are counted).
+  std::vector<double> beam_work_;
+  /// The work model of split_beams(), in units of a coherent return's work in one beam: a
+  /// diffuse return's (its map rows, and the cells it makes the beam synthesise and test) and a
+  /// beam's own (its noise-only cells' false alarms, its CFAR bookkeeping). From the profile of
+  /// BM_SensorLoopFrame (coherent only and diffuse only); only the split depends on them.
+  static constexpr double kCoherentWork = 1.0, kDiffuseWork = 2.5, kBeamWork = 200.0;
+  /// Splits the beams into the workers' contiguous blocks of about equal work (beam_work_).
+  void split_beams() noexcept;
   /// The scan's beam azimuths ascend: a return's beams are found by bisection, not by testing
   /// every beam.
   bool beams_ascending_ = false;
