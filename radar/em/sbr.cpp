@@ -36,14 +36,35 @@ inline glm::dvec3 v_pol(const glm::dvec3& up, const glm::dvec3& boresight, const
 }
 
 // The antenna's polarisation vector of channel `h` (H: true, V: false) for a wave along `d`
-// (from the radar): V as above, H = V x d (SbrConfig::polarisation).
+// (from the radar): V as above, H = V x d (SbrConfig::polarisation), a unit vector to rounding
+// as it is (V is a unit vector perpendicular to the unit d).
 inline glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
                              const glm::dvec3& d) {
   const glm::dvec3 v = v_pol(up, boresight, d);
-  if (!h)
-    return v;
-  const glm::dvec3 x = glm::cross(v, d);
-  return x * (1.0 / std::sqrt(glm::dot(x, x)));
+  return h ? glm::cross(v, d) : v;
+}
+
+// pol_vector(h, up, boresight, d) for a return arriving along d (from the radar, world), given
+// d in the antenna frame, `a` (x boresight, y right, z down), and h = sqrt(a_x^2 + a_y^2), the
+// cosine of its elevation. There V = unit(up_a - (up_a . a) a) with up_a = (0, 0, -1) is
+// (a_z a_x, a_z a_y, a_z^2 - 1) / |.| = (a_z a_x / h, a_z a_y / h, -h) for a unit a (a_z^2 - 1 =
+// -h^2, |.| = h): the antenna's up rotated toward d by the elevation, free of the cancellation of
+// up - (up . d) d near the vertical and of its square root. Within 1e-8 of the vertical (h <
+// 1e-8) it is pol_vector itself, which falls back on the boresight where V is undefined.
+inline glm::dvec3 receive_pol(bool h, const glm::dmat3& world_from_antenna, const glm::dvec3& up,
+                              const glm::dvec3& boresight, const glm::dvec3& d, const glm::dvec3& a,
+                              double cos_el) {
+  if (!(cos_el >= 1e-8))
+    return pol_vector(h, up, boresight, d);
+  const double inv = 1.0 / cos_el;
+  const glm::dvec3 v = world_from_antenna * glm::dvec3(a.z * a.x * inv, a.z * a.y * inv, -cos_el);
+  return h ? glm::cross(v, d) : v;
+}
+
+// The product of two finite complex numbers: the real products and sums that std::complex's
+// multiplication forms, without its NaN recovery (libgcc's __muldc3).
+inline std::complex<double> times(std::complex<double> x, std::complex<double> y) noexcept {
+  return {x.real() * y.real() - x.imag() * y.imag(), x.real() * y.imag() + x.imag() * y.real()};
 }
 
 // azel_from_direction for a return's direction of arrival (an output, no decision rests on
@@ -834,18 +855,22 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         }
         if (visible) {  // written now, kept (counted) once its shadow ray is known to be clear
           const TubeFootprint fp = tube_footprint(st.u * path_m, st.v * path_m, d, n, s);
-          const glm::dvec3 p = pol_vector(rx_h, up, boresight, -s);
+          // The direction of arrival in the antenna frame gives both the return's angles and
+          // the receive polarisation (receive_pol).
+          const glm::dvec3 arrival = antenna_from_world * (-s);
+          const double arrival_h = std::sqrt(arrival.x * arrival.x + arrival.y * arrival.y);
+          const glm::dvec3 p = receive_pol(rx_h, r, up, boresight, -s, arrival, arrival_h);
           const double total_m = path_m + back_m;
           Contribution& out = st.slot[*st.count];
-          out.amplitude =
-              po_amplitude_m(k, p, po_source(st.e, d, n, s, rc, pec), footprint_integral(fp, k)) *
-              std::polar(1.0, -k * total_m);
+          out.amplitude = times(
+              po_amplitude_m(k, p, po_source(st.e, d, n, s, rc, pec), footprint_integral(fp, k)),
+              std::polar(1.0, -k * total_m));
           out.range_m = 0.5 * total_m;
           out.range_spread_m = 0.0;
           out.radial_velocity_mps = 0.5 * (st.path_rate + glm::dot(pose.velocity_mps - v_obj, s));
-          const AzEl ae = arrival_azel(antenna_from_world * (-s));
-          out.azimuth_rad = ae.azimuth_rad;
-          out.elevation_rad = ae.elevation_rad;
+          // arrival_azel(arrival), its square root shared.
+          out.azimuth_rad = std::atan2(arrival.y, arrival.x);
+          out.elevation_rad = std::atan2(-arrival.z, arrival_h);
           out.object_id = st.path_owner;
           out.radiated_by_owner = hit.object_id == st.path_owner;
           out.bounces = static_cast<std::uint8_t>(bounce + 1);

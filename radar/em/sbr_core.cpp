@@ -110,7 +110,12 @@ double footprint_integral(const TubeFootprint& f, double k) noexcept {
 
 cplx po_amplitude_m(double k, const glm::dvec3& p, const CVec& source,
                     double integral_m2) noexcept {
-  return cplx(0.0, -k / std::sqrt(kPi)) * (0.5 * dot(p, source)) * integral_m2;
+  // -j c z for c = k / sqrt(pi), z = (p . src) / 2: (c Im z, -c Re z), the products the complex
+  // multiplication by (0, -c) forms, without its NaN recovery (libgcc's __muldc3) that finite
+  // operands never need.
+  const double c = k / std::sqrt(kPi);
+  const cplx z = 0.5 * dot(p, source);
+  return {c * z.imag() * integral_m2, -c * z.real() * integral_m2};
 }
 
 std::array<glm::dvec3, kFacetSamples> facet_samples(const glm::dvec3& v0, const glm::dvec3& v1,
