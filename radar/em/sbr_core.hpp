@@ -26,6 +26,8 @@
 #include <vector>
 
 #include "common/polarisation.hpp"
+#include "common/sinc.hpp"
+#include "common/units.hpp"
 
 namespace radar_emu::radar {
 
@@ -103,15 +105,29 @@ struct CVec {
 /// The local reflection of field `e` travelling along `d` off a surface with unit normal `n`
 /// facing the wave (n.d < 0), reflected direction d_r = mirror(d, n), in the basis of
 /// ReflectionCoefficients. `pec`: E_r = -E + 2 (n.E) n (tangential E flips, normal E stays).
-[[nodiscard]] CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r,
-                                 const glm::dvec3& n, const ReflectionCoefficients& r,
-                                 bool pec) noexcept;
+/// (Inline: the PEC case is a few products; the general case is reflect_field_general.)
+[[nodiscard]] CVec reflect_field_general(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r,
+                                         const glm::dvec3& n,
+                                         const ReflectionCoefficients& r) noexcept;
+[[nodiscard]] inline CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r,
+                                        const glm::dvec3& n, const ReflectionCoefficients& r,
+                                        bool pec) noexcept {
+  if (pec)  // tangential E flips, normal E stays: E_r = -E + 2 (n.E) n
+    return {2.0 * glm::dot(n, e.re) * n - e.re, 2.0 * glm::dot(n, e.im) * n - e.im};
+  return reflect_field_general(e, d, d_r, n, r);
+}
 
 /// eta J - s x M of the PO currents of the local reflection (header), per unit area, radiating
 /// toward s.
-[[nodiscard]] CVec po_source(const CVec& e, const glm::dvec3& d, const glm::dvec3& n,
-                             const glm::dvec3& s, const ReflectionCoefficients& r,
-                             bool pec) noexcept;
+[[nodiscard]] CVec po_source_general(const CVec& e, const glm::dvec3& d, const glm::dvec3& n,
+                                     const glm::dvec3& s, const ReflectionCoefficients& r) noexcept;
+[[nodiscard]] inline CVec po_source(const CVec& e, const glm::dvec3& d, const glm::dvec3& n,
+                                    const glm::dvec3& s, const ReflectionCoefficients& r,
+                                    bool pec) noexcept {
+  if (pec)  // eta J = 2 n x (d x E), M = 0
+    return {2.0 * glm::cross(n, glm::cross(d, e.re)), 2.0 * glm::cross(n, glm::cross(d, e.im))};
+  return po_source_general(e, d, n, s, r);
+}
 
 /// A ray tube's footprint on a facet: its edge vectors (tube_u, tube_v at the hit, [m])
 /// projected along d onto the plane of normal n, and the taper lengths of the footprint
@@ -123,19 +139,43 @@ struct TubeFootprint {
   double area_m2 = 0.0;
   double taper_u_m = 0.0, taper_v_m = 0.0;
 };
-[[nodiscard]] TubeFootprint tube_footprint(const glm::dvec3& tube_u_m, const glm::dvec3& tube_v_m,
-                                           const glm::dvec3& d, const glm::dvec3& n,
-                                           const glm::dvec3& s) noexcept;
-/// area sinc(k taper_u) sinc(k taper_v) [m^2] at wavenumber k [rad/m].
-[[nodiscard]] double footprint_integral(const TubeFootprint& f,
-                                        double wavenumber_rad_per_m) noexcept;
+[[nodiscard]] inline TubeFootprint tube_footprint(const glm::dvec3& tube_u_m,
+                                                  const glm::dvec3& tube_v_m, const glm::dvec3& d,
+                                                  const glm::dvec3& n,
+                                                  const glm::dvec3& s) noexcept {
+  const double n_d = glm::dot(n, d);
+  TubeFootprint f;
+  f.u_m = tube_u_m - d * (glm::dot(n, tube_u_m) / n_d);
+  f.v_m = tube_v_m - d * (glm::dot(n, tube_v_m) / n_d);
+  f.area_m2 = glm::length(glm::cross(f.u_m, f.v_m));
+  f.taper_u_m = 0.5 * glm::dot(s - d, f.u_m);
+  f.taper_v_m = 0.5 * glm::dot(s - d, f.v_m);
+  return f;
+}
+/// area sinc(k taper_u) sinc(k taper_v) [m^2] at wavenumber k [rad/m]. Away from 0 (both
+/// arguments at least 1e-3, sinc's series threshold) as area sin(a) sin(b) / (a b): one division
+/// instead of two, the same value to rounding.
+[[nodiscard]] inline double footprint_integral(const TubeFootprint& f,
+                                               double wavenumber_rad_per_m) noexcept {
+  const double a = wavenumber_rad_per_m * f.taper_u_m, b = wavenumber_rad_per_m * f.taper_v_m;
+  if (std::abs(a) < 1e-3 || std::abs(b) < 1e-3)
+    return f.area_m2 * common::sinc(a) * common::sinc(b);
+  return f.area_m2 * (std::sin(a) * std::sin(b)) / (a * b);
+}
 
 /// The scattering amplitude [m] of a footprint (header): -j k / sqrt(pi) * (p . src) / 2 *
 /// integral, phase referred to the hit point (the caller multiplies by its path phase).
-[[nodiscard]] std::complex<double> po_amplitude_m(double wavenumber_rad_per_m,
-                                                  const glm::dvec3& receive_polarisation,
-                                                  const CVec& source,
-                                                  double footprint_integral_m2) noexcept;
+[[nodiscard]] inline std::complex<double> po_amplitude_m(double wavenumber_rad_per_m,
+                                                         const glm::dvec3& receive_polarisation,
+                                                         const CVec& source,
+                                                         double footprint_integral_m2) noexcept {
+  // -j c z for c = k / sqrt(pi), z = (p . src) / 2: (c Im z, -c Re z), the products the complex
+  // multiplication by (0, -c) forms, without its NaN recovery (libgcc's __muldc3) that finite
+  // operands never need.
+  const double c = wavenumber_rad_per_m / std::sqrt(common::kPi);
+  const std::complex<double> z = 0.5 * dot(receive_polarisation, source);
+  return {c * z.imag() * footprint_integral_m2, -c * z.real() * footprint_integral_m2};
+}
 
 // --- Visibility rules shared by both engines (docs/validation.md, "Visibility rules"). ---------
 
