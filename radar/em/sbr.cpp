@@ -718,7 +718,7 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
       RayState& st = rays[q];
       if (!st.active)
         continue;
-      scene::Ray ray;
+      scene::Ray& ray = segments[n_seg];  // kept (n_seg counts it) unless the ray ends here
       ray.origin_m = st.origin;
       ray.direction = st.d;
       ray.t_near_m = 0.0;  // reflected rays start lifted off the surface (below)
@@ -734,7 +734,6 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         st.active = false;
         continue;
       }
-      segments[n_seg] = ray;
       segment_of[n_seg++] = static_cast<std::uint32_t>(q);
     }
     if (n_seg == 0)
@@ -887,16 +886,15 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         st.active = false;
         continue;
       }
-      const glm::dvec3 d_r = mirror(d, n);
+      st.d = mirror(d, n);  // d_r (written in place: no copy of a temporary)
       if (st.met_target) {
-        st.e = reflect_field(st.e, d, d_r, n, rc, pec);
+        st.e = reflect_field(st.e, d, st.d, n, rc, pec);
       } else {  // no return yet: the field may never be needed (pruned, lost, owned by another)
         st.pending_surface = &sm;
         st.pending_d = d;
         st.pending_n = n;
         st.pending_cos = cos_i;
       }
-      st.d = d_r;
       st.u = mirror(st.u, n);
       st.v = mirror(st.v, n);
       st.origin = hit.position_m + off * n;  // lifted to the lit side: no self-hit
