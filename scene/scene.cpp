@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -14,6 +15,10 @@
 #include <string>
 
 #include "scene/trajectory.hpp"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 // Structure of the acceleration:
 //   static_scene: one Embree triangle geometry per static object, vertices pre-transformed to
@@ -113,19 +118,34 @@ bool to_embree(const Ray& ray, RTCRay& r) noexcept {
     return false;
   }
   constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+  const float tnear = static_cast<float>(std::clamp(ray.t_near_m, 0.0, kFloatMax));
+  const float tfar = ray.t_far_m >= kFloatMax ? std::numeric_limits<float>::infinity()
+                                              : static_cast<float>(std::max(ray.t_far_m, 0.0));
+#if defined(__SSE2__)
+  // Each 16-byte row (origin + tnear, direction + time, tfar + mask + id + flags) as one store:
+  // Embree loads the rows as 16-byte vectors, which a store-to-load forward serves only from a
+  // store that covers them (scalar stores make each query wait for them to retire).
+  _mm_storeu_ps(&r.org_x,
+                _mm_setr_ps(static_cast<float>(ray.origin_m.x), static_cast<float>(ray.origin_m.y),
+                            static_cast<float>(ray.origin_m.z), tnear));
+  _mm_storeu_ps(&r.dir_x, _mm_setr_ps(static_cast<float>(ray.direction.x),
+                                      static_cast<float>(ray.direction.y),
+                                      static_cast<float>(ray.direction.z), 0.0f));
+  _mm_storeu_ps(&r.tfar, _mm_castsi128_ps(_mm_setr_epi32(std::bit_cast<int>(tfar), -1, 0, 0)));
+#else
   r.org_x = static_cast<float>(ray.origin_m.x);
   r.org_y = static_cast<float>(ray.origin_m.y);
   r.org_z = static_cast<float>(ray.origin_m.z);
   r.dir_x = static_cast<float>(ray.direction.x);
   r.dir_y = static_cast<float>(ray.direction.y);
   r.dir_z = static_cast<float>(ray.direction.z);
-  r.tnear = static_cast<float>(std::clamp(ray.t_near_m, 0.0, kFloatMax));
-  r.tfar = ray.t_far_m >= kFloatMax ? std::numeric_limits<float>::infinity()
-                                    : static_cast<float>(std::max(ray.t_far_m, 0.0));
+  r.tnear = tnear;
+  r.tfar = tfar;
   r.time = 0.0f;
   r.mask = 0xFFFFFFFFu;
   r.id = 0;
   r.flags = 0;
+#endif
   return true;
 }
 
