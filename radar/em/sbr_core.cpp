@@ -39,6 +39,12 @@ inline cplx principal_sqrt(cplx z) noexcept {
   return {std::abs(y) / (2.0 * t), std::copysign(t, y)};
 }
 
+// The product of two finite complex numbers: the real products and sums std::complex's
+// multiplication forms, without its NaN recovery (libgcc's __muldc3).
+inline cplx times(cplx x, cplx y) noexcept {
+  return {x.real() * y.real() - x.imag() * y.imag(), x.real() * y.imag() + x.imag() * y.real()};
+}
+
 }  // namespace
 
 ReflectionCoefficients reflection_coefficients(const SurfaceModel& surface, double cos_incidence,
@@ -73,9 +79,10 @@ CVec reflect_field_general(const CVec& e, const glm::dvec3& d, const glm::dvec3&
     if (len == 0.0)
       return {};
   }
-  e_perp /= len;
+  e_perp *= 1.0 / len;  // one division (the field's basis: a unit vector to rounding)
   const glm::dvec3 e_par_i = glm::cross(e_perp, d), e_par_r = glm::cross(e_perp, d_r);
-  return scale(r.perp * dot(e_perp, e), e_perp) + scale(r.par * dot(e_par_i, e), e_par_r);
+  return scale(times(r.perp, dot(e_perp, e)), e_perp) +
+         scale(times(r.par, dot(e_par_i, e)), e_par_r);
 }
 
 CVec po_source_general(const CVec& e, const glm::dvec3& d, const glm::dvec3& n, const glm::dvec3& s,
