@@ -67,6 +67,12 @@ inline std::complex<double> times(std::complex<double> x, std::complex<double> y
   return {x.real() * y.real() - x.imag() * y.imag(), x.real() * y.imag() + x.imag() * y.real()};
 }
 
+// std::polar(1.0, phase_rad), by sin_cos (sbr_core.hpp).
+inline std::complex<double> unit_phasor(double phase_rad) noexcept {
+  const SinCos sc = sin_cos(phase_rad);
+  return {sc.cos, sc.sin};
+}
+
 // azel_from_direction for a return's direction of arrival (an output, no decision rests on
 // it): sqrt(x^2 + y^2) for hypot(x, y), whose overflow guard a unit vector does not need.
 inline AzEl arrival_azel(const glm::dvec3& d) noexcept {
@@ -863,7 +869,7 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
           Contribution& out = st.slot[*st.count];
           out.amplitude = times(
               po_amplitude_m(k, p, po_source(st.e, d, n, s, rc, pec), footprint_integral(fp, k)),
-              std::polar(1.0, -k * total_m));
+              unit_phasor(-k * total_m));
           out.range_m = 0.5 * total_m;
           out.range_spread_m = 0.0;
           out.radial_velocity_mps = 0.5 * (st.path_rate + glm::dot(pose.velocity_mps - v_obj, s));
