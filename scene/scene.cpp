@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -14,6 +15,10 @@
 #include <string>
 
 #include "scene/trajectory.hpp"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 // Structure of the acceleration:
 //   static_scene: one Embree triangle geometry per static object, vertices pre-transformed to
@@ -113,19 +118,34 @@ bool to_embree(const Ray& ray, RTCRay& r) noexcept {
     return false;
   }
   constexpr double kFloatMax = static_cast<double>(std::numeric_limits<float>::max());
+  const float tnear = static_cast<float>(std::clamp(ray.t_near_m, 0.0, kFloatMax));
+  const float tfar = ray.t_far_m >= kFloatMax ? std::numeric_limits<float>::infinity()
+                                              : static_cast<float>(std::max(ray.t_far_m, 0.0));
+#if defined(__SSE2__)
+  // Each 16-byte row (origin + tnear, direction + time, tfar + mask + id + flags) as one store:
+  // Embree loads the rows as 16-byte vectors, which a store-to-load forward serves only from a
+  // store that covers them (scalar stores make each query wait for them to retire).
+  _mm_storeu_ps(&r.org_x,
+                _mm_setr_ps(static_cast<float>(ray.origin_m.x), static_cast<float>(ray.origin_m.y),
+                            static_cast<float>(ray.origin_m.z), tnear));
+  _mm_storeu_ps(&r.dir_x, _mm_setr_ps(static_cast<float>(ray.direction.x),
+                                      static_cast<float>(ray.direction.y),
+                                      static_cast<float>(ray.direction.z), 0.0f));
+  _mm_storeu_ps(&r.tfar, _mm_castsi128_ps(_mm_setr_epi32(std::bit_cast<int>(tfar), -1, 0, 0)));
+#else
   r.org_x = static_cast<float>(ray.origin_m.x);
   r.org_y = static_cast<float>(ray.origin_m.y);
   r.org_z = static_cast<float>(ray.origin_m.z);
   r.dir_x = static_cast<float>(ray.direction.x);
   r.dir_y = static_cast<float>(ray.direction.y);
   r.dir_z = static_cast<float>(ray.direction.z);
-  r.tnear = static_cast<float>(std::clamp(ray.t_near_m, 0.0, kFloatMax));
-  r.tfar = ray.t_far_m >= kFloatMax ? std::numeric_limits<float>::infinity()
-                                    : static_cast<float>(std::max(ray.t_far_m, 0.0));
+  r.tnear = tnear;
+  r.tfar = tfar;
   r.time = 0.0f;
   r.mask = 0xFFFFFFFFu;
   r.id = 0;
   r.flags = 0;
+#endif
   return true;
 }
 
@@ -297,10 +317,15 @@ struct Scene::Impl {
   // Per object: its current world box padded as ray_crosses_box pads it (kept for the movers,
   // whose boxes every query tests: refresh_padded_bounds after each move).
   std::vector<PaddedBox> padded_bounds;
+  // Per object: 1 when world_from_body is the identity (static objects placed in world), so the
+  // refit (finish_intersect) takes the mesh's vertices as they are; kept with padded_bounds.
+  std::vector<std::uint8_t> identity_placement;
   void refresh_padded_bounds() noexcept {
-    for (const Mover& mv : movers)
+    for (const Mover& mv : movers) {
       padded_bounds[mv.object] =
           pad(states[mv.object].bounds_min_m, states[mv.object].bounds_max_m);
+      identity_placement[mv.object] = world_from_body[mv.object] == glm::dmat4(1.0) ? 1 : 0;
+    }
   }
   std::vector<glm::dvec3> bounds_min_at_zero_m;  // world bounds at t = 0, per object
   std::vector<glm::dvec3> bounds_max_at_zero_m;
@@ -706,6 +731,9 @@ Scene::Scene(SceneDescription description) : impl_(std::make_unique<Impl>()) {
   rtcSetDeviceErrorFunction(m.device, device_error, &m.errors);
   m.build();
   m.padded_bounds.assign(m.states.size(), PaddedBox{});
+  m.identity_placement.resize(m.states.size());
+  for (std::size_t id = 0; id < m.states.size(); ++id)
+    m.identity_placement[id] = m.world_from_body[id] == glm::dmat4(1.0) ? 1 : 0;
   m.refresh_padded_bounds();
 }
 
@@ -788,10 +816,10 @@ bool Scene::Impl::finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) cons
   if (prim >= o.mesh.triangles.size())
     return false;
   const glm::uvec3 tri = o.mesh.triangles[prim];
-  const glm::dmat4& x = m.world_from_body[object];
   glm::dvec3 a(o.mesh.positions_m[tri.x]), b(o.mesh.positions_m[tri.y]),
       c(o.mesh.positions_m[tri.z]);
-  if (x != glm::dmat4(1.0)) {  // the identity (static objects placed in world) changes nothing
+  if (m.identity_placement[object] == 0) {  // the identity changes nothing
+    const glm::dmat4& x = m.world_from_body[object];
     a = glm::dvec3(x * glm::dvec4(a, 1.0));
     b = glm::dvec3(x * glm::dvec4(b, 1.0));
     c = glm::dvec3(x * glm::dvec4(c, 1.0));
@@ -808,8 +836,12 @@ bool Scene::Impl::finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) cons
     const glm::dvec3 tvec = ray.origin_m - a;
     const glm::dvec3 qvec = glm::cross(tvec, e1);
     const double t_refit = glm::dot(e2, qvec) / det;
-    const double scale = 1.0 + std::abs(t) + glm::length(ray.origin_m);
-    if (std::isfinite(t_refit) && std::abs(t_refit - t) <= 1e-4 * scale)
+    // Accepted within 1e-4 (1 + |t| + |origin|). The bound without |origin| is no larger (each
+    // rounded step is monotonic), so a refit within it is accepted without the square root.
+    const double diff = std::abs(t_refit - t);
+    const double base = 1.0 + std::abs(t);
+    if (std::isfinite(t_refit) &&
+        (diff <= 1e-4 * base || diff <= 1e-4 * (base + glm::length(ray.origin_m))))
       t = t_refit;
   }
   hit.t_m = t;

@@ -38,14 +38,41 @@ inline glm::dvec3 v_pol(const glm::dvec3& up, const glm::dvec3& boresight, const
 }
 
 // The antenna's polarisation vector of channel `h` (H: true, V: false) for a wave along `d`
-// (from the radar): V as above, H = V x d (SbrConfig::polarisation).
+// (from the radar): V as above, H = V x d (SbrConfig::polarisation), a unit vector to rounding
+// as it is (V is a unit vector perpendicular to the unit d).
 inline glm::dvec3 pol_vector(bool h, const glm::dvec3& up, const glm::dvec3& boresight,
                              const glm::dvec3& d) {
   const glm::dvec3 v = v_pol(up, boresight, d);
-  if (!h)
-    return v;
-  const glm::dvec3 x = glm::cross(v, d);
-  return x * (1.0 / std::sqrt(glm::dot(x, x)));
+  return h ? glm::cross(v, d) : v;
+}
+
+// pol_vector(h, up, boresight, d) for a return arriving along d (from the radar, world), given
+// d in the antenna frame, `a` (x boresight, y right, z down), and h = sqrt(a_x^2 + a_y^2), the
+// cosine of its elevation. There V = unit(up_a - (up_a . a) a) with up_a = (0, 0, -1) is
+// (a_z a_x, a_z a_y, a_z^2 - 1) / |.| = (a_z a_x / h, a_z a_y / h, -h) for a unit a (a_z^2 - 1 =
+// -h^2, |.| = h): the antenna's up rotated toward d by the elevation, free of the cancellation of
+// up - (up . d) d near the vertical and of its square root. Within 1e-8 of the vertical (h <
+// 1e-8) it is pol_vector itself, which falls back on the boresight where V is undefined.
+inline glm::dvec3 receive_pol(bool h, const glm::dmat3& world_from_antenna, const glm::dvec3& up,
+                              const glm::dvec3& boresight, const glm::dvec3& d, const glm::dvec3& a,
+                              double cos_el) {
+  if (!(cos_el >= 1e-8))
+    return pol_vector(h, up, boresight, d);
+  const double inv = 1.0 / cos_el;
+  const glm::dvec3 v = world_from_antenna * glm::dvec3(a.z * a.x * inv, a.z * a.y * inv, -cos_el);
+  return h ? glm::cross(v, d) : v;
+}
+
+// The product of two finite complex numbers: the real products and sums that std::complex's
+// multiplication forms, without its NaN recovery (libgcc's __muldc3).
+inline std::complex<double> times(std::complex<double> x, std::complex<double> y) noexcept {
+  return {x.real() * y.real() - x.imag() * y.imag(), x.real() * y.imag() + x.imag() * y.real()};
+}
+
+// std::polar(1.0, phase_rad), by sin_cos (sbr_core.hpp).
+inline std::complex<double> unit_phasor(double phase_rad) noexcept {
+  const SinCos sc = sin_cos(phase_rad);
+  return {sc.cos, sc.sin};
 }
 
 // azel_from_direction for a return's direction of arrival (an output, no decision rests on
@@ -858,7 +885,7 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
       RayState& st = rays[q];
       if (!st.active)
         continue;
-      scene::Ray ray;
+      scene::Ray& ray = segments[n_seg];  // kept (n_seg counts it) unless the ray ends here
       ray.origin_m = st.origin;
       ray.direction = st.d;
       ray.t_near_m = 0.0;  // reflected rays start lifted off the surface (below)
@@ -874,7 +901,6 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         st.active = false;
         continue;
       }
-      segments[n_seg] = ray;
       segment_of[n_seg++] = static_cast<std::uint32_t>(q);
     }
     if (n_seg == 0)
@@ -999,12 +1025,16 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         }
         if (visible) {  // written now, kept (counted) once its shadow ray is known to be clear
           const TubeFootprint fp = tube_footprint(st.u * path_m, st.v * path_m, d, n, s);
-          const glm::dvec3 p = pol_vector(rx_h, up, boresight, -s);
+          // The direction of arrival in the antenna frame gives both the return's angles and
+          // the receive polarisation (receive_pol).
+          const glm::dvec3 arrival = antenna_from_world * (-s);
+          const double arrival_h = std::sqrt(arrival.x * arrival.x + arrival.y * arrival.y);
+          const glm::dvec3 p = receive_pol(rx_h, r, up, boresight, -s, arrival, arrival_h);
           const double total_m = path_m + back_m;
           Contribution& out = st.slot[*st.count];
           const std::complex<double> a =
               po_amplitude_m(k, p, po_source(st.e, d, n, s, rc, pec), footprint_integral(fp, k));
-          out.amplitude = a * std::polar(1.0, -k * total_m);
+          out.amplitude = times(a, unit_phasor(-k * total_m));
           if (st.kept != nullptr) {
             KeptPath& kp = st.kept[*st.count];
             kp.first_hit_m = st.first_hit;
@@ -1018,9 +1048,9 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
           out.range_m = 0.5 * total_m;
           out.range_spread_m = 0.0;
           out.radial_velocity_mps = 0.5 * (st.path_rate + glm::dot(pose.velocity_mps - v_obj, s));
-          const AzEl ae = arrival_azel(antenna_from_world * (-s));
-          out.azimuth_rad = ae.azimuth_rad;
-          out.elevation_rad = ae.elevation_rad;
+          // arrival_azel(arrival), its square root shared.
+          out.azimuth_rad = std::atan2(arrival.y, arrival.x);
+          out.elevation_rad = std::atan2(-arrival.z, arrival_h);
           out.object_id = st.path_owner;
           out.radiated_by_owner = hit.object_id == st.path_owner;
           out.bounces = static_cast<std::uint8_t>(bounce + 1);
@@ -1037,16 +1067,15 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
         st.active = false;
         continue;
       }
-      const glm::dvec3 d_r = mirror(d, n);
+      st.d = mirror(d, n);  // d_r (written in place: no copy of a temporary)
       if (st.met_target) {
-        st.e = reflect_field(st.e, d, d_r, n, rc, pec);
+        st.e = reflect_field(st.e, d, st.d, n, rc, pec);
       } else {  // no return yet: the field may never be needed (pruned, lost, owned by another)
         st.pending_surface = &sm;
         st.pending_d = d;
         st.pending_n = n;
         st.pending_cos = cos_i;
       }
-      st.d = d_r;
       st.u = mirror(st.u, n);
       st.v = mirror(st.v, n);
       st.origin = hit.position_m + off * n;  // lifted to the lit side: no self-hit
@@ -1378,8 +1407,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
             const glm::dvec3 s = to_radar / back_m;
             const double total_m = first_m + kp.inner_m + back_m;
             Contribution& x = out[n + i];
-            x.amplitude = std::complex<double>(kp.amplitude_re_m, kp.amplitude_im_m) *
-                          std::polar(1.0, -k * total_m);
+            x.amplitude = times(std::complex<double>(kp.amplitude_re_m, kp.amplitude_im_m),
+                                unit_phasor(-k * total_m));
             x.range_m = 0.5 * total_m;
             x.range_spread_m = 0.0;
             // Static path: d(path)/dt = -v . d1 + v . s (the radar's velocity on its two ends).

@@ -39,6 +39,12 @@ inline cplx principal_sqrt(cplx z) noexcept {
   return {std::abs(y) / (2.0 * t), std::copysign(t, y)};
 }
 
+// The product of two finite complex numbers: the real products and sums std::complex's
+// multiplication forms, without its NaN recovery (libgcc's __muldc3).
+inline cplx times(cplx x, cplx y) noexcept {
+  return {x.real() * y.real() - x.imag() * y.imag(), x.real() * y.imag() + x.imag() * y.real()};
+}
+
 }  // namespace
 
 ReflectionCoefficients reflection_coefficients(const SurfaceModel& surface, double cos_incidence,
@@ -61,10 +67,8 @@ ReflectionCoefficients reflection_coefficients(const SurfaceModel& surface, doub
   return r;
 }
 
-CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r, const glm::dvec3& n,
-                   const ReflectionCoefficients& r, bool pec) noexcept {
-  if (pec)  // tangential E flips, normal E stays: E_r = -E + 2 (n.E) n
-    return {2.0 * glm::dot(n, e.re) * n - e.re, 2.0 * glm::dot(n, e.im) * n - e.im};
+CVec reflect_field_general(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r,
+                           const glm::dvec3& n, const ReflectionCoefficients& r) noexcept {
   glm::dvec3 e_perp = glm::cross(d, n);
   double len = glm::length(e_perp);
   if (len < 1e-12) {  // normal incidence: any tangential direction (take one from the field)
@@ -75,42 +79,19 @@ CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r, co
     if (len == 0.0)
       return {};
   }
-  e_perp /= len;
+  e_perp *= 1.0 / len;  // one division (the field's basis: a unit vector to rounding)
   const glm::dvec3 e_par_i = glm::cross(e_perp, d), e_par_r = glm::cross(e_perp, d_r);
-  return scale(r.perp * dot(e_perp, e), e_perp) + scale(r.par * dot(e_par_i, e), e_par_r);
+  return scale(times(r.perp, dot(e_perp, e)), e_perp) +
+         scale(times(r.par, dot(e_par_i, e)), e_par_r);
 }
 
-CVec po_source(const CVec& e, const glm::dvec3& d, const glm::dvec3& n, const glm::dvec3& s,
-               const ReflectionCoefficients& r, bool pec) noexcept {
-  if (pec)  // eta J = 2 n x (d x E), M = 0
-    return {2.0 * glm::cross(n, glm::cross(d, e.re)), 2.0 * glm::cross(n, glm::cross(d, e.im))};
+CVec po_source_general(const CVec& e, const glm::dvec3& d, const glm::dvec3& n, const glm::dvec3& s,
+                       const ReflectionCoefficients& r) noexcept {
   const glm::dvec3 d_r = mirror(d, n);
-  const CVec e_r = reflect_field(e, d, d_r, n, r, false);
+  const CVec e_r = reflect_field_general(e, d, d_r, n, r);
   const CVec eta_j = cross(n, cross(d, e) + cross(d_r, e_r));
   const CVec m = cross(e + e_r, n);
   return eta_j - cross(s, m);
-}
-
-TubeFootprint tube_footprint(const glm::dvec3& tube_u_m, const glm::dvec3& tube_v_m,
-                             const glm::dvec3& d, const glm::dvec3& n,
-                             const glm::dvec3& s) noexcept {
-  const double n_d = glm::dot(n, d);
-  TubeFootprint f;
-  f.u_m = tube_u_m - d * (glm::dot(n, tube_u_m) / n_d);
-  f.v_m = tube_v_m - d * (glm::dot(n, tube_v_m) / n_d);
-  f.area_m2 = glm::length(glm::cross(f.u_m, f.v_m));
-  f.taper_u_m = 0.5 * glm::dot(s - d, f.u_m);
-  f.taper_v_m = 0.5 * glm::dot(s - d, f.v_m);
-  return f;
-}
-
-double footprint_integral(const TubeFootprint& f, double k) noexcept {
-  return f.area_m2 * sinc(k * f.taper_u_m) * sinc(k * f.taper_v_m);
-}
-
-cplx po_amplitude_m(double k, const glm::dvec3& p, const CVec& source,
-                    double integral_m2) noexcept {
-  return cplx(0.0, -k / std::sqrt(kPi)) * (0.5 * dot(p, source)) * integral_m2;
 }
 
 std::array<glm::dvec3, kFacetSamples> facet_samples(const glm::dvec3& v0, const glm::dvec3& v1,

@@ -26,6 +26,8 @@
 #include <vector>
 
 #include "common/polarisation.hpp"
+#include "common/sinc.hpp"
+#include "common/units.hpp"
 
 namespace radar_emu::radar {
 
@@ -103,15 +105,78 @@ struct CVec {
 /// The local reflection of field `e` travelling along `d` off a surface with unit normal `n`
 /// facing the wave (n.d < 0), reflected direction d_r = mirror(d, n), in the basis of
 /// ReflectionCoefficients. `pec`: E_r = -E + 2 (n.E) n (tangential E flips, normal E stays).
-[[nodiscard]] CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r,
-                                 const glm::dvec3& n, const ReflectionCoefficients& r,
-                                 bool pec) noexcept;
+/// (Inline: the PEC case is a few products; the general case is reflect_field_general.)
+[[nodiscard]] CVec reflect_field_general(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r,
+                                         const glm::dvec3& n,
+                                         const ReflectionCoefficients& r) noexcept;
+[[nodiscard]] inline CVec reflect_field(const CVec& e, const glm::dvec3& d, const glm::dvec3& d_r,
+                                        const glm::dvec3& n, const ReflectionCoefficients& r,
+                                        bool pec) noexcept {
+  if (pec)  // tangential E flips, normal E stays: E_r = -E + 2 (n.E) n
+    return {2.0 * glm::dot(n, e.re) * n - e.re, 2.0 * glm::dot(n, e.im) * n - e.im};
+  return reflect_field_general(e, d, d_r, n, r);
+}
 
 /// eta J - s x M of the PO currents of the local reflection (header), per unit area, radiating
 /// toward s.
-[[nodiscard]] CVec po_source(const CVec& e, const glm::dvec3& d, const glm::dvec3& n,
-                             const glm::dvec3& s, const ReflectionCoefficients& r,
-                             bool pec) noexcept;
+[[nodiscard]] CVec po_source_general(const CVec& e, const glm::dvec3& d, const glm::dvec3& n,
+                                     const glm::dvec3& s, const ReflectionCoefficients& r) noexcept;
+[[nodiscard]] inline CVec po_source(const CVec& e, const glm::dvec3& d, const glm::dvec3& n,
+                                    const glm::dvec3& s, const ReflectionCoefficients& r,
+                                    bool pec) noexcept {
+  if (pec)  // eta J = 2 n x (d x E), M = 0
+    return {2.0 * glm::cross(n, glm::cross(d, e.re)), 2.0 * glm::cross(n, glm::cross(d, e.im))};
+  return po_source_general(e, d, n, s, r);
+}
+
+/// sin(x) and cos(x) [x in rad] to within 2.3e-16 absolute, for the per-return amplitude's
+/// phase exp(-j k L) and footprint sincs, at about half the cost of the libm calls. The argument
+/// is reduced to r = x - n pi/2, |r| <= pi/4, with pi/2 split into three 28-bit parts and a
+/// fourth (Cody & Waite, "Software Manual for the Elementary Functions", 1980, ch. 8: each
+/// n * part is exact for |n| < 2^24, so r carries no cancellation error up to |x| ~ 2.6e7 rad);
+/// sin and cos of r are fdlibm's minimax polynomials (k_sin.c, k_cos.c, Sun Microsystems,
+/// 1993), and the quadrant n mod 4 maps them to sin x and cos x. Larger or non-finite x take
+/// std::sin and std::cos. (tests/radar/sbr_core_test.cpp checks it against libm.)
+struct SinCos {
+  double sin = 0.0, cos = 1.0;
+};
+[[nodiscard]] inline SinCos sin_cos(double x) noexcept {
+  constexpr double kTwoOverPi = 0x1.45f306dc9c883p-1;
+  // pi/2 = kC1 + kC2 + kC3 + kC4 to 1.5e-43; kC1..kC3 have 28 significant bits.
+  constexpr double kC1 = 0x1.921fb54p+0, kC2 = 0x1.10b4612p-30, kC3 = -0x1.676733ap-60,
+                   kC4 = -0x1.d1fc8f8cbb5bfp-89;
+  const double q = x * kTwoOverPi;
+  if (!(std::abs(q) < 0x1p24))
+    return {std::sin(x), std::cos(x)};
+  constexpr double kShift = 0x1.8p52;  // adding and removing it rounds q to the nearest integer
+  const double fn = (q + kShift) - kShift;
+  const double r = ((x - fn * kC1) - fn * kC2) - fn * kC3 - fn * kC4;
+  const double z = r * r;
+  const double s =
+      r + r * z *
+              (-0x1.5555555555549p-3 +
+               z * (0x1.111111110f8a6p-7 +
+                    z * (-0x1.a01a019c161d5p-13 +
+                         z * (0x1.71de357b1fe7dp-19 +
+                              z * (-0x1.ae5e68a2b9cebp-26 + z * 0x1.5d93a5acfd57cp-33)))));
+  const double c = 1.0 - 0.5 * z +
+                   z * z *
+                       (0x1.555555555554cp-5 +
+                        z * (-0x1.6c16c16c15177p-10 +
+                             z * (0x1.a01a019cb159p-16 +
+                                  z * (-0x1.27e4f809c52adp-22 +
+                                       z * (0x1.1ee9ebdb4b1c4p-29 + z * -0x1.8fae9be8838d4p-37)))));
+  switch (static_cast<std::int64_t>(fn) & 3) {
+    case 0:
+      return {s, c};
+    case 1:
+      return {c, -s};
+    case 2:
+      return {-s, -c};
+    default:
+      return {-c, s};
+  }
+}
 
 /// A ray tube's footprint on a facet: its edge vectors (tube_u, tube_v at the hit, [m])
 /// projected along d onto the plane of normal n, and the taper lengths of the footprint
@@ -123,19 +188,43 @@ struct TubeFootprint {
   double area_m2 = 0.0;
   double taper_u_m = 0.0, taper_v_m = 0.0;
 };
-[[nodiscard]] TubeFootprint tube_footprint(const glm::dvec3& tube_u_m, const glm::dvec3& tube_v_m,
-                                           const glm::dvec3& d, const glm::dvec3& n,
-                                           const glm::dvec3& s) noexcept;
-/// area sinc(k taper_u) sinc(k taper_v) [m^2] at wavenumber k [rad/m].
-[[nodiscard]] double footprint_integral(const TubeFootprint& f,
-                                        double wavenumber_rad_per_m) noexcept;
+[[nodiscard]] inline TubeFootprint tube_footprint(const glm::dvec3& tube_u_m,
+                                                  const glm::dvec3& tube_v_m, const glm::dvec3& d,
+                                                  const glm::dvec3& n,
+                                                  const glm::dvec3& s) noexcept {
+  const double n_d = glm::dot(n, d);
+  TubeFootprint f;
+  f.u_m = tube_u_m - d * (glm::dot(n, tube_u_m) / n_d);
+  f.v_m = tube_v_m - d * (glm::dot(n, tube_v_m) / n_d);
+  f.area_m2 = glm::length(glm::cross(f.u_m, f.v_m));
+  f.taper_u_m = 0.5 * glm::dot(s - d, f.u_m);
+  f.taper_v_m = 0.5 * glm::dot(s - d, f.v_m);
+  return f;
+}
+/// area sinc(k taper_u) sinc(k taper_v) [m^2] at wavenumber k [rad/m]. Away from 0 (both
+/// arguments at least 1e-3, sinc's series threshold) as area sin(a) sin(b) / (a b) with sin_cos:
+/// one division instead of two, the same value to rounding.
+[[nodiscard]] inline double footprint_integral(const TubeFootprint& f,
+                                               double wavenumber_rad_per_m) noexcept {
+  const double a = wavenumber_rad_per_m * f.taper_u_m, b = wavenumber_rad_per_m * f.taper_v_m;
+  if (std::abs(a) < 1e-3 || std::abs(b) < 1e-3)
+    return f.area_m2 * common::sinc(a) * common::sinc(b);
+  return f.area_m2 * (sin_cos(a).sin * sin_cos(b).sin) / (a * b);
+}
 
 /// The scattering amplitude [m] of a footprint (header): -j k / sqrt(pi) * (p . src) / 2 *
 /// integral, phase referred to the hit point (the caller multiplies by its path phase).
-[[nodiscard]] std::complex<double> po_amplitude_m(double wavenumber_rad_per_m,
-                                                  const glm::dvec3& receive_polarisation,
-                                                  const CVec& source,
-                                                  double footprint_integral_m2) noexcept;
+[[nodiscard]] inline std::complex<double> po_amplitude_m(double wavenumber_rad_per_m,
+                                                         const glm::dvec3& receive_polarisation,
+                                                         const CVec& source,
+                                                         double footprint_integral_m2) noexcept {
+  // -j c z for c = k / sqrt(pi), z = (p . src) / 2: (c Im z, -c Re z), the products the complex
+  // multiplication by (0, -c) forms, without its NaN recovery (libgcc's __muldc3) that finite
+  // operands never need.
+  const double c = wavenumber_rad_per_m / std::sqrt(common::kPi);
+  const std::complex<double> z = 0.5 * dot(receive_polarisation, source);
+  return {c * z.imag() * footprint_integral_m2, -c * z.real() * footprint_integral_m2};
+}
 
 // --- Visibility rules shared by both engines (docs/validation.md, "Visibility rules"). ---------
 
