@@ -46,7 +46,9 @@ void BM_EvImageForm(benchmark::State& state) {
   const loop::Scenario& s = scenario();
   radar_emu::scene::Scene scene(loop::scene_description(s));
   scene.set_time(kTimeS);
-  radar::SbrTracer tracer(scene, s.sbr);
+  radar::SbrConfig cfg = s.sbr;
+  cfg.reuse_static_paths = false;  // one image's frame traced whole, every iteration
+  radar::SbrTracer tracer(scene, cfg);
   radar::RadarPose pose;
   pose.position_m = s.ownship_start_enu_m + s.ownship_velocity_enu_mps * kTimeS;
   pose.world_from_antenna =
