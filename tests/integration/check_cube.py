@@ -7,9 +7,11 @@ captured frame, against detections.json of the same frame (what went on the bus)
     that cell from the file's bin attributes are within one bin of the detection's;
   * the raw samples: the beam's Sigma channel, range-compressed by correlation with the
     reference chirp built from the file's attributes and Doppler-transformed with NumPy, peaks
-    within one bin of the detection's cell, at a power within 3 dB of the image's at that cell
-    (strong detections of scene objects, SNR >= 20 dB: noise and clutter speckle are drawn anew
-    for the raw samples, so a clutter-dominated cell agrees only in distribution).
+    within one bin of the detection's cell, with a power over the cell and its neighbours within
+    3 dB of the image's
+    (strong detections of scene objects, SNR >= 20 dB and 20 dB above the clutter ridge around
+    the cell: noise and clutter speckle are drawn anew for the raw samples, so a cell where they
+    matter agrees only in distribution).
 The same run without --cube writes the same detections.json byte for byte. The scenario's
 `[output] cube` and `cube_frames` write the same file as the flags (every dataset and attribute
 equal), and the flags win over them. Then the errors: an unwritable path, a bad --cube-frames, a range past the run and one over the
@@ -132,6 +134,16 @@ def main():
                 # returns of scene objects agree, clutter-dominated cells only in distribution.
                 if s["snr_db"] < 20.0 or int(d["object_id"]) == 0xFFFFFFFF:
                     continue
+                # Static objects share the ground's Doppler: their cells sit on the clutter
+                # ridge, whose speckle the raw samples draw anew. Compared only where the cell
+                # is 20 dB above the ridge around it (the median of the image's power 5 to 15
+                # bins away in range, same beam and velocity bin): a clutter amplitude 20 dB
+                # down moves the cell's power by more than 3 dB with a probability of about
+                # exp(-0.29^2 / 0.01) = 2e-4 (complex Gaussian, |1 + x|^2 < 0.5 needs |x| >= 0.29).
+                ridge = np.concatenate([power[b, j, max(l - 15, 0) : max(l - 4, 0)],
+                                        power[b, j, l + 5 : l + 16]])
+                if ridge.size == 0 or cell < 100.0 * np.median(ridge):
+                    continue
                 # Raw: NumPy's own processing of the beam's Sigma samples peaks at the cell.
                 if b not in processed:
                     processed[b] = np.abs(process_raw(f, g["raw"][b, 0])) ** 2
@@ -149,9 +161,16 @@ def main():
                 vel_raw = v0 + pj * dv
                 if abs(rng_raw - s["range_m"]) > dr or abs(vel_raw - s["radial_velocity_mps"]) > dv:
                     fail(f"{name}: raw peak {rng_raw:.2f} m, {vel_raw:.2f} m/s")
-                ratio_db = 10 * np.log10(pr[pj, pl] / cell)
+                # Energy over the cell and its eight neighbours: the image merges an object's
+                # coherent returns within a merge cell (radar/sensor/sensor.cpp, merge_returns)
+                # where the raw samples keep each at its own range, so a spread object's energy
+                # can sit one bin over (frame 3's light mast: image -5.7 / 0.0 dB in range bins
+                # l - 1 / l, raw -3.3 / -3.2 dB).
+                near = [(j - 1) % m, j, (j + 1) % m]
+                lo, hi = max(l - 1, 0), l + 2
+                ratio_db = 10 * np.log10(pr[near][:, lo:hi].sum() / power[b, near][:, lo:hi].sum())
                 if abs(ratio_db) > 3.0:
-                    fail(f"{name}: raw peak power {ratio_db:+.1f} dB from the image's at the cell")
+                    fail(f"{name}: raw power {ratio_db:+.1f} dB from the image's around the cell")
                 checked_raw += 1
     if checked_raw < 3:
         fail(f"only {checked_raw} strong detections checked against the raw samples")
