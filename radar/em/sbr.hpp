@@ -272,7 +272,11 @@ class SbrTracer {
                                   TraceStats& stats, const TraceKnobs& knobs = {}) noexcept;
   /// The rays trace() would shoot for `pose` and `knobs`, without tracing: cheap (one pass over
   /// the objects' bounds), no allocation. `rays_per_object[id]` (when the span reaches id) gets
-  /// the bundle size of object id, 0 for terrain and targets out of view.
+  /// the bundle size of object id, 0 for terrain and targets out of view. With static path reuse
+  /// the bundles whose kept paths trace() would re-evaluate are counted apart (reused_rays,
+  /// reused_contributions; 0 in rays_per_object), by trace()'s rule except the facet check,
+  /// which needs the frame's facet pass. Not to be called concurrently with trace() or itself
+  /// (it fills a scratch of the tracer's).
   [[nodiscard]] TracePlan plan(const RadarPose& pose, const TraceKnobs& knobs = {},
                                std::span<std::size_t> rays_per_object = {}) const noexcept;
 
