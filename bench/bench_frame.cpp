@@ -799,20 +799,9 @@ void BM_ClosedLoop50Frames(benchmark::State& state) {
 }
 BENCHMARK(BM_ClosedLoop50Frames)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// Whole closed-loop frames with terrain clutter both ways (issue 28): the scenario's first 20
-// frames, [governor] off, terrain rays (argument 1 = 0) or the engine's cells (1) beside the
-// trace. Argument 0: the default scenario (0) or examples/terrain_movers.toml (1). Counters:
-// cpu_all_ms, the CPU time of all the process's threads per frame (the frame's work on every
-// core); trace_p50_ms and sensor_p50_ms, the stages' medians.
-void BM_ClosedLoopTerrain(benchmark::State& state) {
-  loop::Scenario s =
-      state.range(0) == 0
-          ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
-          : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
-  s.frames = 20;
-  s.governor.enabled = false;
-  s.terrain_engine = state.range(1) == 1;
-  s.sbr.terrain_rays = !s.terrain_engine;
+// Whole closed-loop runs of `s`, one an iteration (the loop built outside the timing): the last
+// run's result, and the counter cpu_all_ms, the CPU time of all the process's threads a frame.
+loop::RunResult timed_runs(const loop::Scenario& s, benchmark::State& state) {
   loop::RunResult r;
   double cpu_s = 0.0;
   for (auto _ : state) {
@@ -830,6 +819,24 @@ void BM_ClosedLoopTerrain(benchmark::State& state) {
       static_cast<double>(s.frames) *
       static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
   state.counters["cpu_all_ms"] = 1e3 * cpu_s / frames;
+  return r;
+}
+
+// Whole closed-loop frames with terrain clutter both ways (issue 28): the scenario's first 20
+// frames, [governor] off, terrain rays (argument 1 = 0) or the engine's cells (1) beside the
+// trace. Argument 0: the default scenario (0) or examples/terrain_movers.toml (1). Counters:
+// cpu_all_ms, the CPU time of all the process's threads per frame (the frame's work on every
+// core); trace_p50_ms and sensor_p50_ms, the stages' medians.
+void BM_ClosedLoopTerrain(benchmark::State& state) {
+  loop::Scenario s =
+      state.range(0) == 0
+          ? loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>")
+          : loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml");
+  s.frames = 20;
+  s.governor.enabled = false;
+  s.terrain_engine = state.range(1) == 1;
+  s.sbr.terrain_rays = !s.terrain_engine;
+  const loop::RunResult r = timed_runs(s, state);
   state.counters["trace_p50_ms"] =
       1e3 * r.stages[static_cast<std::size_t>(radar_emu::timing::Stage::kTrace)].p50_s;
   state.counters["sensor_p50_ms"] =
@@ -895,31 +902,16 @@ void BM_FrameLevel0(benchmark::State& state) {
   s.governor.enabled = false;
   if (state.range(1) == 0)
     s.sbr.reuse_static_paths = false;
-  loop::RunResult r;
-  double cpu_s = 0.0;
-  for (auto _ : state) {
-    state.PauseTiming();
-    loop::ClosedLoop loop(s, {});
-    timespec t0{}, t1{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
-    state.ResumeTiming();
-    r = loop.run();
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
-    cpu_s += static_cast<double>(t1.tv_sec - t0.tv_sec) +
-             1e-9 * static_cast<double>(t1.tv_nsec - t0.tv_nsec);
-  }
-  const double frames =
-      static_cast<double>(s.frames) *
-      static_cast<double>(std::max<benchmark::IterationCount>(1, state.iterations()));
+  const loop::RunResult r = timed_runs(s, state);
   using radar_emu::timing::Stage;
   auto stage = [&](Stage st) { return r.stages[static_cast<std::size_t>(st)]; };
-  state.counters["cpu_all_ms"] = 1e3 * cpu_s / frames;
   state.counters["frame_p50_ms"] = 1e3 * stage(Stage::kFrame).p50_s;
   state.counters["frame_p99_ms"] = 1e3 * stage(Stage::kFrame).p99_s;
   state.counters["trace_p50_ms"] = 1e3 * stage(Stage::kTrace).p50_s;
   state.counters["trace_p99_ms"] = 1e3 * stage(Stage::kTrace).p99_s;
   state.counters["sensor_p50_ms"] = 1e3 * stage(Stage::kSensor).p50_s;
   state.counters["sensor_p99_ms"] = 1e3 * stage(Stage::kSensor).p99_s;
+  const auto frames = static_cast<double>(r.frames);
   state.counters["rays"] = static_cast<double>(r.trace.rays) / frames;
   state.counters["reused_rays"] = static_cast<double>(r.trace.reused_rays) / frames;
   state.SetLabel(std::string(state.range(0) == 0 ? "default" : "terrain_movers") +

@@ -17,43 +17,16 @@
 
 #include "radar/em/sbr.hpp"
 #include "scene/scene.hpp"
+#include "tests/radar/sbr_shapes.hpp"
 
 namespace sc = radar_emu::scene;
 namespace rd = radar_emu::radar;
+using radar_emu::test::dihedral;
+using radar_emu::test::trihedral;
 
 namespace {
 constexpr double kC = 299792458.0;
 constexpr double kPi = std::numbers::pi;
-
-// Right dihedral: fold along z through the origin, height a, faces of width b, opening toward -y.
-sc::ObjectDesc dihedral(double a, double b, glm::dvec3 at = glm::dvec3(0.0)) {
-  sc::ObjectDesc o{"dihedral", {}, glm::dmat4(1.0), std::nullopt};
-  const auto h = static_cast<float>(a / 2);
-  const auto w = static_cast<float>(b / std::sqrt(2.0));
-  o.mesh.positions_m = {{0, 0, -h}, {-w, -w, -h}, {-w, -w, h}, {0, 0, h},
-                        {0, 0, -h}, {w, -w, -h},  {w, -w, h},  {0, 0, h}};
-  o.mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
-  o.mesh.triangle_material = {0, 0, 0, 0};
-  o.world_from_body[3] = glm::dvec4(at, 1.0);
-  return o;
-}
-
-// Square trihedral of edge a, its symmetry axis toward -y.
-sc::ObjectDesc trihedral(double a) {
-  sc::ObjectDesc o{"trihedral", {}, glm::dmat4(1.0), std::nullopt};
-  const glm::dvec3 from = glm::normalize(glm::dvec3(1.0)), to(0, -1, 0);
-  const glm::dvec3 k = glm::cross(from, to);
-  const double s = glm::length(k), c = glm::dot(from, to);
-  const glm::dvec3 u = k / s;
-  const glm::dmat3 kx(glm::dvec3(0, u.z, -u.y), glm::dvec3(-u.z, 0, u.x), glm::dvec3(u.y, -u.x, 0));
-  const glm::dmat3 r = glm::dmat3(1.0) + s * kx + (1.0 - c) * kx * kx;
-  auto p = [&](double x, double y, double z) { return glm::vec3(r * glm::dvec3(x, y, z)); };
-  o.mesh.positions_m = {p(0, 0, 0), p(a, 0, 0), p(a, a, 0), p(0, a, 0), p(0, 0, 0), p(0, 0, a),
-                        p(a, 0, a), p(a, 0, 0), p(0, 0, 0), p(0, a, 0), p(0, a, a), p(0, 0, a)};
-  o.mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}, {8, 9, 10}, {8, 10, 11}};
-  o.mesh.triangle_material.assign(6, 0);
-  return o;
-}
 
 // A small plate (a x a, in the x-z plane) at `at`; moving at `velocity` when it is not zero.
 sc::ObjectDesc plate(double a, glm::dvec3 at, glm::dvec3 velocity = glm::dvec3(0.0)) {
