@@ -321,7 +321,12 @@ TEST(WebSocketServer, ASlowClientIsSkippedThenClosedAndOthersCarryOn) {
   ws::Server s(std::move(c));
   RawClient slow(s.port());
   slow.handshake();  // and never reads: the kernel's buffers fill, then the server's
-  ASSERT_TRUE(eventually([&] { return s.counters().slow_clients_closed == 1; }));
+  // The server thread updates its counters and its client list one after the other: wait for
+  // all three (under load a read between them saw the slow close counted, the close not yet).
+  ASSERT_TRUE(eventually([&] {
+    const ws::ServerCounters now = s.counters();
+    return now.slow_clients_closed == 1 && now.clients_closed == 1 && s.clients() == 0;
+  }));
   const ws::ServerCounters k = s.counters();
   EXPECT_GE(k.frames_skipped, 20u);
   EXPECT_EQ(k.clients_closed, 1u);
