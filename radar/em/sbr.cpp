@@ -1378,7 +1378,6 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       kp.world_from_antenna = pose.world_from_antenna;
       kp.spacing_m = bd.spacing_m;
       kp.max_bounces = frame.max_bounces;
-      kp.rays = rays_b;
       kp.count = m;
       kp.traced_at = frame_count_;
       for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1]; ++f)

@@ -364,7 +364,6 @@ class SbrTracer {
     glm::dmat3 world_from_antenna{1.0};
     double spacing_m = 0.0;  ///< the bundle's spacing (before coarsening) and bounces then
     int max_bounces = 0;
-    std::size_t rays = 0;         ///< the bundle's rays
     std::size_t count = 0;        ///< kept returns, at the front of its region of kept_paths_
     std::uint64_t traced_at = 0;  ///< frame_count_ then
   };
