@@ -277,35 +277,35 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
   EXPECT_EQ(gov.terrain_cells_merged(16), 32u);  // 16 x 2
   constexpr std::uint64_t kCells = 300'000, kRays = 100'000, kReturns = 20'000;
   constexpr std::uint64_t kPatches = 160'000, kFacets = 40'000, kEngineReturns = 32'000;
+  // The engine's share of the prediction at `level` [ms]: the prediction after a frame at
+  // `counted_at` with the engine's `patches`, kEngineReturns and `facets` counted, less the same
+  // after a frame of rays alone.
+  auto engine_share_ms = [&](int counted_at, int level, std::uint64_t patches,
+                             std::uint64_t facets) {
+    (void)gov.decide_at(f.pose, counted_at);
+    gov.observe(10.0, 5.0, kRays, kReturns, kCells);
+    const double rays_ms = gov.decide_at(f.pose, level).predicted_ms;
+    (void)gov.decide_at(f.pose, counted_at);
+    gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, patches, kEngineReturns,
+                facets);
+    return gov.decide_at(f.pose, level).predicted_ms - rays_ms;
+  };
   for (const int level : {0, 4, 8, 12, 16}) {
     const double k = std::pow(2.0, std::floor(level / 4.0));
     const double merged = k * std::min(k, 2.0);
     const double s2 = std::pow(2.0, 0.5 * level);  // (patch scale)^2
-    // Rays only, then the same with the engine's figures counted at level 0.
-    (void)gov.decide_at(f.pose, 0);
-    gov.observe(10.0, 5.0, kRays, kReturns, kCells);
-    const double rays_ms = gov.decide_at(f.pose, level).predicted_ms;
-    (void)gov.decide_at(f.pose, 0);
-    gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns,
-                kFacets);
-    const double engine_ms = gov.decide_at(f.pose, level).predicted_ms;
+    // The engine's figures counted at level 0.
+    const double engine_ms = engine_share_ms(0, level, kPatches, kFacets);
     const double patches = std::max(static_cast<double>(kFacets), kPatches / s2);
     const double expected_ms =
         1e-6 * (g.terrain_ns_per_patch * patches +
                 g.sensor_ns_per_return * static_cast<double>(kEngineReturns) / merged);
     std::cout << "level " << level << ": engine " << patches << " patches, "
-              << kEngineReturns / merged << " returns, " << engine_ms - rays_ms << " ms\n";
-    EXPECT_NEAR(engine_ms - rays_ms, expected_ms, 1e-9) << "level " << level;
+              << kEngineReturns / merged << " returns, " << engine_ms << " ms\n";
+    EXPECT_NEAR(engine_ms, expected_ms, 1e-9) << "level " << level;
   }
   // Counted at level 12 (16 cells merged): level 4 (4 merged) predicts 4 times the returns.
-  (void)gov.decide_at(f.pose, 12);
-  gov.observe(10.0, 5.0, kRays, kReturns, kCells);
-  const double rays_4 = gov.decide_at(f.pose, 4).predicted_ms;
-  (void)gov.decide_at(f.pose, 12);
-  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kFacets, kEngineReturns,
-              kFacets);
-  const double engine_4 = gov.decide_at(f.pose, 4).predicted_ms;
-  EXPECT_NEAR(engine_4 - rays_4,
+  EXPECT_NEAR(engine_share_ms(12, 4, kFacets, kFacets),
               1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kFacets) * 16.0 +
                       g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 4.0),
               1e-9);
@@ -320,15 +320,8 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
   for (const int level : {8, 12, 16}) {
     const double k = std::pow(2.0, std::floor(level / 4.0));
     const double s2 = std::pow(2.0, 0.5 * level);
-    (void)gov.decide_at(f.pose, 0);
-    gov.observe(10.0, 5.0, kRays, kReturns, kCells);
-    const double rays_ms = gov.decide_at(f.pose, level).predicted_ms;
-    (void)gov.decide_at(f.pose, 0);
-    gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kPatches, kEngineReturns,
-                kFacets);
-    const double engine_ms = gov.decide_at(f.pose, level).predicted_ms;
     const double facets = static_cast<double>(kFacets) * (level >= 12 ? 0.25 : 1.0);
-    EXPECT_NEAR(engine_ms - rays_ms,
+    EXPECT_NEAR(engine_share_ms(0, level, kPatches, kFacets),
                 1e-6 * (g.terrain_ns_per_patch * std::max(facets, kPatches / s2) +
                         g.sensor_ns_per_return * static_cast<double>(kEngineReturns) /
                             (k * std::min(k, 2.0))),
@@ -336,16 +329,9 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
         << "level " << level;
   }
   constexpr std::uint64_t kCoarseFacets = kFacets / 4;
-  (void)gov.decide_at(f.pose, 12);
-  gov.observe(10.0, 5.0, kRays, kReturns, kCells);
-  const double rays_8 = gov.decide_at(f.pose, 8).predicted_ms;
-  (void)gov.decide_at(f.pose, 12);
-  gov.observe(10.0, 5.0, kRays, kReturns + kEngineReturns, kCells, kCoarseFacets, kEngineReturns,
-              kCoarseFacets);
-  const double engine_8 = gov.decide_at(f.pose, 8).predicted_ms;
   // Level 8 from level 12: patch scale 4 against 8 (4 times the patches), 4 times the facets;
   // cells merged 8 against 16.
-  EXPECT_NEAR(engine_8 - rays_8,
+  EXPECT_NEAR(engine_share_ms(12, 8, kCoarseFacets, kCoarseFacets),
               1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kCoarseFacets) * 4.0 +
                       g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 2.0),
               1e-9);

@@ -242,17 +242,48 @@ TEST(LoopTerrain, EngineFramePathDoesNotAllocateAndTargetsAreStillDetected) {
 
 namespace {
 
+// A scenario's scene at time 0 and the loop's tracer over it with its terrain rays off (the
+// engine has the terrain), as the loop builds them for the engine.
+radar_emu::scene::Scene scene_at_start(const loop::Scenario& s) {
+  radar_emu::scene::Scene scene(loop::scene_description(s));
+  scene.set_time(0.0);
+  return scene;
+}
+radar::SbrConfig engine_tracer_config(const loop::Scenario& s) {
+  radar::SbrConfig cfg = s.sbr;
+  cfg.terrain_rays = false;
+  return cfg;
+}
+struct EngineScene {
+  explicit EngineScene(const loop::Scenario& s)
+      : scene(scene_at_start(s)), tracer(scene, engine_tracer_config(s)) {}
+  radar_emu::scene::Scene scene;
+  const radar::SbrTracer tracer;
+};
+
+// TerrainReturns::compute at `scale` from the scenario's first pose into `out`, nothing dropped:
+// the returns' total mean power [m^2] (sum |A|^2); their count in `n`, the engine's in `st`.
+double compute_power(radar::TerrainReturns& t, const loop::Scenario& s, double scale,
+                     std::vector<radar::Contribution>& out, radar::clutter::TerrainStats& st,
+                     std::size_t& n) {
+  std::uint64_t dropped = 0;
+  n = t.compute(first_pose(s), out, st, dropped, scale);
+  EXPECT_EQ(dropped, 0u);
+  double power = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    power += std::norm(out[i].amplitude);
+  return power;
+}
+
 // The loop's engine returns on the scenario's first pose with TBB held to `threads` (0: all).
 std::vector<radar::Contribution> engine_returns(const loop::Scenario& s, int threads,
                                                 std::size_t slices) {
   std::optional<tbb::global_control> limit;
   if (threads > 0)
     limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-  radar_emu::scene::Scene scene(loop::scene_description(s));
-  scene.set_time(0.0);
-  radar::SbrConfig cfg = s.sbr;
-  cfg.terrain_rays = false;
-  const radar::SbrTracer tracer(scene, cfg);
+  const EngineScene e(s);
+  const radar_emu::scene::Scene& scene = e.scene;
+  const radar::SbrTracer& tracer = e.tracer;
   radar::TerrainReturnsConfig tc = loop::terrain_returns_config(s);
   tc.slices = slices;
   radar::TerrainReturns terrain(scene, tracer, tc);
@@ -283,21 +314,15 @@ TEST(LoopTerrain, GovernorPatchScaleCutsThePatchesAndKeepsThePower) {
   // patch stay one patch each, so somewhat more), and the clutter's total mean power the same
   // sum of sigma0 dA within 0.5 dB (the patches spread over the cells they cover).
   const loop::Scenario s = default_scenario();
-  radar_emu::scene::Scene scene(loop::scene_description(s));
-  scene.set_time(0.0);
-  radar::SbrConfig cfg = s.sbr;
-  cfg.terrain_rays = false;
-  const radar::SbrTracer tracer(scene, cfg);
+  const EngineScene e(s);
+  const radar_emu::scene::Scene& scene = e.scene;
+  const radar::SbrTracer& tracer = e.tracer;
   radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
   std::vector<radar::Contribution> out(terrain.max_returns());
   auto run = [&](double scale, double& power) {
     radar::clutter::TerrainStats st;
-    std::uint64_t dropped = 0;
-    const std::size_t n = terrain.compute(first_pose(s), out, st, dropped, scale);
-    EXPECT_EQ(dropped, 0u);
-    power = 0.0;
-    for (std::size_t i = 0; i < n; ++i)
-      power += std::norm(out[i].amplitude);
+    std::size_t n = 0;
+    power = compute_power(terrain, s, scale, out, st, n);
     return st.patches;
   };
   double p1 = 0.0, p2 = 0.0;
@@ -318,11 +343,9 @@ TEST(LoopTerrain, GovernorScaleMergesTheCellsAndKeepsThePower) {
   // dense), and the total mean power the same sum of sigma0 dA within 0.5 dB (patches 4 times
   // larger too: their shadows and grazing differ a little).
   const loop::Scenario s = default_scenario();
-  radar_emu::scene::Scene scene(loop::scene_description(s));
-  scene.set_time(0.0);
-  radar::SbrConfig cfg = s.sbr;
-  cfg.terrain_rays = false;
-  const radar::SbrTracer tracer(scene, cfg);
+  const EngineScene e(s);
+  const radar_emu::scene::Scene& scene = e.scene;
+  const radar::SbrTracer& tracer = e.tracer;
   radar::TerrainReturns terrain(scene, tracer, loop::terrain_returns_config(s));
   ASSERT_EQ(terrain.azimuth_merge_max(), 1u);
   const radar::TerrainCellMerge m = radar::TerrainReturns::cell_merge(4.0, 1);
@@ -335,12 +358,8 @@ TEST(LoopTerrain, GovernorScaleMergesTheCellsAndKeepsThePower) {
   std::vector<radar::Contribution> out(terrain.max_returns());
   auto run = [&](double scale, double& power) {
     radar::clutter::TerrainStats st;
-    std::uint64_t dropped = 0;
-    const std::size_t n = terrain.compute(first_pose(s), out, st, dropped, scale);
-    EXPECT_EQ(dropped, 0u);
-    power = 0.0;
-    for (std::size_t i = 0; i < n; ++i)
-      power += std::norm(out[i].amplitude);
+    std::size_t n = 0;
+    power = compute_power(terrain, s, scale, out, st, n);
     return n;
   };
   double p1 = 0.0, p4 = 0.0;
@@ -364,11 +383,9 @@ TEST(LoopTerrain, CoarseLevelOfDetailCutsTheFacetsAndKeepsThePower) {
   // dA over the field of view within 1 dB (the same surface sampled more coarsely: its facets'
   // tilts and shadows differ); compute() allocates nothing at any of these scales.
   const loop::Scenario s = movers_scenario();
-  radar_emu::scene::Scene scene(loop::scene_description(s));
-  scene.set_time(0.0);
-  radar::SbrConfig cfg = s.sbr;
-  cfg.terrain_rays = false;
-  const radar::SbrTracer tracer(scene, cfg);
+  const EngineScene e(s);
+  const radar_emu::scene::Scene& scene = e.scene;
+  const radar::SbrTracer& tracer = e.tracer;
   radar::TerrainReturnsConfig tc = loop::terrain_returns_config(s);
   radar::TerrainReturns coarse(scene, tracer, tc);
   ASSERT_NE(coarse.coarse_engine(), nullptr);
@@ -383,13 +400,8 @@ TEST(LoopTerrain, CoarseLevelOfDetailCutsTheFacetsAndKeepsThePower) {
   EXPECT_LT(c.lod_facet_ratio, 1.0 / 3.0);
   std::vector<radar::Contribution> out(fine.max_returns());
   auto run = [&](radar::TerrainReturns& t, double scale, radar::clutter::TerrainStats& st) {
-    std::uint64_t dropped = 0;
-    const std::size_t n = t.compute(first_pose(s), out, st, dropped, scale);
-    EXPECT_EQ(dropped, 0u);
-    double power = 0.0;
-    for (std::size_t i = 0; i < n; ++i)
-      power += std::norm(out[i].amplitude);
-    return power;
+    std::size_t n = 0;
+    return compute_power(t, s, scale, out, st, n);
   };
   radar::clutter::TerrainStats s_fine, s_coarse, s_below;
   const double p_fine = run(fine, 8.0, s_fine), p_coarse = run(coarse, 8.0, s_coarse);
@@ -425,11 +437,9 @@ TEST(LoopTerrain, MergedCellsHoldTheSumOfTheCellsTheyMerge) {
   // sigma0 dA, to rounding. Fine: patch fraction 1 at scale 1 (patches one cell: R x 0.5 deg,
   // 6 m); merged: fraction 1/4 at scale 4, the same patch sizes, widest column 4 x 0.5 deg.
   const loop::Scenario s = default_scenario();
-  radar_emu::scene::Scene scene(loop::scene_description(s));
-  scene.set_time(0.0);
-  radar::SbrConfig cfg = s.sbr;
-  cfg.terrain_rays = false;
-  const radar::SbrTracer tracer(scene, cfg);
+  const EngineScene e(s);
+  const radar_emu::scene::Scene& scene = e.scene;
+  const radar::SbrTracer& tracer = e.tracer;
   radar::TerrainReturnsConfig fine_cfg = loop::terrain_returns_config(s);
   fine_cfg.shadowing = false;
   radar::TerrainReturnsConfig merged_cfg = fine_cfg;
