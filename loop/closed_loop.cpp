@@ -348,8 +348,10 @@ struct TracerSide {
     // bus) is traced in its frame as usual.
     if (s.sbr.reuse_static_paths) {
       radar::TraceStats setup;
-      (void)tracer.trace(scripted_pose(s, 0.0),
-                         std::span(contributions).first(tracer.max_contributions()), setup);
+      primed_contributions = tracer.trace(
+          scripted_pose(s, 0.0), std::span(contributions).first(tracer.max_contributions()), setup);
+      primed_rays = setup.rays + setup.reused_rays;
+      primed = true;
     }
   }
   radar::SbrTracer tracer;
@@ -357,6 +359,11 @@ struct TracerSide {
   std::string no_terrain;  ///< why the engine was left out; empty when it runs
   std::vector<radar::Contribution> contributions;
   WeatherFigures weather;  ///< [weather] one-way; all 0: free space
+  /// The frame traced at setup (static path reuse): its returns, at the start of
+  /// `contributions` until the first frame, and the rays it traced or kept.
+  bool primed = false;
+  std::size_t primed_contributions = 0;
+  std::uint64_t primed_rays = 0;
 };
 
 // The sensor and its detection buffers (the sensor's view and the ICD's).
@@ -483,6 +490,8 @@ struct ClosedLoop::Impl {
       warnings.push_back(tracer.no_terrain);
     if (tracer.terrain)  // the governor predicts the engine's returns as its cells merge
       governor.set_terrain_cells(tracer.terrain->coarsening());
+    if (tracer.primed)
+      prime_governor();
     if (!scene.scene.incomplete().empty()) {  // a `scene import` stopped early
       warnings.push_back((s.scene_file.empty() ? std::string("the scene") : s.scene_file.string()) +
                          ": an incomplete scene database (" + scene.scene.incomplete() + ")");
@@ -508,6 +517,40 @@ struct ClosedLoop::Impl {
     }
     if (bus.hardware() || ownship.external())
       peers.silence();
+  }
+
+  // The governor's first prediction from the frame traced at setup (TracerSide): that frame's
+  // returns through the terrain engine and the sensor once, their counts observed as a frame's
+  // (no times: a setup frame's wall time says nothing of the loop's; measured mode learns from
+  // the first frame). Without it the first frame is predicted from the whole image synthesised
+  // and half a return a ray (FidelityGovernor's start), far above a frame's cost: the first
+  // frame degrades, and its lost kept paths then hold the run there. The sensor's noise frame
+  // and the engine's sigma0 record are set back, so the run draws and reports what it would
+  // have.
+  void prime_governor() {
+    const radar::RadarPose pose = scripted_pose(scenario, 0.0);
+    const std::span<radar::Contribution> all(tracer.contributions);
+    std::size_t n = tracer.primed_contributions;
+    std::uint64_t patches = 0, facets = 0, terrain_returns = 0;
+    if (tracer.terrain) {
+      const std::size_t cap = tracer.tracer.max_contributions();
+      radar::clutter::TerrainStats ts;
+      std::uint64_t dropped = 0;
+      terrain_returns = tracer.terrain->compute(pose, all.subspan(cap), ts, dropped);
+      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), terrain_returns,
+                  all.begin() + static_cast<std::ptrdiff_t>(n));
+      n += terrain_returns;
+      patches = ts.patches;
+      facets = ts.facets_considered;
+      tracer.terrain->forget_sigma0_use();
+    }
+    radar::SensorStats ss;
+    const std::uint64_t noise_frame = sensor.sensor.noise_frame();
+    (void)sensor.sensor.process(all.first(n), sensor.detections, ss);
+    sensor.sensor.set_noise_frame(noise_frame);
+    const double untimed = std::numeric_limits<double>::quiet_NaN();
+    governor.observe(untimed, untimed, tracer.primed_rays, n, ss.cells_synthesised, patches,
+                     terrain_returns, facets);
   }
 
   // ---- the frame's stages (ClosedLoop::step), each timed but wait_or_stop ----

@@ -131,6 +131,8 @@ class FidelityGovernor {
   /// rays traced and those kept paths stood for, `returns` all of them, `terrain_returns` of those
   /// the terrain engine's, `terrain_patches` the engine's patches; both 0 without the engine).
   /// `terrain_facets`: the facets the engine cut into those patches (0: unknown, no floor).
+  /// Times that are not finite (a frame processed at setup): its counts only; measured mode's
+  /// factors learn nothing from it.
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
                std::uint64_t cells_synthesised, std::uint64_t terrain_patches = 0,
                std::uint64_t terrain_returns = 0, std::uint64_t terrain_facets = 0) noexcept;

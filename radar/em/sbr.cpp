@@ -17,6 +17,12 @@
 #include "radar/em/facet_po.hpp"
 #include "scene/mesh/topology.hpp"
 
+#if defined(RADAR_EMU_HAVE_MVEC)
+#include <emmintrin.h>
+// glibc's libmvec: atan2 on two lanes (atan2_pair below).
+extern "C" __m128d _ZGVbN2vv_atan2(__m128d y, __m128d x);
+#endif
+
 namespace radar_emu::radar {
 
 namespace {
@@ -75,10 +81,27 @@ inline std::complex<double> unit_phasor(double phase_rad) noexcept {
   return {sc.cos, sc.sin};
 }
 
+// atan2(y0, x0) and atan2(y1, x1) together: with glibc's vector math library (libmvec, glibc
+// >= 2.35) its two-lane atan2, by its name in the x86-64 vector function ABI (SSE2 variant:
+// `b`, 2 lanes, two vector arguments; glibc's manual, "Known Maximum Errors in Math Functions":
+// within 4 ulp); else two calls.
+inline AzEl atan2_pair(double y0, double x0, double y1, double x1) noexcept {
+#if defined(RADAR_EMU_HAVE_MVEC)
+  const __m128d r = _ZGVbN2vv_atan2(_mm_set_pd(y1, y0), _mm_set_pd(x1, x0));
+  return {_mm_cvtsd_f64(r), _mm_cvtsd_f64(_mm_unpackhi_pd(r, r))};
+#else
+  return {std::atan2(y0, x0), std::atan2(y1, x1)};
+#endif
+}
+
 // azel_from_direction for a return's direction of arrival (an output, no decision rests on
-// it): sqrt(x^2 + y^2) for hypot(x, y), whose overflow guard a unit vector does not need.
+// it): sqrt(x^2 + y^2) for hypot(x, y), whose overflow guard a unit vector does not need; both
+// angles from one atan2_pair.
+inline AzEl arrival_azel(const glm::dvec3& d, double horizontal) noexcept {
+  return atan2_pair(d.y, d.x, -d.z, horizontal);
+}
 inline AzEl arrival_azel(const glm::dvec3& d) noexcept {
-  return {std::atan2(d.y, d.x), std::atan2(-d.z, std::sqrt(d.x * d.x + d.y * d.y))};
+  return arrival_azel(d, std::sqrt(d.x * d.x + d.y * d.y));
 }
 
 }  // namespace
@@ -243,6 +266,9 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     static_assert(std::is_trivially_default_constructible_v<KeptPath>);
     kept_paths_ = std::make_unique_for_overwrite<KeptPath[]>(n_slots);
     kept_facet_by_rays_.assign(facet_first_.back(), 0);
+    static_assert(FacetMemo::kBits >=
+                  kFacetSamples + kMaxFacetSubdivisions * kMaxFacetSubdivisions);
+    facet_memo_.assign(facet_first_.back(), FacetMemo{});
   }
 }
 
@@ -363,8 +389,11 @@ Contribution bounce1_return(std::complex<double> amplitude, double range_m,
 
 std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
                                    bool centroid_only, double resolution_m, Contribution& out,
-                                   std::uint64_t& queries) const noexcept {
+                                   std::uint64_t& queries, FacetMemo* record,
+                                   const FacetMemo* replay) const noexcept {
   const SbrConfig& c = config_;
+  if (record != nullptr)
+    *record = FacetMemo{};
   const scene::Mesh& mesh = scene_->description().objects[id].mesh;
   const glm::uvec3 tri = mesh.triangles[t];
   const std::uint16_t material = mesh.triangle_material[t];
@@ -406,7 +435,11 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   if (!in_view || range_m > c.max_range_m || !facet_in_far_field(rho_m, range_m, k))
     return kLightByRays;
   const double offset_m = surface_offset_m(centroid);
+  std::size_t asked = 0;  // this facet's queries so far (FacetMemo: answers in this order)
   auto blocked = [&](const glm::dvec3& p) {
+    const std::size_t q = asked++;
+    if (replay != nullptr && q < replay->count)
+      return ((replay->blocked[q / 64] >> (q % 64)) & 1u) != 0;
     ++queries;
     scene::Ray ray;
     const glm::dvec3 to = pose.position_m - p;
@@ -414,7 +447,12 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
     ray.origin_m = p;
     ray.direction = to / ray.t_far_m;
     ray.t_near_m = 0.0;
-    return occluded(ray);
+    const bool answer = occluded(ray);
+    if (record != nullptr && q < FacetMemo::kBits) {
+      record->blocked[q / 64] |= static_cast<std::uint64_t>(answer ? 1 : 0) << (q % 64);
+      record->count = static_cast<std::uint16_t>(q + 1);
+    }
+    return answer;
   };
   // TraceKnobs::facet_centroid_only: the centroid's sample alone decides, lit or dark whole.
   const FacetLight light =
@@ -727,19 +765,18 @@ bool SbrTracer::mover_near(const RadarPose& pose, std::uint32_t id) const noexce
 }
 
 void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<Bundle> bundles,
-                             bool check_facets, double& credit, TraceStats* stats) const noexcept {
+                             double& credit) const noexcept {
   const SbrConfig& c = config_;
   for (Bundle& b : bundles) {
     b.trace = true;
     b.keep = false;
+    b.refreshed = false;
   }
   if (!c.reuse_static_paths)
     return;
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const auto objects = scene_->objects();
   std::size_t forced_rays = 0, kept_rays = 0;  // static bundles traced / kept this frame
-  double worst_fraction = 0.0;
-  std::uint64_t oldest = 0;
   for (Bundle& b : bundles) {
     const std::uint32_t id = b.object_id;
     const std::size_t rays = b.n_az * b.n_el;
@@ -771,10 +808,6 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
       fraction = std::max(dtheta, turn) / limit;
       reuse = fraction <= 1.0;
     }
-    if (reuse && check_facets) {
-      for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1] && reuse; ++f)
-        reuse = (facet_light_[f] == kLightByRays ? 1 : 0) == kept_facet_by_rays_[f];
-    }
     if (reuse) {
       b.trace = false;
       b.kept_fraction = fraction;
@@ -798,23 +831,34 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     if (pick == nullptr || credit < static_cast<double>(pick->n_az * pick->n_el))
       break;
     pick->trace = true;
+    pick->refreshed = true;
     credit -= static_cast<double>(pick->n_az * pick->n_el);
-    if (stats != nullptr)
-      ++stats->refreshed_bundles;
   }
-  if (stats == nullptr)
-    return;
+}
+
+bool SbrTracer::same_facets_by_rays(std::uint32_t id) const noexcept {
+  for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1]; ++f) {
+    if ((facet_light_[f] == kLightByRays ? 1 : 0) != kept_facet_by_rays_[f])
+      return false;
+  }
+  return true;
+}
+
+void SbrTracer::count_reuse(std::span<const Bundle> bundles, TraceStats& stats) const noexcept {
+  double worst_fraction = 0.0;
+  std::uint64_t oldest = 0;
   for (const Bundle& b : bundles) {
+    stats.refreshed_bundles += b.refreshed ? 1u : 0u;
     if (b.trace)
       continue;
-    ++stats->reused_bundles;
-    stats->reused_rays += b.n_az * b.n_el;
-    stats->reused_contributions += kept_[b.object_id].count;
+    ++stats.reused_bundles;
+    stats.reused_rays += b.n_az * b.n_el;
+    stats.reused_contributions += kept_[b.object_id].count;
     worst_fraction = std::max(worst_fraction, b.kept_fraction);
     oldest = std::max(oldest, frame_count_ - kept_[b.object_id].traced_at);
   }
-  stats->reuse_max_angle_fraction = std::max(stats->reuse_max_angle_fraction, worst_fraction);
-  stats->reuse_max_age_frames = std::max(stats->reuse_max_age_frames, oldest);
+  stats.reuse_max_angle_fraction = std::max(stats.reuse_max_angle_fraction, worst_fraction);
+  stats.reuse_max_age_frames = std::max(stats.reuse_max_age_frames, oldest);
 }
 
 // A ray between its hits (trace_batch): where it is, what it carries, where its returns go.
@@ -1048,9 +1092,9 @@ void SbrTracer::trace_batch(const RadarPose& pose, const Frame& frame, std::span
           out.range_m = 0.5 * total_m;
           out.range_spread_m = 0.0;
           out.radial_velocity_mps = 0.5 * (st.path_rate + glm::dot(pose.velocity_mps - v_obj, s));
-          // arrival_azel(arrival), its square root shared.
-          out.azimuth_rad = std::atan2(arrival.y, arrival.x);
-          out.elevation_rad = std::atan2(-arrival.z, arrival_h);
+          const AzEl ae = arrival_azel(arrival, arrival_h);  // its square root shared
+          out.azimuth_rad = ae.azimuth_rad;
+          out.elevation_rad = ae.elevation_rad;
           out.object_id = st.path_owner;
           out.radiated_by_owner = hit.object_id == st.path_owner;
           out.bounces = static_cast<std::uint8_t>(bounce + 1);
@@ -1115,7 +1159,7 @@ TracePlan SbrTracer::plan(const RadarPose& pose, const TraceKnobs& knobs,
     }
   }
   double credit = refresh_credit_;
-  choose_reuse(pose, f.max_bounces, plan_bundles_, false, credit, nullptr);
+  choose_reuse(pose, f.max_bounces, plan_bundles_, credit);
   for (const Bundle& b : plan_bundles_) {
     const std::size_t rays = b.n_az * b.n_el;
     if (!b.trace) {
@@ -1163,31 +1207,62 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     ++stats.target_bundles;
   }
   frame.unbundled_in_range = unbundled_in_range_;
+  // Static path reuse: which bundles shoot their rays this frame (the others' kept paths are
+  // re-evaluated below), before the facet pass, whose kept bundles read their facets' occlusion
+  // answers back (FacetMemo).
+  choose_reuse(pose, frame.max_bounces, bundles_, refresh_credit_);
   // Bounce 1 of every facet of the bundled targets (header), before the rays that read it: one
   // parallel loop over all their facets (bundle b's run from its first_facet).
   for (const Bundle& bd : bundles_)
     frame_world_from_body_[bd.object_id] = scene_->world_from_body(bd.object_id);
   const std::size_t n_facets = lay_out_run(bundles_, &Bundle::first_facet, facet_first_);
-  std::atomic<std::uint64_t> lit_facets{0}, partial_facets{0}, facet_queries{0};
+  std::atomic<std::uint64_t> facet_queries{0};
+  auto facet_of = [&](const Bundle& bd, std::size_t t, std::uint64_t& queries) {
+    const std::size_t slot = facet_first_[bd.object_id] + t;
+    FacetMemo* record = nullptr;
+    const FacetMemo* replay = nullptr;
+    if (!facet_memo_.empty() && bd.trace && bd.keep)
+      record = &facet_memo_[slot];
+    else if (!facet_memo_.empty() && !bd.trace &&
+             kept_[bd.object_id].facet_centroid_only == knobs.facet_centroid_only)
+      replay = &facet_memo_[slot];
+    facet_light_[slot] = facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only, bd.spacing_m,
+                                    facet_out_[slot], queries, record, replay);
+  };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_facets, 64),
                     [&](const tbb::blocked_range<std::size_t>& range) {
-                      std::uint64_t queries = 0, n_lit = 0, n_partial = 0;
+                      std::uint64_t queries = 0;
                       std::size_t b = 0;
                       for (std::size_t i = range.begin(); i != range.end(); ++i) {
                         const std::size_t t = run_item(bundles_, &Bundle::first_facet, i, b);
-                        const Bundle& bd = bundles_[b];
-                        const std::size_t slot = facet_first_[bd.object_id] + t;
-                        const std::uint8_t l =
-                            facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only,
-                                       bd.spacing_m, facet_out_[slot], queries);
-                        facet_light_[slot] = l;
-                        n_lit += l == static_cast<std::uint8_t>(FacetLight::kLit) ? 1u : 0u;
-                        n_partial += l == static_cast<std::uint8_t>(FacetLight::kPartial) ? 1u : 0u;
+                        facet_of(bundles_[b], t, queries);
                       }
                       facet_queries += queries;
-                      lit_facets += n_lit;
-                      partial_facets += n_partial;
                     });
+  // The reuse rule's last condition: the same facets left to the rays as when the paths were
+  // kept. A bundle that fails it is traced after all, its facets asked again (and recorded).
+  for (Bundle& bd : bundles_) {
+    if (bd.trace || same_facets_by_rays(bd.object_id))
+      continue;
+    bd.trace = true;
+    refresh_credit_ = std::max(0.0, refresh_credit_ - static_cast<double>(bd.n_az * bd.n_el));
+    std::uint64_t queries = 0;
+    for (std::size_t t = 0; t < facet_first_[bd.object_id + 1] - facet_first_[bd.object_id]; ++t)
+      facet_of(bd, t, queries);
+    facet_queries += queries;
+  }
+  count_reuse(bundles_, stats);
+  {
+    std::uint64_t n_lit = 0, n_partial = 0;
+    for (const Bundle& bd : bundles_) {
+      for (std::size_t f = facet_first_[bd.object_id]; f < facet_first_[bd.object_id + 1]; ++f) {
+        n_lit += facet_light_[f] == static_cast<std::uint8_t>(FacetLight::kLit) ? 1u : 0u;
+        n_partial += facet_light_[f] == static_cast<std::uint8_t>(FacetLight::kPartial) ? 1u : 0u;
+      }
+    }
+    stats.lit_facets += n_lit;
+    stats.partial_facets += n_partial;
+  }
 
   // Edge diffraction of the bundled targets (SbrConfig::edges), the same way.
   std::atomic<std::uint64_t> edge_queries{0};
@@ -1218,9 +1293,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                         }
                       });
   }
-  // Static path reuse: which bundles shoot their rays this frame (the others' kept paths are
-  // re-evaluated below); the rays of those that do, laid end to end after the terrain grid's.
-  choose_reuse(pose, frame.max_bounces, bundles_, true, refresh_credit_, &stats);
+  // The rays of the bundles traced, laid end to end after the terrain grid's.
   for (Bundle& bd : bundles_) {
     bd.first_ray = next_ray;
     if (bd.trace)
@@ -1378,6 +1451,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       kp.world_from_antenna = pose.world_from_antenna;
       kp.spacing_m = bd.spacing_m;
       kp.max_bounces = frame.max_bounces;
+      kp.facet_centroid_only = knobs.facet_centroid_only;
       kp.count = m;
       kp.traced_at = frame_count_;
       for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1]; ++f)
@@ -1459,8 +1533,6 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     }
     stats.facet_queries += edge_queries.load();
   }
-  stats.lit_facets += lit_facets.load();
-  stats.partial_facets += partial_facets.load();
   stats.contributions += n;
   return n;
 }

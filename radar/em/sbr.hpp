@@ -140,7 +140,11 @@ struct SbrConfig {
   /// met a moving object and no moving object comes near the target or its line of sight to
   /// the radar; else the bundle is traced again. Besides, about 1 / reuse_refresh_frames of the
   /// kept rays are traced again each frame, the longest kept first, so a kept path is at most
-  /// about that many frames old (a frame is a trace() call). Off: every bundle every frame.
+  /// about that many frames old (a frame is a trace() call). While its paths are kept, a
+  /// target's bounce-1 facets also keep the answers of their occlusion queries (which samples
+  /// and sub-triangles see the radar): under the same rule a shadow boundary moves across it
+  /// by at most D dtheta <= spacing / 2, within the rays' own resolution. Their PO integrals,
+  /// phases and angles are computed for the pose. Off: every bundle every frame.
   bool reuse_static_paths = false;
   double reuse_max_phase_rad = 0.39269908169872414;  ///< pi / 8
   int reuse_refresh_frames = 16;                     ///< >= 1
@@ -321,6 +325,7 @@ class SbrTracer {
     /// returns start in this frame's run of them.
     bool trace = true;
     bool keep = false;
+    bool refreshed = false;      ///< traced (static, its kept paths valid) to refresh them
     double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
     std::size_t first_kept = 0;
   };
@@ -340,11 +345,16 @@ class SbrTracer {
   /// Static path reuse (SbrConfig::reuse_static_paths): per bundle, whether it is traced this
   /// frame or re-evaluates its kept paths, and whether it keeps its paths once traced (the rule
   /// at SbrConfig::reuse_static_paths, then the refresh of the longest kept, paid from `credit`
-  /// [rays], which it updates). `check_facets`: also require the same facets left to the rays
-  /// as when the paths were kept (facet_light_ holds this frame's: trace(), after the facet
-  /// pass; plan() cannot know it). Adds to `stats` when given.
+  /// [rays], which it updates). The rule's last condition, the same facets left to the rays as
+  /// when the paths were kept, needs this frame's facet pass: trace() checks it after
+  /// (same_facets_by_rays); plan() cannot know it.
   void choose_reuse(const RadarPose& pose, int max_bounces, std::span<Bundle> bundles,
-                    bool check_facets, double& credit, TraceStats* stats) const noexcept;
+                    double& credit) const noexcept;
+  /// Whether target `id`'s facets left to the rays this frame (facet_light_) are those of when
+  /// its paths were kept.
+  [[nodiscard]] bool same_facets_by_rays(std::uint32_t id) const noexcept;
+  /// The frame's reuse figures of `bundles` (those not traced re-evaluate kept paths).
+  void count_reuse(std::span<const Bundle> bundles, TraceStats& stats) const noexcept;
   double refresh_credit_ = 0.0;  ///< the refresh's credit [rays] (choose_reuse)
   /// Whether a moving object is near static target `id` or its line of sight to the radar.
   [[nodiscard]] bool mover_near(const RadarPose& pose, std::uint32_t id) const noexcept;
@@ -364,8 +374,9 @@ class SbrTracer {
     glm::dmat3 world_from_antenna{1.0};
     double spacing_m = 0.0;  ///< the bundle's spacing (before coarsening) and bounces then
     int max_bounces = 0;
-    std::size_t count = 0;        ///< kept returns, at the front of its region of kept_paths_
-    std::uint64_t traced_at = 0;  ///< frame_count_ then
+    bool facet_centroid_only = false;  ///< TraceKnobs::facet_centroid_only then (facet_memo_)
+    std::size_t count = 0;             ///< kept returns, at the front of its region of kept_paths_
+    std::uint64_t traced_at = 0;       ///< frame_count_ then
   };
   std::vector<Kept> kept_;
   /// Each static target's region of kept_paths_ (max_rays_per_target x max_bounces slots: the
@@ -375,6 +386,21 @@ class SbrTracer {
   std::unique_ptr<KeptPath[]> kept_paths_;
   /// Per facet of a kept target: left to the rays (kLightByRays) when its paths were kept.
   std::vector<std::uint8_t> kept_facet_by_rays_;
+  /// Per facet of a static target, with reuse on: the answers of its bounce-1 occlusion queries
+  /// (facet_pass: its visibility samples toward the radar, then its sub-triangles', in the
+  /// order asked; bit i set: query i blocked) when its bundle was last traced to keep its
+  /// paths. While the kept paths stand for the rays, the facet pass reads the answers back
+  /// instead of asking the scene again: the same aspect-change rule bounds how far a shadow
+  /// boundary can have moved across the target (at most half a ray tube, D dtheta <= spacing /
+  /// 2), so the facets' light is kept to the rays' own resolution, and the facets' PO integrals,
+  /// phases and angles are still computed for the pose. A query beyond the recorded ones (a
+  /// facet that was turned away then) asks the scene.
+  struct FacetMemo {
+    static constexpr std::size_t kBits = 320;  ///< >= kFacetSamples + kMaxFacetSubdivisions^2
+    std::uint64_t blocked[kBits / 64];
+    std::uint16_t count;  ///< answers recorded
+  };
+  std::vector<FacetMemo> facet_memo_;
   /// Per object, this frame: a kept bundle's path met a moving object (not kept then).
   std::unique_ptr<std::atomic<std::uint8_t>[]> met_mover_;
   std::vector<std::uint32_t> movers_;  ///< the scene's moving objects
@@ -410,9 +436,12 @@ class SbrTracer {
   /// Bounce 1 of triangle `t` of target `id` for a radar at `pose` (header): its light, and
   /// its contribution in `out` when lit or partly lit. Adds its occlusion queries to `queries`.
   /// Partly lit facets are cut to `resolution_m` (sbr_core.hpp, facet_subdivisions).
+  /// `record`: its occlusion answers are written there; `replay`: read from there (FacetMemo;
+  /// at most one of the two, each may be null).
   [[nodiscard]] std::uint8_t facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
                                         bool centroid_only, double resolution_m, Contribution& out,
-                                        std::uint64_t& queries) const noexcept;
+                                        std::uint64_t& queries, FacetMemo* record = nullptr,
+                                        const FacetMemo* replay = nullptr) const noexcept;
 
   /// Diffracting edges of the targets, body frame (SbrConfig::edges): object id's are
   /// edges_body_[edge_first_[id] .. edge_first_[id + 1]); per frame, each edge's state (0 used,

@@ -58,6 +58,7 @@
 // into its own buffers: the output (values and order: slice, bin, column) is the same for any
 // number of threads.
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <optional>
@@ -167,6 +168,11 @@ class TerrainReturns {
   /// flight.
   [[nodiscard]] std::span<const clutter::Sigma0Use> sigma0_use() const noexcept {
     return sigma0_use_;
+  }
+  /// Setup: forgets what the compute() calls so far read (sigma0_use()), e.g. after a frame
+  /// computed at setup only to learn its cost.
+  void forget_sigma0_use() noexcept {
+    std::fill(sigma0_use_.begin(), sigma0_use_.end(), clutter::Sigma0Use{});
   }
 
  private:

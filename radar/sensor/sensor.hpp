@@ -161,6 +161,10 @@ class Sensor {
   /// storage must match capture_shape() (process() skips a capture that does not) and stay
   /// valid until that call returns. Real-time safe.
   void capture_next(SensorCapture* capture) noexcept { capture_ = capture; }
+  /// The frame counter that keys the noise streams (one more each process()). Setup: set back
+  /// after a frame processed only to learn its cost, so the run draws what it would have drawn.
+  [[nodiscard]] std::uint64_t noise_frame() const noexcept { return frame_; }
+  void set_noise_frame(std::uint64_t frame) noexcept { frame_ = frame; }
   [[nodiscard]] CaptureShape capture_shape() const noexcept;
   /// After process() filled `capture`: every image cell as the CFAR saw it. The synthesised
   /// cells keep their value (where no return added signal, the phase is the one the sensor

@@ -2,7 +2,8 @@
 // kept paths re-evaluated for a still radar give back the traced returns; for a moving radar the
 // right dihedral's double-bounce paths keep the image-method length to within Fermat's
 // second-order bound, and the square trihedral keeps its closed-form RCS; every rule that calls
-// for a new trace (aspect, antenna turn, spacing, a moving object near, the refresh) does.
+// for a new trace (aspect, antenna turn, spacing, a moving object near, the refresh) does; kept
+// targets' facets read their occlusion answers back.
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -131,6 +132,49 @@ TEST(SbrReuse, AStillRadarGetsTheTracedReturnsBack) {
     EXPECT_NEAR(a.elevation_rad, b.elevation_rad, 1e-12) << i;
     EXPECT_NEAR(a.radial_velocity_mps, b.radial_velocity_mps, 1e-12) << i;
   }
+}
+
+TEST(SbrReuse, KeptFacetsReadTheirShadowsBackInTheOrderAsked) {
+  // A 1 m plate with a 0.3 m plate 2 m in front of it, off centre: the big plate is partly lit
+  // (its facets cut into sub-triangles, each with its own visibility query). Its bundle keeps
+  // its paths, and its facets' occlusion answers; a radar turned by a thousandth of the aspect
+  // limit (no shadow boundary crosses a sample) gets every facet's light from them, no query
+  // asked, and the bounce-1 returns a fresh trace computes at that pose, to rounding. Turned
+  // past the limit, the facets ask the scene again.
+  const double f = 10e9, rho = 1000.0, spacing = 0.05;
+  sc::Scene scene(with({plate(1.0, {0.0, 0.0, 0.0}), plate(0.3, {0.4, -2.0, 0.0})}));
+  const rd::SbrConfig c = config(f, spacing);
+  rd::SbrConfig fresh_config = c;
+  fresh_config.reuse_static_paths = false;
+  const double limit = limit_rad(c, spacing, std::sqrt(2.0));
+  const rd::RadarPose near = pose_around(rho, 1e-3 * limit);
+  rd::SbrTracer reuse(scene, c), fresh(scene, fresh_config);
+  const Frame first = trace(reuse, pose_around(rho, 0.0));
+  const Frame kept = trace(reuse, near), traced = trace(fresh, near);
+  EXPECT_GT(first.stats.facet_queries, 100u);
+  EXPECT_GE(first.stats.partial_facets, 1u);
+  ASSERT_EQ(kept.stats.reused_bundles, 2u);
+  EXPECT_EQ(kept.stats.facet_queries, 0u);
+  EXPECT_EQ(kept.stats.lit_facets, traced.stats.lit_facets);
+  EXPECT_EQ(kept.stats.partial_facets, traced.stats.partial_facets);
+  auto bounce1 = [](const Frame& fr) {
+    std::vector<std::complex<double>> a;
+    for (const rd::Contribution& x : fr.out) {
+      if (x.bounces == 1)
+        a.push_back(x.amplitude);
+    }
+    return a;
+  };
+  const std::vector<std::complex<double>> a = bounce1(kept), b = bounce1(traced);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GE(a.size(), 3u);
+  for (std::size_t i = 0; i < a.size(); ++i)
+    EXPECT_LE(std::abs(a[i] - b[i]), 1e-9 * std::abs(b[i])) << i;
+  // Past both plates' limits (the small plate's is the larger).
+  const Frame turned =
+      trace(reuse, pose_around(rho, 1.5 * limit_rad(c, spacing, 0.3 * std::sqrt(2.0))));
+  EXPECT_EQ(turned.stats.reused_bundles, 0u);
+  EXPECT_GT(turned.stats.facet_queries, 100u);
 }
 
 TEST(SbrReuse, KeptDihedralPathsKeepTheImageLengthToSecondOrder) {
