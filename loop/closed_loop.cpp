@@ -390,6 +390,7 @@ struct Frame {
   std::uint64_t rays_before = 0, cells_before = 0, truncated_before = 0;
   std::uint64_t terrain_patches = 0, terrain_returns = 0;  ///< the engine's, this frame
   std::uint64_t terrain_facets = 0;                        ///< the facets cut into its patches
+  std::uint64_t kept_returns = 0, cells_synthesised = 0;   ///< this frame's (FrameRecord)
   std::size_t contributions = 0, detections = 0, truth = 0;
   FrameRecord record{};
 };
@@ -676,6 +677,7 @@ void ClosedLoop::Impl::trace(Frame& f) {
   RunState& rs = accounting.run();
   RunResult& r = rs.r;
   f.rays_before = r.trace.rays + r.trace.reused_rays;
+  const std::uint64_t kept_before = r.trace.reused_contributions;
   f.cells_before = r.sensor.cells_synthesised;
   timing::ScopedStage stage(accounting.profiler, rs.wall, timing::Stage::kTrace);
   if (f.valid) {
@@ -712,6 +714,7 @@ void ClosedLoop::Impl::trace(Frame& f) {
           tracer.tracer.trace(f.pose, tracer.contributions, r.trace, f.decision->knobs);  // adds
     }
   }
+  f.kept_returns = r.trace.reused_contributions - kept_before;
   // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
   radar::apply_two_way_loss(std::span(tracer.contributions.data(), f.contributions),
                             tracer.weather.total_db_per_m);
@@ -732,6 +735,7 @@ void ClosedLoop::Impl::sense(Frame& f) {
   const GovernorDecision* d = f.decision;
   if (f.valid) {
     const timing::StageProfiler& p = accounting.profiler;
+    f.cells_synthesised = r.sensor.cells_synthesised - f.cells_before;
     governor.observe(static_cast<double>(p.last_ns(timing::Stage::kTrace)) * 1e-6,
                      static_cast<double>(p.last_ns(timing::Stage::kSensor)) * 1e-6,
                      r.trace.rays + r.trace.reused_rays - f.rays_before, f.contributions,
@@ -805,6 +809,12 @@ void ClosedLoop::Impl::send(Frame& f) {
   rec.governor_predicted_ms = d != nullptr ? d->predicted_ms : 0.0;
   rec.governor_error_db = d != nullptr ? d->estimated_snr_error_db : 0.0;
   rec.rays = d != nullptr ? d->rays : 0;
+  rec.governor_predicted_trace_ms = d != nullptr ? d->predicted_trace_ms : 0.0;
+  rec.governor_predicted_sensor_ms = d != nullptr ? d->predicted_sensor_ms : 0.0;
+  rec.kept_returns = f.kept_returns;
+  rec.returns = f.valid ? f.contributions : 0;
+  rec.cells_synthesised = f.cells_synthesised;
+  rec.terrain_patches = f.terrain_patches;
 }
 
 ClosedLoop::ClosedLoop(const Scenario& scenario, const RunOptions& options)

@@ -41,6 +41,14 @@ struct FrameRecord {
   double governor_predicted_ms = 0.0;  ///< its predicted trace + sensor time [ms]
   double governor_error_db = 0.0;      ///< its estimated SNR error at that level [dB]
   std::uint64_t rays = 0;              ///< rays traced
+  // What the governor's cost model counts (loop/governor.hpp), for reading its predictions
+  // against the stage times: its two terms, and the frame's figures they rest on.
+  double governor_predicted_trace_ms = 0.0;
+  double governor_predicted_sensor_ms = 0.0;
+  std::uint64_t kept_returns = 0;       ///< returns re-evaluated from kept paths (static reuse)
+  std::uint64_t returns = 0;            ///< returns handed to the sensor (the engine's included)
+  std::uint64_t cells_synthesised = 0;  ///< image cells the sensor synthesised
+  std::uint64_t terrain_patches = 0;    ///< the terrain engine's patches
 };
 
 /// What the streamed outputs (emulator/output_stream.hpp) wrote and lost.

@@ -236,6 +236,8 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
       kLevelSnrError_db[static_cast<std::size_t>(std::min(level, kMaxLevel))];
   last_predicted_trace_ms_ = model_trace_ms(plan);
   last_predicted_sensor_ms_ = model_sensor_ms(plan);
+  d.predicted_trace_ms = trace_factor_ * last_predicted_trace_ms_;
+  d.predicted_sensor_ms = sensor_factor_ * last_predicted_sensor_ms_;
   return d;
 }
 

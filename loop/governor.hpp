@@ -97,6 +97,8 @@ struct GovernorDecision {
   bool degraded = false;                ///< level > 0
   bool over_deadline = false;           ///< even the coarsest level was predicted late
   double predicted_ms = 0.0;            ///< trace + sensor predicted at the level
+  double predicted_trace_ms = 0.0;      ///< of which the trace (the terrain engine's included)
+  double predicted_sensor_ms = 0.0;     ///< and the sensor
   double deadline_ms = 0.0;             ///< compute_fraction x period
   double estimated_snr_error_db = 0.0;  ///< kLevelSnrError_db at the level
   std::size_t rays = 0;                 ///< rays planned

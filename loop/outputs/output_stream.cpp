@@ -227,7 +227,9 @@ OutputStream::OutputStream(OutputStreamConfig config)
   files_[kFramesCsv]->put(
       "frame,time_s,frame_counter,status,ownship_valid,sent,late,detections,objects_in_beam,"
       "input_ms,scene_update_ms,trace_ms,sensor_ms,output_ms,frame_ms,wake_latency_ms,"
-      "governor_level,governor_predicted_ms,governor_estimated_snr_error_db,rays\n");
+      "governor_level,governor_predicted_ms,governor_estimated_snr_error_db,rays,"
+      "governor_predicted_trace_ms,governor_predicted_sensor_ms,kept_returns,returns,"
+      "cells_synthesised,terrain_patches\n");
   writer_ = std::thread([this] { writer_main(); });
 }
 
@@ -530,6 +532,15 @@ void OutputStream::write_frames_csv(const FrameEntry& e) noexcept {
   c.put_fixed(rec.governor_error_db, 2);
   c.put(',');
   c.put_uint(rec.rays);
+  c.put(',');
+  c.put_fixed(rec.governor_predicted_trace_ms, 3);
+  c.put(',');
+  c.put_fixed(rec.governor_predicted_sensor_ms, 3);
+  for (std::uint64_t v :
+       {rec.kept_returns, rec.returns, rec.cells_synthesised, rec.terrain_patches}) {
+    c.put(',');
+    c.put_uint(v);
+  }
   c.put('\n');
 }
 
