@@ -80,6 +80,10 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
   }
   rank_.assign(n, 0);
   spacing_m_.assign(n, 0.0);
+  // The loop's frame primed at setup (static path reuse) is traced at the scenario's spacing.
+  last_spacing_m_.assign(n, tracer.config().target_ray_spacing_m);
+  lagging_.reserve(targets_.size());
+  rays_per_object_.assign(n, 0);
   decision_.deadline_ms = deadline_ms_;
   // Before the first frame the sensor's work is unknown: assume the worst (every cell of the
   // image synthesised) and half a return a ray, so the first frame errs on the early side.
@@ -142,14 +146,85 @@ double FidelityGovernor::predict_ms(const radar::TracePlan& plan) const noexcept
   return trace_factor_ * model_trace_ms(plan) + sensor_factor_ * model_sensor_ms(plan);
 }
 
+double FidelityGovernor::target_spacing_m(std::uint32_t id, int level) const noexcept {
+  const int l = level + std::min(rank_[id], level);
+  return tracer_->config().target_ray_spacing_m * std::pow(2.0, 0.5 * l);
+}
+
+int FidelityGovernor::level_of_spacings(int from) const noexcept {
+  for (int level = from; level < kMaxLevel; ++level) {
+    bool fine_enough = true;
+    for (std::uint32_t id : targets_)
+      fine_enough = fine_enough && spacing_m_[id] <= target_spacing_m(id, level) * (1.0 + 1e-9);
+    if (fine_enough)
+      return level;
+  }
+  return kMaxLevel;
+}
+
+int FidelityGovernor::refine_with_kept(const radar::RadarPose& pose, int min_level, int level,
+                                       radar::TracePlan& plan, double& predicted) noexcept {
+  const std::span<const scene::ObjectState> objects = scene_->objects();
+  for (int l = min_level; l < level; ++l) {
+    knobs_for(l);
+    // The static targets whose kept paths are coarser than level l asks (lagging_).
+    lagging_.clear();
+    for (std::uint32_t id : targets_) {
+      if (!objects[id].moving && last_spacing_m_[id] > spacing_m_[id] * (1.0 + 1e-9))
+        lagging_.push_back(id);
+    }
+    if (lagging_.empty())
+      continue;  // level l itself: it did not fit
+    // Their rays at level l (what tracing them again costs), then the mix: they keep theirs.
+    (void)tracer_->plan(pose, decision_.knobs, rays_per_object_);
+    for (std::uint32_t id : lagging_)
+      spacing_m_[id] = last_spacing_m_[id];
+    radar::TracePlan mixed = tracer_->plan(pose, decision_.knobs);
+    double cost = predict_ms(mixed);
+    if (cost > deadline_ms_)
+      continue;
+    // The strongest first (lowest rank, then object id), while their rays fit: a weaker target
+    // never goes before a stronger one.
+    std::sort(lagging_.begin(), lagging_.end(), [&](std::uint32_t a, std::uint32_t b) {
+      return rank_[a] != rank_[b] ? rank_[a] < rank_[b] : a < b;  // std::sort: no allocation
+    });
+    double room = deadline_ms_ - cost;
+    std::size_t upgraded = 0;
+    for (; upgraded < lagging_.size(); ++upgraded) {
+      const std::uint32_t id = lagging_[upgraded];
+      const double extra_ms = trace_factor_ * config_.trace_ns_per_ray * 1e-6 *
+                              static_cast<double>(rays_per_object_[id]);
+      if (extra_ms > room)
+        break;
+      room -= extra_ms;
+      spacing_m_[id] = target_spacing_m(id, l);
+    }
+    // The estimate leaves out the sensor's share of their returns: the weakest go back while
+    // the whole is over the deadline.
+    if (upgraded > 0) {
+      mixed = tracer_->plan(pose, decision_.knobs);
+      cost = predict_ms(mixed);
+      while (cost > deadline_ms_ && upgraded > 0) {
+        const std::uint32_t id = lagging_[--upgraded];
+        spacing_m_[id] = last_spacing_m_[id];
+        mixed = tracer_->plan(pose, decision_.knobs);
+        cost = predict_ms(mixed);
+      }
+    }
+    plan = mixed;
+    predicted = cost;
+    return level_of_spacings(l);
+  }
+  knobs_for(level);  // nothing finer: the level as chosen
+  return level;
+}
+
 void FidelityGovernor::knobs_for(int level) noexcept {
   const radar::SbrConfig& c = tracer_->config();
-  for (std::uint32_t id : targets_) {
-    // Level 0 is the scenario's fidelity for every target; above it the weaker targets coarsen
-    // faster (by their rank, at most by the level itself).
-    const int l = level + std::min(rank_[id], level);
-    spacing_m_[id] = c.target_ray_spacing_m * std::pow(2.0, 0.5 * l);
-  }
+  // Level 0 is the scenario's fidelity for every target; above it the weaker targets coarsen
+  // faster (by their rank, at most by the level itself).
+  for (std::uint32_t id : targets_)
+    spacing_m_[id] = target_spacing_m(id, level);
   radar::TraceKnobs& k = decision_.knobs;
   k.target_ray_spacing_m = spacing_m_;
   k.terrain_spacing_scale = std::pow(2.0, 0.25 * level);
@@ -226,7 +301,11 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
     knobs_for(level);
     predicted = predicted_at[static_cast<std::size_t>(level)];
     plan = plan_at[static_cast<std::size_t>(level)];
+  } else if (level > min_level && tracer_->config().reuse_static_paths) {
+    level = refine_with_kept(pose, min_level, level, plan, predicted);
   }
+  for (std::uint32_t id : targets_)
+    last_spacing_m_[id] = spacing_m_[id];
   d.level = level;
   d.degraded = level > 0;
   d.over_deadline = predicted > deadline_ms_;

@@ -50,6 +50,17 @@
 // one lowers them slowly (exponential average), so the governor errs on the side of the
 // deadline.
 //
+// Returning to a finer level. With static path reuse a target's paths are kept at the spacing
+// they were traced with, and a level that asks another spacing traces the target again (plan()
+// counts it). Left alone, that makes a finer level cost a whole frame's rays the first time:
+// after one frame over the deadline the governor would never come back. So when it chooses a
+// level L above the frame's finest, it also tries each finer level l: the static targets whose
+// kept paths are coarser than l asks keep them (no new rays), the rest take l; if that fits,
+// the strongest of those lagging targets (lowest rank first) are traced at l's spacing while
+// their rays fit the deadline. The frame's level is then its coarsest target's (the finest level
+// whose spacings are all at least as coarse as the frame's), and it falls to l over the
+// following frames as the targets come up.
+//
 // Estimated error. Each level carries the mean |SNR error| of matched detections that `radar-emu
 // tradeoff` measured on the default scenario's frame at that level against a high-fidelity
 // frame (kLevelSnrError_db, with the command in docs/performance.md). It is an estimate for
@@ -162,16 +173,31 @@ class FidelityGovernor {
   const GovernorDecision& choose(const radar::RadarPose& pose, int min_level,
                                  int max_level) noexcept;
   void knobs_for(int level) noexcept;
+  /// Target `id`'s bundle spacing at `level` (its rank applied) [m].
+  [[nodiscard]] double target_spacing_m(std::uint32_t id, int level) const noexcept;
+  /// The finest level from `from` on whose spacings are all at least as coarse as spacing_m_'s.
+  [[nodiscard]] int level_of_spacings(int from) const noexcept;
+  /// With static path reuse, after `level` was chosen above `min_level`: the finest level l
+  /// below it at which the static targets whose kept paths are coarser than l asks keep them
+  /// and the rest fits the deadline; of those, the strongest are traced at l's spacing while
+  /// their rays fit (header: returning to a finer level). Sets the knobs, `plan` and
+  /// `predicted`, and returns the level the frame then has (its coarsest target's); else
+  /// leaves them at `level` and returns it.
+  int refine_with_kept(const radar::RadarPose& pose, int min_level, int level,
+                       radar::TracePlan& plan, double& predicted) noexcept;
 
   GovernorConfig config_;
   const scene::Scene* scene_;
   const radar::SbrTracer* tracer_;
   const radar::Sensor* sensor_;
   double deadline_ms_;
-  std::vector<std::uint32_t> targets_;  ///< object ids of the tracer's targets
-  std::vector<int> rank_;               ///< per object id
-  std::vector<double> mean_area_m2_;    ///< per object id: surface / 4 (targets)
-  std::vector<double> spacing_m_;       ///< per object id, for TraceKnobs
+  std::vector<std::uint32_t> targets_;        ///< object ids of the tracer's targets
+  std::vector<int> rank_;                     ///< per object id
+  std::vector<double> mean_area_m2_;          ///< per object id: surface / 4 (targets)
+  std::vector<double> spacing_m_;             ///< per object id, for TraceKnobs
+  std::vector<double> last_spacing_m_;        ///< per object id: the previous decision's spacing
+  std::vector<std::uint32_t> lagging_;        ///< refine_with_kept's targets (capacity: all)
+  std::vector<std::size_t> rays_per_object_;  ///< SbrTracer::plan's, per object id
   GovernorDecision decision_{};
   // The previous frame, for the sensor term.
   double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;

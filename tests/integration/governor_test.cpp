@@ -176,7 +176,11 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
   loop::GovernorConfig g = f.s.governor;
   g.mode = loop::GovernorConfig::Mode::kMeasured;
   g.max_level = loop::FidelityGovernor::kMaxLevel;
-  loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
+  // Nothing is traced here: without static path reuse every level is one for all targets.
+  radar::SbrConfig every_ray = f.s.sbr;
+  every_ray.reuse_static_paths = false;
+  const radar::SbrTracer tracer(f.scene, every_ray);
+  loop::FidelityGovernor gov(g, f.scene, tracer, f.sensor, 1.0 / f.s.rate_hz);
   // A first frame exactly as fast as the model: the factors stay at 1.
   const loop::GovernorDecision first = gov.decide(f.pose);
   auto model_trace_ms = [&](std::size_t rays) {
@@ -397,4 +401,51 @@ TEST(Governor, TheFirstFrameIsPredictedFromTheFramePrimedAtSetup) {
                second = r.records[1].governor_predicted_ms;
   std::cout << "predicted: frame 0 " << first << " ms, frame 1 " << second << " ms\n";
   EXPECT_NEAR(first, second, 0.1 * second);
+}
+
+TEST(Governor, AfterADegradedFrameKeptTargetsComeBackToTheFinestLevelInSteps) {
+  // Static path reuse keeps a target's paths at the spacing they were traced with, so a finer
+  // level first costs that target's rays again. A frame forced to level 3 keeps every static
+  // target at level 3's spacing; a deadline that holds the default frame at level 0 with its
+  // paths kept but not a whole frame's rays at level 0 is then met by coming back in steps:
+  // each frame keeps the lagging targets' paths, traces the strongest of them at the finer
+  // spacing while the rays fit, and reports its coarsest target's level, which falls to 0.
+  DefaultFrame& f = default_frame();
+  ASSERT_TRUE(f.s.sbr.reuse_static_paths);
+  radar::SbrTracer tracer(f.scene, f.s.sbr);
+  loop::GovernorConfig g = f.s.governor;
+  g.mode = loop::GovernorConfig::Mode::kModel;
+  const double period_s = 1.0 / f.s.rate_hz;
+  // The deadline between the two: level 0 with every static path kept, and level 0 traced.
+  loop::FidelityGovernor probe(g, f.scene, tracer, f.sensor, period_s);
+  std::vector<radar::Contribution> out(tracer.max_contributions());
+  radar::TraceStats ts;
+  auto trace = [&](const loop::GovernorDecision& d) {
+    (void)tracer.trace(f.pose, out, ts, d.knobs);
+  };
+  const double traced_ms = probe.decide_at(f.pose, 0).predicted_ms;
+  trace(probe.decide_at(f.pose, 0));
+  const double kept_ms = probe.decide_at(f.pose, 0).predicted_ms;
+  ASSERT_LT(kept_ms, 0.8 * traced_ms);
+  const double deadline_ms = 0.5 * (kept_ms + traced_ms);
+  g.compute_fraction = deadline_ms * 1e-3 / period_s;
+  loop::FidelityGovernor gov(g, f.scene, tracer, f.sensor, period_s);
+  trace(gov.decide_at(f.pose, 3));  // the degraded frame: every static target at level 3
+  std::vector<int> levels;
+  for (int frame = 0; frame < 12 && (levels.empty() || levels.back() > 0); ++frame) {
+    const loop::GovernorDecision& d = gov.decide(f.pose);
+    EXPECT_LE(d.predicted_ms, deadline_ms) << frame;
+    levels.push_back(d.level);
+    trace(d);
+  }
+  std::cout << "deadline " << deadline_ms << " ms (level 0 kept " << kept_ms << ", traced "
+            << traced_ms << "); levels after the degraded frame:";
+  for (int l : levels)
+    std::cout << " " << l;
+  std::cout << "\n";
+  ASSERT_FALSE(levels.empty());
+  EXPECT_EQ(levels.back(), 0);
+  EXPECT_GE(levels.size(), 2u);  // not all at once: a whole frame's rays do not fit
+  for (std::size_t i = 1; i < levels.size(); ++i)
+    EXPECT_LE(levels[i], levels[i - 1]) << i;
 }
