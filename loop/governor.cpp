@@ -45,6 +45,8 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
           "compute_fraction", "must be in (0, 1]");
   require(std::isfinite(config.trace_ns_per_ray) && config.trace_ns_per_ray > 0.0,
           "trace_ns_per_ray", "must be > 0");
+  require(std::isfinite(config.trace_ms_per_frame) && config.trace_ms_per_frame >= 0.0,
+          "trace_ms_per_frame", "must be >= 0");
   require(std::isfinite(config.trace_ns_per_kept_return) && config.trace_ns_per_kept_return >= 0.0,
           "trace_ns_per_kept_return", "must be >= 0");
   require(std::isfinite(config.sensor_ns_per_cell) && config.sensor_ns_per_cell >= 0.0,
@@ -104,7 +106,8 @@ double FidelityGovernor::model_trace_ms(const radar::TracePlan& plan) const noex
                         terrain_facet_ratio_at(decision_.knobs.terrain_spacing_scale) /
                         prev_terrain_facet_ratio_;
   const double patches = std::max(facets, prev_terrain_patches_ * s * s);
-  return 1e-6 * (config_.trace_ns_per_ray * static_cast<double>(plan.rays()) +
+  return config_.trace_ms_per_frame +
+         1e-6 * (config_.trace_ns_per_ray * static_cast<double>(plan.rays()) +
                  config_.trace_ns_per_kept_return * static_cast<double>(plan.reused_contributions) +
                  config_.terrain_ns_per_patch * patches);
 }

@@ -10,8 +10,8 @@ same with [radar] reuse_static_paths = false (every ray traced), and one held at
 level ([governor] max_level = 4 with compute_fraction = 0.01). Frame 0 of each run is left out
 (its caches are cold). The model, per frame:
 
-  trace  = trace_ns_per_ray x rays traced + trace_ns_per_kept_return x kept returns
-           + terrain_ns_per_patch x terrain patches
+  trace  = trace_ms_per_frame + trace_ns_per_ray x rays traced
+           + trace_ns_per_kept_return x kept returns + terrain_ns_per_patch x terrain patches
   sensor = sensor_ns_per_cell x cells synthesised + sensor_ns_per_return x returns
 
 fitted by least squares with non-negative coefficients (numpy.linalg.lstsq, a coefficient that
@@ -25,8 +25,9 @@ import sys
 
 import numpy as np
 
-TRACE_TERMS = ["rays", "kept_returns", "terrain_patches"]
-TRACE_KEYS = ["trace_ns_per_ray", "trace_ns_per_kept_return", "terrain_ns_per_patch"]
+TRACE_TERMS = ["frame", "rays", "kept_returns", "terrain_patches"]  # "frame": the constant
+TRACE_KEYS = ["trace_ms_per_frame", "trace_ns_per_ray", "trace_ns_per_kept_return",
+              "terrain_ns_per_patch"]
 SENSOR_TERMS = ["cells_synthesised", "returns"]
 SENSOR_KEYS = ["sensor_ns_per_cell", "sensor_ns_per_return"]
 
@@ -35,7 +36,7 @@ def load(run_dir):
     path = os.path.join(run_dir, "frames.csv")
     with open(path, newline="") as f:
         rows = [r for r in csv.DictReader(f) if r["ownship_valid"] == "1"]
-    missing = [k for k in TRACE_TERMS + SENSOR_TERMS if rows and k not in rows[0]]
+    missing = [k for k in TRACE_TERMS[1:] + SENSOR_TERMS if rows and k not in rows[0]]
     if missing:
         sys.exit(f"{path}: no column {missing[0]} (a frames.csv from an older radar-emu?)")
     return rows[1:]
@@ -63,8 +64,8 @@ def main():
     if len(rows) < 10:
         sys.exit("fit-governor-costs: fewer than 10 frames in all: run longer")
 
-    def matrix(rs, terms):
-        return np.array([[float(r[t]) * 1e-6 for t in terms] for r in rs])  # ns x count -> ms
+    def matrix(rs, terms):  # ns x count -> ms; the constant in ms
+        return np.array([[1.0 if t == "frame" else float(r[t]) * 1e-6 for t in terms] for r in rs])
 
     trace = fit_nonnegative(matrix(rows, TRACE_TERMS), np.array([float(r["trace_ms"]) for r in rows]))
     sensor = fit_nonnegative(matrix(rows, SENSOR_TERMS),
@@ -72,7 +73,7 @@ def main():
     print(f"# fitted on {len(rows)} frames of {len(runs)} runs ({os.cpu_count()} CPUs)")
     print("[governor]")
     for key, value in zip(TRACE_KEYS + SENSOR_KEYS, list(trace) + list(sensor)):
-        print(f"{key} = {value:.1f}")
+        print(f"{key} = {value:.2f}" if key.endswith("_ms_per_frame") else f"{key} = {value:.1f}")
     print("\n# measured / predicted per run: mean, p99 (trace, sensor, both)")
     for d, rs in runs.items():
         pt = matrix(rs, TRACE_TERMS) @ trace
