@@ -170,6 +170,10 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     merge_hash_.resize(c.max_contributions);
     merge_hashed_.resize(c.max_contributions);
     merge_sums_.resize(c.max_contributions);
+    // merge_key()'s cells a unit: per bin, and per radian of azimuth and elevation.
+    merge_per_bin_ = 1.0 / c.merge_step_bins;
+    merge_per_rad_az_ = 1.0 / (c.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad());
+    merge_per_rad_el_ = 1.0 / (c.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad());
   }
   by_range_.resize(c.max_contributions);
   range_start_.resize(processor_->range_bins() + 2);
@@ -836,9 +840,7 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
 
 void Sensor::merge_key(std::size_t i) noexcept {
   const Item& it = items_[i];
-  const double q = 1.0 / config_.merge_step_bins;
-  const double da = config_.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad();
-  const double de = config_.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad();
+  const double q = merge_per_bin_;
   // floor(x) for finite x within +-2^63: truncation, one less below zero off the integers
   // (std::floor is a library call without SSE4.1).
   auto cell = [](double x) {
@@ -846,7 +848,8 @@ void Sensor::merge_key(std::size_t i) noexcept {
     return t - (x < static_cast<double>(t) ? 1 : 0);
   };
   const MergeKey key{it.object_id, cell(it.pos.range_bin * q), cell(it.pos.velocity_bin * q),
-                     cell(it.azimuth_rad / da), cell(it.elevation_rad / de)};
+                     cell(it.azimuth_rad * merge_per_rad_az_),
+                     cell(it.elevation_rad * merge_per_rad_el_)};
   merge_keys_[i] = key;
   // The hash places the key in the table only (the result does not depend on it): one
   // multiply a field, then splitmix64's finaliser (Steele, Lea and Flood, "Fast splittable
@@ -859,7 +862,9 @@ void Sensor::merge_key(std::size_t i) noexcept {
   h ^= h >> 31;
   merge_hash_[i] = h;
   merge_hashed_[i] = 1;
-  const double w = std::abs(it.amplitude);
+  // |amplitude| as sqrt(re^2 + im^2) (no hypot call: the amplitudes are in noise units, far
+  // from overflow; rounding-level).
+  const double w = std::sqrt(std::norm(it.amplitude));
   merge_sums_[i] = {w,
                     w * it.pos.range_bin,
                     w * it.pos.velocity_bin,

@@ -253,6 +253,9 @@ class Sensor {
   std::vector<std::uint64_t> merge_hash_;   ///< ... its key's hash
   std::vector<std::uint8_t> merge_hashed_;  ///< per item: 1 when it has a key (usable, coherent)
   std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position, then the cell's
+  /// The merge cells a unit (setup): 1 / merge_step_bins, and per radian of azimuth and of
+  /// elevation, 1 / (merge_step_beamwidths x the sum beam's width).
+  double merge_per_bin_ = 0.0, merge_per_rad_az_ = 0.0, merge_per_rad_el_ = 0.0;
   /// Item i's merge key, hash and weighted position (prepare step, in parallel).
   void merge_key(std::size_t i) noexcept;
   /// Worker w: accumulates every item into its beams (the w-th of the contiguous blocks of
