@@ -153,6 +153,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   n_workers_ = std::clamp<std::size_t>(
       static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1, antenna_.beams());
   worker_beams_.resize(n_workers_ + 1);
+  footprint_cells_.resize(n_workers_ * kFootprintCells);
   beam_work_.resize(antenna_.beams() + 1);
   gain_floor_ = std::pow(10.0, c.beam_floor_db / 10.0);
   for (std::size_t i = 0; i < antenna_.beams(); ++i)
@@ -388,9 +389,11 @@ void Sensor::process_worker(std::size_t w) noexcept {
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
   // taper; the speckle is drawn per cell afterwards.
   Footprint fp;
+  std::complex<double>* cells = footprint_cells_.data() + w * kFootprintCells;
   double taps[Footprint::kMaxBins];
   std::uint32_t tap_rows[Footprint::kMaxBins];
-  double values[3][Footprint::kMaxBins];  // a diffuse return's pieces, tap by tap
+  // A diffuse return's pieces, tap by tap, at unit two-way gain (scaled by each beam's).
+  double values[3][Footprint::kMaxBins];
   for (std::size_t i = 0; i < item_count_; ++i) {
     // The beams within the azimuth extent of the return (gains_of() tests it again), from the
     // return's span of the whole scan; items outside this worker's beams are not read.
@@ -402,6 +405,7 @@ void Sensor::process_worker(std::size_t w) noexcept {
       continue;
     const Item& item = items_[i];
     bool prepared = false;
+    long n_bins = 0;  // coherent: the footprint's range bins
     int n_taps = 0;
     // Diffuse: its range footprint as up to three pieces of the difference array (the bins it
     // partly covers at each end, and the bins between), clipped to the swath once for all beams
@@ -451,12 +455,31 @@ void Sensor::process_worker(std::size_t w) noexcept {
       }
       Workspace& ws = *workspaces_[b];
       if (item.coherent) {
-        if (!prepared && !proc.footprint(item.amplitude, item.pos, item.radial_velocity_mps, fp))
-          break;
-        prepared = true;
-        proc.add_footprint(fp, g.sum, ws.image);
-        for (int r = 0; r < fp.n_rows; ++r)
+        if (!prepared) {
+          if (!proc.footprint(item.amplitude, item.pos, item.radial_velocity_mps, fp))
+            break;
+          // The response's cells at unit gain, once a return (velocity value times range value,
+          // the complex product written out as in add_footprint), so that each beam adds them
+          // times its real gain: a scaled sum, which the compiler vectorises.
+          n_bins = fp.l1 - fp.l0 + 1;
+          for (int r = 0; r < fp.n_rows; ++r) {
+            const double vr = fp.velocity[r].real(), vi = fp.velocity[r].imag();
+            std::complex<double>* out = cells + r * n_bins;
+            for (long l = 0; l < n_bins; ++l) {
+              const double rr = fp.range[l].real(), ri = fp.range[l].imag();
+              out[l] = {vr * rr - vi * ri, vr * ri + vi * rr};
+            }
+          }
+          prepared = true;
+        }
+        for (int r = 0; r < fp.n_rows; ++r) {
+          std::complex<double>* row = ws.image.data() + static_cast<std::size_t>(fp.rows[r]) * nr +
+                                      static_cast<std::size_t>(fp.l0);
+          const std::complex<double>* x = cells + r * n_bins;
+          for (long l = 0; l < n_bins; ++l)
+            row[l] = {row[l].real() + g.sum * x[l].real(), row[l].imag() + g.sum * x[l].imag()};
           cover(ws.dirty[fp.rows[r]], fp.l0, fp.l1 + 1);
+        }
         continue;
       }
       if (!prepared) {

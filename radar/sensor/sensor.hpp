@@ -300,6 +300,10 @@ class Sensor {
   double az_extent_rad_ = 0.0;
   double gain_floor_ = 0.0;  ///< beam_floor_db as a linear two-way power ratio
   std::size_t n_workers_ = 1;
+  /// Per worker: a coherent return's response cells at unit gain, [velocity row][range bin].
+  static constexpr std::size_t kFootprintCells =
+      static_cast<std::size_t>(Footprint::kMaxBins) * Footprint::kMaxBins;
+  std::vector<std::complex<double>> footprint_cells_;
   /// Worker w takes beams [worker_beams_[w], worker_beams_[w + 1]) (split_beams(), per frame).
   std::vector<std::size_t> worker_beams_;
   /// Per beam, this frame's work estimate (a difference array while the items are counted).
