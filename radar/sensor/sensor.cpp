@@ -120,6 +120,9 @@ struct Sensor::Workspace {
   std::vector<RowSpan> dirty;  ///< per velocity row: bins this frame's returns reach
   std::vector<RowSpan> cuts;   ///< cells under test evaluated on the image
   std::vector<RowSpan> synth;  ///< cells synthesised (the cuts' windows)
+  /// The range bins [begin, end) of `clutter` this frame's returns wrote (its entries are zero
+  /// elsewhere): the running sum reads those only. None: begin >= end.
+  std::uint32_t clutter_begin = std::numeric_limits<std::uint32_t>::max(), clutter_end = 0;
   std::uint64_t crossings = 0, overflowed = 0, synthesised = 0;
 };
 
@@ -376,6 +379,7 @@ Sensor::BeamSpan Sensor::beam_span(const Item& item) const noexcept {
 }
 
 void Sensor::process_worker(std::size_t w) noexcept {
+  constexpr long kPrefetchBins = 4;
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t nr = proc.range_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
@@ -491,48 +495,60 @@ void Sensor::process_worker(std::size_t w) noexcept {
           row = row + 1 == nvl ? 0 : row + 1;
         }
         pieces = make_pieces(item.pos.range_bin, item.half_bins, nrl);
+        // The values of the pieces, tap by tap, at unit two-way gain: once a return, so that a
+        // beam only scales them (no division a tap and a beam).
+        const double p = std::norm(item.amplitude) * range_energy_;
+        const double density = pieces.single ? p : p / pieces.extent;
+        for (int t = 0; t < n_taps; ++t) {
+          const double v = density * taps[t];
+          values[0][t] = pieces.single ? v : v * pieces.share[0];
+          values[1][t] = v * pieces.share[1];
+          values[2][t] = v;
+        }
         prepared = true;
       }
       if (pieces.span_begin >= pieces.span_end)
         continue;
-      // The values of the pieces, tap by tap, then each piece's two ends added to the taps'
-      // rows (contiguous in the transposed array; two runs where the rows wrap).
-      const double p = std::norm(item.amplitude) * g.sum * g.sum * range_energy_;
-      for (int t = 0; t < n_taps; ++t) {
+      // Each piece's two ends added to the taps' rows times the beam's two-way power gain
+      // (contiguous in the transposed array; two runs where the rows wrap).
+      const double s = g.sum * g.sum;
+      for (int t = 0; t < n_taps; ++t)
         cover(ws.dirty[tap_rows[t]], pieces.span_begin, pieces.span_end);
-        const double v = p * taps[t];
-        if (pieces.single) {
-          values[0][t] = v;
-          continue;
-        }
-        const double density = v / pieces.extent;
-        values[0][t] = density * pieces.share[0];
-        values[1][t] = density * pieces.share[1];
-        values[2][t] = density;
+      // The terrain engine's cells come in range order: the one-bin sums a few bins beyond this
+      // return's are fetched ahead (a hint only; every order gives the same sums).
+      if (pieces.span_end + kPrefetchBins + 1 < nrl) {
+        const double* ahead = ws.direct.data() +
+                              static_cast<std::size_t>(pieces.span_end + kPrefetchBins) * nv +
+                              tap_rows[0];
+        __builtin_prefetch(ahead, 1);
+        __builtin_prefetch(ahead + 8, 1);
+        __builtin_prefetch(ahead + nv, 1);
+        __builtin_prefetch(ahead + nv + 8, 1);
       }
       const int n_first = std::min(n_taps, static_cast<int>(nvl - tap_rows[0]));
       for (int k = 0; k < (pieces.single ? 1 : 3); ++k) {
         if (pieces.a[k] > pieces.c[k])
           continue;
+        const double* x = values[k];
         if (pieces.a[k] == pieces.c[k]) {  // one bin: added to it directly
           double* at = ws.direct.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
-          const double* x = values[k];
           for (int t = 0, c = static_cast<int>(tap_rows[0]); t < n_first; ++t, ++c)
-            at[c] += x[t];
+            at[c] += x[t] * s;
           for (int t = n_first, c = 0; t < n_taps; ++t, ++c)
-            at[c] += x[t];
+            at[c] += x[t] * s;
           continue;
         }
+        ws.clutter_begin = std::min(ws.clutter_begin, static_cast<std::uint32_t>(pieces.a[k]));
+        ws.clutter_end = std::max(ws.clutter_end, static_cast<std::uint32_t>(pieces.c[k] + 2));
         double* on = ws.clutter.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
         double* off = ws.clutter.data() + static_cast<std::size_t>(pieces.c[k] + 1) * nv;
-        const double* x = values[k];
         for (int t = 0, c = static_cast<int>(tap_rows[0]); t < n_first; ++t, ++c) {
-          on[c] += x[t];
-          off[c] -= x[t];
+          on[c] += x[t] * s;
+          off[c] -= x[t] * s;
         }
         for (int t = n_first, c = 0; t < n_taps; ++t, ++c) {
-          on[c] += x[t];
-          off[c] -= x[t];
+          on[c] += x[t] * s;
+          off[c] -= x[t] * s;
         }
       }
     }
@@ -577,19 +593,33 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
       }
     };
     // Clutter power: the running sum of its difference array over the bins it reaches, plus
-    // the one-bin pieces' power (both read once, and cleared for the next frame as read).
+    // the one-bin pieces' power (both read once, and cleared for the next frame as read). The
+    // difference array is read only on the bins the returns wrote (clutter_begin/end): before
+    // them the sum is 0, after them it keeps its value (the same sums as reading the zeros).
     const std::uint32_t d0 = d.empty() ? sp.end : d.begin, d1 = d.empty() ? sp.end : d.end;
+    const std::uint32_t c0 = std::clamp(ws.clutter_begin, d0, d1),
+                        c1 = std::clamp(ws.clutter_end, c0, d1);
     for (std::uint32_t l = sp.begin; l < d0; ++l)
       synthesise(l, floor_var);
     double run = 0.0;
     double* diff = ws.clutter.data() + j;
     double* direct = ws.direct.data() + j;
-    for (std::uint32_t l = d0; l < d1; ++l) {
+    // rounding of the running sum must not go negative
+    for (std::uint32_t l = d0; l < c0; ++l) {
+      const double one_bin = direct[l * nv];
+      direct[l * nv] = 0.0;
+      synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
+    }
+    for (std::uint32_t l = c0; l < c1; ++l) {
       run += diff[l * nv];
       diff[l * nv] = 0.0;
       const double one_bin = direct[l * nv];
       direct[l * nv] = 0.0;
-      // rounding of the running sum must not go negative
+      synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
+    }
+    for (std::uint32_t l = c1; l < d1; ++l) {
+      const double one_bin = direct[l * nv];
+      direct[l * nv] = 0.0;
       synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
     }
     if (!d.empty())
@@ -678,6 +708,8 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
 
   // 5. Leave the image zero for the next frame: clear what was written (the clutter was cleared
   // as step 2 read it).
+  ws.clutter_begin = std::numeric_limits<std::uint32_t>::max();
+  ws.clutter_end = 0;
   for (std::size_t j = 0; j < nv; ++j) {
     RowSpan& d = ws.dirty[j];
     if (d.empty())
