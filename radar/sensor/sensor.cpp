@@ -170,6 +170,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
       cap <<= 1;
     merge_table_.assign(cap, 0);
     merge_used_.resize(c.max_contributions);
+    merge_cells_.resize(c.max_contributions);
     merge_keys_.resize(c.max_contributions);
     merge_hash_.resize(c.max_contributions);
     merge_hashed_.resize(c.max_contributions);
@@ -815,7 +816,10 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
   // input order (not on the table's size or the hash).
   // The keys, hashes and weighted positions are computed per item in parallel beforehand
   // (merge_key()); only the table is walked here, in input order. An entry holds the upper half
-  // of its key's hash beside the item, so that a probe of another cell seldom reads its key.
+  // of its key's hash beside the cell's index, so that a probe of another cell seldom reads its
+  // key; the cells (key, sums, amplitude) are dense in the order met (merge_cells_), so that the
+  // cells a target's next returns fall in are still in cache, and the representatives' items
+  // are written once, by the parallel finish.
   std::size_t n_mergeable = 0;
   for (std::size_t i = 0; i < item_count_; ++i)
     n_mergeable += merge_hashed_[i];
@@ -835,25 +839,24 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     const MergeKey& key = merge_keys_[i];
     const std::uint64_t tag = merge_hash_[i] >> 32;
     std::size_t slot = static_cast<std::size_t>(merge_hash_[i]) & mask;
-    std::size_t rep = 0;
-    bool found = false;
+    MergeCell* cell = nullptr;
     for (std::uint64_t e = table[slot]; e != 0; slot = (slot + 1) & mask, e = table[slot]) {
-      rep = static_cast<std::size_t>(e & 0xFFFFFFFFu) - 1;
-      if ((e >> 32) == tag && merge_keys_[rep] == key) {
-        found = true;
+      MergeCell& m = merge_cells_[static_cast<std::size_t>(e & 0xFFFFFFFFu) - 1];
+      if ((e >> 32) == tag && m.key == key) {
+        cell = &m;
         break;
       }
     }
-    if (!found) {  // the first return of its cell represents it
-      table[slot] = (tag << 32) | static_cast<std::uint64_t>(i + 1);
-      merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
+    Item& it = items_[i];
+    if (cell == nullptr) {  // the first return of its cell represents it
+      table[slot] = (tag << 32) | static_cast<std::uint64_t>(n_used + 1);
+      merge_used_[n_used] = static_cast<std::uint32_t>(slot);
+      merge_cells_[n_used++] = {key, merge_sums_[i], it.amplitude, static_cast<std::uint32_t>(i)};
       continue;
     }
-    Item& it = items_[i];
     const MergeSums& m = merge_sums_[i];
-    Item& r = items_[rep];
-    MergeSums& a = merge_sums_[rep];
-    r.amplitude += it.amplitude;
+    MergeSums& a = cell->sums;
+    cell->amplitude += it.amplitude;
     a.weight += m.weight;
     a.range_bin += m.range_bin;
     a.velocity_bin += m.velocity_bin;
@@ -866,14 +869,14 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     item_beams_[i] = {};
     ++stats.merged_returns;
   }
-  // Each merged cell's representative independently (in parallel): its mean position, and its
-  // elevation channels there.
+  // Each merged cell's representative independently (in parallel): its summed amplitude, its
+  // mean position, and its elevation channels there.
   auto finish = [&](std::size_t u) {
-    const std::uint32_t slot = merge_used_[u];
-    const auto rep = static_cast<std::size_t>(merge_table_[slot] & 0xFFFFFFFFu) - 1;
-    merge_table_[slot] = 0;
-    const MergeSums& a = merge_sums_[rep];
-    Item& r = items_[rep];
+    merge_table_[merge_used_[u]] = 0;
+    const MergeCell& cell = merge_cells_[u];
+    const MergeSums& a = cell.sums;
+    Item& r = items_[cell.rep];
+    r.amplitude = cell.amplitude;
     if (a.count >= 2 && a.weight > 0.0) {
       r.pos.range_bin = a.range_bin / a.weight;
       r.pos.velocity_bin = a.velocity_bin / a.weight;
@@ -884,7 +887,7 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     }
     antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el,
                          r.delta_el);
-    item_beams_[rep] = beam_span(r);
+    item_beams_[cell.rep] = beam_span(r);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_used, 2048),
                     [&](const tbb::blocked_range<std::size_t>& r) {
