@@ -162,6 +162,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   for (std::size_t i = 0; i < antenna_.beams(); ++i)
     workspaces_.push_back(std::make_unique<Workspace>(c.cfar, *processor_, c.max_hits_per_beam));
   items_.resize(c.max_contributions);
+  item_state_.resize(c.max_contributions);
   item_beams_.resize(c.max_contributions);
   item_bucket_.resize(c.max_contributions);
   if (c.merge_step_bins > 0.0) {
@@ -175,6 +176,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     merge_hash_.resize(c.max_contributions);
     merge_hashed_.resize(c.max_contributions);
     merge_sums_.resize(c.max_contributions);
+    merge_amplitude_.resize(c.max_contributions);
     // merge_key()'s cells a unit: per bin, and per radian of azimuth and elevation.
     merge_per_bin_ = 1.0 / c.merge_step_bins;
     merge_per_rad_az_ = 1.0 / (c.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad());
@@ -806,7 +808,8 @@ void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_rati
   }
 }
 
-void Sensor::merge_returns(SensorStats& stats) noexcept {
+void Sensor::merge_returns(std::span<const Contribution> contributions,
+                           SensorStats& stats) noexcept {
   // Coherent returns of one object within one merge cell of each other (merge_step_bins in range
   // and velocity, merge_step_beamwidths of the sum beam in azimuth and elevation) reach the image
   // through responses that differ by less than the direct path's own table step: they are one
@@ -847,16 +850,16 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
         break;
       }
     }
-    Item& it = items_[i];
     if (cell == nullptr) {  // the first return of its cell represents it
       table[slot] = (tag << 32) | static_cast<std::uint64_t>(n_used + 1);
       merge_used_[n_used] = static_cast<std::uint32_t>(slot);
-      merge_cells_[n_used++] = {key, merge_sums_[i], it.amplitude, static_cast<std::uint32_t>(i)};
+      merge_cells_[n_used++] = {key, merge_sums_[i], merge_amplitude_[i],
+                                static_cast<std::uint32_t>(i)};
       continue;
     }
     const MergeSums& m = merge_sums_[i];
     MergeSums& a = cell->sums;
-    cell->amplitude += it.amplitude;
+    cell->amplitude += merge_amplitude_[i];
     a.weight += m.weight;
     a.range_bin += m.range_bin;
     a.velocity_bin += m.velocity_bin;
@@ -865,18 +868,27 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     a.azimuth_rad += m.azimuth_rad;
     a.elevation_rad += m.elevation_rad;
     ++a.count;
-    it.usable = false;
-    item_beams_[i] = {};
+    item_state_[i] = kMerged;  // its beam span stays empty (prepare)
     ++stats.merged_returns;
   }
-  // Each merged cell's representative independently (in parallel): its summed amplitude, its
-  // mean position, and its elevation channels there.
+  // Each merged cell's representative independently (in parallel): its item (from its
+  // contribution, as the prepare step writes the others' items), with the summed amplitude and
+  // the mean position, and its elevation channels there.
   auto finish = [&](std::size_t u) {
     merge_table_[merge_used_[u]] = 0;
     const MergeCell& cell = merge_cells_[u];
     const MergeSums& a = cell.sums;
+    const Contribution& c = contributions[cell.rep];
     Item& r = items_[cell.rep];
     r.amplitude = cell.amplitude;
+    r.pos = processor_->position_of(c.range_m, c.radial_velocity_mps);
+    r.coherent = true;
+    r.object_id = c.object_id;
+    r.half_bins = 0.0;
+    r.range_m = c.range_m;
+    r.radial_velocity_mps = c.radial_velocity_mps;
+    r.azimuth_rad = c.azimuth_rad;
+    r.elevation_rad = c.elevation_rad;
     if (a.count >= 2 && a.weight > 0.0) {
       r.pos.range_bin = a.range_bin / a.weight;
       r.pos.velocity_bin = a.velocity_bin / a.weight;
@@ -896,8 +908,8 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
                     });
 }
 
-void Sensor::merge_key(std::size_t i) noexcept {
-  const Item& it = items_[i];
+void Sensor::merge_key(std::size_t i, const Contribution& c, const ImagePosition& pos,
+                       std::complex<double> amplitude) noexcept {
   const double q = merge_per_bin_;
   // floor(x) for finite x within +-2^63: truncation, one less below zero off the integers
   // (std::floor is a library call without SSE4.1).
@@ -905,9 +917,9 @@ void Sensor::merge_key(std::size_t i) noexcept {
     const auto t = static_cast<long long>(x);
     return t - (x < static_cast<double>(t) ? 1 : 0);
   };
-  const MergeKey key{it.object_id, cell(it.pos.range_bin * q), cell(it.pos.velocity_bin * q),
-                     cell(it.azimuth_rad * merge_per_rad_az_),
-                     cell(it.elevation_rad * merge_per_rad_el_)};
+  const MergeKey key{c.object_id, cell(pos.range_bin * q), cell(pos.velocity_bin * q),
+                     cell(c.azimuth_rad * merge_per_rad_az_),
+                     cell(c.elevation_rad * merge_per_rad_el_)};
   merge_keys_[i] = key;
   // The hash places the key in the table only (the result does not depend on it): one
   // multiply a field, then splitmix64's finaliser (Steele, Lea and Flood, "Fast splittable
@@ -922,14 +934,15 @@ void Sensor::merge_key(std::size_t i) noexcept {
   merge_hashed_[i] = 1;
   // |amplitude| as sqrt(re^2 + im^2) (no hypot call: the amplitudes are in noise units, far
   // from overflow; rounding-level).
-  const double w = std::sqrt(std::norm(it.amplitude));
+  const double w = std::sqrt(std::norm(amplitude));
+  merge_amplitude_[i] = amplitude;
   merge_sums_[i] = {w,
-                    w * it.pos.range_bin,
-                    w * it.pos.velocity_bin,
-                    w * it.range_m,
-                    w * it.radial_velocity_mps,
-                    w * it.azimuth_rad,
-                    w * it.elevation_rad,
+                    w * pos.range_bin,
+                    w * pos.velocity_bin,
+                    w * c.range_m,
+                    w * c.radial_velocity_mps,
+                    w * c.azimuth_rad,
+                    w * c.elevation_rad,
                     1};
 }
 
@@ -966,18 +979,31 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   // Independent per item: prepared in parallel, counted after in order.
   auto prepare = [&](std::size_t i) {
     const Contribution& c = contributions[i];
-    Item& it = items_[i];
-    it.usable = false;
-    it.reject = 0;
     item_beams_[i] = {};
     if (!merge_hashed_.empty())
       merge_hashed_[i] = 0;
     if (!finite(c) || !(c.range_m > 0.0)) {
-      it.reject = 1;
+      item_state_[i] = kNotFinite;
       return;
     }
-    it.amplitude = c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
-    it.pos = proc.position_of(c.range_m, c.radial_velocity_mps);
+    const std::complex<double> amplitude =
+        c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
+    const ImagePosition pos = proc.position_of(c.range_m, c.radial_velocity_mps);
+    // A coherent return to be merged: its key, weighted position and amplitude only; its item
+    // is written after the merge if it represents its cell (merge_returns()), so that the
+    // returns summed into another are not written at all.
+    if (c.coherent && !merge_table_.empty()) {
+      if (!pos.in_swath) {
+        item_state_[i] = kOffImage;
+        return;
+      }
+      item_state_[i] = kUsable;
+      merge_key(i, c, pos, amplitude);
+      return;
+    }
+    Item& it = items_[i];
+    it.amplitude = amplitude;
+    it.pos = pos;
     it.coherent = c.coherent;
     it.object_id = c.object_id;
     it.half_bins = c.coherent ? 0.0 : 0.5 * std::max(c.range_spread_m, 0.0) / bin_m;
@@ -989,19 +1015,13 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     const bool visible =
         it.coherent ? it.pos.in_swath : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5;
     if (!visible) {
-      it.reject = 2;
+      item_state_[i] = kOffImage;
       return;
     }
-    it.usable = true;
-    // The elevation channels: of a coherent return once merged (merge_returns(), at the merged
-    // elevation), of the others now.
-    if (it.coherent && !merge_table_.empty()) {
-      merge_key(i);
-    } else {
-      antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
-                           it.delta_el);
-      item_beams_[i] = beam_span(it);
-    }
+    item_state_[i] = kUsable;
+    antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
+                         it.delta_el);
+    item_beams_[i] = beam_span(it);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -1009,17 +1029,18 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
                         prepare(i);
                     });
   if (config_.merge_step_bins > 0.0)
-    merge_returns(stats);
+    merge_returns(contributions, stats);
   // One pass over the items (the counts, then each usable item's bucket, kept for the second
   // pass, which then reads 4 bytes an item).
   constexpr std::uint32_t kNoBucket = 0xFFFFFFFFu;
   std::fill(beam_work_.begin(), beam_work_.end(), 0.0);
   for (std::size_t i = 0; i < item_count_; ++i) {
-    const Item& it = items_[i];
-    stats.rejected_input += it.reject == 1 ? 1u : 0u;
-    stats.out_of_grid += it.reject == 2 ? 1u : 0u;
+    const std::uint8_t state = item_state_[i];
+    stats.rejected_input += state == kNotFinite ? 1u : 0u;
+    stats.out_of_grid += state == kOffImage ? 1u : 0u;
     item_bucket_[i] = kNoBucket;
-    if (it.usable) {
+    if (state == kUsable) {
+      const Item& it = items_[i];
       max_half_bins_ = std::max(max_half_bins_, it.half_bins);
       const std::size_t bucket = bucket_of(it);
       item_bucket_[i] = static_cast<std::uint32_t>(bucket);
@@ -1046,9 +1067,9 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     c.dropped = 0;
     c.noise_frame = frame_;
     for (std::size_t i = 0; i < item_count_; ++i) {
-      const Item& it = items_[i];
-      if (!it.usable)
+      if (item_state_[i] != kUsable)
         continue;
+      const Item& it = items_[i];
       if (c.return_count >= c.returns.size()) {
         ++c.dropped;
         continue;
