@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -396,6 +397,13 @@ void Sensor::process_worker(std::size_t w) noexcept {
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
   // taper; the speckle is drawn per cell afterwards.
   Footprint fp;
+  // The azimuth recurrence's start a return azimuth (below), memoised: NaN marks an empty entry.
+  struct AzMemo {
+    double azimuth_rad = std::numeric_limits<double>::quiet_NaN();
+    double a = 0.0, b = 0.0, ra = 0.0, rb = 0.0;
+  };
+  constexpr int kAzMemoBits = 7;
+  std::array<AzMemo, std::size_t{1} << kAzMemoBits> az_memo{};
   std::complex<double>* cells = footprint_cells_.data() + w * kFootprintCells;
   double taps[Footprint::kMaxBins];
   std::uint32_t tap_rows[Footprint::kMaxBins];
@@ -426,8 +434,24 @@ void Sensor::process_worker(std::size_t w) noexcept {
     // the sum channel is needed here. The recurrence starts at the return's first beam of the
     // whole scan whatever this worker's block, so the result does not depend on the number of
     // workers.
+    // The recurrence's start depends on the return's azimuth alone (and this worker's block):
+    // returns at an azimuth met before (the terrain engine's cells: one azimuth a column) take
+    // the values computed then, from a small direct-mapped memo (the same values: exact).
     double rec_a = 0.0, rec_ra = 0.0, rec_b = 0.0, rec_rb = 0.0;
+    AzMemo* memo = nullptr;
     if (az_rec_.on) {
+      std::uint64_t bits = 0;
+      std::memcpy(&bits, &item.azimuth_rad, sizeof bits);
+      memo = &az_memo[(bits * 0x9e3779b97f4a7c15ull) >> (64 - kAzMemoBits)];
+      if (memo->azimuth_rad == item.azimuth_rad) {
+        rec_a = memo->a;
+        rec_b = memo->b;
+        rec_ra = memo->ra;
+        rec_rb = memo->rb;
+        memo = nullptr;
+      }
+    }
+    if (memo != nullptr) {
       const double t0 = item.azimuth_rad - config_.antenna.beam_azimuth_rad[b_lowest];
       const double ta = t0 - az_rec_.squint, tb = t0 + az_rec_.squint;
       const double cs = az_rec_.c * az_rec_.step;
@@ -441,6 +465,7 @@ void Sensor::process_worker(std::size_t w) noexcept {
         rec_ra *= az_rec_.q;
         rec_rb *= az_rec_.q;
       }
+      *memo = {item.azimuth_rad, rec_a, rec_b, rec_ra, rec_rb};
     }
     for (std::size_t b = b_first; b < b_end; ++b) {
       Gains g;
