@@ -770,15 +770,33 @@ void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_rati
   const long b0 = std::max<long>(0, static_cast<long>(std::floor(static_cast<double>(l) - reach)));
   const long b1 =
       std::min<long>(nr - 1, static_cast<long>(std::ceil(static_cast<double>(l) + reach)));
-  for (std::uint32_t q = range_start_[static_cast<std::size_t>(b0)];
-       q < range_start_[static_cast<std::size_t>(b1) + 1]; ++q) {
+  // The returns in reach, by range bucket: scattered over the items (fetched kAhead ahead).
+  constexpr std::uint32_t kAhead = 8;
+  const std::uint32_t q_end = range_start_[static_cast<std::size_t>(b1) + 1];
+  for (std::uint32_t q = range_start_[static_cast<std::size_t>(b0)]; q < q_end; ++q) {
+    if (q + kAhead < q_end) {
+      const char* ahead = reinterpret_cast<const char*>(&items_[by_range_[q + kAhead]]);
+      __builtin_prefetch(ahead);
+      __builtin_prefetch(ahead + sizeof(Item) - 1);
+    }
     const Item& item = items_[by_range_[q]];
+    // A return whose response at the cell is zero adds nothing (its products are zeros): its
+    // beam gains (two exp) are needed only to register a coherent return's object when it is new
+    // (the order objects are met in stays the same). Most returns in reach are such.
     Gains g;
-    if (!gains_of(item, c.beam, g))
-      continue;
     if (item.coherent) {
       const std::complex<double> r = proc.response_at(
           {item.amplitude, item.range_m, item.radial_velocity_mps}, c.range_bin, c.velocity_bin);
+      if (r == std::complex<double>{0.0, 0.0}) {
+        std::size_t o = 0;
+        while (o < n_objects && ids[o] != item.object_id)
+          ++o;
+        if (o == n_objects && n_objects < kObjects && gains_of(item, c.beam, g))
+          ids[n_objects++] = item.object_id;
+        continue;
+      }
+      if (!gains_of(item, c.beam, g))
+        continue;
       s_coh += r * g.sum;
       d_az += r * g.daz;
       d_el += r * g.del;
@@ -792,6 +810,8 @@ void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_rati
     } else {
       const double p = std::norm(item.amplitude) * range_energy_ * range_share(item, l) *
                        velocity_weight(item, j);
+      if (p == 0.0 || !gains_of(item, c.beam, g))
+        continue;
       c_ss += p * g.sum * g.sum;
       c_as += p * g.sum * g.daz;
       c_aa += p * g.daz * g.daz;
