@@ -172,7 +172,6 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
       cap <<= 1;
     merge_table_.assign(cap, 0);
     merge_used_.resize(c.max_contributions);
-    merge_cells_.resize(c.max_contributions);
     merge_keys_.resize(c.max_contributions);
     merge_hash_.resize(c.max_contributions);
     merge_hashed_.resize(c.max_contributions);
@@ -544,7 +543,7 @@ void Sensor::process_worker(std::size_t w) noexcept {
         cover(ws.dirty[tap_rows[t]], pieces.span_begin, pieces.span_end);
       // The terrain engine's cells come in range order: the one-bin sums a few bins beyond this
       // return's are fetched ahead (a hint only; every order gives the same sums).
-      if (pieces.span_end + kPrefetchBins + 1 < nrl) {
+      if (pieces.span_end + kPrefetchBins + 2 < nrl) {
         const double* ahead = ws.direct.data() +
                               static_cast<std::size_t>(pieces.span_end + kPrefetchBins) * nv +
                               tap_rows[0];
@@ -864,10 +863,9 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
   // input order (not on the table's size or the hash).
   // The keys, hashes and weighted positions are computed per item in parallel beforehand
   // (merge_key()); only the table is walked here, in input order. An entry holds the upper half
-  // of its key's hash beside the cell's index, so that a probe of another cell seldom reads its
-  // key; the cells (key, sums, amplitude) are dense in the order met (merge_cells_), so that the
-  // cells a target's next returns fall in are still in cache, and the representatives' items
-  // are written once, by the parallel finish.
+  // of its key's hash beside the item, so that a probe of another cell seldom reads its key. A
+  // cell's sums and amplitude accumulate on its representative's entries; the representatives'
+  // items are written once, by the parallel finish.
   std::size_t n_mergeable = 0;
   for (std::size_t i = 0; i < item_count_; ++i)
     n_mergeable += merge_hashed_[i];
@@ -887,24 +885,24 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
     const MergeKey& key = merge_keys_[i];
     const std::uint64_t tag = merge_hash_[i] >> 32;
     std::size_t slot = static_cast<std::size_t>(merge_hash_[i]) & mask;
-    MergeCell* cell = nullptr;
+    std::size_t rep = 0;
+    bool found = false;
     for (std::uint64_t e = table[slot]; e != 0; slot = (slot + 1) & mask, e = table[slot]) {
-      MergeCell& m = merge_cells_[static_cast<std::size_t>(e & 0xFFFFFFFFu) - 1];
-      if ((e >> 32) == tag && m.key == key) {
-        cell = &m;
+      rep = static_cast<std::size_t>(e & 0xFFFFFFFFu) - 1;
+      if ((e >> 32) == tag && merge_keys_[rep] == key) {
+        found = true;
         break;
       }
     }
-    if (cell == nullptr) {  // the first return of its cell represents it
-      table[slot] = (tag << 32) | static_cast<std::uint64_t>(n_used + 1);
-      merge_used_[n_used] = static_cast<std::uint32_t>(slot);
-      merge_cells_[n_used++] = {key, merge_sums_[i], merge_amplitude_[i],
-                                static_cast<std::uint32_t>(i)};
+    if (!found) {  // the first return of its cell represents it
+      table[slot] = (tag << 32) | static_cast<std::uint64_t>(i + 1);
+      merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
       continue;
     }
+    // The cell's sums and amplitude accumulate on its representative's entries.
     const MergeSums& m = merge_sums_[i];
-    MergeSums& a = cell->sums;
-    cell->amplitude += merge_amplitude_[i];
+    MergeSums& a = merge_sums_[rep];
+    merge_amplitude_[rep] += merge_amplitude_[i];
     a.weight += m.weight;
     a.range_bin += m.range_bin;
     a.velocity_bin += m.velocity_bin;
@@ -920,12 +918,13 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
   // contribution, as the prepare step writes the others' items), with the summed amplitude and
   // the mean position, and its elevation channels there.
   auto finish = [&](std::size_t u) {
-    merge_table_[merge_used_[u]] = 0;
-    const MergeCell& cell = merge_cells_[u];
-    const MergeSums& a = cell.sums;
-    const Contribution& c = contributions[cell.rep];
-    Item& r = items_[cell.rep];
-    r.amplitude = cell.amplitude;
+    const std::uint32_t slot = merge_used_[u];
+    const auto rep = static_cast<std::size_t>(merge_table_[slot] & 0xFFFFFFFFu) - 1;
+    merge_table_[slot] = 0;
+    const MergeSums& a = merge_sums_[rep];
+    const Contribution& c = contributions[rep];
+    Item& r = items_[rep];
+    r.amplitude = merge_amplitude_[rep];
     r.pos = processor_->position_of(c.range_m, c.radial_velocity_mps);
     r.coherent = true;
     r.object_id = c.object_id;
@@ -944,7 +943,7 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
     }
     antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el,
                          r.delta_el);
-    item_beams_[cell.rep] = beam_span(r);
+    item_beams_[rep] = beam_span(r);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_used, 2048),
                     [&](const tbb::blocked_range<std::size_t>& r) {

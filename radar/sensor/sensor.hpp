@@ -253,26 +253,16 @@ class Sensor {
     std::uint32_t count = 0;
   };
   /// Open addressing, the first 2^k >= 2 x (the frame's coherent returns) entries: 0 empty,
-  /// else (the key hash's upper 32 bits << 32) | (merge_cells_ index + 1).
+  /// else (the key hash's upper 32 bits << 32) | (item index + 1).
   std::vector<std::uint64_t> merge_table_;
   std::vector<std::uint32_t> merge_used_;   ///< slots taken this frame
   std::vector<MergeKey> merge_keys_;        ///< per usable coherent item
   std::vector<std::uint64_t> merge_hash_;   ///< ... its key's hash
   std::vector<std::uint8_t> merge_hashed_;  ///< per item: 1 when it has a key (usable, coherent)
-  std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position
-  /// ... its amplitude (the coherent items' Items are written after the merge, for the
-  /// representatives only)
+  std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position, then its cell's
+  /// ... its amplitude, then its cell's (the coherent items' Items are written after the merge,
+  /// for the representatives only)
   std::vector<std::complex<double>> merge_amplitude_;
-  /// A merge cell of this frame, in the order the walk met them (the table's entries index
-  /// these): its key, the sums so far and its first return. Dense, so that the walk's look-ups
-  /// of the cells it just met (a target's returns come together) stay in cache.
-  struct MergeCell {
-    MergeKey key;
-    MergeSums sums;
-    std::complex<double> amplitude{0.0, 0.0};  ///< the sum of the cell's amplitudes
-    std::uint32_t rep = 0;                     ///< the item that represents it (its first)
-  };
-  std::vector<MergeCell> merge_cells_;
   /// The merge cells a unit (setup): 1 / merge_step_bins, and per radian of azimuth and of
   /// elevation, 1 / (merge_step_beamwidths x the sum beam's width).
   double merge_per_bin_ = 0.0, merge_per_rad_az_ = 0.0, merge_per_rad_el_ = 0.0;
