@@ -73,6 +73,9 @@ RangeDopplerProcessor::RangeDopplerProcessor(const ProcessingConfig& config) : c
   dv_mps_ = velocity_bin_mps(w);
   lambda_m_ = wavelength_m(w);
   chirp_rate_ = chirp_rate_hz_per_s(w);
+  inv_dv_ = 1.0 / dv_mps_;
+  inv_range_bin_ = 1.0 / range_bin_m_;
+  coupling_bins_per_mps_ = 2.0 * fs_hz_ / (lambda_m_ * chirp_rate_);
 
   // Windows: the range taper weights the matched filter's reference (pulsed) or the beat samples
   // (FMCW); the Doppler taper weights the pulses.
@@ -282,17 +285,22 @@ std::complex<double> RangeDopplerProcessor::range_kernel(double x, double fd_hz)
 ImagePosition RangeDopplerProcessor::position_of(double range_m,
                                                  double radial_velocity_mps) const noexcept {
   ImagePosition p;
-  const double fd = -2.0 * radial_velocity_mps / lambda_m_;
-  p.velocity_bin = radial_velocity_mps / dv_mps_ + static_cast<double>(n_pulses_ / 2);
+  // Per return (every return of a frame): the divisions by setup constants are products by
+  // their reciprocals (rounding-level).
+  p.velocity_bin = radial_velocity_mps * inv_dv_ + static_cast<double>(n_pulses_ / 2);
   if (!std::isfinite(range_m) || !std::isfinite(radial_velocity_mps) || range_m < 0.0)
     return p;
   if (pulsed_) {
-    // Echoes fold modulo the unambiguous range (second-time-around returns).
-    const double r_fold = std::fmod(range_m, unamb_range_m_);
-    const double start_bin = (r_fold - first_range_m_) / range_bin_m_;
-    p.range_bin = start_bin - fd * fs_hz_ / chirp_rate_;
+    // Echoes fold modulo the unambiguous range (second-time-around returns); fmod is the
+    // identity below it (exact), so it is called only beyond.
+    const double r_fold = range_m < unamb_range_m_ ? range_m : std::fmod(range_m, unamb_range_m_);
+    const double start_bin = (r_fold - first_range_m_) * inv_range_bin_;
+    // Range-Doppler coupling: - f_d fs / k with f_d = -2 v / lambda (Richards 2014, eqs.
+    // 4.105-4.106), as one product by 2 fs / (lambda k).
+    p.range_bin = start_bin + radial_velocity_mps * coupling_bins_per_mps_;
     p.in_swath = start_bin >= 0.0 && start_bin <= static_cast<double>(n_range_ - 1);
   } else {
+    const double fd = -2.0 * radial_velocity_mps / lambda_m_;
     const double tau = 2.0 * range_m / kSpeedOfLight_mps;
     p.range_bin = static_cast<double>(n_range_) * (chirp_rate_ * tau - fd) / fs_hz_;
     p.in_swath = p.range_bin >= 0.0 && p.range_bin < static_cast<double>(n_range_);

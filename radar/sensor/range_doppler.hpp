@@ -155,6 +155,9 @@ class RangeDopplerProcessor {
   double range_bin_m_ = 0, first_range_m_ = 0, unamb_range_m_ = 0, fs_hz_ = 0, pri_s_ = 0;
   double dv_mps_ = 0, lambda_m_ = 0, chirp_rate_ = 0, processing_gain_ = 1, out_scale_ = 1;
   double range_norm_ = 1;  ///< 1 / sqrt(sum w_r^2)
+  /// position_of's constants: 1 / dv, 1 / range bin, and the pulsed range-Doppler coupling
+  /// 2 fs / (lambda k) [bins per m/s]
+  double inv_dv_ = 1, inv_range_bin_ = 1, coupling_bins_per_mps_ = 0;
   double range_energy_ = 1;
   double rms_bandwidth_ = 0, rms_duration_ = 0;
   std::vector<double> w_range_, w_doppler_;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -120,6 +121,9 @@ struct Sensor::Workspace {
   std::vector<RowSpan> dirty;  ///< per velocity row: bins this frame's returns reach
   std::vector<RowSpan> cuts;   ///< cells under test evaluated on the image
   std::vector<RowSpan> synth;  ///< cells synthesised (the cuts' windows)
+  /// The range bins [begin, end) of `clutter` this frame's returns wrote (its entries are zero
+  /// elsewhere): the running sum reads those only. None: begin >= end.
+  std::uint32_t clutter_begin = std::numeric_limits<std::uint32_t>::max(), clutter_end = 0;
   std::uint64_t crossings = 0, overflowed = 0, synthesised = 0;
 };
 
@@ -153,11 +157,13 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   n_workers_ = std::clamp<std::size_t>(
       static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()), 1, antenna_.beams());
   worker_beams_.resize(n_workers_ + 1);
+  footprint_cells_.resize(n_workers_ * kFootprintCells);
   beam_work_.resize(antenna_.beams() + 1);
   gain_floor_ = std::pow(10.0, c.beam_floor_db / 10.0);
   for (std::size_t i = 0; i < antenna_.beams(); ++i)
     workspaces_.push_back(std::make_unique<Workspace>(c.cfar, *processor_, c.max_hits_per_beam));
   items_.resize(c.max_contributions);
+  item_state_.resize(c.max_contributions);
   item_beams_.resize(c.max_contributions);
   item_bucket_.resize(c.max_contributions);
   if (c.merge_step_bins > 0.0) {
@@ -170,6 +176,11 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     merge_hash_.resize(c.max_contributions);
     merge_hashed_.resize(c.max_contributions);
     merge_sums_.resize(c.max_contributions);
+    merge_amplitude_.resize(c.max_contributions);
+    // merge_key()'s cells a unit: per bin, and per radian of azimuth and elevation.
+    merge_per_bin_ = 1.0 / c.merge_step_bins;
+    merge_per_rad_az_ = 1.0 / (c.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad());
+    merge_per_rad_el_ = 1.0 / (c.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad());
   }
   by_range_.resize(c.max_contributions);
   range_start_.resize(processor_->range_bins() + 2);
@@ -371,6 +382,7 @@ Sensor::BeamSpan Sensor::beam_span(const Item& item) const noexcept {
 }
 
 void Sensor::process_worker(std::size_t w) noexcept {
+  constexpr long kPrefetchBins = 4;
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t nr = proc.range_bins();
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
@@ -384,9 +396,18 @@ void Sensor::process_worker(std::size_t w) noexcept {
   // cell, its range footprint by a difference array along range, its Doppler leakage through the
   // taper; the speckle is drawn per cell afterwards.
   Footprint fp;
+  // The azimuth recurrence's start a return azimuth (below), memoised: NaN marks an empty entry.
+  struct AzMemo {
+    double azimuth_rad = std::numeric_limits<double>::quiet_NaN();
+    double a = 0.0, b = 0.0, ra = 0.0, rb = 0.0;
+  };
+  constexpr int kAzMemoBits = 7;
+  std::array<AzMemo, std::size_t{1} << kAzMemoBits> az_memo{};
+  std::complex<double>* cells = footprint_cells_.data() + w * kFootprintCells;
   double taps[Footprint::kMaxBins];
   std::uint32_t tap_rows[Footprint::kMaxBins];
-  double values[3][Footprint::kMaxBins];  // a diffuse return's pieces, tap by tap
+  // A diffuse return's pieces, tap by tap, at unit two-way gain (scaled by each beam's).
+  double values[3][Footprint::kMaxBins];
   for (std::size_t i = 0; i < item_count_; ++i) {
     // The beams within the azimuth extent of the return (gains_of() tests it again), from the
     // return's span of the whole scan; items outside this worker's beams are not read.
@@ -398,6 +419,7 @@ void Sensor::process_worker(std::size_t w) noexcept {
       continue;
     const Item& item = items_[i];
     bool prepared = false;
+    long n_bins = 0;  // coherent: the footprint's range bins
     int n_taps = 0;
     // Diffuse: its range footprint as up to three pieces of the difference array (the bins it
     // partly covers at each end, and the bins between), clipped to the swath once for all beams
@@ -411,8 +433,24 @@ void Sensor::process_worker(std::size_t w) noexcept {
     // the sum channel is needed here. The recurrence starts at the return's first beam of the
     // whole scan whatever this worker's block, so the result does not depend on the number of
     // workers.
+    // The recurrence's start depends on the return's azimuth alone (and this worker's block):
+    // returns at an azimuth met before (the terrain engine's cells: one azimuth a column) take
+    // the values computed then, from a small direct-mapped memo (the same values: exact).
     double rec_a = 0.0, rec_ra = 0.0, rec_b = 0.0, rec_rb = 0.0;
+    AzMemo* memo = nullptr;
     if (az_rec_.on) {
+      std::uint64_t bits = 0;
+      std::memcpy(&bits, &item.azimuth_rad, sizeof bits);
+      memo = &az_memo[(bits * 0x9e3779b97f4a7c15ull) >> (64 - kAzMemoBits)];
+      if (memo->azimuth_rad == item.azimuth_rad) {
+        rec_a = memo->a;
+        rec_b = memo->b;
+        rec_ra = memo->ra;
+        rec_rb = memo->rb;
+        memo = nullptr;
+      }
+    }
+    if (memo != nullptr) {
       const double t0 = item.azimuth_rad - config_.antenna.beam_azimuth_rad[b_lowest];
       const double ta = t0 - az_rec_.squint, tb = t0 + az_rec_.squint;
       const double cs = az_rec_.c * az_rec_.step;
@@ -426,6 +464,7 @@ void Sensor::process_worker(std::size_t w) noexcept {
         rec_ra *= az_rec_.q;
         rec_rb *= az_rec_.q;
       }
+      *memo = {item.azimuth_rad, rec_a, rec_b, rec_ra, rec_rb};
     }
     for (std::size_t b = b_first; b < b_end; ++b) {
       Gains g;
@@ -447,12 +486,31 @@ void Sensor::process_worker(std::size_t w) noexcept {
       }
       Workspace& ws = *workspaces_[b];
       if (item.coherent) {
-        if (!prepared && !proc.footprint(item.amplitude, item.pos, item.radial_velocity_mps, fp))
-          break;
-        prepared = true;
-        proc.add_footprint(fp, g.sum, ws.image);
-        for (int r = 0; r < fp.n_rows; ++r)
+        if (!prepared) {
+          if (!proc.footprint(item.amplitude, item.pos, item.radial_velocity_mps, fp))
+            break;
+          // The response's cells at unit gain, once a return (velocity value times range value,
+          // the complex product written out as in add_footprint), so that each beam adds them
+          // times its real gain: a scaled sum, which the compiler vectorises.
+          n_bins = fp.l1 - fp.l0 + 1;
+          for (int r = 0; r < fp.n_rows; ++r) {
+            const double vr = fp.velocity[r].real(), vi = fp.velocity[r].imag();
+            std::complex<double>* out = cells + r * n_bins;
+            for (long l = 0; l < n_bins; ++l) {
+              const double rr = fp.range[l].real(), ri = fp.range[l].imag();
+              out[l] = {vr * rr - vi * ri, vr * ri + vi * rr};
+            }
+          }
+          prepared = true;
+        }
+        for (int r = 0; r < fp.n_rows; ++r) {
+          std::complex<double>* row = ws.image.data() + static_cast<std::size_t>(fp.rows[r]) * nr +
+                                      static_cast<std::size_t>(fp.l0);
+          const std::complex<double>* x = cells + r * n_bins;
+          for (long l = 0; l < n_bins; ++l)
+            row[l] = {row[l].real() + g.sum * x[l].real(), row[l].imag() + g.sum * x[l].imag()};
           cover(ws.dirty[fp.rows[r]], fp.l0, fp.l1 + 1);
+        }
         continue;
       }
       if (!prepared) {
@@ -464,48 +522,60 @@ void Sensor::process_worker(std::size_t w) noexcept {
           row = row + 1 == nvl ? 0 : row + 1;
         }
         pieces = make_pieces(item.pos.range_bin, item.half_bins, nrl);
+        // The values of the pieces, tap by tap, at unit two-way gain: once a return, so that a
+        // beam only scales them (no division a tap and a beam).
+        const double p = std::norm(item.amplitude) * range_energy_;
+        const double density = pieces.single ? p : p / pieces.extent;
+        for (int t = 0; t < n_taps; ++t) {
+          const double v = density * taps[t];
+          values[0][t] = pieces.single ? v : v * pieces.share[0];
+          values[1][t] = v * pieces.share[1];
+          values[2][t] = v;
+        }
         prepared = true;
       }
       if (pieces.span_begin >= pieces.span_end)
         continue;
-      // The values of the pieces, tap by tap, then each piece's two ends added to the taps'
-      // rows (contiguous in the transposed array; two runs where the rows wrap).
-      const double p = std::norm(item.amplitude) * g.sum * g.sum * range_energy_;
-      for (int t = 0; t < n_taps; ++t) {
+      // Each piece's two ends added to the taps' rows times the beam's two-way power gain
+      // (contiguous in the transposed array; two runs where the rows wrap).
+      const double s = g.sum * g.sum;
+      for (int t = 0; t < n_taps; ++t)
         cover(ws.dirty[tap_rows[t]], pieces.span_begin, pieces.span_end);
-        const double v = p * taps[t];
-        if (pieces.single) {
-          values[0][t] = v;
-          continue;
-        }
-        const double density = v / pieces.extent;
-        values[0][t] = density * pieces.share[0];
-        values[1][t] = density * pieces.share[1];
-        values[2][t] = density;
+      // The terrain engine's cells come in range order: the one-bin sums a few bins beyond this
+      // return's are fetched ahead (a hint only; every order gives the same sums).
+      if (pieces.span_end + kPrefetchBins + 2 < nrl) {
+        const double* ahead = ws.direct.data() +
+                              static_cast<std::size_t>(pieces.span_end + kPrefetchBins) * nv +
+                              tap_rows[0];
+        __builtin_prefetch(ahead, 1);
+        __builtin_prefetch(ahead + 8, 1);
+        __builtin_prefetch(ahead + nv, 1);
+        __builtin_prefetch(ahead + nv + 8, 1);
       }
       const int n_first = std::min(n_taps, static_cast<int>(nvl - tap_rows[0]));
       for (int k = 0; k < (pieces.single ? 1 : 3); ++k) {
         if (pieces.a[k] > pieces.c[k])
           continue;
+        const double* x = values[k];
         if (pieces.a[k] == pieces.c[k]) {  // one bin: added to it directly
           double* at = ws.direct.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
-          const double* x = values[k];
           for (int t = 0, c = static_cast<int>(tap_rows[0]); t < n_first; ++t, ++c)
-            at[c] += x[t];
+            at[c] += x[t] * s;
           for (int t = n_first, c = 0; t < n_taps; ++t, ++c)
-            at[c] += x[t];
+            at[c] += x[t] * s;
           continue;
         }
+        ws.clutter_begin = std::min(ws.clutter_begin, static_cast<std::uint32_t>(pieces.a[k]));
+        ws.clutter_end = std::max(ws.clutter_end, static_cast<std::uint32_t>(pieces.c[k] + 2));
         double* on = ws.clutter.data() + static_cast<std::size_t>(pieces.a[k]) * nv;
         double* off = ws.clutter.data() + static_cast<std::size_t>(pieces.c[k] + 1) * nv;
-        const double* x = values[k];
         for (int t = 0, c = static_cast<int>(tap_rows[0]); t < n_first; ++t, ++c) {
-          on[c] += x[t];
-          off[c] -= x[t];
+          on[c] += x[t] * s;
+          off[c] -= x[t] * s;
         }
         for (int t = n_first, c = 0; t < n_taps; ++t, ++c) {
-          on[c] += x[t];
-          off[c] -= x[t];
+          on[c] += x[t] * s;
+          off[c] -= x[t] * s;
         }
       }
     }
@@ -550,19 +620,33 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
       }
     };
     // Clutter power: the running sum of its difference array over the bins it reaches, plus
-    // the one-bin pieces' power (both read once, and cleared for the next frame as read).
+    // the one-bin pieces' power (both read once, and cleared for the next frame as read). The
+    // difference array is read only on the bins the returns wrote (clutter_begin/end): before
+    // them the sum is 0, after them it keeps its value (the same sums as reading the zeros).
     const std::uint32_t d0 = d.empty() ? sp.end : d.begin, d1 = d.empty() ? sp.end : d.end;
+    const std::uint32_t c0 = std::clamp(ws.clutter_begin, d0, d1),
+                        c1 = std::clamp(ws.clutter_end, c0, d1);
     for (std::uint32_t l = sp.begin; l < d0; ++l)
       synthesise(l, floor_var);
     double run = 0.0;
     double* diff = ws.clutter.data() + j;
     double* direct = ws.direct.data() + j;
-    for (std::uint32_t l = d0; l < d1; ++l) {
+    // rounding of the running sum must not go negative
+    for (std::uint32_t l = d0; l < c0; ++l) {
+      const double one_bin = direct[l * nv];
+      direct[l * nv] = 0.0;
+      synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
+    }
+    for (std::uint32_t l = c0; l < c1; ++l) {
       run += diff[l * nv];
       diff[l * nv] = 0.0;
       const double one_bin = direct[l * nv];
       direct[l * nv] = 0.0;
-      // rounding of the running sum must not go negative
+      synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
+    }
+    for (std::uint32_t l = c1; l < d1; ++l) {
+      const double one_bin = direct[l * nv];
+      direct[l * nv] = 0.0;
       synthesise(l, floor_var + (std::max(run, 0.0) + one_bin));
     }
     if (!d.empty())
@@ -651,6 +735,8 @@ void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
 
   // 5. Leave the image zero for the next frame: clear what was written (the clutter was cleared
   // as step 2 read it).
+  ws.clutter_begin = std::numeric_limits<std::uint32_t>::max();
+  ws.clutter_end = 0;
   for (std::size_t j = 0; j < nv; ++j) {
     RowSpan& d = ws.dirty[j];
     if (d.empty())
@@ -683,15 +769,33 @@ void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_rati
   const long b0 = std::max<long>(0, static_cast<long>(std::floor(static_cast<double>(l) - reach)));
   const long b1 =
       std::min<long>(nr - 1, static_cast<long>(std::ceil(static_cast<double>(l) + reach)));
-  for (std::uint32_t q = range_start_[static_cast<std::size_t>(b0)];
-       q < range_start_[static_cast<std::size_t>(b1) + 1]; ++q) {
+  // The returns in reach, by range bucket: scattered over the items (fetched kAhead ahead).
+  constexpr std::uint32_t kAhead = 8;
+  const std::uint32_t q_end = range_start_[static_cast<std::size_t>(b1) + 1];
+  for (std::uint32_t q = range_start_[static_cast<std::size_t>(b0)]; q < q_end; ++q) {
+    if (q + kAhead < q_end) {
+      const char* ahead = reinterpret_cast<const char*>(&items_[by_range_[q + kAhead]]);
+      __builtin_prefetch(ahead);
+      __builtin_prefetch(ahead + sizeof(Item) - 1);
+    }
     const Item& item = items_[by_range_[q]];
+    // A return whose response at the cell is zero adds nothing (its products are zeros): its
+    // beam gains (two exp) are needed only to register a coherent return's object when it is new
+    // (the order objects are met in stays the same). Most returns in reach are such.
     Gains g;
-    if (!gains_of(item, c.beam, g))
-      continue;
     if (item.coherent) {
       const std::complex<double> r = proc.response_at(
           {item.amplitude, item.range_m, item.radial_velocity_mps}, c.range_bin, c.velocity_bin);
+      if (r == std::complex<double>{0.0, 0.0}) {
+        std::size_t o = 0;
+        while (o < n_objects && ids[o] != item.object_id)
+          ++o;
+        if (o == n_objects && n_objects < kObjects && gains_of(item, c.beam, g))
+          ids[n_objects++] = item.object_id;
+        continue;
+      }
+      if (!gains_of(item, c.beam, g))
+        continue;
       s_coh += r * g.sum;
       d_az += r * g.daz;
       d_el += r * g.del;
@@ -705,6 +809,8 @@ void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_rati
     } else {
       const double p = std::norm(item.amplitude) * range_energy_ * range_share(item, l) *
                        velocity_weight(item, j);
+      if (p == 0.0 || !gains_of(item, c.beam, g))
+        continue;
       c_ss += p * g.sum * g.sum;
       c_as += p * g.sum * g.daz;
       c_aa += p * g.daz * g.daz;
@@ -746,7 +852,8 @@ void Sensor::cell_channels(const Candidate& c, double& az_ratio, double& el_rati
   }
 }
 
-void Sensor::merge_returns(SensorStats& stats) noexcept {
+void Sensor::merge_returns(std::span<const Contribution> contributions,
+                           SensorStats& stats) noexcept {
   // Coherent returns of one object within one merge cell of each other (merge_step_bins in range
   // and velocity, merge_step_beamwidths of the sum beam in azimuth and elevation) reach the image
   // through responses that differ by less than the direct path's own table step: they are one
@@ -756,7 +863,9 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
   // input order (not on the table's size or the hash).
   // The keys, hashes and weighted positions are computed per item in parallel beforehand
   // (merge_key()); only the table is walked here, in input order. An entry holds the upper half
-  // of its key's hash beside the item, so that a probe of another cell seldom reads its key.
+  // of its key's hash beside the item, so that a probe of another cell seldom reads its key. A
+  // cell's sums and amplitude accumulate on its representative's entries; the representatives'
+  // items are written once, by the parallel finish.
   std::size_t n_mergeable = 0;
   for (std::size_t i = 0; i < item_count_; ++i)
     n_mergeable += merge_hashed_[i];
@@ -790,11 +899,10 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
       merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
       continue;
     }
-    Item& it = items_[i];
+    // The cell's sums and amplitude accumulate on its representative's entries.
     const MergeSums& m = merge_sums_[i];
-    Item& r = items_[rep];
     MergeSums& a = merge_sums_[rep];
-    r.amplitude += it.amplitude;
+    merge_amplitude_[rep] += merge_amplitude_[i];
     a.weight += m.weight;
     a.range_bin += m.range_bin;
     a.velocity_bin += m.velocity_bin;
@@ -803,18 +911,28 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
     a.azimuth_rad += m.azimuth_rad;
     a.elevation_rad += m.elevation_rad;
     ++a.count;
-    it.usable = false;
-    item_beams_[i] = {};
+    item_state_[i] = kMerged;  // its beam span stays empty (prepare)
     ++stats.merged_returns;
   }
-  // Each merged cell's representative independently (in parallel): its mean position, and its
-  // elevation channels there.
+  // Each merged cell's representative independently (in parallel): its item (from its
+  // contribution, as the prepare step writes the others' items), with the summed amplitude and
+  // the mean position, and its elevation channels there.
   auto finish = [&](std::size_t u) {
     const std::uint32_t slot = merge_used_[u];
     const auto rep = static_cast<std::size_t>(merge_table_[slot] & 0xFFFFFFFFu) - 1;
     merge_table_[slot] = 0;
     const MergeSums& a = merge_sums_[rep];
+    const Contribution& c = contributions[rep];
     Item& r = items_[rep];
+    r.amplitude = merge_amplitude_[rep];
+    r.pos = processor_->position_of(c.range_m, c.radial_velocity_mps);
+    r.coherent = true;
+    r.object_id = c.object_id;
+    r.half_bins = 0.0;
+    r.range_m = c.range_m;
+    r.radial_velocity_mps = c.radial_velocity_mps;
+    r.azimuth_rad = c.azimuth_rad;
+    r.elevation_rad = c.elevation_rad;
     if (a.count >= 2 && a.weight > 0.0) {
       r.pos.range_bin = a.range_bin / a.weight;
       r.pos.velocity_bin = a.velocity_bin / a.weight;
@@ -834,19 +952,18 @@ void Sensor::merge_returns(SensorStats& stats) noexcept {
                     });
 }
 
-void Sensor::merge_key(std::size_t i) noexcept {
-  const Item& it = items_[i];
-  const double q = 1.0 / config_.merge_step_bins;
-  const double da = config_.merge_step_beamwidths * antenna_.sum_beamwidth_az_rad();
-  const double de = config_.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad();
+void Sensor::merge_key(std::size_t i, const Contribution& c, const ImagePosition& pos,
+                       std::complex<double> amplitude) noexcept {
+  const double q = merge_per_bin_;
   // floor(x) for finite x within +-2^63: truncation, one less below zero off the integers
   // (std::floor is a library call without SSE4.1).
   auto cell = [](double x) {
     const auto t = static_cast<long long>(x);
     return t - (x < static_cast<double>(t) ? 1 : 0);
   };
-  const MergeKey key{it.object_id, cell(it.pos.range_bin * q), cell(it.pos.velocity_bin * q),
-                     cell(it.azimuth_rad / da), cell(it.elevation_rad / de)};
+  const MergeKey key{c.object_id, cell(pos.range_bin * q), cell(pos.velocity_bin * q),
+                     cell(c.azimuth_rad * merge_per_rad_az_),
+                     cell(c.elevation_rad * merge_per_rad_el_)};
   merge_keys_[i] = key;
   // The hash places the key in the table only (the result does not depend on it): one
   // multiply a field, then splitmix64's finaliser (Steele, Lea and Flood, "Fast splittable
@@ -859,14 +976,17 @@ void Sensor::merge_key(std::size_t i) noexcept {
   h ^= h >> 31;
   merge_hash_[i] = h;
   merge_hashed_[i] = 1;
-  const double w = std::abs(it.amplitude);
+  // |amplitude| as sqrt(re^2 + im^2) (no hypot call: the amplitudes are in noise units, far
+  // from overflow; rounding-level).
+  const double w = std::sqrt(std::norm(amplitude));
+  merge_amplitude_[i] = amplitude;
   merge_sums_[i] = {w,
-                    w * it.pos.range_bin,
-                    w * it.pos.velocity_bin,
-                    w * it.range_m,
-                    w * it.radial_velocity_mps,
-                    w * it.azimuth_rad,
-                    w * it.elevation_rad,
+                    w * pos.range_bin,
+                    w * pos.velocity_bin,
+                    w * c.range_m,
+                    w * c.radial_velocity_mps,
+                    w * c.azimuth_rad,
+                    w * c.elevation_rad,
                     1};
 }
 
@@ -903,18 +1023,31 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   // Independent per item: prepared in parallel, counted after in order.
   auto prepare = [&](std::size_t i) {
     const Contribution& c = contributions[i];
-    Item& it = items_[i];
-    it.usable = false;
-    it.reject = 0;
     item_beams_[i] = {};
     if (!merge_hashed_.empty())
       merge_hashed_[i] = 0;
     if (!finite(c) || !(c.range_m > 0.0)) {
-      it.reject = 1;
+      item_state_[i] = kNotFinite;
       return;
     }
-    it.amplitude = c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
-    it.pos = proc.position_of(c.range_m, c.radial_velocity_mps);
+    const std::complex<double> amplitude =
+        c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
+    const ImagePosition pos = proc.position_of(c.range_m, c.radial_velocity_mps);
+    // A coherent return to be merged: its key, weighted position and amplitude only; its item
+    // is written after the merge if it represents its cell (merge_returns()), so that the
+    // returns summed into another are not written at all.
+    if (c.coherent && !merge_table_.empty()) {
+      if (!pos.in_swath) {
+        item_state_[i] = kOffImage;
+        return;
+      }
+      item_state_[i] = kUsable;
+      merge_key(i, c, pos, amplitude);
+      return;
+    }
+    Item& it = items_[i];
+    it.amplitude = amplitude;
+    it.pos = pos;
     it.coherent = c.coherent;
     it.object_id = c.object_id;
     it.half_bins = c.coherent ? 0.0 : 0.5 * std::max(c.range_spread_m, 0.0) / bin_m;
@@ -926,19 +1059,13 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     const bool visible =
         it.coherent ? it.pos.in_swath : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5;
     if (!visible) {
-      it.reject = 2;
+      item_state_[i] = kOffImage;
       return;
     }
-    it.usable = true;
-    // The elevation channels: of a coherent return once merged (merge_returns(), at the merged
-    // elevation), of the others now.
-    if (it.coherent && !merge_table_.empty()) {
-      merge_key(i);
-    } else {
-      antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
-                           it.delta_el);
-      item_beams_[i] = beam_span(it);
-    }
+    item_state_[i] = kUsable;
+    antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
+                         it.delta_el);
+    item_beams_[i] = beam_span(it);
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
@@ -946,17 +1073,18 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
                         prepare(i);
                     });
   if (config_.merge_step_bins > 0.0)
-    merge_returns(stats);
+    merge_returns(contributions, stats);
   // One pass over the items (the counts, then each usable item's bucket, kept for the second
   // pass, which then reads 4 bytes an item).
   constexpr std::uint32_t kNoBucket = 0xFFFFFFFFu;
   std::fill(beam_work_.begin(), beam_work_.end(), 0.0);
   for (std::size_t i = 0; i < item_count_; ++i) {
-    const Item& it = items_[i];
-    stats.rejected_input += it.reject == 1 ? 1u : 0u;
-    stats.out_of_grid += it.reject == 2 ? 1u : 0u;
+    const std::uint8_t state = item_state_[i];
+    stats.rejected_input += state == kNotFinite ? 1u : 0u;
+    stats.out_of_grid += state == kOffImage ? 1u : 0u;
     item_bucket_[i] = kNoBucket;
-    if (it.usable) {
+    if (state == kUsable) {
+      const Item& it = items_[i];
       max_half_bins_ = std::max(max_half_bins_, it.half_bins);
       const std::size_t bucket = bucket_of(it);
       item_bucket_[i] = static_cast<std::uint32_t>(bucket);
@@ -983,9 +1111,9 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     c.dropped = 0;
     c.noise_frame = frame_;
     for (std::size_t i = 0; i < item_count_; ++i) {
-      const Item& it = items_[i];
-      if (!it.usable)
+      if (item_state_[i] != kUsable)
         continue;
+      const Item& it = items_[i];
       if (c.return_count >= c.returns.size()) {
         ++c.dropped;
         continue;

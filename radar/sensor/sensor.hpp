@@ -219,9 +219,15 @@ class Sensor {
     double sum_el = 0.0, delta_el = 0.0;  ///< elevation channels (one beam elevation per scan)
     std::uint32_t object_id = 0;
     bool coherent = true;
-    bool usable = false;
-    std::uint8_t reject = 0;  ///< why not usable: 1 not finite / no range, 2 off the image
   };
+  /// Per item, this frame: whether it is usable (its Item written) or why not.
+  enum ItemState : std::uint8_t {
+    kUsable = 0,
+    kNotFinite = 1,  ///< a field not finite, or no range
+    kOffImage = 2,   ///< outside the swath
+    kMerged = 3,     ///< summed into an earlier coherent return (merge_returns())
+  };
+  std::vector<std::uint8_t> item_state_;
   struct Candidate {
     std::complex<double> sum{0.0, 0.0};  ///< Sigma channel at the cell (signal + clutter + noise)
     double power = 0, noise = 0;
@@ -237,8 +243,9 @@ class Sensor {
   /// Capture: copies beam `beam`'s synthesised cells and false alarms (detect_beam).
   void capture_beam(std::size_t beam, const Workspace& ws, std::size_t n_alarms) noexcept;
 
-  /// Sums coherent returns that share a merge cell (SensorConfig::merge_step_bins).
-  void merge_returns(SensorStats& stats) noexcept;
+  /// Sums coherent returns that share a merge cell (SensorConfig::merge_step_bins), and writes
+  /// the Item of each cell's representative.
+  void merge_returns(std::span<const Contribution> contributions, SensorStats& stats) noexcept;
   struct MergeKey {
     std::uint32_t object_id = 0;
     long long range = 0, velocity = 0, azimuth = 0, elevation = 0;
@@ -256,9 +263,17 @@ class Sensor {
   std::vector<MergeKey> merge_keys_;        ///< per usable coherent item
   std::vector<std::uint64_t> merge_hash_;   ///< ... its key's hash
   std::vector<std::uint8_t> merge_hashed_;  ///< per item: 1 when it has a key (usable, coherent)
-  std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position, then the cell's
-  /// Item i's merge key, hash and weighted position (prepare step, in parallel).
-  void merge_key(std::size_t i) noexcept;
+  std::vector<MergeSums> merge_sums_;       ///< ... its own weighted position, then its cell's
+  /// ... its amplitude, then its cell's (the coherent items' Items are written after the merge,
+  /// for the representatives only)
+  std::vector<std::complex<double>> merge_amplitude_;
+  /// The merge cells a unit (setup): 1 / merge_step_bins, and per radian of azimuth and of
+  /// elevation, 1 / (merge_step_beamwidths x the sum beam's width).
+  double merge_per_bin_ = 0.0, merge_per_rad_az_ = 0.0, merge_per_rad_el_ = 0.0;
+  /// Item i's merge key, hash, weighted position and amplitude (prepare step, in parallel), from
+  /// its contribution, its image position and its amplitude at the receiver.
+  void merge_key(std::size_t i, const Contribution& c, const ImagePosition& pos,
+                 std::complex<double> amplitude) noexcept;
   /// Worker w: accumulates every item into its beams (the w-th of the contiguous blocks of
   /// worker_beams_), then detects in them.
   void process_worker(std::size_t w) noexcept;
@@ -301,6 +316,10 @@ class Sensor {
   double az_extent_rad_ = 0.0;
   double gain_floor_ = 0.0;  ///< beam_floor_db as a linear two-way power ratio
   std::size_t n_workers_ = 1;
+  /// Per worker: a coherent return's response cells at unit gain, [velocity row][range bin].
+  static constexpr std::size_t kFootprintCells =
+      static_cast<std::size_t>(Footprint::kMaxBins) * Footprint::kMaxBins;
+  std::vector<std::complex<double>> footprint_cells_;
   /// Worker w takes beams [worker_beams_[w], worker_beams_[w + 1]) (split_beams(), per frame).
   std::vector<std::size_t> worker_beams_;
   /// Per beam, this frame's work estimate (a difference array while the items are counted).
