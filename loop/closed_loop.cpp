@@ -815,6 +815,7 @@ void ClosedLoop::Impl::send(Frame& f) {
   rec.returns = f.valid ? f.contributions : 0;
   rec.cells_synthesised = f.cells_synthesised;
   rec.terrain_patches = f.terrain_patches;
+  rec.terrain_facets = f.terrain_facets;
 }
 
 ClosedLoop::ClosedLoop(const Scenario& scenario, const RunOptions& options)

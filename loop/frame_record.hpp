@@ -49,6 +49,7 @@ struct FrameRecord {
   std::uint64_t returns = 0;            ///< returns handed to the sensor (the engine's included)
   std::uint64_t cells_synthesised = 0;  ///< image cells the sensor synthesised
   std::uint64_t terrain_patches = 0;    ///< the terrain engine's patches
+  std::uint64_t terrain_facets = 0;     ///< the facets it cut into them
 };
 
 /// What the streamed outputs (emulator/output_stream.hpp) wrote and lost.

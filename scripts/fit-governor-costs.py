@@ -11,7 +11,8 @@ level ([governor] max_level = 4 with compute_fraction = 0.01). Frame 0 of each r
 (its caches are cold). The model, per frame:
 
   trace  = trace_ms_per_frame + trace_ns_per_ray x rays traced
-           + trace_ns_per_kept_return x kept returns + terrain_ns_per_patch x terrain patches
+           + trace_ns_per_kept_return x kept returns
+           + terrain_ns_per_patch x max(terrain patches, terrain facets) (the governor's count)
   sensor = sensor_ns_per_cell x cells synthesised + sensor_ns_per_return x returns
 
 fitted by least squares with non-negative coefficients (numpy.linalg.lstsq, a coefficient that
@@ -25,7 +26,8 @@ import sys
 
 import numpy as np
 
-TRACE_TERMS = ["frame", "rays", "kept_returns", "terrain_patches"]  # "frame": the constant
+# "frame": the constant; "terrain": max(terrain_patches, terrain_facets)
+TRACE_TERMS = ["frame", "rays", "kept_returns", "terrain"]
 TRACE_KEYS = ["trace_ms_per_frame", "trace_ns_per_ray", "trace_ns_per_kept_return",
               "terrain_ns_per_patch"]
 SENSOR_TERMS = ["cells_synthesised", "returns"]
@@ -36,9 +38,12 @@ def load(run_dir):
     path = os.path.join(run_dir, "frames.csv")
     with open(path, newline="") as f:
         rows = [r for r in csv.DictReader(f) if r["ownship_valid"] == "1"]
-    missing = [k for k in TRACE_TERMS[1:] + SENSOR_TERMS if rows and k not in rows[0]]
+    needed = ["rays", "kept_returns", "terrain_patches", "terrain_facets"] + SENSOR_TERMS
+    missing = [k for k in needed if rows and k not in rows[0]]
     if missing:
         sys.exit(f"{path}: no column {missing[0]} (a frames.csv from an older radar-emu?)")
+    for r in rows:
+        r["terrain"] = max(float(r["terrain_patches"]), float(r["terrain_facets"]))
     return rows[1:]
 
 

@@ -133,6 +133,8 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   require(c.elevation_min_rad < c.elevation_max_rad && c.elevation_min_rad > -kPi / 2 &&
               c.elevation_max_rad < kPi / 2,
           "elevation_min/max_rad", "must satisfy -pi/2 < min < max < pi/2");
+  fov_tan_ = {std::tan(c.azimuth_min_rad), std::tan(c.azimuth_max_rad),
+              std::tan(c.elevation_min_rad), std::tan(c.elevation_max_rad)};
   require(c.terrain_ray_spacing_rad > 0, "terrain_ray_spacing_rad", "must be > 0");
   require(c.target_ray_spacing_m > 0, "target_ray_spacing_m", "must be > 0");
   require(c.max_rays_per_target >= 1, "max_rays_per_target", "must be >= 1");
@@ -269,6 +271,7 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     static_assert(FacetMemo::kBits >=
                   kFacetSamples + kMaxFacetSubdivisions * kMaxFacetSubdivisions);
     facet_memo_.assign(facet_first_.back(), FacetMemo{});
+    memo_state_.assign(desc.objects.size(), MemoState{});
   }
 }
 
@@ -336,13 +339,17 @@ double surface_offset_m(const glm::dvec3& p) noexcept {
   return 1e-6 * (1.0 + glm::length(p));
 }
 
-// Whether a direction d from the radar (world), at antenna angles `ae`, is inside the field of
-// view (ahead of the antenna and within its azimuth and elevation limits).
-bool in_field_of_view(const SbrConfig& c, const RadarPose& pose, const glm::dvec3& d,
-                      const AzEl& ae) noexcept {
-  return glm::dot(pose.world_from_antenna[0], d) > 0.0 && ae.azimuth_rad >= c.azimuth_min_rad &&
-         ae.azimuth_rad <= c.azimuth_max_rad && ae.elevation_rad >= c.elevation_min_rad &&
-         ae.elevation_rad <= c.elevation_max_rad;
+// Whether a direction `a` from the radar (antenna frame, unit) is inside the field of view:
+// ahead of the antenna (a.x > 0) and within its azimuth and elevation limits, by their tangents
+// (`fov_tan`: az min, az max, el min, el max; the limits are within +-pi/2, where tan is
+// increasing): az = atan2(a.y, a.x) in [lo, hi] iff a.x tan lo <= a.y <= a.x tan hi, and
+// el = atan2(-a.z, h) likewise with h = |(a.x, a.y)|. No atan2: the angles are needed only for
+// what radiates.
+bool in_field_of_view(const std::array<double, 4>& fov_tan, const glm::dvec3& a) noexcept {
+  if (!(a.x > 0.0) || a.y < a.x * fov_tan[0] || a.y > a.x * fov_tan[1])
+    return false;
+  const double h = std::sqrt(a.x * a.x + a.y * a.y);
+  return -a.z >= h * fov_tan[2] && -a.z <= h * fov_tan[3];
 }
 
 // The bundled targets' items of one kind (facets, edges or edge pairs: object id's are
@@ -427,11 +434,11 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
     return dark;
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
-  const AzEl ae = azel_from_direction(antenna_from_world * d);
+  const glm::dvec3 arrival = antenna_from_world * d;
   // Outside the view or the range, or too near for a plane wave over it: the rays sample it.
   const double rho_m = std::max(
       {glm::length(v0 - centroid), glm::length(v1 - centroid), glm::length(v2 - centroid)});
-  const bool in_view = in_field_of_view(c, pose, d, ae);
+  const bool in_view = in_field_of_view(fov_tan_, arrival);
   if (!in_view || range_m > c.max_range_m || !facet_in_far_field(rho_m, range_m, k))
     return kLightByRays;
   const double offset_m = surface_offset_m(centroid);
@@ -489,7 +496,7 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
   out = bounce1_return(po_amplitude_m(k, p, po_source(e, d, n, s, rc, pec), 1.0) * integral *
                            std::polar(1.0, -2.0 * k * range_m),
-                       range_m, glm::dot(v_obj - pose.velocity_mps, d), ae, id);
+                       range_m, glm::dot(v_obj - pose.velocity_mps, d), arrival_azel(arrival), id);
   return static_cast<std::uint8_t>(light);
 }
 
@@ -558,8 +565,8 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   const glm::dvec3 s = to_radar / range_m, d = -s;
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
-  const AzEl ae = azel_from_direction(antenna_from_world * d);
-  const bool in_view = in_field_of_view(c, pose, d, ae);
+  const glm::dvec3 arrival = antenna_from_world * d;
+  const bool in_view = in_field_of_view(fov_tan_, arrival);
   // A plane wave along the edge: its own far field, as for a facet (facet_in_far_field).
   if (!in_view || !facet_in_far_field(0.5 * w.length_m, range_m, k))
     return kNoTerm;
@@ -589,7 +596,7 @@ std::uint8_t SbrTracer::edge_pass(const RadarPose& pose, std::uint32_t id, std::
   const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
   out = bounce1_return(term.c[channel] * (term.length_m * sinc(k * term.taper_m)) *
                            std::polar(1.0, -2.0 * k * range_m),
-                       range_m, glm::dot(v_obj - pose.velocity_mps, d), ae, id);
+                       range_m, glm::dot(v_obj - pose.velocity_mps, d), arrival_azel(arrival), id);
   return kUsed;
 }
 
@@ -770,6 +777,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
   for (Bundle& b : bundles) {
     b.trace = true;
     b.keep = false;
+    b.still = false;
     b.refreshed = false;
   }
   if (!c.reuse_static_paths)
@@ -780,8 +788,8 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
   for (Bundle& b : bundles) {
     const std::uint32_t id = b.object_id;
     const std::size_t rays = b.n_az * b.n_el;
-    b.keep =
-        kept_region_[id] != kNoRegion && !objects[id].moving && !b.clipped && !mover_near(pose, id);
+    b.still = kept_region_[id] != kNoRegion && !objects[id].moving && !mover_near(pose, id);
+    b.keep = b.still && !b.clipped;
     if (!b.keep)
       continue;
     const Kept& kp = kept_[id];
@@ -789,18 +797,9 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     double fraction = 0.0;
     if (reuse) {
       // The aspect change, against its limit (SbrConfig::reuse_static_paths).
-      glm::dvec3 lo, hi;
-      target_region(objects[id], c.target_ground_image, lo, hi);
-      const glm::dvec3 centre = 0.5 * (lo + hi);
-      const double extent_m = glm::length(hi - lo);
-      const glm::dvec3 now = pose.position_m - centre, then = kp.radar_m - centre;
-      const double dtheta = std::atan2(glm::length(glm::cross(now, then)), glm::dot(now, then));
-      // The spacing at the target: the bundle's angular step at its nearest range.
-      const glm::dvec3 nearest =
-          glm::clamp(pose.position_m, objects[id].bounds_min_m, objects[id].bounds_max_m);
-      const double tube_m = std::min(b.daz_rad, b.del_rad) * glm::length(nearest - pose.position_m);
-      const double limit =
-          std::min(0.5 * tube_m / extent_m, std::sqrt(c.reuse_max_phase_rad / (k * extent_m)));
+      double dtheta = 0.0, limit = 0.0;
+      aspect_change(pose, b, kp.radar_m, dtheta, limit);
+      limit = std::min(limit, std::sqrt(c.reuse_max_phase_rad / (k * target_extent_m(id))));
       // The antenna's turn (its polarisation basis): the largest change of its axes.
       double turn = 0.0;
       for (int a = 0; a < 3; ++a)
@@ -833,6 +832,47 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     pick->trace = true;
     pick->refreshed = true;
     credit -= static_cast<double>(pick->n_az * pick->n_el);
+  }
+}
+
+double SbrTracer::target_extent_m(std::uint32_t id) const noexcept {
+  glm::dvec3 lo, hi;
+  target_region(scene_->objects()[id], config_.target_ground_image, lo, hi);
+  return glm::length(hi - lo);
+}
+
+void SbrTracer::aspect_change(const RadarPose& pose, const Bundle& b, const glm::dvec3& then_m,
+                              double& dtheta_rad, double& limit_rad) const noexcept {
+  const scene::ObjectState& o = scene_->objects()[b.object_id];
+  glm::dvec3 lo, hi;
+  target_region(o, config_.target_ground_image, lo, hi);
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const glm::dvec3 now = pose.position_m - centre, then = then_m - centre;
+  dtheta_rad = std::atan2(glm::length(glm::cross(now, then)), glm::dot(now, then));
+  // The spacing at the target: the bundle's angular step at its nearest range.
+  const glm::dvec3 nearest = glm::clamp(pose.position_m, o.bounds_min_m, o.bounds_max_m);
+  const double tube_m = std::min(b.daz_rad, b.del_rad) * glm::length(nearest - pose.position_m);
+  limit_rad = 0.5 * tube_m / glm::length(hi - lo);
+}
+
+void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
+                            std::span<Bundle> bundles) const noexcept {
+  for (Bundle& b : bundles) {
+    b.memo = kMemoNone;
+    if (facet_memo_.empty() || !b.still)
+      continue;
+    // A bundle traced to keep its paths records its facets' answers with them.
+    b.memo = kMemoRecord;
+    if (b.trace && b.keep)
+      continue;
+    const MemoState& m = memo_state_[b.object_id];
+    if (!m.valid || m.spacing_m != b.spacing_m || m.centroid_only != knobs.facet_centroid_only ||
+        frame_count_ - m.recorded_at >= static_cast<std::uint64_t>(config_.reuse_refresh_frames))
+      continue;
+    double dtheta = 0.0, limit = 0.0;
+    aspect_change(pose, b, m.radar_m, dtheta, limit);
+    if (dtheta <= limit)
+      b.memo = kMemoReplay;
   }
 }
 
@@ -1217,15 +1257,11 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     frame_world_from_body_[bd.object_id] = scene_->world_from_body(bd.object_id);
   const std::size_t n_facets = lay_out_run(bundles_, &Bundle::first_facet, facet_first_);
   std::atomic<std::uint64_t> facet_queries{0};
+  choose_memo(pose, knobs, bundles_);
   auto facet_of = [&](const Bundle& bd, std::size_t t, std::uint64_t& queries) {
     const std::size_t slot = facet_first_[bd.object_id] + t;
-    FacetMemo* record = nullptr;
-    const FacetMemo* replay = nullptr;
-    if (!facet_memo_.empty() && bd.trace && bd.keep)
-      record = &facet_memo_[slot];
-    else if (!facet_memo_.empty() && !bd.trace &&
-             kept_[bd.object_id].facet_centroid_only == knobs.facet_centroid_only)
-      replay = &facet_memo_[slot];
+    FacetMemo* record = bd.memo == kMemoRecord ? &facet_memo_[slot] : nullptr;
+    const FacetMemo* replay = bd.memo == kMemoReplay ? &facet_memo_[slot] : nullptr;
     facet_light_[slot] = facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only, bd.spacing_m,
                                     facet_out_[slot], queries, record, replay);
   };
@@ -1245,6 +1281,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     if (bd.trace || same_facets_by_rays(bd.object_id))
       continue;
     bd.trace = true;
+    bd.memo = kMemoRecord;
     refresh_credit_ = std::max(0.0, refresh_credit_ - static_cast<double>(bd.n_az * bd.n_el));
     std::uint64_t queries = 0;
     for (std::size_t t = 0; t < facet_first_[bd.object_id + 1] - facet_first_[bd.object_id]; ++t)
@@ -1252,6 +1289,11 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     facet_queries += queries;
   }
   count_reuse(bundles_, stats);
+  for (const Bundle& bd : bundles_) {
+    if (bd.memo == kMemoRecord)
+      memo_state_[bd.object_id] = {true, pose.position_m, bd.spacing_m, knobs.facet_centroid_only,
+                                   frame_count_};
+  }
   {
     std::uint64_t n_lit = 0, n_partial = 0;
     for (const Bundle& bd : bundles_) {
@@ -1451,7 +1493,6 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       kp.world_from_antenna = pose.world_from_antenna;
       kp.spacing_m = bd.spacing_m;
       kp.max_bounces = frame.max_bounces;
-      kp.facet_centroid_only = knobs.facet_centroid_only;
       kp.count = m;
       kp.traced_at = frame_count_;
       for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1]; ++f)

@@ -46,6 +46,7 @@
 //   - Every return is labelled with its path's owner (Contribution::object_id), whichever
 //     surface the path last met: radar -> target -> ground -> radar is the target's echo.
 
+#include <array>
 #include <atomic>
 #include <complex>
 #include <cstddef>
@@ -326,6 +327,8 @@ class SbrTracer {
     bool trace = true;
     bool keep = false;
     bool refreshed = false;      ///< traced (static, its kept paths valid) to refresh them
+    bool still = false;          ///< static, no mover near: its facets may keep their answers
+    std::uint8_t memo = 0;       ///< kMemoNone, kMemoRecord or kMemoReplay this frame
     double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
     std::size_t first_kept = 0;
   };
@@ -374,9 +377,8 @@ class SbrTracer {
     glm::dmat3 world_from_antenna{1.0};
     double spacing_m = 0.0;  ///< the bundle's spacing (before coarsening) and bounces then
     int max_bounces = 0;
-    bool facet_centroid_only = false;  ///< TraceKnobs::facet_centroid_only then (facet_memo_)
-    std::size_t count = 0;             ///< kept returns, at the front of its region of kept_paths_
-    std::uint64_t traced_at = 0;       ///< frame_count_ then
+    std::size_t count = 0;        ///< kept returns, at the front of its region of kept_paths_
+    std::uint64_t traced_at = 0;  ///< frame_count_ then
   };
   std::vector<Kept> kept_;
   /// Each static target's region of kept_paths_ (max_rays_per_target x max_bounces slots: the
@@ -388,19 +390,41 @@ class SbrTracer {
   std::vector<std::uint8_t> kept_facet_by_rays_;
   /// Per facet of a static target, with reuse on: the answers of its bounce-1 occlusion queries
   /// (facet_pass: its visibility samples toward the radar, then its sub-triangles', in the
-  /// order asked; bit i set: query i blocked) when its bundle was last traced to keep its
-  /// paths. While the kept paths stand for the rays, the facet pass reads the answers back
-  /// instead of asking the scene again: the same aspect-change rule bounds how far a shadow
-  /// boundary can have moved across the target (at most half a ray tube, D dtheta <= spacing /
-  /// 2), so the facets' light is kept to the rays' own resolution, and the facets' PO integrals,
-  /// phases and angles are still computed for the pose. A query beyond the recorded ones (a
-  /// facet that was turned away then) asks the scene.
+  /// order asked; bit i set: query i blocked), recorded when choose_memo says so. Later frames
+  /// read the answers back instead of asking the scene again while the aspect change since
+  /// bounds how far a shadow boundary can have moved across the target (at most half a ray
+  /// tube, D dtheta <= spacing / 2, as for kept paths), so the facets' light is kept to the
+  /// rays' own resolution; the facets' PO integrals, phases and angles are still computed for
+  /// the pose. This holds whether the target's rays are kept or traced (a target cut by the
+  /// field of view). A query beyond the recorded ones (a facet that was turned away then) asks
+  /// the scene.
   struct FacetMemo {
     static constexpr std::size_t kBits = 320;  ///< >= kFacetSamples + kMaxFacetSubdivisions^2
     std::uint64_t blocked[kBits / 64];
     std::uint16_t count;  ///< answers recorded
   };
   std::vector<FacetMemo> facet_memo_;
+  /// Per object: when and how its facets' answers were recorded.
+  struct MemoState {
+    bool valid = false;
+    glm::dvec3 radar_m{0.0};
+    double spacing_m = 0.0;
+    bool centroid_only = false;
+    std::uint64_t recorded_at = 0;  ///< frame_count_ then
+  };
+  std::vector<MemoState> memo_state_;
+  static constexpr std::uint8_t kMemoNone = 0, kMemoRecord = 1, kMemoReplay = 2;
+  /// Per bundle: whether its facets record their answers this frame (a still target traced to
+  /// keep its paths, or whose answers are out of date) or read them back (recorded at this
+  /// spacing and facet knob, fewer than reuse_refresh_frames frames ago, the aspect changed by
+  /// no more than half a tube across the target since), or neither (a mover, one near).
+  void choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
+                   std::span<Bundle> bundles) const noexcept;
+  /// The change dtheta in the direction from target `b`'s region to the radar since the radar
+  /// was at `then_m`, and the limit that keeps its hit points within half a tube: spacing / 2D.
+  void aspect_change(const RadarPose& pose, const Bundle& b, const glm::dvec3& then_m,
+                     double& dtheta_rad, double& limit_rad) const noexcept;
+  [[nodiscard]] double target_extent_m(std::uint32_t id) const noexcept;  ///< D
   /// Per object, this frame: a kept bundle's path met a moving object (not kept then).
   std::unique_ptr<std::atomic<std::uint8_t>[]> met_mover_;
   std::vector<std::uint32_t> movers_;  ///< the scene's moving objects
@@ -432,6 +456,8 @@ class SbrTracer {
   std::vector<std::int8_t> facet_outward_;
   std::vector<std::uint8_t> facet_light_;
   std::vector<Contribution> facet_out_;
+  /// tan of the field of view's limits: azimuth min, max, elevation min, max (setup).
+  std::array<double, 4> fov_tan_{};
   std::vector<glm::dmat4> frame_world_from_body_;  ///< per object, this frame (bundled targets)
   /// Bounce 1 of triangle `t` of target `id` for a radar at `pose` (header): its light, and
   /// its contribution in `out` when lit or partly lit. Adds its occlusion queries to `queries`.
