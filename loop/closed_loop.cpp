@@ -387,10 +387,12 @@ struct Frame {
   radar::RadarPose pose{};
   bool valid = false;                          ///< a fresh ownship state (or the caller's)
   const GovernorDecision* decision = nullptr;  ///< null: nothing traced
-  std::uint64_t rays_before = 0, cells_before = 0, truncated_before = 0;
+  std::uint64_t rays_before = 0, cells_before = 0, truncated_before = 0, merged_before = 0;
   std::uint64_t terrain_patches = 0, terrain_returns = 0;  ///< the engine's, this frame
   std::uint64_t terrain_facets = 0;                        ///< the facets cut into its patches
   std::uint64_t kept_returns = 0, cells_synthesised = 0;   ///< this frame's (FrameRecord)
+  std::uint64_t target_facets = 0;                         ///< this frame's (FrameRecord)
+  std::uint64_t merged_returns = 0;                        ///< this frame's (FrameRecord)
   std::size_t contributions = 0, detections = 0, truth = 0;
   FrameRecord record{};
 };
@@ -551,7 +553,7 @@ struct ClosedLoop::Impl {
     sensor.sensor.set_noise_frame(noise_frame);
     const double untimed = std::numeric_limits<double>::quiet_NaN();
     governor.observe(untimed, untimed, tracer.primed_rays, n, ss.cells_synthesised, patches,
-                     terrain_returns, facets);
+                     terrain_returns, facets, ss.merged_returns);
   }
 
   // ---- the frame's stages (ClosedLoop::step), each timed but wait_or_stop ----
@@ -678,6 +680,7 @@ void ClosedLoop::Impl::trace(Frame& f) {
   RunResult& r = rs.r;
   f.rays_before = r.trace.rays + r.trace.reused_rays;
   const std::uint64_t kept_before = r.trace.reused_contributions;
+  const std::uint64_t target_facets_before = r.trace.target_facets;
   f.cells_before = r.sensor.cells_synthesised;
   timing::ScopedStage stage(accounting.profiler, rs.wall, timing::Stage::kTrace);
   if (f.valid) {
@@ -715,6 +718,7 @@ void ClosedLoop::Impl::trace(Frame& f) {
     }
   }
   f.kept_returns = r.trace.reused_contributions - kept_before;
+  f.target_facets = r.trace.target_facets - target_facets_before;
   // [weather]: every return loses the two-way attenuation of its path (diffuse ones too).
   radar::apply_two_way_loss(std::span(tracer.contributions.data(), f.contributions),
                             tracer.weather.total_db_per_m);
@@ -725,6 +729,7 @@ void ClosedLoop::Impl::sense(Frame& f) {
   RunState& rs = accounting.run();
   RunResult& r = rs.r;
   f.truncated_before = r.sensor.truncated;
+  f.merged_before = r.sensor.merged_returns;
   {
     timing::ScopedStage stage(accounting.profiler, rs.wall, timing::Stage::kSensor);
     if (f.valid) {
@@ -736,11 +741,12 @@ void ClosedLoop::Impl::sense(Frame& f) {
   if (f.valid) {
     const timing::StageProfiler& p = accounting.profiler;
     f.cells_synthesised = r.sensor.cells_synthesised - f.cells_before;
+    f.merged_returns = r.sensor.merged_returns - f.merged_before;
     governor.observe(static_cast<double>(p.last_ns(timing::Stage::kTrace)) * 1e-6,
                      static_cast<double>(p.last_ns(timing::Stage::kSensor)) * 1e-6,
                      r.trace.rays + r.trace.reused_rays - f.rays_before, f.contributions,
                      r.sensor.cells_synthesised - f.cells_before, f.terrain_patches,
-                     f.terrain_returns, f.terrain_facets);
+                     f.terrain_returns, f.terrain_facets, f.merged_returns);
     ++r.governor.level_frames[static_cast<std::size_t>(d->level)];
     r.governor.frames_degraded += d->degraded ? 1 : 0;
     r.governor.frames_predicted_late += d->over_deadline ? 1 : 0;
@@ -816,6 +822,9 @@ void ClosedLoop::Impl::send(Frame& f) {
   rec.cells_synthesised = f.cells_synthesised;
   rec.terrain_patches = f.terrain_patches;
   rec.terrain_facets = f.terrain_facets;
+  rec.target_facets = f.target_facets;
+  rec.terrain_returns = f.valid ? f.terrain_returns : 0;
+  rec.merged_returns = f.merged_returns;
 }
 
 ClosedLoop::ClosedLoop(const Scenario& scenario, const RunOptions& options)

@@ -50,6 +50,9 @@ struct FrameRecord {
   std::uint64_t cells_synthesised = 0;  ///< image cells the sensor synthesised
   std::uint64_t terrain_patches = 0;    ///< the terrain engine's patches
   std::uint64_t terrain_facets = 0;     ///< the facets it cut into them
+  std::uint64_t target_facets = 0;      ///< the bundled targets' facets (the facet pass)
+  std::uint64_t terrain_returns = 0;    ///< of `returns`, the terrain engine's
+  std::uint64_t merged_returns = 0;     ///< returns the sensor summed into another
 };
 
 /// What the streamed outputs (emulator/output_stream.hpp) wrote and lost.

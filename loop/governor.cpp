@@ -47,12 +47,20 @@ FidelityGovernor::FidelityGovernor(const GovernorConfig& config, const scene::Sc
           "trace_ns_per_ray", "must be > 0");
   require(std::isfinite(config.trace_ms_per_frame) && config.trace_ms_per_frame >= 0.0,
           "trace_ms_per_frame", "must be >= 0");
+  require(std::isfinite(config.trace_ns_per_facet) && config.trace_ns_per_facet >= 0.0,
+          "trace_ns_per_facet", "must be >= 0");
   require(std::isfinite(config.trace_ns_per_kept_return) && config.trace_ns_per_kept_return >= 0.0,
           "trace_ns_per_kept_return", "must be >= 0");
   require(std::isfinite(config.sensor_ns_per_cell) && config.sensor_ns_per_cell >= 0.0,
           "sensor_ns_per_cell", "must be >= 0");
   require(std::isfinite(config.sensor_ns_per_return) && config.sensor_ns_per_return >= 0.0,
           "sensor_ns_per_return", "must be >= 0");
+  require(std::isfinite(config.sensor_ns_per_unmerged_return) &&
+              config.sensor_ns_per_unmerged_return >= 0.0,
+          "sensor_ns_per_unmerged_return", "must be >= 0");
+  require(std::isfinite(config.sensor_ns_per_terrain_return) &&
+              config.sensor_ns_per_terrain_return >= 0.0,
+          "sensor_ns_per_terrain_return", "must be >= 0");
   require(std::isfinite(config.terrain_ns_per_patch) && config.terrain_ns_per_patch >= 0.0,
           "terrain_ns_per_patch", "must be >= 0");
   require(config.max_level >= 0 && config.max_level <= kMaxLevel, "max_level", "must be in 0..16");
@@ -107,7 +115,8 @@ double FidelityGovernor::model_trace_ms(const radar::TracePlan& plan) const noex
                         prev_terrain_facet_ratio_;
   const double patches = std::max(facets, prev_terrain_patches_ * s * s);
   return config_.trace_ms_per_frame +
-         1e-6 * (config_.trace_ns_per_ray * static_cast<double>(plan.rays()) +
+         1e-6 * (config_.trace_ns_per_facet * static_cast<double>(plan.target_facets) +
+                 config_.trace_ns_per_ray * static_cast<double>(plan.rays()) +
                  config_.trace_ns_per_kept_return * static_cast<double>(plan.reused_contributions) +
                  config_.terrain_ns_per_patch * patches);
 }
@@ -140,9 +149,11 @@ double FidelityGovernor::model_sensor_ms(const radar::TracePlan& plan) const noe
       static_cast<double>(radar::TerrainReturns::cell_merge(decision_.knobs.terrain_spacing_scale,
                                                             terrain_.azimuth_merge_max)
                               .cells());
-  const double returns = (prev_rays_ > 0.0 ? ray_returns * rays / prev_rays_ : 0.0) +
-                         prev_terrain_returns_ * prev_terrain_merge_ / merge;
-  return 1e-6 * (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns);
+  const double returns = prev_rays_ > 0.0 ? ray_returns * rays / prev_rays_ : 0.0;
+  const double terrain_returns = prev_terrain_returns_ * prev_terrain_merge_ / merge;
+  return 1e-6 * (config_.sensor_ns_per_cell * prev_cells_ + config_.sensor_ns_per_return * returns +
+                 config_.sensor_ns_per_unmerged_return * returns * prev_unmerged_fraction_ +
+                 config_.sensor_ns_per_terrain_return * terrain_returns);
 }
 
 double FidelityGovernor::predict_ms(const radar::TracePlan& plan) const noexcept {
@@ -234,6 +245,7 @@ void FidelityGovernor::knobs_for(int level) noexcept {
   k.max_bounces =
       level >= kBounceLevel ? std::max(std::min(2, c.max_bounces), c.max_bounces - 1) : 0;
   k.facet_centroid_only = level >= kFacetLevel;
+  k.defer_refresh = false;
 }
 
 const GovernorDecision& FidelityGovernor::decide(const radar::RadarPose& pose) noexcept {
@@ -285,15 +297,36 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
   // The finest level that fits (the cost falls with the level: one plan per level tried).
   std::array<double, kMaxLevel + 1> predicted_at{};
   std::array<radar::TracePlan, kMaxLevel + 1> plan_at{};
-  predicted_at[static_cast<std::size_t>(level)] = predicted;
-  plan_at[static_cast<std::size_t>(level)] = plan;
+  std::array<bool, kMaxLevel + 1> deferred_at{};
+  // Over the deadline, a level first defers the refresh of kept paths (TraceKnobs): the same
+  // fidelity, the kept paths a frame older.
+  auto defer_if_late = [&] {
+    if (predicted <= deadline_ms_ || !config_.enabled || !tracer_->config().reuse_static_paths)
+      return;
+    d.knobs.defer_refresh = true;
+    const radar::TracePlan deferred = tracer_->plan(pose, d.knobs);
+    const double p = predict_ms(deferred);
+    if (p < predicted) {
+      plan = deferred;
+      predicted = p;
+    } else {
+      d.knobs.defer_refresh = false;
+    }
+  };
+  auto remember = [&] {
+    predicted_at[static_cast<std::size_t>(level)] = predicted;
+    plan_at[static_cast<std::size_t>(level)] = plan;
+    deferred_at[static_cast<std::size_t>(level)] = d.knobs.defer_refresh;
+  };
+  defer_if_late();
+  remember();
   while (predicted > deadline_ms_ && level < max_level) {
     ++level;
     knobs_for(level);
     plan = tracer_->plan(pose, d.knobs);
     predicted = predict_ms(plan);
-    predicted_at[static_cast<std::size_t>(level)] = predicted;
-    plan_at[static_cast<std::size_t>(level)] = plan;
+    defer_if_late();
+    remember();
   }
   if (predicted > deadline_ms_) {
     // Nothing fits: the part of the cost the levels do not reach (the sensor's cells) is over
@@ -302,6 +335,7 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
     while (level > min_level && predicted_at[static_cast<std::size_t>(level - 1)] <= enough)
       --level;
     knobs_for(level);
+    d.knobs.defer_refresh = deferred_at[static_cast<std::size_t>(level)];
     predicted = predicted_at[static_cast<std::size_t>(level)];
     plan = plan_at[static_cast<std::size_t>(level)];
   } else if (level > min_level && tracer_->config().reuse_static_paths) {
@@ -326,7 +360,8 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
 void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t rays,
                                std::uint64_t returns, std::uint64_t cells_synthesised,
                                std::uint64_t terrain_patches, std::uint64_t terrain_returns,
-                               std::uint64_t terrain_facets) noexcept {
+                               std::uint64_t terrain_facets,
+                               std::uint64_t merged_returns) noexcept {
   if (config_.mode == GovernorConfig::Mode::kMeasured) {
     // Factors of measured over modelled cost: up at once, down by an exponential average (a
     // tenth a frame), bounded so one odd frame cannot stall the governor.
@@ -349,6 +384,11 @@ void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t 
       radar::TerrainReturns::cell_merge(prev_terrain_scale_, terrain_.azimuth_merge_max).cells());
   prev_terrain_facet_ratio_ = terrain_facet_ratio_at(prev_terrain_scale_);
   prev_terrain_returns_ = static_cast<double>(std::min(terrain_returns, returns));
+  const double ray_returns = static_cast<double>(returns) - prev_terrain_returns_;
+  prev_unmerged_fraction_ =
+      ray_returns > 0.0
+          ? std::clamp(1.0 - static_cast<double>(merged_returns) / ray_returns, 0.0, 1.0)
+          : 1.0;
 }
 
 }  // namespace radar_emu::loop

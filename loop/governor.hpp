@@ -26,6 +26,7 @@
 // Cost model. predicted = trace + sensor, with
 //   trace  = trace_ms_per_frame (what a frame costs whatever its level: the bundles' facet pass
 //            and edges, the passes' set-up)
+//          + trace_ns_per_facet x the bundled targets' facets (their bounce-1 facet pass)
 //          + trace_ns_per_ray x rays planned (SbrTracer::plan(): exact count, no tracing)
 //          + trace_ns_per_kept_return x the kept returns it re-evaluates instead
 //            ([radar] reuse_static_paths: SbrTracer::plan() counts them too)
@@ -36,8 +37,11 @@
 //            the facets of the level of detail the engine took then and takes at this level
 //            (1, or lod_facet_ratio from its coarse level on: radar::TerrainCoarsening)
 //   sensor = sensor_ns_per_cell x cells synthesised by the previous frame
-//          + sensor_ns_per_return x (the previous frame's ray returns x (rays / its rays)
-//                                    + T x m' / m)
+//          + sensor_ns_per_return x R, R = the previous frame's ray returns x (rays / its rays)
+//          + sensor_ns_per_unmerged_return x R x (1 - the fraction of its ray returns the
+//            sensor merged into another: Sensor's merge_step_bins; a return left alone is
+//            synthesised in every beam it reaches, a merged one only summed)
+//          + sensor_ns_per_terrain_return x T x m' / m
 //            (rays: traced and kept alike, each stands for its returns)
 //            T the engine's returns (lit cells) of the previous frame, m' and m the cells its
 //            coarse cells merged then and at this level (radar::TerrainReturns::cell_merge:
@@ -85,6 +89,8 @@
 
 namespace radar_emu::loop {
 
+// The defaults are the embedded scenario's (loop/scenario.cpp: fitted on the project's 2-core
+// machine by scripts/fit-governor-costs.py).
 struct GovernorConfig {
   bool enabled = true;  ///< false: every frame at level 0, whatever it costs
   /// Deadline of a frame's computation (trace + sensor) as a fraction of the frame period (half:
@@ -95,15 +101,20 @@ struct GovernorConfig {
   /// stage times; kAuto: kMeasured with --realtime, kModel otherwise (the loop resolves it).
   enum class Mode { kAuto, kModel, kMeasured } mode = Mode::kAuto;
   /// Wall time of a frame's tracing at any level (facet pass, edges, set-up) [ms].
-  double trace_ms_per_frame = 0.0;
-  double trace_ns_per_ray = 180.0;  ///< wall time of the frame's tracing per ray [ns]
+  double trace_ms_per_frame = 1.5;
+  double trace_ns_per_facet = 345.0;  ///< per facet of the bundled targets (facet pass) [ns]
+  double trace_ns_per_ray = 216.0;    ///< wall time of the frame's tracing per ray [ns]
   /// Wall time per kept return re-evaluated instead of traced ([radar] reuse_static_paths) [ns].
-  double trace_ns_per_kept_return = 35.0;
-  double sensor_ns_per_cell = 18.0;     ///< sensor wall time per cell synthesised [ns]
-  double sensor_ns_per_return = 110.0;  ///< sensor wall time per return (contribution) [ns]
+  double trace_ns_per_kept_return = 91.0;
+  double sensor_ns_per_cell = 12.5;     ///< sensor wall time per cell synthesised [ns]
+  double sensor_ns_per_return = 107.0;  ///< sensor wall time per ray return (contribution) [ns]
+  /// Per ray return the sensor does not merge into another (synthesised in its beams) [ns].
+  double sensor_ns_per_unmerged_return = 0.0;
+  /// Per return of the terrain engine (a diffuse cell: its footprint over the taps) [ns].
+  double sensor_ns_per_terrain_return = 0.0;
   /// Wall time of the terrain engine ([radar] terrain = "engine") per patch it evaluates [ns]
   /// (its horizon sweep and queries included).
-  double terrain_ns_per_patch = 110.0;
+  double terrain_ns_per_patch = 0.0;
   int max_level = 12;  ///< coarsest level allowed (0..kMaxLevel)
 };
 
@@ -153,7 +164,8 @@ class FidelityGovernor {
   /// factors learn nothing from it.
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,
                std::uint64_t cells_synthesised, std::uint64_t terrain_patches = 0,
-               std::uint64_t terrain_returns = 0, std::uint64_t terrain_facets = 0) noexcept;
+               std::uint64_t terrain_returns = 0, std::uint64_t terrain_facets = 0,
+               std::uint64_t merged_returns = 0) noexcept;
   /// Setup: what the terrain engine coarsens with the level (radar::TerrainReturns::
   /// coarsening(); until set: no columns merged, no coarse level of detail), for its cost.
   void set_terrain_cells(const radar::TerrainCoarsening& c) noexcept {
@@ -207,7 +219,8 @@ class FidelityGovernor {
   // The previous frame, for the sensor term.
   double prev_cells_ = 0.0, prev_returns_ = 0.0, prev_rays_ = 0.0;
   double prev_terrain_patches_ = 0.0, prev_terrain_returns_ = 0.0;
-  double prev_terrain_scale_ = 1.0;  ///< the engine's patch scale of the previous frame
+  double prev_unmerged_fraction_ = 1.0;  ///< of the previous frame's ray returns
+  double prev_terrain_scale_ = 1.0;      ///< the engine's patch scale of the previous frame
   double prev_terrain_facets_ = 0.0;
   double prev_terrain_merge_ = 1.0;        ///< cells merged by the engine in the previous frame
   double prev_terrain_facet_ratio_ = 1.0;  ///< its level of detail's terrain_facet_ratio

@@ -159,12 +159,21 @@ babble_end_s = 0.0            # 0: until the end
 enabled = true
 compute_fraction = 0.5      # the rest of the period absorbs the cost model's error and jitter
 mode = "auto"               # auto (measured with --realtime, else model) | model | measured
-trace_ms_per_frame = 0.0    # cost model, measured on the project's 2-core machine
-trace_ns_per_ray = 180.0    # (scripts/fit-governor-costs.py fits it to another)
-trace_ns_per_kept_return = 35.0 # a kept path re-evaluated ([radar] reuse_static_paths)
-sensor_ns_per_cell = 18.0
-sensor_ns_per_return = 110.0
-terrain_ns_per_patch = 110.0 # the terrain engine ([radar] terrain = "engine"), per patch
+# The cost model, fitted on the project's 2-core machine (scripts/fit-governor-costs.py fits it
+# to another): wall time of the trace per frame, per facet of the targets in view (their
+# bounce-1 facet pass), per ray traced, per kept path re-evaluated ([radar] reuse_static_paths)
+# and per terrain-engine patch (0 here: the engine runs beside the tracer, in the time its
+# passes leave a core idle); of the sensor per cell synthesised, per return of the rays, more
+# per such return it does not merge into another, and per return of the terrain engine.
+trace_ms_per_frame = 1.5
+trace_ns_per_facet = 345.0
+trace_ns_per_ray = 216.0
+trace_ns_per_kept_return = 91.0
+terrain_ns_per_patch = 0.0
+sensor_ns_per_cell = 12.5
+sensor_ns_per_return = 107.0
+sensor_ns_per_unmerged_return = 0.0
+sensor_ns_per_terrain_return = 0.0
 max_level = 12              # coarsest: target rays / 64, terrain grid spacing x 8
 
 # [weather]                   # no table: free space. With one, every return loses the two-way
@@ -236,9 +245,10 @@ void apply_weather(Scenario& s, const Table& root) {
 void apply_governor(Scenario& s, const Table& root) {
   GovernorConfig& g = s.governor;
   const Table t = root.table("governor");
-  t.refuse_unknown({"enabled", "compute_fraction", "mode", "trace_ms_per_frame", "trace_ns_per_ray",
-                    "trace_ns_per_kept_return", "sensor_ns_per_cell", "sensor_ns_per_return",
-                    "terrain_ns_per_patch", "max_level"});
+  t.refuse_unknown({"enabled", "compute_fraction", "mode", "trace_ms_per_frame",
+                    "trace_ns_per_facet", "trace_ns_per_ray", "trace_ns_per_kept_return",
+                    "sensor_ns_per_cell", "sensor_ns_per_return", "sensor_ns_per_unmerged_return",
+                    "sensor_ns_per_terrain_return", "terrain_ns_per_patch", "max_level"});
   t.boolean("enabled", g.enabled);
   t.number("compute_fraction", g.compute_fraction, {0.01, 1.0});
   std::string mode;
@@ -251,9 +261,12 @@ void apply_governor(Scenario& s, const Table& root) {
     g.mode = GovernorConfig::Mode::kMeasured;
   t.number("trace_ns_per_ray", g.trace_ns_per_ray, {1e-3, 1e6});
   t.number("trace_ms_per_frame", g.trace_ms_per_frame, {0.0, 1e6});
+  t.number("trace_ns_per_facet", g.trace_ns_per_facet, {0.0, 1e6});
   t.number("trace_ns_per_kept_return", g.trace_ns_per_kept_return, {0.0, 1e6});
   t.number("sensor_ns_per_cell", g.sensor_ns_per_cell, {0.0, 1e6});
   t.number("sensor_ns_per_return", g.sensor_ns_per_return, {0.0, 1e6});
+  t.number("sensor_ns_per_unmerged_return", g.sensor_ns_per_unmerged_return, {0.0, 1e6});
+  t.number("sensor_ns_per_terrain_return", g.sensor_ns_per_terrain_return, {0.0, 1e6});
   t.number("terrain_ns_per_patch", g.terrain_ns_per_patch, {0.0, 1e6});
   t.integer("max_level", g.max_level, 0, FidelityGovernor::kMaxLevel);
 }

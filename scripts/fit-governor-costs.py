@@ -10,10 +10,13 @@ same with [radar] reuse_static_paths = false (every ray traced), and one held at
 level ([governor] max_level = 4 with compute_fraction = 0.01). Frame 0 of each run is left out
 (its caches are cold). The model, per frame:
 
-  trace  = trace_ms_per_frame + trace_ns_per_ray x rays traced
+  trace  = trace_ms_per_frame + trace_ns_per_facet x the targets' facets (facet pass)
+           + trace_ns_per_ray x rays traced
            + trace_ns_per_kept_return x kept returns
            + terrain_ns_per_patch x max(terrain patches, terrain facets) (the governor's count)
-  sensor = sensor_ns_per_cell x cells synthesised + sensor_ns_per_return x returns
+  sensor = sensor_ns_per_cell x cells synthesised + sensor_ns_per_return x the rays' returns
+           + sensor_ns_per_unmerged_return x those the sensor did not merge into another
+           + sensor_ns_per_terrain_return x the terrain engine's returns
 
 fitted by least squares with non-negative coefficients (numpy.linalg.lstsq, a coefficient that
 comes out negative is set to 0 and the rest fitted again). Prints the [governor] lines to paste,
@@ -27,23 +30,27 @@ import sys
 import numpy as np
 
 # "frame": the constant; "terrain": max(terrain_patches, terrain_facets)
-TRACE_TERMS = ["frame", "rays", "kept_returns", "terrain"]
-TRACE_KEYS = ["trace_ms_per_frame", "trace_ns_per_ray", "trace_ns_per_kept_return",
+TRACE_TERMS = ["frame", "target_facets", "rays", "kept_returns", "terrain"]
+TRACE_KEYS = ["trace_ms_per_frame", "trace_ns_per_facet", "trace_ns_per_ray", "trace_ns_per_kept_return",
               "terrain_ns_per_patch"]
-SENSOR_TERMS = ["cells_synthesised", "returns"]
-SENSOR_KEYS = ["sensor_ns_per_cell", "sensor_ns_per_return"]
+SENSOR_TERMS = ["cells_synthesised", "ray_returns", "unmerged_returns", "terrain_returns"]
+SENSOR_KEYS = ["sensor_ns_per_cell", "sensor_ns_per_return", "sensor_ns_per_unmerged_return",
+               "sensor_ns_per_terrain_return"]
 
 
 def load(run_dir):
     path = os.path.join(run_dir, "frames.csv")
     with open(path, newline="") as f:
         rows = [r for r in csv.DictReader(f) if r["ownship_valid"] == "1"]
-    needed = ["rays", "kept_returns", "terrain_patches", "terrain_facets"] + SENSOR_TERMS
+    needed = ["target_facets", "rays", "kept_returns", "terrain_patches", "terrain_facets"]
+    needed += ["cells_synthesised", "returns", "terrain_returns", "merged_returns"]
     missing = [k for k in needed if rows and k not in rows[0]]
     if missing:
         sys.exit(f"{path}: no column {missing[0]} (a frames.csv from an older radar-emu?)")
     for r in rows:
         r["terrain"] = max(float(r["terrain_patches"]), float(r["terrain_facets"]))
+        r["ray_returns"] = float(r["returns"]) - float(r["terrain_returns"])
+        r["unmerged_returns"] = r["ray_returns"] - float(r["merged_returns"])
     return rows[1:]
 
 

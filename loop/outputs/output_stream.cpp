@@ -229,7 +229,8 @@ OutputStream::OutputStream(OutputStreamConfig config)
       "input_ms,scene_update_ms,trace_ms,sensor_ms,output_ms,frame_ms,wake_latency_ms,"
       "governor_level,governor_predicted_ms,governor_estimated_snr_error_db,rays,"
       "governor_predicted_trace_ms,governor_predicted_sensor_ms,kept_returns,returns,"
-      "cells_synthesised,terrain_patches,terrain_facets\n");
+      "cells_synthesised,terrain_patches,terrain_facets,target_facets,terrain_returns,"
+      "merged_returns\n");
   writer_ = std::thread([this] { writer_main(); });
 }
 
@@ -536,8 +537,9 @@ void OutputStream::write_frames_csv(const FrameEntry& e) noexcept {
   c.put_fixed(rec.governor_predicted_trace_ms, 3);
   c.put(',');
   c.put_fixed(rec.governor_predicted_sensor_ms, 3);
-  for (std::uint64_t v : {rec.kept_returns, rec.returns, rec.cells_synthesised, rec.terrain_patches,
-                          rec.terrain_facets}) {
+  for (std::uint64_t v :
+       {rec.kept_returns, rec.returns, rec.cells_synthesised, rec.terrain_patches,
+        rec.terrain_facets, rec.target_facets, rec.terrain_returns, rec.merged_returns}) {
     c.put(',');
     c.put_uint(v);
   }

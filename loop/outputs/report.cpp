@@ -289,11 +289,14 @@ void add_governor(const RunReport& p, Json& rep) {
       {"compute_fraction", g.compute_fraction},
       {"cost_model",
        {{"trace_ms_per_frame", g.trace_ms_per_frame},
+        {"trace_ns_per_facet", g.trace_ns_per_facet},
         {"trace_ns_per_ray", g.trace_ns_per_ray},
         {"trace_ns_per_kept_return", g.trace_ns_per_kept_return},
         {"terrain_ns_per_patch", g.terrain_ns_per_patch},
         {"sensor_ns_per_cell", g.sensor_ns_per_cell},
         {"sensor_ns_per_return", g.sensor_ns_per_return},
+        {"sensor_ns_per_unmerged_return", g.sensor_ns_per_unmerged_return},
+        {"sensor_ns_per_terrain_return", g.sensor_ns_per_terrain_return},
         {"final_trace_factor", p.governor_trace_factor},
         {"final_sensor_factor", p.governor_sensor_factor}}},
       {"max_level", g.max_level},
@@ -388,6 +391,7 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"grazing_skipped", r.trace.grazing_skipped},
                   {"dielectric_reflections", r.trace.dielectric_reflections},
                   {"pruned_paths", r.trace.pruned_paths},
+                  {"target_facets", r.trace.target_facets},
                   {"lit_facets", r.trace.lit_facets},
                   {"partial_facets", r.trace.partial_facets},
                   {"facet_queries", r.trace.facet_queries},
@@ -402,7 +406,8 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"reused_contributions", r.trace.reused_contributions},
                   {"refreshed_bundles", r.trace.refreshed_bundles},
                   {"reuse_max_angle_fraction", r.trace.reuse_max_angle_fraction},
-                  {"reuse_max_age_frames", r.trace.reuse_max_age_frames}};
+                  {"reuse_max_age_frames", r.trace.reuse_max_age_frames},
+                  {"refresh_deferred_frames", r.trace.refresh_deferred}};
   rep["terrain"] = {{"source", s.terrain_engine ? "engine" : "rays"},
                     {"facets_considered", r.terrain.facets_considered},
                     {"patches", r.terrain.patches},
@@ -616,6 +621,12 @@ void print_reuse_line(const RunReport& p, std::FILE* out) {
                100.0 * static_cast<double>(t.reused_rays) / all,
                static_cast<ull>(t.reuse_max_age_frames), t.reuse_max_angle_fraction,
                p.scenario->sbr.reuse_max_phase_rad * 180.0 / std::numbers::pi);
+  if (t.refresh_deferred > 0) {
+    std::fprintf(out,
+                 "              the refresh of kept paths waited in %llu frames (the governor's "
+                 "resort before a coarser level)\n",
+                 static_cast<ull>(t.refresh_deferred));
+  }
 }
 
 // The outcome per target: one row per object that was in the beam, then the false alarms.

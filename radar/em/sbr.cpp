@@ -772,7 +772,7 @@ bool SbrTracer::mover_near(const RadarPose& pose, std::uint32_t id) const noexce
 }
 
 void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<Bundle> bundles,
-                             double& credit) const noexcept {
+                             double& credit, bool defer_refresh) const noexcept {
   const SbrConfig& c = config_;
   for (Bundle& b : bundles) {
     b.trace = true;
@@ -818,6 +818,18 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
   // The refresh: a credit of 1 / reuse_refresh_frames of the kept rays a frame, less the rays
   // of static bundles traced anyway, pays for tracing again the longest kept bundle (then the
   // lowest id) once it covers its rays, so each is traced about every reuse_refresh_frames.
+  // TraceKnobs::defer_refresh: none this frame, and the credit waits as it is; but not past
+  // twice the refresh's period (the oldest kept bundle's age), so the paths stay about as fresh
+  // as the refresh keeps them.
+  if (defer_refresh) {
+    std::uint64_t oldest = 0;
+    for (const Bundle& b : bundles) {
+      if (!b.trace)
+        oldest = std::max(oldest, frame_count_ - kept_[b.object_id].traced_at);
+    }
+    if (oldest < 2 * static_cast<std::uint64_t>(c.reuse_refresh_frames))
+      return;
+  }
   credit += static_cast<double>(kept_rays) / static_cast<double>(c.reuse_refresh_frames);
   credit = std::max(0.0, credit - static_cast<double>(forced_rays));
   for (;;) {
@@ -1195,11 +1207,12 @@ TracePlan SbrTracer::plan(const RadarPose& pose, const TraceKnobs& knobs,
       b.spacing_m = spacing_m;
       plan_bundles_.push_back(b);  // within the capacity reserved at setup
       ++p.target_bundles;
+      p.target_facets += facet_first_[id + 1] - facet_first_[id];
       p.coarsened_bundles += coarsened ? 1 : 0;
     }
   }
   double credit = refresh_credit_;
-  choose_reuse(pose, f.max_bounces, plan_bundles_, credit);
+  choose_reuse(pose, f.max_bounces, plan_bundles_, credit, knobs.defer_refresh);
   for (const Bundle& b : plan_bundles_) {
     const std::size_t rays = b.n_az * b.n_el;
     if (!b.trace) {
@@ -1250,12 +1263,14 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // Static path reuse: which bundles shoot their rays this frame (the others' kept paths are
   // re-evaluated below), before the facet pass, whose kept bundles read their facets' occlusion
   // answers back (FacetMemo).
-  choose_reuse(pose, frame.max_bounces, bundles_, refresh_credit_);
+  choose_reuse(pose, frame.max_bounces, bundles_, refresh_credit_, knobs.defer_refresh);
+  stats.refresh_deferred += knobs.defer_refresh && c.reuse_static_paths ? 1u : 0u;
   // Bounce 1 of every facet of the bundled targets (header), before the rays that read it: one
   // parallel loop over all their facets (bundle b's run from its first_facet).
   for (const Bundle& bd : bundles_)
     frame_world_from_body_[bd.object_id] = scene_->world_from_body(bd.object_id);
   const std::size_t n_facets = lay_out_run(bundles_, &Bundle::first_facet, facet_first_);
+  stats.target_facets += n_facets;
   std::atomic<std::uint64_t> facet_queries{0};
   choose_memo(pose, knobs, bundles_);
   auto facet_of = [&](const Bundle& bd, std::size_t t, std::uint64_t& queries) {

@@ -166,6 +166,11 @@ struct TraceKnobs {
   /// Bounce 1 judges each facet by one visibility sample (its centroid) instead of seven: a
   /// seventh of the occlusion queries, no partly lit facets (a facet is lit or dark whole).
   bool facet_centroid_only = false;
+  /// Static path reuse: no bundle is traced again for the refresh alone this frame, and the
+  /// refresh's credit waits (the governor's resort before a coarser level when the refresh
+  /// would take the frame past its deadline; the reuse rule's own retraces still happen), as
+  /// long as no kept bundle is 2 x reuse_refresh_frames frames old.
+  bool defer_refresh = false;
 };
 
 /// What trace() would shoot for a pose and knobs (plan()).
@@ -178,7 +183,8 @@ struct TracePlan {
   /// target_rays), and their kept returns.
   std::size_t reused_rays = 0;
   std::size_t reused_contributions = 0;
-  int max_bounces = 0;  ///< hits per ray the knobs give
+  std::size_t target_facets = 0;  ///< facets of the bundled targets (the facet pass's work)
+  int max_bounces = 0;            ///< hits per ray the knobs give
   [[nodiscard]] std::size_t rays() const noexcept { return terrain_rays + target_rays; }
 };
 
@@ -232,6 +238,7 @@ struct TraceStats {
   /// Rays ended before a target because their next segment could reach no countable target
   /// (header: ownership).
   std::uint64_t pruned_paths = 0;
+  std::uint64_t target_facets = 0;   ///< facets of the bundled targets (the facet pass)
   std::uint64_t lit_facets = 0;      ///< facets returned whole by exact PO (bounce 1, header)
   std::uint64_t partial_facets = 0;  ///< partly lit facets returned by their lit sub-triangles
   std::uint64_t facet_queries = 0;   ///< occlusion queries of the bounce-1 rule and the edges
@@ -252,6 +259,7 @@ struct TraceStats {
   std::uint64_t reused_rays = 0;
   std::uint64_t reused_contributions = 0;
   std::uint64_t refreshed_bundles = 0;
+  std::uint64_t refresh_deferred = 0;  ///< frames whose refresh waited (TraceKnobs)
   double reuse_max_angle_fraction = 0.0;
   std::uint64_t reuse_max_age_frames = 0;
 };
@@ -352,7 +360,7 @@ class SbrTracer {
   /// when the paths were kept, needs this frame's facet pass: trace() checks it after
   /// (same_facets_by_rays); plan() cannot know it.
   void choose_reuse(const RadarPose& pose, int max_bounces, std::span<Bundle> bundles,
-                    double& credit) const noexcept;
+                    double& credit, bool defer_refresh) const noexcept;
   /// Whether target `id`'s facets left to the rays this frame (facet_light_) are those of when
   /// its paths were kept.
   [[nodiscard]] bool same_facets_by_rays(std::uint32_t id) const noexcept;

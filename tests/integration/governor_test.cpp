@@ -176,6 +176,8 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
   loop::GovernorConfig g = f.s.governor;
   g.mode = loop::GovernorConfig::Mode::kMeasured;
   g.max_level = loop::FidelityGovernor::kMaxLevel;
+  g.trace_ms_per_frame = 0.0;  // the trace's model: its rays alone (model_trace_ms below)
+  g.trace_ns_per_facet = 0.0;
   // Nothing is traced here: without static path reuse every level is one for all targets.
   radar::SbrConfig every_ray = f.s.sbr;
   every_ray.reuse_static_paths = false;
@@ -213,12 +215,14 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
 
 TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   // [radar] terrain = "engine": the engine's time (terrain_ns_per_patch x its patches) and its
-  // returns (sensor_ns_per_return each, not scaled with the rays) join the prediction at every
-  // level, by the closed form of the cost model (loop/governor.hpp): the patches as observed
+  // returns (sensor_ns_per_terrain_return each, not scaled with the rays) join the prediction at
+  // every level, by the closed form of the cost model (loop/governor.hpp): the patches as observed
   // at the level they were made at, times (that level's patch scale / the predicted level's)^2.
   DefaultFrame& f = default_frame();
   loop::GovernorConfig g = f.s.governor;
   g.mode = loop::GovernorConfig::Mode::kModel;
+  g.terrain_ns_per_patch = 110.0;  // non-zero terms, whatever the defaults' fit
+  g.sensor_ns_per_terrain_return = 120.0;
   loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
   constexpr std::uint64_t kCells = 300'000, kRays = 100'000, kReturns = 20'000;
   (void)gov.decide_at(f.pose, 0);
@@ -229,7 +233,7 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   const loop::GovernorDecision with_engine = gov.decide_at(f.pose, 0);
   const double expected_extra_ms =
       1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) +
-              g.sensor_ns_per_return * static_cast<double>(kEngineReturns));
+              g.sensor_ns_per_terrain_return * static_cast<double>(kEngineReturns));
   std::cout << "level 0: " << rays_only.predicted_ms << " ms with rays only, "
             << with_engine.predicted_ms << " ms with the engine's " << kPatches << " patches\n";
   EXPECT_NEAR(with_engine.predicted_ms - rays_only.predicted_ms, expected_extra_ms, 1e-9);
@@ -244,7 +248,7 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   const loop::GovernorDecision coarse_engine = gov.decide_at(f.pose, 6);
   const double coarse_extra_ms =
       1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) / 8.0 +
-              g.sensor_ns_per_return * static_cast<double>(kEngineReturns) / 2.0);
+              g.sensor_ns_per_terrain_return * static_cast<double>(kEngineReturns) / 2.0);
   EXPECT_NEAR(coarse_engine.predicted_ms - coarse_rays.predicted_ms, coarse_extra_ms, 1e-9);
   // And patches counted at level 6 predict level 6 as they are, level 0 at 8 times as many (and
   // returns counted in cells merged two ways, twice as many).
@@ -255,7 +259,7 @@ TEST(Governor, ModelModeCountsTheTerrainEnginesPatchesAndReturns) {
   const loop::GovernorDecision fine = gov.decide_at(f.pose, 0);
   EXPECT_NEAR(fine.predicted_ms - rays_only.predicted_ms,
               1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kPatches) * 8.0 +
-                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 2.0),
+                      g.sensor_ns_per_terrain_return * static_cast<double>(kEngineReturns) * 2.0),
               1e-9);
 }
 
@@ -269,6 +273,8 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
   DefaultFrame& f = default_frame();
   loop::GovernorConfig g = f.s.governor;
   g.mode = loop::GovernorConfig::Mode::kModel;
+  g.terrain_ns_per_patch = 110.0;  // non-zero terms, whatever the defaults' fit
+  g.sensor_ns_per_terrain_return = 120.0;
   loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, 1.0 / f.s.rate_hz);
   radar::TerrainCoarsening tc;
   tc.azimuth_merge_max = 2;
@@ -303,7 +309,7 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
     const double patches = std::max(static_cast<double>(kFacets), kPatches / s2);
     const double expected_ms =
         1e-6 * (g.terrain_ns_per_patch * patches +
-                g.sensor_ns_per_return * static_cast<double>(kEngineReturns) / merged);
+                g.sensor_ns_per_terrain_return * static_cast<double>(kEngineReturns) / merged);
     std::cout << "level " << level << ": engine " << patches << " patches, "
               << kEngineReturns / merged << " returns, " << engine_ms << " ms\n";
     EXPECT_NEAR(engine_ms, expected_ms, 1e-9) << "level " << level;
@@ -311,7 +317,7 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
   // Counted at level 12 (16 cells merged): level 4 (4 merged) predicts 4 times the returns.
   EXPECT_NEAR(engine_share_ms(12, 4, kFacets, kFacets),
               1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kFacets) * 16.0 +
-                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 4.0),
+                      g.sensor_ns_per_terrain_return * static_cast<double>(kEngineReturns) * 4.0),
               1e-9);
   // A coarse level of detail with a quarter of the facets from the range merge 8 on (level 12,
   // radar::TerrainReturnsConfig::coarse_lod_merge): facets F counted at level 0 predict F / 4
@@ -327,7 +333,7 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
     const double facets = static_cast<double>(kFacets) * (level >= 12 ? 0.25 : 1.0);
     EXPECT_NEAR(engine_share_ms(0, level, kPatches, kFacets),
                 1e-6 * (g.terrain_ns_per_patch * std::max(facets, kPatches / s2) +
-                        g.sensor_ns_per_return * static_cast<double>(kEngineReturns) /
+                        g.sensor_ns_per_terrain_return * static_cast<double>(kEngineReturns) /
                             (k * std::min(k, 2.0))),
                 1e-9)
         << "level " << level;
@@ -337,7 +343,7 @@ TEST(Governor, ModelModeFollowsTheEnginesMergedCellsAndItsFacets) {
   // cells merged 8 against 16.
   EXPECT_NEAR(engine_share_ms(12, 8, kCoarseFacets, kCoarseFacets),
               1e-6 * (g.terrain_ns_per_patch * static_cast<double>(kCoarseFacets) * 4.0 +
-                      g.sensor_ns_per_return * static_cast<double>(kEngineReturns) * 2.0),
+                      g.sensor_ns_per_terrain_return * static_cast<double>(kEngineReturns) * 2.0),
               1e-9);
 }
 
