@@ -178,6 +178,7 @@ int FidelityGovernor::level_of_spacings(int from) const noexcept {
 
 int FidelityGovernor::refine_with_kept(const radar::RadarPose& pose, int min_level, int level,
                                        radar::TracePlan& plan, double& predicted) noexcept {
+  const bool deferred = decision_.knobs.defer_refresh;  // `plan` was made with it
   const std::span<const scene::ObjectState> objects = scene_->objects();
   for (int l = min_level; l < level; ++l) {
     knobs_for(l);
@@ -229,7 +230,8 @@ int FidelityGovernor::refine_with_kept(const radar::RadarPose& pose, int min_lev
     predicted = cost;
     return level_of_spacings(l);
   }
-  knobs_for(level);  // nothing finer: the level as chosen
+  knobs_for(level);  // nothing finer: the level as chosen, its refresh as it was
+  decision_.knobs.defer_refresh = deferred;
   return level;
 }
 
