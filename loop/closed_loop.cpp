@@ -354,6 +354,16 @@ struct TracerSide {
       primed = true;
     }
   }
+  /// The engine's part of `contributions`: after the tracer's max_contributions(), its bound.
+  [[nodiscard]] std::span<radar::Contribution> engine_part() noexcept {
+    return std::span(contributions).subspan(tracer.max_contributions());
+  }
+  /// Moves the engine's first `m` returns down behind the tracer's first `n`: n + m returns.
+  std::size_t append_engine(std::size_t n, std::size_t m) noexcept {
+    const std::span<radar::Contribution> engine = engine_part();
+    std::copy_n(engine.begin(), m, contributions.begin() + static_cast<std::ptrdiff_t>(n));
+    return n + m;
+  }
   radar::SbrTracer tracer;
   std::optional<radar::TerrainReturns> terrain;
   std::string no_terrain;  ///< why the engine was left out; empty when it runs
@@ -532,24 +542,20 @@ struct ClosedLoop::Impl {
   // have.
   void prime_governor() {
     const radar::RadarPose pose = scripted_pose(scenario, 0.0);
-    const std::span<radar::Contribution> all(tracer.contributions);
     std::size_t n = tracer.primed_contributions;
     std::uint64_t patches = 0, facets = 0, terrain_returns = 0;
     if (tracer.terrain) {
-      const std::size_t cap = tracer.tracer.max_contributions();
       radar::clutter::TerrainStats ts;
       std::uint64_t dropped = 0;
-      terrain_returns = tracer.terrain->compute(pose, all.subspan(cap), ts, dropped);
-      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), terrain_returns,
-                  all.begin() + static_cast<std::ptrdiff_t>(n));
-      n += terrain_returns;
+      terrain_returns = tracer.terrain->compute(pose, tracer.engine_part(), ts, dropped);
+      n = tracer.append_engine(n, terrain_returns);
       patches = ts.patches;
       facets = ts.facets_considered;
       tracer.terrain->forget_sigma0_use();
     }
     radar::SensorStats ss;
     const std::uint64_t noise_frame = sensor.sensor.noise_frame();
-    (void)sensor.sensor.process(all.first(n), sensor.detections, ss);
+    (void)sensor.sensor.process(std::span(tracer.contributions).first(n), sensor.detections, ss);
     sensor.sensor.set_noise_frame(noise_frame);
     const double untimed = std::numeric_limits<double>::quiet_NaN();
     governor.observe(untimed, untimed, tracer.primed_rays, n, ss.cells_synthesised, patches,
@@ -691,27 +697,24 @@ void ClosedLoop::Impl::trace(Frame& f) {
       // each into its own part of the buffer (the tracer's holds max_contributions(), its
       // bound); the engine's returns then move down behind the tracer's. Same returns in the same
       // order as one after the other.
-      const std::span<radar::Contribution> all(tracer.contributions);
       const std::size_t cap = tracer.tracer.max_contributions();
       const std::uint64_t patches_before = r.terrain.patches;
       const std::uint64_t facets_before = r.terrain.facets_considered;
       tbb::parallel_invoke(
           [&] {
-            f.contributions =
-                tracer.tracer.trace(f.pose, all.first(cap), r.trace, f.decision->knobs);  // adds
+            f.contributions = tracer.tracer.trace(
+                f.pose, std::span(tracer.contributions).first(cap), r.trace, f.decision->knobs);
           },
           [&] {
             // The governor's terrain knob coarsens the engine's patches as the terrain rays,
             // and from level 4 on merges its cells (fewer returns for the sensor).
             f.terrain_returns =
-                tracer.terrain->compute(f.pose, all.subspan(cap), r.terrain, r.terrain_dropped,
+                tracer.terrain->compute(f.pose, tracer.engine_part(), r.terrain, r.terrain_dropped,
                                         f.decision->knobs.terrain_spacing_scale);
           });
-      std::copy_n(all.begin() + static_cast<std::ptrdiff_t>(cap), f.terrain_returns,
-                  all.begin() + static_cast<std::ptrdiff_t>(f.contributions));
       f.terrain_patches = r.terrain.patches - patches_before;
       f.terrain_facets = r.terrain.facets_considered - facets_before;
-      f.contributions += f.terrain_returns;
+      f.contributions = tracer.append_engine(f.contributions, f.terrain_returns);
     } else {
       f.contributions =
           tracer.tracer.trace(f.pose, tracer.contributions, r.trace, f.decision->knobs);  // adds
@@ -745,8 +748,8 @@ void ClosedLoop::Impl::sense(Frame& f) {
     governor.observe(static_cast<double>(p.last_ns(timing::Stage::kTrace)) * 1e-6,
                      static_cast<double>(p.last_ns(timing::Stage::kSensor)) * 1e-6,
                      r.trace.rays + r.trace.reused_rays - f.rays_before, f.contributions,
-                     r.sensor.cells_synthesised - f.cells_before, f.terrain_patches,
-                     f.terrain_returns, f.terrain_facets, f.merged_returns);
+                     f.cells_synthesised, f.terrain_patches, f.terrain_returns, f.terrain_facets,
+                     f.merged_returns);
     ++r.governor.level_frames[static_cast<std::size_t>(d->level)];
     r.governor.frames_degraded += d->degraded ? 1 : 0;
     r.governor.frames_predicted_late += d->over_deadline ? 1 : 0;

@@ -797,9 +797,9 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     double fraction = 0.0;
     if (reuse) {
       // The aspect change, against its limit (SbrConfig::reuse_static_paths).
-      double dtheta = 0.0, limit = 0.0;
-      aspect_change(pose, b, kp.radar_m, dtheta, limit);
-      limit = std::min(limit, std::sqrt(c.reuse_max_phase_rad / (k * target_extent_m(id))));
+      double dtheta = 0.0, limit = 0.0, extent_m = 0.0;
+      aspect_change(pose, b, kp.radar_m, dtheta, limit, extent_m);
+      limit = std::min(limit, std::sqrt(c.reuse_max_phase_rad / (k * extent_m)));
       // The antenna's turn (its polarisation basis): the largest change of its axes.
       double turn = 0.0;
       for (int a = 0; a < 3; ++a)
@@ -847,14 +847,9 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
   }
 }
 
-double SbrTracer::target_extent_m(std::uint32_t id) const noexcept {
-  glm::dvec3 lo, hi;
-  target_region(scene_->objects()[id], config_.target_ground_image, lo, hi);
-  return glm::length(hi - lo);
-}
-
 void SbrTracer::aspect_change(const RadarPose& pose, const Bundle& b, const glm::dvec3& then_m,
-                              double& dtheta_rad, double& limit_rad) const noexcept {
+                              double& dtheta_rad, double& limit_rad,
+                              double& extent_m) const noexcept {
   const scene::ObjectState& o = scene_->objects()[b.object_id];
   glm::dvec3 lo, hi;
   target_region(o, config_.target_ground_image, lo, hi);
@@ -864,7 +859,8 @@ void SbrTracer::aspect_change(const RadarPose& pose, const Bundle& b, const glm:
   // The spacing at the target: the bundle's angular step at its nearest range.
   const glm::dvec3 nearest = glm::clamp(pose.position_m, o.bounds_min_m, o.bounds_max_m);
   const double tube_m = std::min(b.daz_rad, b.del_rad) * glm::length(nearest - pose.position_m);
-  limit_rad = 0.5 * tube_m / glm::length(hi - lo);
+  extent_m = glm::length(hi - lo);
+  limit_rad = 0.5 * tube_m / extent_m;
 }
 
 void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
@@ -881,8 +877,8 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
     if (!m.valid || m.spacing_m != b.spacing_m || m.centroid_only != knobs.facet_centroid_only ||
         frame_count_ - m.recorded_at >= static_cast<std::uint64_t>(config_.reuse_refresh_frames))
       continue;
-    double dtheta = 0.0, limit = 0.0;
-    aspect_change(pose, b, m.radar_m, dtheta, limit);
+    double dtheta = 0.0, limit = 0.0, extent_m = 0.0;
+    aspect_change(pose, b, m.radar_m, dtheta, limit, extent_m);
     if (dtheta <= limit)
       b.memo = kMemoReplay;
   }

@@ -429,10 +429,10 @@ class SbrTracer {
   void choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
                    std::span<Bundle> bundles) const noexcept;
   /// The change dtheta in the direction from target `b`'s region to the radar since the radar
-  /// was at `then_m`, and the limit that keeps its hit points within half a tube: spacing / 2D.
+  /// was at `then_m`, the limit that keeps its hit points within half a tube (spacing / 2D) and
+  /// the region's extent D.
   void aspect_change(const RadarPose& pose, const Bundle& b, const glm::dvec3& then_m,
-                     double& dtheta_rad, double& limit_rad) const noexcept;
-  [[nodiscard]] double target_extent_m(std::uint32_t id) const noexcept;  ///< D
+                     double& dtheta_rad, double& limit_rad, double& extent_m) const noexcept;
   /// Per object, this frame: a kept bundle's path met a moving object (not kept then).
   std::unique_ptr<std::atomic<std::uint8_t>[]> met_mover_;
   std::vector<std::uint32_t> movers_;  ///< the scene's moving objects
