@@ -326,6 +326,46 @@ TEST(SbrReuse, TheRefreshTracesTheLongestKeptFirst) {
   }
 }
 
+TEST(SbrReuse, ADeferredRefreshWaitsUntilAKeptBundleIsTwiceItsPeriodOld) {
+  // The same eight dihedrals, reuse_refresh_frames = 4, once every bundle was traced (frame 0)
+  // and each refreshed on its turn (frames 1-4). With TraceKnobs::defer_refresh every frame, the
+  // refresh waits, the credit with it: nothing is traced while the oldest kept bundle is less
+  // than 2 x 4 = 8 frames old; when it reaches 8, the refresh goes on (two bundles, the
+  // credit's share of one frame), deferred or not. A frame without the knob right after
+  // refreshes as usual.
+  const double f = 10e9, rho = 1000.0;
+  std::vector<sc::ObjectDesc> objects;
+  for (int i = 0; i < 8; ++i)
+    objects.push_back(dihedral(1.0, 0.5, {-14.0 + 4.0 * i, 0.0, 0.0}));
+  sc::Scene scene(with(std::move(objects)));
+  rd::SbrConfig c = config(f, 0.05);
+  c.reuse_refresh_frames = 4;
+  rd::SbrTracer tracer(scene, c);
+  const rd::RadarPose pose = pose_around(rho, 0.0);
+  for (int frame = 0; frame <= 4; ++frame)
+    (void)trace(tracer, pose);
+  rd::TraceKnobs defer;
+  defer.defer_refresh = true;
+  int waited = 0;
+  for (;;) {
+    const Frame x = trace(tracer, pose, defer);
+    ASSERT_EQ(x.stats.refresh_deferred, 1u);
+    if (x.stats.refreshed_bundles > 0) {
+      EXPECT_EQ(x.stats.refreshed_bundles, 2u);
+      break;
+    }
+    EXPECT_EQ(x.stats.rays, 0u) << waited;
+    EXPECT_EQ(x.stats.reused_bundles, 8u) << waited;
+    ++waited;
+    ASSERT_LT(waited, 20);
+  }
+  // The oldest was refreshed at frame 1 (3 frames old at frame 4); it waits until 8 frames old.
+  EXPECT_EQ(waited, 4);
+  const Frame after = trace(tracer, pose);
+  EXPECT_EQ(after.stats.refresh_deferred, 0u);
+  EXPECT_EQ(after.stats.refreshed_bundles, 2u);
+}
+
 TEST(SbrReuse, KeptPathsDoNotDependOnTheThreads) {
   // A moving radar over eight dihedrals (traced, kept, refreshed in turn): every frame's returns
   // are bit-identical on one thread and on all of them.
