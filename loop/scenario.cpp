@@ -119,6 +119,7 @@ reuse_static_paths = true   # targets that do not move keep their rays' paths be
                             # within the phase below); traced again once the aspect has changed
 reuse_max_phase_deg = 22.5  # (docs/performance.md, "Static path reuse")
 reuse_refresh_frames = 16   # about 1/16 of the kept rays are traced again every frame
+reuse_refresh_slices = 4    # a bundle refreshed a quarter of its rows at a time
 
 [detector]
 cfar = "ca"                 # ca | os
@@ -692,7 +693,8 @@ void read_radar(Scenario& s, const Table& root) {
                       "edge_turn_deg",
                       "reuse_static_paths",
                       "reuse_max_phase_deg",
-                      "reuse_refresh_frames"});
+                      "reuse_refresh_frames",
+                      "reuse_refresh_slices"});
   std::string waveform = radar::waveform_name(w.kind);
   rad.string("waveform", waveform);
   if (!radar::parse_waveform_kind(waveform, w.kind))
@@ -750,8 +752,10 @@ void read_radar(Scenario& s, const Table& root) {
   rad.boolean("reuse_static_paths", s.sbr.reuse_static_paths);
   rad.degrees("reuse_max_phase_deg", s.sbr.reuse_max_phase_rad, {0.01, 180.0});
   rad.integer("reuse_refresh_frames", s.sbr.reuse_refresh_frames, 1, 100000);
+  rad.integer("reuse_refresh_slices", s.sbr.reuse_refresh_slices, 1,
+              radar::SbrConfig::kMaxKeptSlices);
   if (!s.sbr.reuse_static_paths)
-    for (const char* key : {"reuse_max_phase_deg", "reuse_refresh_frames"})
+    for (const char* key : {"reuse_max_phase_deg", "reuse_refresh_frames", "reuse_refresh_slices"})
       if (rad.has(key))
         rad.fail(key, "is read with reuse_static_paths = true only");
 }

@@ -257,14 +257,19 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     require(std::isfinite(c.reuse_max_phase_rad) && c.reuse_max_phase_rad > 0.0,
             "reuse_max_phase_rad", "must be > 0");
     require(c.reuse_refresh_frames >= 1, "reuse_refresh_frames", "must be >= 1");
+    require(c.reuse_refresh_slices >= 1 && c.reuse_refresh_slices <= SbrConfig::kMaxKeptSlices,
+            "reuse_refresh_slices", "must be 1..8");
+    // A region per slice, each with a slot per ray and bounce (the rays of a slice write their
+    // paths at their slots, then the slice's are compacted to its front); pages touched as used.
     const std::size_t per_target = c.max_rays_per_target * static_cast<std::size_t>(c.max_bounces);
     std::size_t n_slots = 0;
     for (std::uint32_t i = 0; i < desc.objects.size(); ++i) {
       if (is_target_[i] && !scene.objects()[i].moving) {
         kept_region_[i] = n_slots;
-        n_slots += per_target;
+        n_slots += per_target * static_cast<std::size_t>(c.reuse_refresh_slices);
       }
     }
+    kept_runs_.reserve(n_targets_ * static_cast<std::size_t>(c.reuse_refresh_slices));
     static_assert(std::is_trivially_default_constructible_v<KeptPath>);
     kept_paths_ = std::make_unique_for_overwrite<KeptPath[]>(n_slots);
     kept_facet_by_rays_.assign(facet_first_.back(), 0);
@@ -717,6 +722,9 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   b.object_id = id;
   b.n_az = n_az;
   b.n_el = n_el;
+  b.row_lo = 0;
+  b.row_hi = n_el;
+  b.slice = kAllSlices;
   b.daz_rad = (az_hi - az_lo) / static_cast<double>(n_az);
   b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
   b.az0_rad = az_lo;
@@ -779,9 +787,13 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     b.keep = false;
     b.still = false;
     b.refreshed = false;
+    b.row_lo = 0;
+    b.row_hi = b.n_el;
+    b.slice = kAllSlices;
   }
   if (!c.reuse_static_paths)
     return;
+  const int n_slices = c.reuse_refresh_slices;
   const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   const auto objects = scene_->objects();
   std::size_t forced_rays = 0, kept_rays = 0;  // static bundles traced / kept this frame
@@ -796,15 +808,19 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     bool reuse = kp.valid && kp.spacing_m == b.spacing_m && kp.max_bounces == max_bounces;
     double fraction = 0.0;
     if (reuse) {
-      // The aspect change, against its limit (SbrConfig::reuse_static_paths).
-      double dtheta = 0.0, limit = 0.0, extent_m = 0.0;
-      aspect_change(pose, b, kp.radar_m, dtheta, limit, extent_m);
-      limit = std::min(limit, std::sqrt(c.reuse_max_phase_rad / (k * extent_m)));
-      // The antenna's turn (its polarisation basis): the largest change of its axes.
-      double turn = 0.0;
-      for (int a = 0; a < 3; ++a)
-        turn = std::max(turn, glm::length(pose.world_from_antenna[a] - kp.world_from_antenna[a]));
-      fraction = std::max(dtheta, turn) / limit;
+      // The aspect change since each slice was traced, against its limit
+      // (SbrConfig::reuse_static_paths), and the antenna's turn (its polarisation basis: the
+      // largest change of its axes).
+      for (int s = 0; s < n_slices; ++s) {
+        const KeptSlice& ks = kp.slices[static_cast<std::size_t>(s)];
+        double dtheta = 0.0, limit = 0.0, extent_m = 0.0;
+        aspect_change(pose, b, ks.radar_m, dtheta, limit, extent_m);
+        limit = std::min(limit, std::sqrt(c.reuse_max_phase_rad / (k * extent_m)));
+        double turn = 0.0;
+        for (int a = 0; a < 3; ++a)
+          turn = std::max(turn, glm::length(pose.world_from_antenna[a] - ks.world_from_antenna[a]));
+        fraction = std::max(fraction, std::max(dtheta, turn) / limit);
+      }
       reuse = fraction <= 1.0;
     }
     if (reuse) {
@@ -825,26 +841,88 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     std::uint64_t oldest = 0;
     for (const Bundle& b : bundles) {
       if (!b.trace)
-        oldest = std::max(oldest, frame_count_ - kept_[b.object_id].traced_at);
+        oldest = std::max(oldest, frame_count_ - oldest_kept_at(b.object_id));
     }
     if (oldest < 2 * static_cast<std::uint64_t>(c.reuse_refresh_frames))
       return;
   }
   credit += static_cast<double>(kept_rays) / static_cast<double>(c.reuse_refresh_frames);
   credit = std::max(0.0, credit - static_cast<double>(forced_rays));
+  // A slice at a time: the longest kept slice of a bundle that has the rows its slices were
+  // kept with, or the whole of one that has not (SbrConfig::reuse_refresh_slices).
   for (;;) {
     Bundle* pick = nullptr;
+    std::uint8_t pick_slice = kAllSlices;
+    std::uint64_t pick_at = 0;
     for (Bundle& b : bundles) {
-      if (!b.trace &&
-          (pick == nullptr || kept_[b.object_id].traced_at < kept_[pick->object_id].traced_at))
-        pick = &b;
+      if (b.trace)
+        continue;
+      const Kept& kp = kept_[b.object_id];
+      const bool by_slice = n_slices > 1 && b.n_el == kp.n_el;
+      for (int s = 0; s < n_slices; ++s) {
+        const std::uint64_t at = kp.slices[static_cast<std::size_t>(s)].traced_at;
+        if (pick == nullptr || at < pick_at) {
+          pick = &b;
+          pick_slice = by_slice ? static_cast<std::uint8_t>(s) : kAllSlices;
+          pick_at = at;
+        }
+      }
     }
-    if (pick == nullptr || credit < static_cast<double>(pick->n_az * pick->n_el))
+    if (pick == nullptr)
+      break;
+    std::size_t lo = 0, hi = pick->n_el;
+    if (pick_slice != kAllSlices)
+      slice_rows(pick->n_el, n_slices, pick_slice, lo, hi);
+    const std::size_t rays = (hi - lo) * pick->n_az;
+    if (credit < static_cast<double>(rays))
       break;
     pick->trace = true;
     pick->refreshed = true;
-    credit -= static_cast<double>(pick->n_az * pick->n_el);
+    pick->row_lo = lo;
+    pick->row_hi = hi;
+    pick->slice = pick_slice;
+    credit -= static_cast<double>(rays);
   }
+}
+
+void SbrTracer::slice_rows(std::size_t n_el, int slices, int s, std::size_t& lo,
+                           std::size_t& hi) noexcept {
+  // Row ie is in slice floor((2 ie + 1) slices / (2 n_el)); the first row of slice s is the
+  // least ie with (2 ie + 1) slices >= 2 s n_el.
+  const auto n = static_cast<std::size_t>(slices);
+  auto first = [&](std::size_t t) { return (2 * t * n_el + n - 1) / (2 * n); };
+  lo = first(static_cast<std::size_t>(s));
+  hi = first(static_cast<std::size_t>(s) + 1);
+}
+
+SbrTracer::KeptPath* SbrTracer::kept_slot(const Bundle& bd, std::size_t ia, std::size_t ie,
+                                          std::size_t per_ray) const noexcept {
+  const int n_slices = config_.reuse_refresh_slices;
+  const std::size_t s = bd.slice != kAllSlices
+                            ? bd.slice
+                            : (2 * ie + 1) * static_cast<std::size_t>(n_slices) / (2 * bd.n_el);
+  std::size_t lo = 0, hi = 0;
+  slice_rows(bd.n_el, n_slices, static_cast<int>(s), lo, hi);
+  return kept_paths_.get() + kept_region_[bd.object_id] + s * kept_slice_slots() +
+         ((ie - lo) * bd.n_az + ia) * per_ray;
+}
+
+std::uint64_t SbrTracer::oldest_kept_at(std::uint32_t id) const noexcept {
+  std::uint64_t at = std::numeric_limits<std::uint64_t>::max();
+  for (int s = 0; s < config_.reuse_refresh_slices; ++s)
+    at = std::min(at, kept_[id].slices[static_cast<std::size_t>(s)].traced_at);
+  return at;
+}
+
+std::size_t SbrTracer::untraced_kept(const Bundle& b) const noexcept {
+  if (b.trace && b.slice == kAllSlices)
+    return 0;
+  std::size_t n = 0;
+  for (int s = 0; s < config_.reuse_refresh_slices; ++s) {
+    if (!b.trace || s != b.slice)
+      n += kept_[b.object_id].slices[static_cast<std::size_t>(s)].count;
+  }
+  return n;
 }
 
 void SbrTracer::aspect_change(const RadarPose& pose, const Bundle& b, const glm::dvec3& then_m,
@@ -897,13 +975,14 @@ void SbrTracer::count_reuse(std::span<const Bundle> bundles, TraceStats& stats) 
   std::uint64_t oldest = 0;
   for (const Bundle& b : bundles) {
     stats.refreshed_bundles += b.refreshed ? 1u : 0u;
-    if (b.trace)
+    if (b.trace && b.slice == kAllSlices)
       continue;
+    // Kept, or a slice of it traced again (its other slices kept).
     ++stats.reused_bundles;
-    stats.reused_rays += b.n_az * b.n_el;
-    stats.reused_contributions += kept_[b.object_id].count;
+    stats.reused_rays += b.n_az * b.n_el - b.traced_rays();
+    stats.reused_contributions += untraced_kept(b);
     worst_fraction = std::max(worst_fraction, b.kept_fraction);
-    oldest = std::max(oldest, frame_count_ - kept_[b.object_id].traced_at);
+    oldest = std::max(oldest, frame_count_ - oldest_kept_at(b.object_id));
   }
   stats.reuse_max_angle_fraction = std::max(stats.reuse_max_angle_fraction, worst_fraction);
   stats.reuse_max_age_frames = std::max(stats.reuse_max_age_frames, oldest);
@@ -1210,14 +1289,11 @@ TracePlan SbrTracer::plan(const RadarPose& pose, const TraceKnobs& knobs,
   double credit = refresh_credit_;
   choose_reuse(pose, f.max_bounces, plan_bundles_, credit, knobs.defer_refresh);
   for (const Bundle& b : plan_bundles_) {
-    const std::size_t rays = b.n_az * b.n_el;
-    if (!b.trace) {
-      p.reused_rays += rays;
-      p.reused_contributions += kept_[b.object_id].count;
-      continue;
-    }
+    const std::size_t rays = b.traced_rays();
+    p.reused_rays += b.n_az * b.n_el - rays;
+    p.reused_contributions += untraced_kept(b);
     p.target_rays += rays;
-    if (b.object_id < rays_per_object.size())
+    if (b.object_id < rays_per_object.size() && rays > 0)
       rays_per_object[b.object_id] = rays;
   }
   return p;
@@ -1291,9 +1367,14 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   for (Bundle& bd : bundles_) {
     if (bd.trace || same_facets_by_rays(bd.object_id))
       continue;
+    const std::size_t paid = bd.traced_rays();  // a slice's, when it was to be refreshed
     bd.trace = true;
+    bd.row_lo = 0;
+    bd.row_hi = bd.n_el;
+    bd.slice = kAllSlices;
     bd.memo = kMemoRecord;
-    refresh_credit_ = std::max(0.0, refresh_credit_ - static_cast<double>(bd.n_az * bd.n_el));
+    refresh_credit_ =
+        std::max(0.0, refresh_credit_ - static_cast<double>(bd.n_az * bd.n_el - paid));
     std::uint64_t queries = 0;
     for (std::size_t t = 0; t < facet_first_[bd.object_id + 1] - facet_first_[bd.object_id]; ++t)
       facet_of(bd, t, queries);
@@ -1349,8 +1430,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // The rays of the bundles traced, laid end to end after the terrain grid's.
   for (Bundle& bd : bundles_) {
     bd.first_ray = next_ray;
-    if (bd.trace)
-      next_ray += bd.n_az * bd.n_el;
+    next_ray += bd.traced_rays();
     if (bd.keep)
       met_mover_[bd.object_id].store(0, std::memory_order_relaxed);
   }
@@ -1418,7 +1498,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
                 ++b;
               const Bundle& bd = bundles_[b];
               const std::size_t j = i - bd.first_ray;
-              const std::size_t ia = j % bd.n_az, ie = j / bd.n_az;
+              const std::size_t ia = j % bd.n_az, ie = bd.row_lo + j / bd.n_az;
               el = bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad;
               daz = bd.daz_rad;
               del = bd.del_rad;
@@ -1432,7 +1512,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
               }
               st.owner = bd.object_id;
               if (bd.keep)
-                st.kept = kept_paths_.get() + kept_region_[bd.object_id] + j * per_ray;
+                st.kept = kept_slot(bd, ia, ie, per_ray);
             }
             if (el != row_el) {  // one elevation per row of a grid
               row_el = el;
@@ -1480,32 +1560,57 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // each ray, in ray order) and remember the frame; then the others' kept paths are evaluated
   // for this pose, in bundle order, after the rays' returns.
   if (c.reuse_static_paths) {
+    const int n_slices = c.reuse_refresh_slices;
+    // The runs of kept returns to evaluate: each slice not traced this frame of a bundle that
+    // was kept or had one slice traced again (taken before the traced slices are compacted).
+    kept_runs_.clear();
     std::size_t n_kept = 0;
-    for (Bundle& bd : bundles_) {
+    for (const Bundle& bd : bundles_) {
+      if (bd.trace && bd.slice == kAllSlices)
+        continue;
+      for (int s = 0; s < n_slices; ++s) {
+        if (bd.trace && s == bd.slice)
+          continue;
+        kept_runs_.push_back({n_kept, bd.object_id, static_cast<std::uint8_t>(s)});
+        n_kept += kept_[bd.object_id].slices[static_cast<std::size_t>(s)].count;
+      }
+    }
+    for (const Bundle& bd : bundles_) {
       const std::uint32_t id = bd.object_id;
-      bd.first_kept = n_kept;
-      if (!bd.trace) {
-        n_kept += kept_[id].count;
+      if (!bd.trace)
         continue;
-      }
       Kept& kp = kept_[id];
-      const std::size_t rays_b = bd.n_az * bd.n_el;
-      kp.valid = bd.keep && bd.first_ray + rays_b <= usable_rays &&
-                 met_mover_[id].load(std::memory_order_relaxed) == 0;
-      if (!kp.valid)
+      if (!bd.keep || bd.first_ray + bd.traced_rays() > usable_rays ||
+          met_mover_[id].load(std::memory_order_relaxed) != 0) {
+        kp.valid = false;
         continue;
-      KeptPath* region = kept_paths_.get() + kept_region_[id];
-      std::size_t m = 0;
-      for (std::size_t j = 0; j < rays_b; ++j) {
-        for (std::uint8_t q = 0; q < counts_[bd.first_ray + j]; ++q)
-          region[m++] = region[j * per_ray + q];
       }
-      kp.radar_m = pose.position_m;
-      kp.world_from_antenna = pose.world_from_antenna;
-      kp.spacing_m = bd.spacing_m;
-      kp.max_bounces = frame.max_bounces;
-      kp.count = m;
-      kp.traced_at = frame_count_;
+      if (bd.slice == kAllSlices) {
+        kp.valid = true;
+        kp.spacing_m = bd.spacing_m;
+        kp.max_bounces = frame.max_bounces;
+        kp.n_el = bd.n_el;
+      }
+      // Each traced slice's paths to the front of its region (rays in order).
+      for (int s = 0; s < n_slices; ++s) {
+        if (bd.slice != kAllSlices && s != bd.slice)
+          continue;
+        std::size_t lo = 0, hi = 0;
+        slice_rows(bd.n_el, n_slices, s, lo, hi);
+        KeptPath* region =
+            kept_paths_.get() + kept_region_[id] + static_cast<std::size_t>(s) * kept_slice_slots();
+        std::size_t m = 0;
+        for (std::size_t j = 0; j < (hi - lo) * bd.n_az; ++j) {
+          const std::size_t i = bd.first_ray + (lo - bd.row_lo) * bd.n_az + j;
+          for (std::uint8_t q = 0; q < counts_[i]; ++q)
+            region[m++] = region[j * per_ray + q];
+        }
+        KeptSlice& ks = kp.slices[static_cast<std::size_t>(s)];
+        ks.radar_m = pose.position_m;
+        ks.world_from_antenna = pose.world_from_antenna;
+        ks.count = m;
+        ks.traced_at = frame_count_;
+      }
       for (std::size_t f = facet_first_[id]; f < facet_first_[id + 1]; ++f)
         kept_facet_by_rays_[f] = facet_light_[f] == kLightByRays ? 1 : 0;
     }
@@ -1518,12 +1623,13 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, n_eval, 256),
         [&](const tbb::blocked_range<std::size_t>& range) {
-          std::size_t b = 0;
+          std::size_t r = 0;
           for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_kept)
-              ++b;
-            const Bundle& bd = bundles_[b];
-            const KeptPath& kp = kept_paths_[kept_region_[bd.object_id] + (i - bd.first_kept)];
+            while (r + 1 < kept_runs_.size() && i >= kept_runs_[r + 1].first)
+              ++r;
+            const KeptRun& run = kept_runs_[r];
+            const KeptPath& kp = kept_paths_[kept_region_[run.object_id] +
+                                             run.slice * kept_slice_slots() + (i - run.first)];
             // The kept path for this pose (SbrConfig::reuse_static_paths): exact end segments.
             const glm::dvec3 to_first = kp.first_hit_m - pose.position_m;
             const double first_m = glm::length(to_first);
@@ -1541,7 +1647,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
             const AzEl ae = arrival_azel(antenna_from_world * (-s));
             x.azimuth_rad = ae.azimuth_rad;
             x.elevation_rad = ae.elevation_rad;
-            x.object_id = bd.object_id;
+            x.object_id = run.object_id;
             x.radiated_by_owner = kp.radiated_by_owner;
             x.bounces = kp.bounces;
             x.coherent = true;

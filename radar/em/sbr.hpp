@@ -141,7 +141,12 @@ struct SbrConfig {
   /// met a moving object and no moving object comes near the target or its line of sight to
   /// the radar; else the bundle is traced again. Besides, about 1 / reuse_refresh_frames of the
   /// kept rays are traced again each frame, the longest kept first, so a kept path is at most
-  /// about that many frames old (a frame is a trace() call). While its paths are kept, a
+  /// about that many frames old (a frame is a trace() call). The refresh goes a slice at a time:
+  /// a bundle's rows fall into reuse_refresh_slices bands of its box's elevation span (a row
+  /// whose centre lies in band s belongs to slice s), each kept and traced again on its own,
+  /// so one refresh traces a slice's rays, not the bundle's. A slice is refreshed only while
+  /// the bundle has the rows its paths were kept with, so that the slices' rows together are
+  /// each of the bundle's rows once; else the whole bundle is. While its paths are kept, a
   /// target's bounce-1 facets also keep the answers of their occlusion queries (which samples
   /// and sub-triangles see the radar): under the same rule a shadow boundary moves across it
   /// by at most D dtheta <= spacing / 2, within the rays' own resolution. Their PO integrals,
@@ -149,6 +154,8 @@ struct SbrConfig {
   bool reuse_static_paths = false;
   double reuse_max_phase_rad = 0.39269908169872414;  ///< pi / 8
   int reuse_refresh_frames = 16;                     ///< >= 1
+  int reuse_refresh_slices = 4;                      ///< 1..kMaxKeptSlices
+  static constexpr int kMaxKeptSlices = 8;
 };
 
 /// Per-frame overrides for the fidelity governor. Defaults leave the configuration as it is.
@@ -329,17 +336,27 @@ class SbrTracer {
     std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame (or none)
     /// Its box (with the ground image) reached past the field of view and was cut to it.
     bool clipped = false;
-    /// Static path reuse (SbrConfig::reuse_static_paths, choose_reuse): traced this frame (else
-    /// its kept paths are re-evaluated), its paths kept once traced, and where its re-evaluated
-    /// returns start in this frame's run of them.
+    /// Static path reuse (SbrConfig::reuse_static_paths, choose_reuse): traced this frame, whole
+    /// or one slice (else its kept paths are re-evaluated), and its paths kept once traced.
     bool trace = true;
     bool keep = false;
     bool refreshed = false;      ///< traced (static, its kept paths valid) to refresh them
     bool still = false;          ///< static, no mover near: its facets may keep their answers
     std::uint8_t memo = 0;       ///< kMemoNone, kMemoRecord or kMemoReplay this frame
     double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
-    std::size_t first_kept = 0;
+    /// The rows traced this frame (all of them, or one slice's for the refresh) and that slice
+    /// (kAllSlices: the whole bundle).
+    std::size_t row_lo = 0, row_hi = 0;
+    std::uint8_t slice = kAllSlices;
+    [[nodiscard]] std::size_t traced_rays() const noexcept {
+      return trace ? (row_hi - row_lo) * n_az : 0;
+    }
   };
+  static constexpr std::uint8_t kAllSlices = 0xff;
+  /// Rows [lo, hi) of slice `s` of `slices` in a grid of `n_el` rows: those whose centre lies in
+  /// the slice's band, (ie + 1/2) / n_el in [s / slices, (s + 1) / slices).
+  static void slice_rows(std::size_t n_el, int slices, int s, std::size_t& lo,
+                         std::size_t& hi) noexcept;
   struct Frame {  // per-frame quantities shared by every ray
     double terrain_daz_rad = 0, terrain_del_rad = 0;
     std::size_t terrain_n_az = 0, terrain_n_el = 0;
@@ -366,6 +383,10 @@ class SbrTracer {
   [[nodiscard]] bool same_facets_by_rays(std::uint32_t id) const noexcept;
   /// The frame's reuse figures of `bundles` (those not traced re-evaluate kept paths).
   void count_reuse(std::span<const Bundle> bundles, TraceStats& stats) const noexcept;
+  /// The frame the longest kept slice of static target `id` was traced in.
+  [[nodiscard]] std::uint64_t oldest_kept_at(std::uint32_t id) const noexcept;
+  /// Kept returns of `b`'s slices not traced this frame (re-evaluated).
+  [[nodiscard]] std::size_t untraced_kept(const Bundle& b) const noexcept;
   double refresh_credit_ = 0.0;  ///< the refresh's credit [rays] (choose_reuse)
   /// Whether a moving object is near static target `id` or its line of sight to the radar.
   [[nodiscard]] bool mover_near(const RadarPose& pose, std::uint32_t id) const noexcept;
@@ -378,21 +399,42 @@ class SbrTracer {
     std::uint8_t bounces;
     bool radiated_by_owner;
   };
-  /// Per object: its kept paths and the frame they were traced in.
-  struct Kept {
-    bool valid = false;
+  /// Per object: its kept paths, per slice of its rows (SbrConfig::reuse_refresh_slices), and
+  /// the frame each slice was traced in.
+  struct KeptSlice {
     glm::dvec3 radar_m{0.0};
     glm::dmat3 world_from_antenna{1.0};
-    double spacing_m = 0.0;  ///< the bundle's spacing (before coarsening) and bounces then
-    int max_bounces = 0;
-    std::size_t count = 0;        ///< kept returns, at the front of its region of kept_paths_
+    std::size_t count = 0;        ///< kept returns, at the front of the slice's region
     std::uint64_t traced_at = 0;  ///< frame_count_ then
   };
+  struct Kept {
+    bool valid = false;
+    double spacing_m = 0.0;  ///< the bundle's spacing (before coarsening) and bounces then
+    int max_bounces = 0;
+    std::size_t n_el = 0;  ///< the bundle's rows then
+    std::array<KeptSlice, SbrConfig::kMaxKeptSlices> slices{};
+  };
   std::vector<Kept> kept_;
-  /// Each static target's region of kept_paths_ (max_rays_per_target x max_bounces slots: the
-  /// rays write their returns' paths at their slots, compacted after the trace); kNoRegion for
-  /// the others. Allocated at setup with reuse on, left uninitialised (pages touched as used).
+  /// Each static target's region of kept_paths_: reuse_refresh_slices regions of
+  /// max_rays_per_target x max_bounces slots (a slice's rays write their returns' paths at
+  /// their slots, compacted after the trace); kNoRegion for the others. Allocated at setup with
+  /// reuse on, left uninitialised (pages touched as used).
   std::vector<std::size_t> kept_region_;
+  /// Slots of one slice's region (max_rays_per_target x max_bounces).
+  [[nodiscard]] std::size_t kept_slice_slots() const noexcept {
+    return config_.max_rays_per_target * static_cast<std::size_t>(config_.max_bounces);
+  }
+  /// Where the ray of column ia, row ie of `bd` writes its kept paths: its slot in its slice's
+  /// region.
+  [[nodiscard]] KeptPath* kept_slot(const Bundle& bd, std::size_t ia, std::size_t ie,
+                                    std::size_t per_ray) const noexcept;
+  /// A run of kept returns evaluated this frame: one slice of a target, from `first` in the run.
+  struct KeptRun {
+    std::size_t first;
+    std::uint32_t object_id;
+    std::uint8_t slice;
+  };
+  std::vector<KeptRun> kept_runs_;
   std::unique_ptr<KeptPath[]> kept_paths_;
   /// Per facet of a kept target: left to the rays (kLightByRays) when its paths were kept.
   std::vector<std::uint8_t> kept_facet_by_rays_;

@@ -165,6 +165,9 @@ TEST(Scenario, BadInputFailsWithLocationAndReason) {
   EXPECT_NE(error_of("[radar]\nreuse_refresh_frames = 0\n").find("[radar] reuse_refresh_frames"),
             std::string::npos);
   EXPECT_EQ(error_of("[radar]\nreuse_max_phase_deg = 10.0\n"), "");  // reuse is the default
+  EXPECT_NE(error_of("[radar]\nreuse_refresh_slices = 9\n").find("[radar] reuse_refresh_slices"),
+            std::string::npos);
+  EXPECT_EQ(error_of("[radar]\nreuse_refresh_slices = 1\n"), "");
   EXPECT_EQ(error_of("[radar]\nterrain = \"dem\"\n"),
             "test.toml: [radar] terrain: unknown value \"dem\" (known: rays, engine)");
   EXPECT_NE(error_of("[radar]\nterrain = \"rays\"\nterrain_cell_range_bins = 4\n")

@@ -308,6 +308,7 @@ TEST(SbrReuse, TheRefreshTracesTheLongestKeptFirst) {
   sc::Scene scene(with(std::move(objects)));
   rd::SbrConfig c = config(f, 0.05);
   c.reuse_refresh_frames = 4;
+  c.reuse_refresh_slices = 1;  // whole bundles (TheRefreshGoesASliceAtATime: slices)
   rd::SbrTracer tracer(scene, c);
   const rd::RadarPose pose = pose_around(rho, 0.0);
   const Frame first = trace(tracer, pose);
@@ -326,6 +327,39 @@ TEST(SbrReuse, TheRefreshTracesTheLongestKeptFirst) {
   }
 }
 
+TEST(SbrReuse, TheRefreshGoesASliceAtATime) {
+  // One trihedral, a still radar, reuse_refresh_frames = 4 and 4 slices: after the first frame
+  // each refresh traces one slice of the bundle's rows (about a quarter of its rays), the other
+  // three slices' kept paths are re-evaluated, and every frame gives the first frame's returns
+  // back: the slices' rows together are each row once (a row missed or counted twice changes
+  // the count and the coherent sums). Over 8 frames each slice is traced twice.
+  const double f = 10e9;
+  const double k = 2.0 * kPi * f / kC;
+  sc::Scene scene(with({trihedral(0.5)}));
+  rd::SbrConfig c = config(f, 0.02);
+  c.reuse_refresh_frames = 4;
+  c.reuse_refresh_slices = 4;
+  rd::SbrTracer tracer(scene, c);
+  const rd::RadarPose pose = pose_around(1000.0, 0.0);
+  const Frame first = trace(tracer, pose);
+  const auto all_rays = static_cast<double>(first.stats.rays);
+  ASSERT_GT(all_rays, 1000.0);
+  double traced = 0.0;
+  for (int frame = 1; frame <= 8; ++frame) {
+    const Frame x = trace(tracer, pose);
+    EXPECT_EQ(x.stats.reused_bundles, 1u) << frame;
+    EXPECT_LE(static_cast<double>(x.stats.rays), 0.3 * all_rays) << frame;
+    EXPECT_LE(x.stats.reuse_max_age_frames, 4u) << frame;
+    traced += static_cast<double>(x.stats.rays);
+    ASSERT_EQ(x.out.size(), first.out.size()) << frame;
+    for (int bounces = 1; bounces <= 3; ++bounces) {
+      const std::complex<double> a = sum(first, bounces, k, 1000.0), b = sum(x, bounces, k, 1000.0);
+      EXPECT_LE(std::abs(a - b), 1e-9 * std::abs(a) + 1e-12) << frame << " " << bounces;
+    }
+  }
+  EXPECT_NEAR(traced, 2.0 * all_rays, 0.3 * all_rays);
+}
+
 TEST(SbrReuse, ADeferredRefreshWaitsUntilAKeptBundleIsTwiceItsPeriodOld) {
   // The same eight dihedrals, reuse_refresh_frames = 4, once every bundle was traced (frame 0)
   // and each refreshed on its turn (frames 1-4). With TraceKnobs::defer_refresh every frame, the
@@ -340,6 +374,7 @@ TEST(SbrReuse, ADeferredRefreshWaitsUntilAKeptBundleIsTwiceItsPeriodOld) {
   sc::Scene scene(with(std::move(objects)));
   rd::SbrConfig c = config(f, 0.05);
   c.reuse_refresh_frames = 4;
+  c.reuse_refresh_slices = 1;  // whole bundles (TheRefreshGoesASliceAtATime: slices)
   rd::SbrTracer tracer(scene, c);
   const rd::RadarPose pose = pose_around(rho, 0.0);
   for (int frame = 0; frame <= 4; ++frame)
