@@ -112,6 +112,7 @@ terrain = "engine"          # terrain clutter: "engine" (per range-azimuth cell)
 terrain_ray_spacing_deg = 0.0573   # 1 mrad: terrain rays' grid; the tracer's terrain detail
 target_ray_spacing_m = 0.1
 max_rays_per_target = 20000 # bundles of larger targets (the parked transports) coarsen (counted)
+mask_target_rays = true     # a target's rays only where its facets (or their ground images) are
 edges = true                # edge diffraction (PTD fringe edge currents) of the targets' wedges
 edge_turn_deg = 30.0        # shared edges turning by more than this diffract
 reuse_static_paths = true   # targets that do not move keep their rays' paths between frames,
@@ -689,6 +690,7 @@ void read_radar(Scenario& s, const Table& root) {
                       "terrain_cell_range_bins",
                       "target_ray_spacing_m",
                       "max_rays_per_target",
+                      "mask_target_rays",
                       "edges",
                       "edge_turn_deg",
                       "reuse_static_paths",
@@ -745,6 +747,7 @@ void read_radar(Scenario& s, const Table& root) {
         rad.fail(key, "is read with terrain = \"engine\" only (terrain is \"rays\")");
   rad.number("target_ray_spacing_m", s.sbr.target_ray_spacing_m, {1e-4, 100.0});
   rad.integer("max_rays_per_target", s.sbr.max_rays_per_target, 1, 100'000'000);
+  rad.boolean("mask_target_rays", s.sbr.mask_target_rays);
   rad.boolean("edges", s.sbr.edges);
   rad.degrees("edge_turn_deg", s.sbr.edge_min_turn_rad, {0.0, 179.0});
   if (!s.sbr.edges && rad.has("edge_turn_deg"))

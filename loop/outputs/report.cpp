@@ -407,7 +407,9 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"refreshed_bundles", r.trace.refreshed_bundles},
                   {"reuse_max_angle_fraction", r.trace.reuse_max_angle_fraction},
                   {"reuse_max_age_frames", r.trace.reuse_max_age_frames},
-                  {"refresh_deferred_frames", r.trace.refresh_deferred}};
+                  {"refresh_deferred_frames", r.trace.refresh_deferred},
+                  {"mask_target_rays", s.sbr.mask_target_rays},
+                  {"masked_rays", r.trace.masked_rays}};
   rep["terrain"] = {{"source", s.terrain_engine ? "engine" : "rays"},
                     {"facets_considered", r.terrain.facets_considered},
                     {"patches", r.terrain.patches},

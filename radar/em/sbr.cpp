@@ -245,6 +245,19 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   column_cos_.assign(n_az_ + n_targets_ * std::min(kColumnsPerTarget, c.max_rays_per_target), 0.0);
   column_sin_.assign(column_cos_.size(), 0.0);
   plan_bundles_.reserve(n_targets_);
+  // Masks (SbrConfig::mask_target_rays): rows of the bundles of a frame, up to 1024 a target on
+  // average; a bundle past the capacity shoots its whole box.
+  if (c.mask_target_rays)
+    row_spans_.assign(n_targets_ * 1025, RowSpan{});
+  // Each target's facets in up to kMaskParts parts (SbrConfig::mask_target_rays): split at the
+  // median of their centroids along the longest side, recursively; each part's box holds its
+  // facets' corners.
+  part_first_.assign(desc.objects.size() + 1, 0);
+  for (std::uint32_t i = 0; i < desc.objects.size(); ++i) {
+    if (c.mask_target_rays && is_target_[i])
+      split_parts(desc.objects[i].mesh);
+    part_first_[i + 1] = part_boxes_.size();
+  }
   // Static path reuse: a region of kept paths per target that does not move.
   kept_.assign(desc.objects.size(), Kept{});
   kept_region_.assign(desc.objects.size(), kNoRegion);
@@ -725,10 +738,13 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   b.row_lo = 0;
   b.row_hi = n_el;
   b.slice = kAllSlices;
+  b.mask = kNoMask;
   b.daz_rad = (az_hi - az_lo) / static_cast<double>(n_az);
   b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
   b.az0_rad = az_lo;
   b.el0_rad = el_lo;
+  if (c.mask_target_rays)
+    mask_rows(pose, id, b);
   return true;
 }
 
@@ -799,7 +815,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
   std::size_t forced_rays = 0, kept_rays = 0;  // static bundles traced / kept this frame
   for (Bundle& b : bundles) {
     const std::uint32_t id = b.object_id;
-    const std::size_t rays = b.n_az * b.n_el;
+    const std::size_t rays = all_rays(b);
     b.still = kept_region_[id] != kNoRegion && !objects[id].moving && !mover_near(pose, id);
     b.keep = b.still && !b.clipped;
     if (!b.keep)
@@ -873,7 +889,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     std::size_t lo = 0, hi = pick->n_el;
     if (pick_slice != kAllSlices)
       slice_rows(pick->n_el, n_slices, pick_slice, lo, hi);
-    const std::size_t rays = (hi - lo) * pick->n_az;
+    const std::size_t rays = rays_in_rows(*pick, lo, hi);
     if (credit < static_cast<double>(rays))
       break;
     pick->trace = true;
@@ -893,6 +909,234 @@ void SbrTracer::slice_rows(std::size_t n_el, int slices, int s, std::size_t& lo,
   auto first = [&](std::size_t t) { return (2 * t * n_el + n - 1) / (2 * n); };
   lo = first(static_cast<std::size_t>(s));
   hi = first(static_cast<std::size_t>(s) + 1);
+}
+
+void SbrTracer::split_parts(const scene::Mesh& mesh) {
+  std::vector<std::uint32_t> tris(mesh.triangles.size());
+  for (std::uint32_t t = 0; t < tris.size(); ++t)
+    tris[t] = t;
+  auto centroid = [&](std::uint32_t t) {
+    const glm::uvec3 v = mesh.triangles[t];
+    return (glm::dvec3(mesh.positions_m[v[0]]) + glm::dvec3(mesh.positions_m[v[1]]) +
+            glm::dvec3(mesh.positions_m[v[2]])) /
+           3.0;
+  };
+  auto split = [&](auto&& self, std::size_t lo, std::size_t hi, std::size_t parts) -> void {
+    if (lo == hi)
+      return;
+    if (parts <= 1 || hi - lo == 1) {
+      PartBox box{glm::dvec3(std::numeric_limits<double>::infinity()),
+                  glm::dvec3(-std::numeric_limits<double>::infinity())};
+      for (std::size_t k = lo; k < hi; ++k) {
+        for (int j = 0; j < 3; ++j) {
+          const glm::dvec3 p(mesh.positions_m[mesh.triangles[tris[k]][j]]);
+          box.lo_m = glm::min(box.lo_m, p);
+          box.hi_m = glm::max(box.hi_m, p);
+        }
+      }
+      part_boxes_.push_back(box);
+      return;
+    }
+    glm::dvec3 lo_c(std::numeric_limits<double>::infinity()), hi_c(-lo_c);
+    for (std::size_t k = lo; k < hi; ++k) {
+      lo_c = glm::min(lo_c, centroid(tris[k]));
+      hi_c = glm::max(hi_c, centroid(tris[k]));
+    }
+    const glm::dvec3 extent = hi_c - lo_c;
+    const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0
+                     : extent.y >= extent.z                       ? 1
+                                                                  : 2;
+    const std::size_t mid = lo + (hi - lo) / 2;
+    std::nth_element(
+        tris.begin() + static_cast<std::ptrdiff_t>(lo),
+        tris.begin() + static_cast<std::ptrdiff_t>(mid),
+        tris.begin() + static_cast<std::ptrdiff_t>(hi),
+        [&](std::uint32_t a, std::uint32_t b) { return centroid(a)[axis] < centroid(b)[axis]; });
+    self(self, lo, mid, parts / 2);
+    self(self, mid, hi, parts - parts / 2);
+  };
+  split(split, 0, tris.size(), kMaskParts);
+}
+
+std::size_t SbrTracer::rays_in_rows(const Bundle& b, std::size_t lo,
+                                    std::size_t hi) const noexcept {
+  if (b.mask == kNoMask)
+    return (hi - lo) * b.n_az;
+  return row_spans_[b.mask + hi].first - row_spans_[b.mask + lo].first;
+}
+
+void SbrTracer::row_columns(const Bundle& b, std::size_t r, std::size_t& c0,
+                            std::size_t& c1) const noexcept {
+  if (b.mask == kNoMask) {
+    c0 = 0;
+    c1 = b.n_az;
+    return;
+  }
+  c0 = row_spans_[b.mask + r].lo;
+  c1 = row_spans_[b.mask + r].hi;
+}
+
+void SbrTracer::ray_cell(const Bundle& b, std::size_t j, std::size_t& ia,
+                         std::size_t& ie) const noexcept {
+  if (b.mask == kNoMask) {
+    ia = j % b.n_az;
+    ie = b.row_lo + j / b.n_az;
+    return;
+  }
+  // The last row of [row_lo, row_hi) whose rays before it are at most the ray's.
+  const RowSpan* rows = row_spans_.data() + b.mask;
+  const std::size_t at = rows[b.row_lo].first + j;
+  const RowSpan* r = std::upper_bound(rows + b.row_lo, rows + b.row_hi, at,
+                                      [](std::size_t x, const RowSpan& s) { return x < s.first; });
+  --r;
+  ie = static_cast<std::size_t>(r - rows);
+  ia = r->lo + (at - r->first);
+}
+
+void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) const noexcept {
+  if (part_first_[id] == part_first_[id + 1] || row_spans_used_ + b.n_el + 1 > row_spans_.size())
+    return;
+  const scene::ObjectState& o = scene_->objects()[id];
+  // Its ground-first paths start where the rays aim at its image in the ground (image method):
+  // mirrored in the planes of the lowest and highest ground under it, found by downward
+  // queries at its box's corners and centre, from just above its base, past its own surfaces
+  // (with nothing below, in the plane of its base, as the box's image).
+  std::array<double, 2> mirror_z{};
+  int n_images = 0;
+  if (config_.target_ground_image) {
+    const double base_z = o.bounds_min_m.z;
+    double ground_lo = std::numeric_limits<double>::infinity(), ground_hi = -ground_lo;
+    for (int k = 0; k < 5; ++k) {
+      scene::Ray down;
+      down.origin_m = glm::dvec3(k == 4    ? 0.5 * (o.bounds_min_m.x + o.bounds_max_m.x)
+                                 : (k & 1) ? o.bounds_max_m.x
+                                           : o.bounds_min_m.x,
+                                 k == 4    ? 0.5 * (o.bounds_min_m.y + o.bounds_max_m.y)
+                                 : (k & 2) ? o.bounds_max_m.y
+                                           : o.bounds_min_m.y,
+                                 base_z + 0.01);
+      down.direction = glm::dvec3(0.0, 0.0, -1.0);
+      down.t_near_m = 0.0;
+      down.t_far_m = config_.max_range_m;
+      scene::Hit hit;
+      for (int tries = 0; tries < 4 && intersect(down, hit); ++tries) {
+        if (hit.object_id != id) {
+          ground_lo = std::min(ground_lo, hit.position_m.z);
+          ground_hi = std::max(ground_hi, hit.position_m.z);
+          break;
+        }
+        down.t_near_m = hit.t_m + 1e-4;  // its own surface: on below it
+      }
+    }
+    if (!(ground_lo <= ground_hi))
+      ground_lo = ground_hi = base_z;  // nothing below: its base, as the box's image
+    for (const double z : {ground_lo, ground_hi}) {
+      bool seen = false;
+      for (int m = 0; m < n_images; ++m)
+        seen = seen || std::abs(mirror_z[static_cast<std::size_t>(m)] - 2.0 * z) < 2e-3;
+      if (!seen)
+        mirror_z[static_cast<std::size_t>(n_images++)] = 2.0 * z;
+    }
+  }
+  RowSpan* rows = row_spans_.data() + row_spans_used_;
+  for (std::size_t r = 0; r < b.n_el; ++r)
+    rows[r] = RowSpan{static_cast<std::uint32_t>(b.n_az), 0, 0};
+  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+  const glm::dmat4 xf = scene_->world_from_body(id);
+  const auto n_az = static_cast<double>(b.n_az), n_el = static_cast<double>(b.n_el);
+  // The largest angle from boresight of a direction in the field of view (|az| + |el| bounds
+  // it), and a tube more.
+  const double fov_rad = std::max(std::abs(config_.azimuth_min_rad), config_.azimuth_max_rad) +
+                         std::max(std::abs(config_.elevation_min_rad), config_.elevation_max_rad) +
+                         b.daz_rad + b.del_rad;
+  // Each part's box (part_boxes_: its facets' corners, body frame), and its images, mark the
+  // rows and columns their corners' azimuths and elevations span, one cell added on each side
+  // (a straight edge's projection departs from its corners' box by far less). A box reaching
+  // behind the antenna plane is halved along its longest side until each half is in front (then
+  // marked), or out of the field of view whole (its nearest approach to the boresight axis, over
+  // its farthest reach along it, is wider than the field of view: then left out); past 8
+  // halvings the bundle shoots its whole grid.
+  struct Box {
+    glm::dvec3 lo_m, hi_m;
+    int depth;
+  };
+  std::array<Box, 24> stack{};
+  for (std::size_t q = part_first_[id]; q < part_first_[id + 1]; ++q) {
+    for (int image = 0; image <= n_images; ++image) {
+      const double z_mirror = image > 0 ? mirror_z[static_cast<std::size_t>(image - 1)] : 0.0;
+      auto antenna = [&](const glm::dvec3& body) {
+        glm::dvec3 p(xf * glm::dvec4(body, 1.0));
+        if (image > 0)
+          p.z = z_mirror - p.z;
+        return antenna_from_world * (p - pose.position_m);
+      };
+      std::size_t n_stack = 0;
+      stack[n_stack++] = {part_boxes_[q].lo_m, part_boxes_[q].hi_m, 0};
+      while (n_stack > 0) {
+        const Box box = stack[--n_stack];
+        std::array<glm::dvec3, 8> a;
+        bool behind = false;
+        for (int k = 0; k < 8; ++k) {
+          a[static_cast<std::size_t>(k)] = antenna(glm::dvec3((k & 1) ? box.hi_m.x : box.lo_m.x,
+                                                              (k & 2) ? box.hi_m.y : box.lo_m.y,
+                                                              (k & 4) ? box.hi_m.z : box.lo_m.z));
+          behind = behind || a[static_cast<std::size_t>(k)].x <= 0.0;
+        }
+        if (behind) {
+          const glm::dvec3 centre = antenna(0.5 * (box.lo_m + box.hi_m));
+          const double half_m = 0.5 * glm::length(box.hi_m - box.lo_m);
+          const double x_max = centre.x + half_m;
+          const double lateral_min = std::hypot(centre.y, centre.z) - half_m;
+          if (x_max <= 0.0 || (lateral_min > 0.0 && std::atan2(lateral_min, x_max) > fov_rad))
+            continue;  // behind the antenna, or outside the field of view
+          if (box.depth >= 8 || n_stack + 2 > stack.size())
+            return;  // the whole grid
+          const glm::dvec3 extent = box.hi_m - box.lo_m;
+          const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0
+                           : extent.y >= extent.z                       ? 1
+                                                                        : 2;
+          Box low = box, high = box;
+          low.hi_m[axis] = high.lo_m[axis] = 0.5 * (box.lo_m[axis] + box.hi_m[axis]);
+          low.depth = high.depth = box.depth + 1;
+          stack[n_stack++] = low;
+          stack[n_stack++] = high;
+          continue;
+        }
+        double az_lo = 1e9, az_hi = -1e9, el_lo = 1e9, el_hi = -1e9;
+        for (const glm::dvec3& corner : a) {
+          const AzEl ae = azel_from_direction(corner);
+          az_lo = std::min(az_lo, ae.azimuth_rad);
+          az_hi = std::max(az_hi, ae.azimuth_rad);
+          el_lo = std::min(el_lo, ae.elevation_rad);
+          el_hi = std::max(el_hi, ae.elevation_rad);
+        }
+        const double r0 = std::floor((el_lo - b.el0_rad) / b.del_rad) - 1.0;
+        const double r1 = std::floor((el_hi - b.el0_rad) / b.del_rad) + 1.0;
+        const double c0 = std::floor((az_lo - b.az0_rad) / b.daz_rad) - 1.0;
+        const double c1 = std::floor((az_hi - b.az0_rad) / b.daz_rad) + 1.0;
+        if (!(r1 >= 0.0 && r0 < n_el && c1 >= 0.0 && c0 < n_az))
+          continue;  // outside the (clipped) grid
+        const auto row_lo = static_cast<std::size_t>(std::max(r0, 0.0));
+        const auto row_hi = static_cast<std::size_t>(std::min(r1, n_el - 1.0));
+        const auto col_lo = static_cast<std::uint32_t>(std::max(c0, 0.0));
+        const auto col_hi = static_cast<std::uint32_t>(std::min(c1, n_az - 1.0)) + 1u;
+        for (std::size_t r = row_lo; r <= row_hi; ++r) {
+          rows[r].lo = std::min(rows[r].lo, col_lo);
+          rows[r].hi = std::max(rows[r].hi, col_hi);
+        }
+      }
+    }
+  }
+  std::size_t first = 0;
+  for (std::size_t r = 0; r < b.n_el; ++r) {
+    if (rows[r].hi <= rows[r].lo)
+      rows[r].lo = rows[r].hi = 0;
+    rows[r].first = first;
+    first += rows[r].hi - rows[r].lo;
+  }
+  rows[b.n_el] = RowSpan{0, 0, first};
+  b.mask = row_spans_used_;
+  row_spans_used_ += b.n_el + 1;
 }
 
 SbrTracer::KeptPath* SbrTracer::kept_slot(const Bundle& bd, std::size_t ia, std::size_t ie,
@@ -979,7 +1223,7 @@ void SbrTracer::count_reuse(std::span<const Bundle> bundles, TraceStats& stats) 
       continue;
     // Kept, or a slice of it traced again (its other slices kept).
     ++stats.reused_bundles;
-    stats.reused_rays += b.n_az * b.n_el - b.traced_rays();
+    stats.reused_rays += all_rays(b) - traced_rays(b);
     stats.reused_contributions += untraced_kept(b);
     worst_fraction = std::max(worst_fraction, b.kept_fraction);
     oldest = std::max(oldest, frame_count_ - oldest_kept_at(b.object_id));
@@ -1272,6 +1516,7 @@ TracePlan SbrTracer::plan(const RadarPose& pose, const TraceKnobs& knobs,
   p.max_bounces = f.max_bounces;
   const auto objects = scene_->objects();
   plan_bundles_.clear();
+  row_spans_used_ = 0;
   for (std::uint32_t id = 0; id < objects.size(); ++id) {
     if (id < rays_per_object.size())
       rays_per_object[id] = 0;
@@ -1289,8 +1534,8 @@ TracePlan SbrTracer::plan(const RadarPose& pose, const TraceKnobs& knobs,
   double credit = refresh_credit_;
   choose_reuse(pose, f.max_bounces, plan_bundles_, credit, knobs.defer_refresh);
   for (const Bundle& b : plan_bundles_) {
-    const std::size_t rays = b.traced_rays();
-    p.reused_rays += b.n_az * b.n_el - rays;
+    const std::size_t rays = traced_rays(b);
+    p.reused_rays += all_rays(b) - rays;
     p.reused_contributions += untraced_kept(b);
     p.target_rays += rays;
     if (b.object_id < rays_per_object.size() && rays > 0)
@@ -1307,6 +1552,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // Bundles for targets inside the field of view.
   bundles_.clear();
   unbundled_in_range_.clear();
+  row_spans_used_ = 0;
   const std::size_t terrain_rays = frame.terrain_n_az * frame.terrain_n_el;
   std::size_t next_ray = terrain_rays;
   const auto objects = scene_->objects();
@@ -1367,14 +1613,13 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   for (Bundle& bd : bundles_) {
     if (bd.trace || same_facets_by_rays(bd.object_id))
       continue;
-    const std::size_t paid = bd.traced_rays();  // a slice's, when it was to be refreshed
+    const std::size_t paid = traced_rays(bd);  // a slice's, when it was to be refreshed
     bd.trace = true;
     bd.row_lo = 0;
     bd.row_hi = bd.n_el;
     bd.slice = kAllSlices;
     bd.memo = kMemoRecord;
-    refresh_credit_ =
-        std::max(0.0, refresh_credit_ - static_cast<double>(bd.n_az * bd.n_el - paid));
+    refresh_credit_ = std::max(0.0, refresh_credit_ - static_cast<double>(all_rays(bd) - paid));
     std::uint64_t queries = 0;
     for (std::size_t t = 0; t < facet_first_[bd.object_id + 1] - facet_first_[bd.object_id]; ++t)
       facet_of(bd, t, queries);
@@ -1430,7 +1675,9 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // The rays of the bundles traced, laid end to end after the terrain grid's.
   for (Bundle& bd : bundles_) {
     bd.first_ray = next_ray;
-    next_ray += bd.traced_rays();
+    next_ray += traced_rays(bd);
+    if (bd.trace)
+      stats.masked_rays += (bd.row_hi - bd.row_lo) * bd.n_az - traced_rays(bd);
     if (bd.keep)
       met_mover_[bd.object_id].store(0, std::memory_order_relaxed);
   }
@@ -1497,8 +1744,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
               while (b + 1 < bundles_.size() && i >= bundles_[b + 1].first_ray)
                 ++b;
               const Bundle& bd = bundles_[b];
-              const std::size_t j = i - bd.first_ray;
-              const std::size_t ia = j % bd.n_az, ie = bd.row_lo + j / bd.n_az;
+              std::size_t ia = 0, ie = 0;
+              ray_cell(bd, i - bd.first_ray, ia, ie);
               el = bd.el0_rad + (static_cast<double>(ie) + 0.5) * bd.del_rad;
               daz = bd.daz_rad;
               del = bd.del_rad;
@@ -1580,7 +1827,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       if (!bd.trace)
         continue;
       Kept& kp = kept_[id];
-      if (!bd.keep || bd.first_ray + bd.traced_rays() > usable_rays ||
+      if (!bd.keep || bd.first_ray + traced_rays(bd) > usable_rays ||
           met_mover_[id].load(std::memory_order_relaxed) != 0) {
         kp.valid = false;
         continue;
@@ -1600,10 +1847,15 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         KeptPath* region =
             kept_paths_.get() + kept_region_[id] + static_cast<std::size_t>(s) * kept_slice_slots();
         std::size_t m = 0;
-        for (std::size_t j = 0; j < (hi - lo) * bd.n_az; ++j) {
-          const std::size_t i = bd.first_ray + (lo - bd.row_lo) * bd.n_az + j;
-          for (std::uint8_t q = 0; q < counts_[i]; ++q)
-            region[m++] = region[j * per_ray + q];
+        std::size_t i = bd.first_ray + rays_in_rows(bd, bd.row_lo, lo);
+        for (std::size_t r = lo; r < hi; ++r) {
+          std::size_t c0 = 0, c1 = 0;
+          row_columns(bd, r, c0, c1);
+          for (std::size_t ia = c0; ia < c1; ++ia, ++i) {
+            const std::size_t j = (r - lo) * bd.n_az + ia;  // its slot in the slice's region
+            for (std::uint8_t q = 0; q < counts_[i]; ++q)
+              region[m++] = region[j * per_ray + q];
+          }
         }
         KeptSlice& ks = kp.slices[static_cast<std::size_t>(s)];
         ks.radar_m = pose.position_m;

@@ -156,6 +156,12 @@ struct SbrConfig {
   int reuse_refresh_frames = 16;                     ///< >= 1
   int reuse_refresh_slices = 4;                      ///< 1..kMaxKeptSlices
   static constexpr int kMaxKeptSlices = 8;
+  /// A target's bundle shoots, in each row of its grid, only the columns where a part of its
+  /// facets or its image in the ground below projects (16 parts a target, split at setup; each
+  /// part's box, one cell added on every side), instead of its whole box: a ray elsewhere can
+  /// meet the target only by way of another object (those paths are then not traced). The
+  /// grid and its spacing stay the box's, so the rays shot are the same rays.
+  bool mask_target_rays = true;
 };
 
 /// Per-frame overrides for the fidelity governor. Defaults leave the configuration as it is.
@@ -267,6 +273,9 @@ struct TraceStats {
   std::uint64_t reused_contributions = 0;
   std::uint64_t refreshed_bundles = 0;
   std::uint64_t refresh_deferred = 0;  ///< frames whose refresh waited (TraceKnobs)
+  /// Cells of the traced bundles' grids where none of the target's facets projects
+  /// (SbrConfig::mask_target_rays): rays not shot.
+  std::uint64_t masked_rays = 0;
   double reuse_max_angle_fraction = 0.0;
   std::uint64_t reuse_max_age_frames = 0;
 };
@@ -348,10 +357,43 @@ class SbrTracer {
     /// (kAllSlices: the whole bundle).
     std::size_t row_lo = 0, row_hi = 0;
     std::uint8_t slice = kAllSlices;
-    [[nodiscard]] std::size_t traced_rays() const noexcept {
-      return trace ? (row_hi - row_lo) * n_az : 0;
-    }
+    /// Its rows' spans of columns in row_spans_ (n_el + 1 entries from here), or kNoMask: every
+    /// column of every row.
+    std::size_t mask = kNoMask;
   };
+  static constexpr std::size_t kNoMask = static_cast<std::size_t>(-1);
+  /// The columns [lo, hi) of one row of a bundle's grid where its target's facets or their
+  /// ground images project (mask_rows), and the rays of the rows before it.
+  struct RowSpan {
+    std::uint32_t lo = 0, hi = 0;
+    std::size_t first = 0;
+  };
+  /// Rays of `b`'s rows [lo, hi) (those its mask leaves), of those it traces this frame, and of
+  /// all its rows.
+  [[nodiscard]] std::size_t rays_in_rows(const Bundle& b, std::size_t lo,
+                                         std::size_t hi) const noexcept;
+  [[nodiscard]] std::size_t traced_rays(const Bundle& b) const noexcept {
+    return b.trace ? rays_in_rows(b, b.row_lo, b.row_hi) : 0;
+  }
+  [[nodiscard]] std::size_t all_rays(const Bundle& b) const noexcept {
+    return rays_in_rows(b, 0, b.n_el);
+  }
+  /// The columns [c0, c1) of row `r` of `b` that are shot.
+  void row_columns(const Bundle& b, std::size_t r, std::size_t& c0, std::size_t& c1) const noexcept;
+  /// The grid cell (column, row) of the j-th ray `b` traces this frame.
+  void ray_cell(const Bundle& b, std::size_t j, std::size_t& ia, std::size_t& ie) const noexcept;
+  /// Fills `b`'s mask (SbrConfig::mask_target_rays) for `pose`, or leaves it kNoMask.
+  void mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) const noexcept;
+  /// A part of a target's facets (mask_rows): the box of their corners, body frame.
+  struct PartBox {
+    glm::dvec3 lo_m, hi_m;
+  };
+  static constexpr std::size_t kMaskParts = 16;
+  void split_parts(const scene::Mesh& mesh);
+  std::vector<PartBox> part_boxes_;
+  std::vector<std::size_t> part_first_;     ///< per object, into part_boxes_ (+1 entry)
+  mutable std::vector<RowSpan> row_spans_;  ///< this frame's masks (capacity set at setup)
+  mutable std::size_t row_spans_used_ = 0;
   static constexpr std::uint8_t kAllSlices = 0xff;
   /// Rows [lo, hi) of slice `s` of `slices` in a grid of `n_el` rows: those whose centre lies in
   /// the slice's band, (ie + 1/2) / n_el in [s / slices, (s + 1) / slices).

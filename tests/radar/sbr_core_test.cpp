@@ -672,3 +672,114 @@ TEST(SbrLoopVsRcs, EdgeTermsAreBitIdenticalWhateverTheThreading) {
 }
 
 }  // namespace
+
+namespace {
+// A metal bar (length x w x w, along its body x, in `segments` boxes end to end, as a power
+// line's) on `world_from_body`, over the asphalt ground of plate_on_asphalt (a 0-size plate
+// there: the ground alone).
+sc::SceneDescription bar_over_asphalt(double length_m, double w_m, const glm::dmat4& xf,
+                                      int segments) {
+  sc::SceneDescription d = plate_on_asphalt(0.0, 0.0, 200.0);
+  sc::ObjectDesc bar{"bar", {}, xf, std::nullopt};
+  const auto r = static_cast<float>(w_m / 2);
+  for (int s = 0; s < segments; ++s) {
+    const auto x0 = static_cast<float>(length_m * (s / double(segments) - 0.5));
+    const auto x1 = static_cast<float>(length_m * ((s + 1) / double(segments) - 0.5));
+    const auto base = static_cast<unsigned>(bar.mesh.positions_m.size());
+    for (int k = 0; k < 8; ++k)
+      bar.mesh.positions_m.emplace_back((k & 1) ? x1 : x0, (k & 2) ? r : -r, (k & 4) ? r : -r);
+    for (const glm::uvec3 t : {glm::uvec3{0, 2, 3},
+                               {0, 3, 1},
+                               {4, 5, 7},
+                               {4, 7, 6},
+                               {0, 1, 5},
+                               {0, 5, 4},
+                               {2, 6, 7},
+                               {2, 7, 3},
+                               {0, 4, 6},
+                               {0, 6, 2},
+                               {1, 3, 7},
+                               {1, 7, 5}})
+      bar.mesh.triangles.push_back(t + base);
+  }
+  bar.mesh.triangle_material.assign(bar.mesh.triangles.size(), 0);
+  d.objects[0] = bar;  // in place of the plate
+  return d;
+}
+
+// The returns of one frame with SbrConfig::mask_target_rays on and off, and the stats.
+struct MaskPair {
+  std::vector<rd::Contribution> on, off;
+  rd::TraceStats on_stats, off_stats;
+};
+MaskPair trace_masked_and_not(const sc::Scene& scene, const rd::SbrConfig& base,
+                              const rd::RadarPose& pose) {
+  MaskPair p;
+  rd::SbrConfig c = base;
+  c.mask_target_rays = true;
+  rd::SbrTracer on(scene, c);
+  p.on = trace(on, pose, {}, &p.on_stats);
+  c.mask_target_rays = false;
+  rd::SbrTracer off(scene, c);
+  p.off = trace(off, pose, {}, &p.off_stats);
+  return p;
+}
+
+void expect_same_returns(const MaskPair& p) {
+  ASSERT_EQ(p.on.size(), p.off.size());
+  for (std::size_t i = 0; i < p.on.size(); ++i) {
+    const rd::Contribution &a = p.on[i], &b = p.off[i];
+    ASSERT_EQ(a.amplitude, b.amplitude) << i;
+    ASSERT_EQ(a.range_m, b.range_m) << i;
+    ASSERT_EQ(a.azimuth_rad, b.azimuth_rad) << i;
+    ASSERT_EQ(a.elevation_rad, b.elevation_rad) << i;
+    ASSERT_EQ(a.bounces, b.bounces) << i;
+  }
+}
+}  // namespace
+
+TEST(SbrMask, ABarOverTheGroundKeepsEveryReturnFromFarFewerRays) {
+  // A 40 m bar, 0.2 m thick, 6 m above asphalt, turned 40 deg in azimuth and sloping 5 deg:
+  // its box (and the box's image) is mostly empty. Masked to where its parts and their image in
+  // the ground below project, the bundle shoots the same rays there and none elsewhere, so
+  // every return, the bar-ground double bounces included (their rays aim at the bar's image
+  // in the ground, 6 m below its base's plane), is the unmasked trace's, bit for bit.
+  const glm::dmat4 xf =
+      glm::rotate(glm::rotate(glm::translate(glm::dmat4(1.0), glm::dvec3(0.0, 0.0, 6.0)),
+                              40.0 * kPi / 180.0, glm::dvec3(0.0, 0.0, 1.0)),
+                  5.0 * kPi / 180.0, glm::dvec3(0.0, 1.0, 0.0));
+  sc::Scene scene(bar_over_asphalt(40.0, 0.2, xf, 10));
+  const rd::RadarPose pose = looking_at_origin_from({-1.0, 0.2, 0.5}, 150.0);
+  const MaskPair p = trace_masked_and_not(scene, narrow(0.3, 0.1, rd::Polarisation::kHH), pose);
+  std::size_t doubles = 0;
+  for (const rd::Contribution& x : p.off)
+    doubles += x.coherent && x.bounces == 2 ? 1u : 0u;
+  std::cout << "bar over asphalt: " << p.off_stats.rays << " rays unmasked, " << p.on_stats.rays
+            << " masked (" << p.on_stats.masked_rays << " left out), " << p.off.size()
+            << " returns, " << doubles << " double bounces\n";
+  EXPECT_GT(doubles, 10u);
+  EXPECT_LT(2 * p.on_stats.rays, p.off_stats.rays);
+  EXPECT_EQ(p.on_stats.rays + p.on_stats.masked_rays, p.off_stats.rays);
+  expect_same_returns(p);
+}
+
+TEST(SbrMask, ABarReachingBehindTheAntennaKeepsEveryReturn) {
+  // A 120 m bar along x (one box: each of its facets runs its whole length), 5 m above the
+  // ground, the radar 30 m up over its middle looking along it 25 deg down: half the bar is
+  // behind the antenna plane, so its bundle spans the whole field of view, and so does every
+  // part of it. The mask halves the parts that reach behind until each half is in front or out
+  // of the field of view; the returns are the unmasked trace's, bit for bit.
+  const glm::dmat4 xf = glm::translate(glm::dmat4(1.0), glm::dvec3(0.0, 0.0, 5.0));
+  sc::Scene scene(bar_over_asphalt(120.0, 0.3, xf, 1));
+  rd::RadarPose pose;
+  pose.position_m = {0.0, -6.0, 30.0};
+  const double dip = 25.0 * kPi / 180.0;
+  const glm::dvec3 x(std::cos(dip), 0.0, -std::sin(dip)), y(0.0, 1.0, 0.0);
+  pose.world_from_antenna = glm::dmat3(x, y, glm::cross(x, y));
+  const MaskPair p = trace_masked_and_not(scene, narrow(0.3, 0.1, rd::Polarisation::kHH), pose);
+  std::cout << "bar behind the antenna: " << p.off_stats.rays << " rays unmasked, "
+            << p.on_stats.rays << " masked, " << p.off.size() << " returns\n";
+  EXPECT_GT(p.off.size(), 100u);
+  EXPECT_LT(2 * p.on_stats.rays, p.off_stats.rays);
+  expect_same_returns(p);
+}

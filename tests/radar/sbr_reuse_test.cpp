@@ -332,7 +332,7 @@ TEST(SbrReuse, TheRefreshGoesASliceAtATime) {
   // each refresh traces one slice of the bundle's rows (about a quarter of its rays), the other
   // three slices' kept paths are re-evaluated, and every frame gives the first frame's returns
   // back: the slices' rows together are each row once (a row missed or counted twice changes
-  // the count and the coherent sums). Over 8 frames each slice is traced twice.
+  // the count and the coherent sums). Over 8 frames each slice is traced about twice.
   const double f = 10e9;
   const double k = 2.0 * kPi * f / kC;
   sc::Scene scene(with({trihedral(0.5)}));
@@ -349,7 +349,9 @@ TEST(SbrReuse, TheRefreshGoesASliceAtATime) {
     const Frame x = trace(tracer, pose);
     EXPECT_EQ(x.stats.reused_bundles, 1u) << frame;
     EXPECT_LE(static_cast<double>(x.stats.rays), 0.3 * all_rays) << frame;
-    EXPECT_LE(x.stats.reuse_max_age_frames, 4u) << frame;
+    // A slice with more than a quarter of the rays (the trihedral is narrower in its top and
+    // bottom rows) waits a frame more for its credit.
+    EXPECT_LE(x.stats.reuse_max_age_frames, 5u) << frame;
     traced += static_cast<double>(x.stats.rays);
     ASSERT_EQ(x.out.size(), first.out.size()) << frame;
     for (int bounces = 1; bounces <= 3; ++bounces) {
