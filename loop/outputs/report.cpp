@@ -395,6 +395,7 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"lit_facets", r.trace.lit_facets},
                   {"partial_facets", r.trace.partial_facets},
                   {"facet_queries", r.trace.facet_queries},
+                  {"replayed_mover_facets", r.trace.replayed_mover_facets},
                   {"edges_used", r.trace.edges_used},
                   {"edges_shadowed", r.trace.edges_shadowed},
                   {"edges_skipped", r.trace.edges_skipped},
