@@ -948,9 +948,10 @@ double SbrTracer::mover_memo_fraction(const RadarPose& pose, const Bundle& b,
 void SbrTracer::record_mover_memo(const RadarPose& pose, const TraceKnobs& knobs,
                                   TraceStats& stats) noexcept {
   for (const Bundle& bd : bundles_) {
+    const std::size_t n = facet_first_[bd.object_id + 1] - facet_first_[bd.object_id];
+    stats.mover_facets += scene_->objects()[bd.object_id].moving ? n : 0;
     if (bd.memo != kMemoRolling)
       continue;
-    const std::size_t n = facet_first_[bd.object_id + 1] - facet_first_[bd.object_id];
     glm::dvec3 lo, hi;
     target_region(scene_->objects()[bd.object_id], config_.target_ground_image, lo, hi);
     MemoState now{true, pose.position_m, bd.spacing_m, knobs.facet_centroid_only, frame_count_};

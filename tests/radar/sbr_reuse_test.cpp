@@ -534,6 +534,7 @@ TEST(SbrReuse, AMoversFacetsAskTheSceneAgainOneGroupAFrame) {
     const Frame x = trace(tracer, pose);
     EXPECT_EQ(x.stats.lit_facets, 32u) << frame;
     EXPECT_EQ(x.stats.facet_queries, first.stats.facet_queries / 16) << frame;
+    EXPECT_EQ(x.stats.mover_facets, 32u) << frame;
     EXPECT_EQ(x.stats.replayed_mover_facets, 30u) << frame;
   }
 }
