@@ -242,8 +242,9 @@ struct TraceStats {
   std::uint64_t lit_facets = 0;      ///< facets returned whole by exact PO (bounce 1, header)
   std::uint64_t partial_facets = 0;  ///< partly lit facets returned by their lit sub-triangles
   std::uint64_t facet_queries = 0;   ///< occlusion queries of the bounce-1 rule and the edges
-  /// Facets of moving targets in the facet pass, and those of them whose bounce-1 occlusion
-  /// answers were read back (SbrTracer's facet memo of movers) instead of asked again.
+  /// Facets of moving targets in the facet pass, and those of them in the groups that read
+  /// their bounce-1 occlusion answers back this frame (SbrTracer's facet memo of movers) instead
+  /// of asking again (a facet with no answer recorded, turned away then, still asks).
   std::uint64_t mover_facets = 0;
   std::uint64_t replayed_mover_facets = 0;
   std::uint64_t edges_used = 0;      ///< edge-diffraction contributions (SbrConfig::edges)
