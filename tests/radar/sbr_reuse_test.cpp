@@ -538,3 +538,32 @@ TEST(SbrReuse, AMoversFacetsAskTheSceneAgainOneGroupAFrame) {
     EXPECT_EQ(x.stats.replayed_mover_facets, 30u) << frame;
   }
 }
+
+TEST(SbrReuse, AMoversFacetsAskAgainWhenItHasTurnedPastTheLimit) {
+  // A 1 m plate on a waypoint trajectory through a 90 degree turn of radius 5 cm at 1 m/s (body x
+  // along the path: the plate turns with it). Recorded 1 cm into the turn, then traced 1 cm
+  // later: it has moved 1 cm (0.4 of half a 5 cm tube) but turned by 0.2 rad, which moves its
+  // edges by about 0.1 m and its self-shadowing by D phi: its facets ask the scene again. 10 um
+  // later instead (a turn of 2e-4 rad, phi (D + r) = 0.4 mm), they read their answers back.
+  const double f = 10e9, rho = 1000.0, spacing = 0.05, r = 0.05;
+  sc::ObjectDesc mover = grid_plate(1.0, 1, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0});
+  mover.motion.reset();
+  mover.trajectory = sc::Trajectory{{{-1.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}}, 1.0, r};
+  sc::Scene scene(with({mover}));
+  const double into_turn_s = (1.0 - r) + 0.01;  // the turn starts r before the corner
+  const rd::RadarPose pose = pose_around(rho, 0.0);
+  auto second = [&](double dt_s) {
+    rd::SbrTracer tracer(scene, config(f, spacing));
+    scene.set_time(into_turn_s);
+    const Frame first = trace(tracer, pose);
+    EXPECT_EQ(first.stats.facet_queries, 14u);  // two facets lit whole: 7 samples each
+    scene.set_time(into_turn_s + dt_s);
+    return trace(tracer, pose);
+  };
+  const Frame turned = second(0.01);
+  EXPECT_EQ(turned.stats.replayed_mover_facets, 0u);
+  EXPECT_EQ(turned.stats.facet_queries, 14u);
+  const Frame barely = second(1e-5);
+  EXPECT_EQ(barely.stats.replayed_mover_facets, 2u);
+  EXPECT_EQ(barely.stats.facet_queries, 0u);
+}
