@@ -156,6 +156,11 @@ double FidelityGovernor::model_sensor_ms(const radar::TracePlan& plan) const noe
                  config_.sensor_ns_per_terrain_return * terrain_returns);
 }
 
+radar::TracePlan FidelityGovernor::plan_for(const radar::RadarPose& pose) noexcept {
+  ++decision_.plans;
+  return tracer_->plan(pose, decision_.knobs);
+}
+
 double FidelityGovernor::predict_ms(const radar::TracePlan& plan) const noexcept {
   return trace_factor_ * model_trace_ms(plan) + sensor_factor_ * model_sensor_ms(plan);
 }
@@ -191,10 +196,11 @@ int FidelityGovernor::refine_with_kept(const radar::RadarPose& pose, int min_lev
     if (lagging_.empty())
       continue;  // level l itself: it did not fit
     // Their rays at level l (what tracing them again costs), then the mix: they keep theirs.
+    ++decision_.plans;
     (void)tracer_->plan(pose, decision_.knobs, rays_per_object_);
     for (std::uint32_t id : lagging_)
       spacing_m_[id] = last_spacing_m_[id];
-    radar::TracePlan mixed = tracer_->plan(pose, decision_.knobs);
+    radar::TracePlan mixed = plan_for(pose);
     double cost = predict_ms(mixed);
     if (cost > deadline_ms_)
       continue;
@@ -217,12 +223,12 @@ int FidelityGovernor::refine_with_kept(const radar::RadarPose& pose, int min_lev
     // The estimate leaves out the sensor's share of their returns: the weakest go back while
     // the whole is over the deadline.
     if (upgraded > 0) {
-      mixed = tracer_->plan(pose, decision_.knobs);
+      mixed = plan_for(pose);
       cost = predict_ms(mixed);
       while (cost > deadline_ms_ && upgraded > 0) {
         const std::uint32_t id = lagging_[--upgraded];
         spacing_m_[id] = last_spacing_m_[id];
-        mixed = tracer_->plan(pose, decision_.knobs);
+        mixed = plan_for(pose);
         cost = predict_ms(mixed);
       }
     }
@@ -288,25 +294,27 @@ const GovernorDecision& FidelityGovernor::decide_at(const radar::RadarPose& pose
 const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, int min_level,
                                                  int max_level) noexcept {
   GovernorDecision& d = decision_;
+  d.plans = 0;
   knobs_for(0);
-  const radar::TracePlan full = tracer_->plan(pose, d.knobs);
+  const radar::TracePlan full = plan_for(pose);
   d.full_rays = full.rays();
   int level = min_level;
   if (level > 0)
     knobs_for(level);
-  radar::TracePlan plan = level > 0 ? tracer_->plan(pose, d.knobs) : full;
+  radar::TracePlan plan = level > 0 ? plan_for(pose) : full;
   double predicted = predict_ms(plan);
   // The finest level that fits (the cost falls with the level: one plan per level tried).
   std::array<double, kMaxLevel + 1> predicted_at{};
   std::array<radar::TracePlan, kMaxLevel + 1> plan_at{};
   std::array<bool, kMaxLevel + 1> deferred_at{};
+  std::array<bool, kMaxLevel + 1> known{};  // predicted_at set
   // Over the deadline, a level first defers the refresh of kept paths (TraceKnobs): the same
   // fidelity, the kept paths a frame older.
   auto defer_if_late = [&] {
     if (predicted <= deadline_ms_ || !config_.enabled || !tracer_->config().reuse_static_paths)
       return;
     d.knobs.defer_refresh = true;
-    const radar::TracePlan deferred = tracer_->plan(pose, d.knobs);
+    const radar::TracePlan deferred = plan_for(pose);
     const double p = predict_ms(deferred);
     if (p < predicted) {
       plan = deferred;
@@ -319,23 +327,49 @@ const GovernorDecision& FidelityGovernor::choose(const radar::RadarPose& pose, i
     predicted_at[static_cast<std::size_t>(level)] = predicted;
     plan_at[static_cast<std::size_t>(level)] = plan;
     deferred_at[static_cast<std::size_t>(level)] = d.knobs.defer_refresh;
+    known[static_cast<std::size_t>(level)] = true;
   };
-  defer_if_late();
-  remember();
-  while (predicted > deadline_ms_ && level < max_level) {
-    ++level;
+  auto evaluate = [&](int l) {
+    level = l;
     knobs_for(level);
-    plan = tracer_->plan(pose, d.knobs);
+    plan = plan_for(pose);
     predicted = predict_ms(plan);
     defer_if_late();
     remember();
-  }
+  };
+  defer_if_late();
+  remember();
+  // What no level reduces: the frame's fixed trace cost, the facet pass over the bundled
+  // targets (the same facets at every level: whether a target has a bundle does not depend on
+  // its spacing) and the sensor's cells; every other term of the model only adds to it (its
+  // coefficients are >= 0, the same sums in the same order, so this holds in floating point
+  // too). When that floor is over the deadline no level fits, and trying each in turn would
+  // end at the last: the search goes there at once, then back through the levels below while
+  // they are within 5 % of the deadline (below), each planned when reached. The same choice,
+  // without the plans of the levels in between (on the terrain at 100 Hz, 26 plans a frame, a
+  // few ms on the frame's critical path, down to 5: docs/performance.md).
+  const double floor_ms =
+      trace_factor_ *
+          (config_.trace_ms_per_frame +
+           1e-6 * (config_.trace_ns_per_facet * static_cast<double>(full.target_facets))) +
+      sensor_factor_ * (1e-6 * (config_.sensor_ns_per_cell * prev_cells_));
+  if (predicted > deadline_ms_ && level < max_level && floor_ms > deadline_ms_)
+    evaluate(max_level);
+  while (predicted > deadline_ms_ && level < max_level)
+    evaluate(level + 1);
   if (predicted > deadline_ms_) {
     // Nothing fits: the part of the cost the levels do not reach (the sensor's cells) is over
     // the deadline. Degrade no further than to within 5 % of the deadline of the cheapest.
     const double enough = predicted + 0.05 * deadline_ms_;
-    while (level > min_level && predicted_at[static_cast<std::size_t>(level - 1)] <= enough)
-      --level;
+    int chosen = level;
+    while (chosen > min_level) {
+      if (!known[static_cast<std::size_t>(chosen - 1)])
+        evaluate(chosen - 1);
+      if (predicted_at[static_cast<std::size_t>(chosen - 1)] > enough)
+        break;
+      --chosen;
+    }
+    level = chosen;
     knobs_for(level);
     d.knobs.defer_refresh = deferred_at[static_cast<std::size_t>(level)];
     predicted = predicted_at[static_cast<std::size_t>(level)];

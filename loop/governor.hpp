@@ -130,7 +130,9 @@ struct GovernorDecision {
   double estimated_snr_error_db = 0.0;  ///< kLevelSnrError_db at the level
   std::size_t rays = 0;                 ///< rays planned
   std::size_t full_rays = 0;            ///< rays level 0 would have shot
-  radar::TraceKnobs knobs{};            ///< spans point into the governor
+  /// Trace plans made to choose (SbrTracer::plan, the governor's own cost on the frame's path).
+  std::size_t plans = 0;
+  radar::TraceKnobs knobs{};  ///< spans point into the governor
 };
 
 class FidelityGovernor {
@@ -186,6 +188,8 @@ class FidelityGovernor {
 
  private:
   [[nodiscard]] double predict_ms(const radar::TracePlan& plan) const noexcept;
+  /// The tracer's plan at the decision's knobs, counted in GovernorDecision::plans.
+  [[nodiscard]] radar::TracePlan plan_for(const radar::RadarPose& pose) noexcept;
   /// The finest level in [min_level, max_level] predicted within the deadline (else max_level).
   const GovernorDecision& choose(const radar::RadarPose& pose, int min_level,
                                  int max_level) noexcept;

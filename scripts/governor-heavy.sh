@@ -34,7 +34,7 @@ pulses="${PULSES:-$(/usr/bin/python3 -c "print(min(32, int(1000.0 / $rate / (16 
     "$rate" "$pulses"
 } >"$scenario"
 echo "governor-heavy: $frames frames of examples/terrain_movers.toml at $rate Hz ($pulses pulses per beam), governor on ($(nproc) cores)"
-"$exe" run "$scenario" --frames "$frames" --out "$out/run" | grep -E "budget|governor|frame  |trace|sensor" || true
+"$exe" run "$scenario" --frames "$frames" --out "$out/run" | grep -E "budget|governor|frame  |trace|sensor|movers" || true
 /usr/bin/python3 - "$out/run/report.json" "$scenario" <<'PY'
 import json, sys, tomllib
 r = json.load(open(sys.argv[1]))

@@ -395,6 +395,8 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"lit_facets", r.trace.lit_facets},
                   {"partial_facets", r.trace.partial_facets},
                   {"facet_queries", r.trace.facet_queries},
+                  {"mover_facets", r.trace.mover_facets},
+                  {"replayed_mover_facets", r.trace.replayed_mover_facets},
                   {"edges_used", r.trace.edges_used},
                   {"edges_shadowed", r.trace.edges_shadowed},
                   {"edges_skipped", r.trace.edges_skipped},
@@ -631,6 +633,19 @@ void print_reuse_line(const RunReport& p, std::FILE* out) {
   }
 }
 
+// The facet memo of moving targets (radar/em/sbr.hpp, SbrTracer's mover_memo_): what share of
+// their facets' shadowing answers came from earlier frames.
+void print_mover_memo_line(const RunReport& p, std::FILE* out) {
+  const radar::TraceStats& t = p.result->trace;
+  if (t.replayed_mover_facets == 0 || t.mover_facets == 0)
+    return;
+  std::fprintf(
+      out,
+      "  movers      %.1f %% of the moving targets' facets read their shadowing from "
+      "earlier frames (motion since within half a ray tube, no other mover near)\n",
+      100.0 * static_cast<double>(t.replayed_mover_facets) / static_cast<double>(t.mover_facets));
+}
+
 // The outcome per target: one row per object that was in the beam, then the false alarms.
 void print_outcome_lines(const RunReport& p, std::FILE* out) {
   const OutcomeTotals& o = p.result->outcome;
@@ -762,6 +777,7 @@ void print_summary(const RunReport& report, std::FILE* out) {
   print_run_lines(report, out);
   print_governor_line(report, out);
   print_reuse_line(report, out);
+  print_mover_memo_line(report, out);
   print_exception_lines(report, out);
   print_outcome_lines(report, out);
   print_output_lines(report, out);

@@ -290,6 +290,17 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
                   kFacetSamples + kMaxFacetSubdivisions * kMaxFacetSubdivisions);
     facet_memo_.assign(facet_first_.back(), FacetMemo{});
     memo_state_.assign(desc.objects.size(), MemoState{});
+    // Movers' facets keep their answers too, in groups asked again in turn (mover_memo_).
+    memo_groups_ = std::min(static_cast<std::size_t>(c.reuse_refresh_frames), kMaxMemoGroups);
+    mover_memo_first_.assign(desc.objects.size(), kNoRegion);
+    std::size_t n_states = 0;
+    for (const std::uint32_t m : movers_) {
+      if (is_target_[m]) {
+        mover_memo_first_[m] = n_states;
+        n_states += memo_groups_;
+      }
+    }
+    mover_memo_.assign(n_states, MemoState{});
   }
 }
 
@@ -783,6 +794,8 @@ bool SbrTracer::mover_near(const RadarPose& pose, std::uint32_t id) const noexce
   sight.direction = sight.t_far_m > 0.0 ? to / sight.t_far_m : glm::dvec3(0.0, 0.0, 1.0);
   sight.t_near_m = 0.0;
   for (const std::uint32_t m : movers_) {
+    if (m == id)
+      continue;  // a mover's own motion is the memo's rule (mover_memo_fraction), not this one
     const scene::ObjectState& o = objects[m];
     // Within the target's region, or across the line of sight (the mover's box grown by the
     // region's half extent: any line from the region to the radar).
@@ -1189,6 +1202,24 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
                             std::span<Bundle> bundles) const noexcept {
   for (Bundle& b : bundles) {
     b.memo = kMemoNone;
+    b.memo_replay_groups = 0;
+    if (!facet_memo_.empty() && mover_memo_first_[b.object_id] != kNoRegion &&
+        !mover_near(pose, b.object_id)) {
+      // A mover with no other mover near it: its groups of facets read back the answers
+      // recorded within the rule, except this frame's turn, which asks again (mover_memo_).
+      b.memo = kMemoRolling;
+      const std::size_t turn = frame_count_ % memo_groups_;
+      for (std::size_t g = 0; g < memo_groups_; ++g) {
+        const MemoState& m = mover_memo_[mover_memo_first_[b.object_id] + g];
+        if (g != turn && m.valid && m.spacing_m == b.spacing_m &&
+            m.centroid_only == knobs.facet_centroid_only &&
+            frame_count_ - m.recorded_at <
+                static_cast<std::uint64_t>(config_.reuse_refresh_frames) &&
+            mover_memo_fraction(pose, b, m) <= 1.0)
+          b.memo_replay_groups |= std::uint32_t{1} << g;
+      }
+      continue;
+    }
     if (facet_memo_.empty() || !b.still)
       continue;
     // A bundle traced to keep its paths records its facets' answers with them.
@@ -1204,6 +1235,75 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
     if (dtheta <= limit)
       b.memo = kMemoReplay;
   }
+}
+
+double SbrTracer::mover_memo_fraction(const RadarPose& pose, const Bundle& b,
+                                      const MemoState& m) const noexcept {
+  // A moving target's occlusion answers toward the radar change in two ways:
+  // - by its own parts (self-shadowing): these depend only on the direction to the radar in
+  //   its body frame, which has turned by at most dtheta + phi since the recording (dtheta:
+  //   the direction from its region's centre to the radar in the world, phi: the body's own
+  //   turn); a shadow boundary of its own then moves across it by at most D (dtheta + phi)
+  //   (D: the region's diagonal), as for a static target (SbrConfig::reuse_static_paths);
+  // - by the rest of the scene (terrain, static objects; no other mover is near, choose_memo):
+  //   a shadow boundary cast on it moves, relative to the target, by the aspect term above plus
+  //   the target's own displacement against the scene, at most |d origin| + phi r for a body
+  //   point within r of the body origin (a rotation by phi moves it by 2 r sin(phi / 2)).
+  // Their sum within half a ray tube (D limit, limit = spacing / 2D from aspect_change) keeps
+  // every answer to the rays' own resolution: the fraction returned is that sum over D limit.
+  double dtheta = 0.0, limit = 0.0, extent_m = 0.0;
+  glm::dvec3 lo, hi;
+  target_region(scene_->objects()[b.object_id], config_.target_ground_image, lo, hi);
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  aspect_change(pose, b, centre + (m.radar_m - m.centre_m), dtheta, limit, extent_m);
+  const glm::dmat4& now = frame_world_from_body_[b.object_id];
+  const glm::dmat3 turn = glm::dmat3(now) * glm::inverse(glm::dmat3(m.world_from_body));
+  const double phi =
+      std::acos(std::clamp(0.5 * (turn[0][0] + turn[1][1] + turn[2][2] - 1.0), -1.0, 1.0));
+  const double moved_m = glm::length(glm::dvec3(now[3]) - glm::dvec3(m.world_from_body[3]));
+  const double half_tube_m = limit * extent_m;
+  if (!(half_tube_m > 0.0))
+    return std::numeric_limits<double>::infinity();
+  return (extent_m * (dtheta + phi) + moved_m + phi * m.reach_m) / half_tube_m;
+}
+
+void SbrTracer::record_mover_memo(const RadarPose& pose, const TraceKnobs& knobs,
+                                  TraceStats& stats) noexcept {
+  for (const Bundle& bd : bundles_) {
+    const std::size_t n = facet_first_[bd.object_id + 1] - facet_first_[bd.object_id];
+    stats.mover_facets += scene_->objects()[bd.object_id].moving ? n : 0;
+    if (bd.memo != kMemoRolling)
+      continue;
+    glm::dvec3 lo, hi;
+    target_region(scene_->objects()[bd.object_id], config_.target_ground_image, lo, hi);
+    MemoState now{true, pose.position_m, bd.spacing_m, knobs.facet_centroid_only, frame_count_};
+    now.centre_m = 0.5 * (lo + hi);
+    now.world_from_body = frame_world_from_body_[bd.object_id];
+    now.reach_m =
+        glm::length(glm::dvec3(now.world_from_body[3]) - now.centre_m) + 0.5 * glm::length(hi - lo);
+    for (std::size_t g = 0; g < memo_groups_; ++g) {
+      if (((bd.memo_replay_groups >> g) & 1u) == 0)
+        mover_memo_[mover_memo_first_[bd.object_id] + g] = now;
+      else if (g < n)  // its facets t = g, g + groups, ... read their answers back
+        stats.replayed_mover_facets += (n - g + memo_groups_ - 1) / memo_groups_;
+    }
+  }
+}
+
+SbrTracer::FacetMemo* SbrTracer::memo_record(const Bundle& bd, std::size_t slot,
+                                             std::size_t t) noexcept {
+  if (bd.memo == kMemoRecord ||
+      (bd.memo == kMemoRolling && ((bd.memo_replay_groups >> (t % memo_groups_)) & 1u) == 0))
+    return &facet_memo_[slot];
+  return nullptr;
+}
+
+const SbrTracer::FacetMemo* SbrTracer::memo_replay(const Bundle& bd, std::size_t slot,
+                                                   std::size_t t) const noexcept {
+  if (bd.memo == kMemoReplay ||
+      (bd.memo == kMemoRolling && ((bd.memo_replay_groups >> (t % memo_groups_)) & 1u) != 0))
+    return &facet_memo_[slot];
+  return nullptr;
 }
 
 bool SbrTracer::same_facets_by_rays(std::uint32_t id) const noexcept {
@@ -1593,8 +1693,8 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   choose_memo(pose, knobs, bundles_);
   auto facet_of = [&](const Bundle& bd, std::size_t t, std::uint64_t& queries) {
     const std::size_t slot = facet_first_[bd.object_id] + t;
-    FacetMemo* record = bd.memo == kMemoRecord ? &facet_memo_[slot] : nullptr;
-    const FacetMemo* replay = bd.memo == kMemoReplay ? &facet_memo_[slot] : nullptr;
+    FacetMemo* record = memo_record(bd, slot, t);
+    const FacetMemo* replay = memo_replay(bd, slot, t);
     facet_light_[slot] = facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only, bd.spacing_m,
                                     facet_out_[slot], queries, record, replay);
   };
@@ -1631,6 +1731,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       memo_state_[bd.object_id] = {true, pose.position_m, bd.spacing_m, knobs.facet_centroid_only,
                                    frame_count_};
   }
+  record_mover_memo(pose, knobs, stats);
   {
     std::uint64_t n_lit = 0, n_partial = 0;
     for (const Bundle& bd : bundles_) {

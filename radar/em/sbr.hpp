@@ -255,6 +255,11 @@ struct TraceStats {
   std::uint64_t lit_facets = 0;      ///< facets returned whole by exact PO (bounce 1, header)
   std::uint64_t partial_facets = 0;  ///< partly lit facets returned by their lit sub-triangles
   std::uint64_t facet_queries = 0;   ///< occlusion queries of the bounce-1 rule and the edges
+  /// Facets of moving targets in the facet pass, and those of them in the groups that read
+  /// their bounce-1 occlusion answers back this frame (SbrTracer's facet memo of movers) instead
+  /// of asking again (a facet with no answer recorded, turned away then, still asks).
+  std::uint64_t mover_facets = 0;
+  std::uint64_t replayed_mover_facets = 0;
   std::uint64_t edges_used = 0;      ///< edge-diffraction contributions (SbrConfig::edges)
   std::uint64_t edges_shadowed = 0;  ///< edges whose midpoint does not see the radar
   std::uint64_t edges_skipped = 0;   ///< back-facing, along the Keller cone, out of view/range
@@ -349,9 +354,12 @@ class SbrTracer {
     /// or one slice (else its kept paths are re-evaluated), and its paths kept once traced.
     bool trace = true;
     bool keep = false;
-    bool refreshed = false;      ///< traced (static, its kept paths valid) to refresh them
-    bool still = false;          ///< static, no mover near: its facets may keep their answers
-    std::uint8_t memo = 0;       ///< kMemoNone, kMemoRecord or kMemoReplay this frame
+    bool refreshed = false;  ///< traced (static, its kept paths valid) to refresh them
+    bool still = false;      ///< static, no mover near: its facets may keep their answers
+    std::uint8_t memo = 0;   ///< kMemoNone, kMemoRecord, kMemoReplay or kMemoRolling
+    /// kMemoRolling (a mover): bit g set: its facets t with t % memo_groups_ == g read their
+    /// answers back this frame; the others' ask and record.
+    std::uint32_t memo_replay_groups = 0;
     double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
     /// The rows traced this frame (all of them, or one slice's for the refresh) and that slice
     /// (kAllSlices: the whole bundle).
@@ -430,7 +438,8 @@ class SbrTracer {
   /// Kept returns of `b`'s slices not traced this frame (re-evaluated).
   [[nodiscard]] std::size_t untraced_kept(const Bundle& b) const noexcept;
   double refresh_credit_ = 0.0;  ///< the refresh's credit [rays] (choose_reuse)
-  /// Whether a moving object is near static target `id` or its line of sight to the radar.
+  /// Whether a moving object other than `id` is near target `id` or its line of sight to the
+  /// radar.
   [[nodiscard]] bool mover_near(const RadarPose& pose, std::uint32_t id) const noexcept;
   /// One kept return of a static target's rays (trivial: the pool is left uninitialised).
   struct KeptPath {
@@ -503,13 +512,42 @@ class SbrTracer {
     double spacing_m = 0.0;
     bool centroid_only = false;
     std::uint64_t recorded_at = 0;  ///< frame_count_ then
+    /// Movers: the target's region centre and placement then, and the reach of its region from
+    /// its body origin (|origin - centre| + half the region's diagonal).
+    glm::dvec3 centre_m{0.0};
+    glm::dmat4 world_from_body{1.0};
+    double reach_m = 0.0;
   };
   std::vector<MemoState> memo_state_;
-  static constexpr std::uint8_t kMemoNone = 0, kMemoRecord = 1, kMemoReplay = 2;
+  static constexpr std::uint8_t kMemoNone = 0, kMemoRecord = 1, kMemoReplay = 2, kMemoRolling = 3;
+  /// The facet memo of a moving target (no other mover near it or its line of sight), in
+  /// memo_groups_ groups of its facets (facet t in group t % memo_groups_), each with its own
+  /// MemoState: every frame one group (frame_count_ % memo_groups_) asks the scene again and
+  /// records, so a mover's queries are spread over the frames instead of all asked in one; a
+  /// group reads its answers back while recorded at this spacing and facet knob fewer than
+  /// reuse_refresh_frames frames ago, and the target's motion since keeps every shadow boundary
+  /// on it within half a ray tube (mover_memo_fraction <= 1). Per mover (movers_ order):
+  /// memo_groups_ states from mover_memo_first_[id] (kNoRegion: not a mover).
+  static constexpr std::size_t kMaxMemoGroups = 16;
+  std::size_t memo_groups_ = 0;  ///< min(reuse_refresh_frames, kMaxMemoGroups); 0: reuse off
+  std::vector<MemoState> mover_memo_;
+  std::vector<std::size_t> mover_memo_first_;
+  /// A mover's motion since `m` was recorded, as a fraction of what keeps its facets' answers
+  /// within half a ray tube (<= 1: they may be read back).
+  [[nodiscard]] double mover_memo_fraction(const RadarPose& pose, const Bundle& b,
+                                           const MemoState& m) const noexcept;
+  /// The record of a mover's memo groups that asked the scene this frame (kMemoRolling).
+  void record_mover_memo(const RadarPose& pose, const TraceKnobs& knobs,
+                         TraceStats& stats) noexcept;
+  /// Where facet t of bundle `bd` writes or reads its answers this frame (FacetMemo; null: not).
+  [[nodiscard]] FacetMemo* memo_record(const Bundle& bd, std::size_t slot, std::size_t t) noexcept;
+  [[nodiscard]] const FacetMemo* memo_replay(const Bundle& bd, std::size_t slot,
+                                             std::size_t t) const noexcept;
   /// Per bundle: whether its facets record their answers this frame (a still target traced to
   /// keep its paths, or whose answers are out of date) or read them back (recorded at this
   /// spacing and facet knob, fewer than reuse_refresh_frames frames ago, the aspect changed by
-  /// no more than half a tube across the target since), or neither (a mover, one near).
+  /// no more than half a tube across the target since), or neither (a static target with a
+  /// mover near); a mover with no other mover near: kMemoRolling (mover_memo_).
   void choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
                    std::span<Bundle> bundles) const noexcept;
   /// The change dtheta in the direction from target `b`'s region to the radar since the radar

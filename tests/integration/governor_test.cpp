@@ -136,6 +136,48 @@ TEST(Governor, LevelsCostLessAsTheyGoUpAndTheChoiceIsTheFinestThatFits) {
   EXPECT_EQ(off.decide(f.pose).level, 0);
 }
 
+TEST(Governor, WhenNoLevelCanFitItPlansOnlyTheLastLevelsAndChoosesAsIfItTriedEach) {
+  // The default frame with a deadline under what no level reduces (the floor: the frame's fixed
+  // trace cost, the facet pass over the bundled targets, the sensor's cells). Trying each level
+  // in turn would end at the last (10 here); the governor goes there at once and steps back
+  // through the levels within 5 % of the deadline of its cost. Its choice is the one the
+  // levels' own predictions (decide_at) give, and its plans are level 0's (with the refresh's
+  // wait: 2), then two for each level it reached: the last, those it stepped back to, and the
+  // first that stopped it. Trying each level would take 2 x 11.
+  DefaultFrame& f = default_frame();
+  loop::GovernorConfig g = f.s.governor;
+  g.mode = loop::GovernorConfig::Mode::kModel;
+  g.max_level = 10;
+  const double period_s = 1.0;
+  loop::FidelityGovernor probe(g, f.scene, f.tracer, f.sensor, period_s);
+  std::vector<double> predicted;
+  for (int level = 0; level <= 10; ++level)
+    predicted.push_back(probe.decide_at(f.pose, level).predicted_ms);
+  const double cells =
+      static_cast<double>(f.sensor.antenna().beams() * f.sensor.processor().range_bins() *
+                          f.sensor.processor().velocity_bins());
+  const double floor_ms =
+      g.trace_ms_per_frame +
+      1e-6 * (g.trace_ns_per_facet * static_cast<double>(f.tracer.plan(f.pose).target_facets)) +
+      1e-6 * g.sensor_ns_per_cell * cells;
+  ASSERT_GT(predicted[10], floor_ms);
+  for (const double deadline_ms : {0.999 * floor_ms, 0.5 * floor_ms, 1e-6}) {
+    g.compute_fraction = deadline_ms * 1e-3 / period_s;
+    loop::FidelityGovernor gov(g, f.scene, f.tracer, f.sensor, period_s);
+    const loop::GovernorDecision& d = gov.decide(f.pose);
+    std::size_t want = 10;
+    while (want > 0 && predicted[want - 1] <= predicted[10] + 0.05 * deadline_ms)
+      --want;
+    EXPECT_EQ(d.level, static_cast<int>(want)) << "deadline " << deadline_ms << " ms";
+    EXPECT_EQ(d.predicted_ms, predicted[want]);
+    EXPECT_TRUE(d.over_deadline);
+    const std::size_t reached = 10 - want + 1 + (want > 0 ? 1 : 0);
+    EXPECT_EQ(d.plans, 2 + 2 * reached) << "deadline " << deadline_ms << " ms";
+    std::printf("deadline %.3f ms (floor %.3f ms): level %d, %zu plans\n", deadline_ms, floor_ms,
+                d.level, d.plans);
+  }
+}
+
 TEST(Governor, TheStrongestTargetKeepsTheFinestRays) {
   // Two equal plates, one at 500 m and one at 4000 m: the far one's expected SNR is
   // 40 log10(8) = 36.1 dB lower, rank 3 (10 dB steps).

@@ -436,3 +436,171 @@ TEST(SbrReuse, KeptPathsDoNotDependOnTheThreads) {
   }
   EXPECT_GT(reused, 10u);
 }
+
+namespace {
+// An a x a plate at `at`, cut into n x n squares of two triangles each, moving at `velocity`
+// (LinearMotion, which turns body x along the horizontal velocity): the plate lies in the body
+// y-z plane, so across a velocity along the world y axis it lies in the world x-z plane.
+sc::ObjectDesc grid_plate(double a, int n, glm::dvec3 at, glm::dvec3 velocity) {
+  sc::ObjectDesc o{"grid_plate", {}, glm::dmat4(1.0), std::nullopt};
+  for (int i = 0; i <= n; ++i) {
+    for (int j = 0; j <= n; ++j)
+      o.mesh.positions_m.push_back({0.0F,
+                                    static_cast<float>(a * (i / static_cast<double>(n) - 0.5)),
+                                    static_cast<float>(a * (j / static_cast<double>(n) - 0.5))});
+  }
+  auto v = [&](int i, int j) { return static_cast<unsigned>(i * (n + 1) + j); };
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      o.mesh.triangles.push_back({v(i, j), v(i + 1, j), v(i + 1, j + 1)});
+      o.mesh.triangles.push_back({v(i, j), v(i + 1, j + 1), v(i, j + 1)});
+    }
+  }
+  o.mesh.triangle_material.assign(o.mesh.triangles.size(), 0);
+  o.world_from_body[3] = glm::dvec4(at, 1.0);
+  o.motion = sc::LinearMotion{at, velocity};
+  return o;
+}
+
+std::vector<std::complex<double>> bounce1(const Frame& fr) {
+  std::vector<std::complex<double>> a;
+  for (const rd::Contribution& x : fr.out) {
+    if (x.bounces == 1)
+      a.push_back(x.amplitude);
+  }
+  return a;
+}
+}  // namespace
+
+TEST(SbrReuse, AMoversFacetsReadTheirShadowsBackWhileItsMotionStaysWithinHalfATube) {
+  // A 1 m plate moving toward the radar along the line of sight, partly shadowed by a static
+  // 0.3 m plate 2 m in front of it, off centre (its facets cut into sub-triangles, each with a
+  // query). The mover's facets keep their occlusion answers (SbrTracer's facet memo of movers)
+  // while its displacement plus D times its aspect change stays within half a ray tube. Moved
+  // by 0.8 of half a tube along the line of sight (no aspect change), its facets read their
+  // answers back, no query asked, and give the bounce-1 returns of a fresh trace at that time
+  // to 1e-9; moved by 1.25 of it, they ask the scene again. Likewise a radar turned by 0.8 and
+  // 1.25 of the aspect limit with the mover at rest (at 1e-3 of it, the fresh trace's returns).
+  const double f = 10e9, rho = 1000.0, spacing = 0.05, speed = 0.01;
+  auto scene_with = [&](std::vector<sc::ObjectDesc> more) {
+    std::vector<sc::ObjectDesc> objects = {grid_plate(1.0, 1, {0.0, 0.0, 0.0}, {0.0, -speed, 0.0}),
+                                           plate(0.3, {0.4, -2.0, 0.0})};
+    for (sc::ObjectDesc& o : more)
+      objects.push_back(std::move(o));
+    return with(std::move(objects));
+  };
+  sc::Scene scene(scene_with({}));
+  const rd::SbrConfig c = config(f, spacing);
+  rd::SbrConfig fresh_config = c;
+  fresh_config.reuse_static_paths = false;
+  const double half_tube_m = 0.5 * spacing;
+  // Records at t = 0, then traces at time t_s and pose `second`.
+  auto second_frame = [&](sc::Scene& s, double t_s, const rd::RadarPose& second) {
+    rd::SbrTracer tracer(s, c);
+    s.set_time(0.0);
+    const Frame first = trace(tracer, pose_around(rho, 0.0));
+    EXPECT_GT(first.stats.facet_queries, 100u);
+    EXPECT_GE(first.stats.partial_facets, 1u);
+    EXPECT_EQ(first.stats.replayed_mover_facets, 0u);
+    s.set_time(t_s);
+    return trace(tracer, second);
+  };
+  auto fresh_frame = [&](sc::Scene& s, double t_s, const rd::RadarPose& pose) {
+    rd::SbrTracer tracer(s, fresh_config);
+    s.set_time(t_s);
+    return trace(tracer, pose);
+  };
+  auto expect_same_bounce1 = [](const Frame& a, const Frame& b) {
+    EXPECT_EQ(a.stats.lit_facets, b.stats.lit_facets);
+    EXPECT_EQ(a.stats.partial_facets, b.stats.partial_facets);
+    const std::vector<std::complex<double>> x = bounce1(a), y = bounce1(b);
+    ASSERT_EQ(x.size(), y.size());
+    ASSERT_GE(x.size(), 3u);
+    for (std::size_t i = 0; i < x.size(); ++i)
+      EXPECT_LE(std::abs(x[i] - y[i]), 1e-9 * std::abs(y[i])) << i;
+  };
+  const rd::RadarPose ahead = pose_around(rho, 0.0);
+  // Displacement: the mover's two facets (groups 0 and 1; frame 2's turn is group 2) read back.
+  const double inside_s = 0.8 * half_tube_m / speed, past_s = 1.25 * half_tube_m / speed;
+  const Frame moved = second_frame(scene, inside_s, ahead);
+  EXPECT_EQ(moved.stats.replayed_mover_facets, 2u);
+  EXPECT_EQ(moved.stats.facet_queries, 0u);
+  expect_same_bounce1(moved, fresh_frame(scene, inside_s, ahead));
+  const Frame moved_past = second_frame(scene, past_s, ahead);
+  EXPECT_EQ(moved_past.stats.replayed_mover_facets, 0u);
+  EXPECT_GT(moved_past.stats.facet_queries, 100u);
+  // Aspect: the mover at rest (t = 0), the radar turned about it. The static plate's own limit
+  // is the larger (its extent is smaller), so its facets read back at both.
+  const double limit = limit_rad(c, spacing, std::sqrt(2.0));
+  const rd::RadarPose barely = pose_around(rho, 1e-3 * limit);
+  const Frame turned_barely = second_frame(scene, 0.0, barely);
+  EXPECT_EQ(turned_barely.stats.replayed_mover_facets, 2u);
+  EXPECT_EQ(turned_barely.stats.facet_queries, 0u);
+  expect_same_bounce1(turned_barely, fresh_frame(scene, 0.0, barely));
+  EXPECT_EQ(second_frame(scene, 0.0, pose_around(rho, 0.8 * limit)).stats.replayed_mover_facets,
+            2u);
+  const Frame turned_past = second_frame(scene, 0.0, pose_around(rho, 1.25 * limit));
+  EXPECT_EQ(turned_past.stats.replayed_mover_facets, 0u);
+  EXPECT_GT(turned_past.stats.facet_queries, 100u);
+  // Another mover (a 0.3 m plate, its own facets read back: nothing moves near it) across the
+  // line of sight: the big plate's facets ask again every frame; far off it: they read back.
+  sc::Scene crossing(scene_with({plate(0.3, {0.0, -500.0, 0.0}, {1e-3, 0.0, 0.0})}));
+  const Frame crossed = second_frame(crossing, 0.0, ahead);
+  EXPECT_EQ(crossed.stats.replayed_mover_facets, 2u);
+  EXPECT_GT(crossed.stats.facet_queries, 100u);
+  sc::Scene aside(scene_with({plate(0.3, {300.0, -500.0, 0.0}, {1e-3, 0.0, 0.0})}));
+  const Frame beside = second_frame(aside, 0.0, ahead);
+  EXPECT_EQ(beside.stats.replayed_mover_facets, 2u);  // the other is out of the view
+  EXPECT_EQ(beside.stats.facet_queries, 0u);
+}
+
+TEST(SbrReuse, AMoversFacetsAskTheSceneAgainOneGroupAFrame) {
+  // A 4 x 4-square plate (32 facets, all lit) moving slowly toward the radar: the first frame
+  // asks every facet's seven samples; each later frame asks again only the facets t of its turn,
+  // t % 16 == frame % 16 (2 of 32), and reads the others back: 1/16 of the first frame's queries.
+  const double f = 10e9, rho = 1000.0;
+  sc::Scene scene(with({grid_plate(1.0, 4, {0.0, 0.0, 0.0}, {0.0, -1e-3, 0.0})}));
+  rd::SbrTracer tracer(scene, config(f, 0.05));
+  const rd::RadarPose pose = pose_around(rho, 0.0);
+  scene.set_time(0.0);
+  const Frame first = trace(tracer, pose);
+  ASSERT_EQ(first.stats.lit_facets, 32u);
+  EXPECT_EQ(first.stats.facet_queries, 32u * 7u);
+  for (int frame = 1; frame <= 20; ++frame) {
+    scene.set_time(0.01 * frame);
+    const Frame x = trace(tracer, pose);
+    EXPECT_EQ(x.stats.lit_facets, 32u) << frame;
+    EXPECT_EQ(x.stats.facet_queries, first.stats.facet_queries / 16) << frame;
+    EXPECT_EQ(x.stats.mover_facets, 32u) << frame;
+    EXPECT_EQ(x.stats.replayed_mover_facets, 30u) << frame;
+  }
+}
+
+TEST(SbrReuse, AMoversFacetsAskAgainWhenItHasTurnedPastTheLimit) {
+  // A 1 m plate on a waypoint trajectory through a 90 degree turn of radius 5 cm at 1 m/s (body x
+  // along the path: the plate turns with it). Recorded 1 cm into the turn, then traced 1 cm
+  // later: it has moved 1 cm (0.4 of half a 5 cm tube) but turned by 0.2 rad, which moves its
+  // edges by about 0.1 m and its self-shadowing by D phi: its facets ask the scene again. 10 um
+  // later instead (a turn of 2e-4 rad, phi (D + r) = 0.4 mm), they read their answers back.
+  const double f = 10e9, rho = 1000.0, spacing = 0.05, r = 0.05;
+  sc::ObjectDesc mover = grid_plate(1.0, 1, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0});
+  mover.motion.reset();
+  mover.trajectory = sc::Trajectory{{{-1.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}}, 1.0, r};
+  sc::Scene scene(with({mover}));
+  const double into_turn_s = (1.0 - r) + 0.01;  // the turn starts r before the corner
+  const rd::RadarPose pose = pose_around(rho, 0.0);
+  auto second = [&](double dt_s) {
+    rd::SbrTracer tracer(scene, config(f, spacing));
+    scene.set_time(into_turn_s);
+    const Frame first = trace(tracer, pose);
+    EXPECT_EQ(first.stats.facet_queries, 14u);  // two facets lit whole: 7 samples each
+    scene.set_time(into_turn_s + dt_s);
+    return trace(tracer, pose);
+  };
+  const Frame turned = second(0.01);
+  EXPECT_EQ(turned.stats.replayed_mover_facets, 0u);
+  EXPECT_EQ(turned.stats.facet_queries, 14u);
+  const Frame barely = second(1e-5);
+  EXPECT_EQ(barely.stats.replayed_mover_facets, 2u);
+  EXPECT_EQ(barely.stats.facet_queries, 0u);
+}
