@@ -253,6 +253,7 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
   // median of their centroids along the longest side, recursively; each part's box holds its
   // facets' corners.
   part_first_.assign(desc.objects.size() + 1, 0);
+  ground_planes_.assign(desc.objects.size(), GroundPlanes{});
   for (std::uint32_t i = 0; i < desc.objects.size(); ++i) {
     if (c.mask_target_rays && is_target_[i])
       split_parts(desc.objects[i].mesh);
@@ -1014,9 +1015,10 @@ void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) co
   // mirrored in the planes of the lowest and highest ground under it, found by downward
   // queries at its box's corners and centre, from just above its base, past its own surfaces
   // (with nothing below, in the plane of its base, as the box's image).
-  std::array<double, 2> mirror_z{};
-  int n_images = 0;
-  if (config_.target_ground_image) {
+  // Kept per object until its box moves (a static target's: found once).
+  GroundPlanes& g = ground_planes_[id];
+  if (config_.target_ground_image &&
+      !(g.valid && g.bounds_min_m == o.bounds_min_m && g.bounds_max_m == o.bounds_max_m)) {
     const double base_z = o.bounds_min_m.z;
     double ground_lo = std::numeric_limits<double>::infinity(), ground_hi = -ground_lo;
     for (int k = 0; k < 5; ++k) {
@@ -1033,24 +1035,30 @@ void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) co
       down.t_far_m = config_.max_range_m;
       scene::Hit hit;
       for (int tries = 0; tries < 4 && intersect(down, hit); ++tries) {
-        if (hit.object_id != id) {
+        if (hit.object_id != id && !scene_->objects()[hit.object_id].moving) {
           ground_lo = std::min(ground_lo, hit.position_m.z);
           ground_hi = std::max(ground_hi, hit.position_m.z);
           break;
         }
-        down.t_near_m = hit.t_m + 1e-4;  // its own surface: on below it
+        down.t_near_m = hit.t_m + 1e-4;  // its own surface, or a mover's: on below it
       }
     }
     if (!(ground_lo <= ground_hi))
       ground_lo = ground_hi = base_z;  // nothing below: its base, as the box's image
+    g.n_images = 0;
     for (const double z : {ground_lo, ground_hi}) {
       bool seen = false;
-      for (int m = 0; m < n_images; ++m)
-        seen = seen || std::abs(mirror_z[static_cast<std::size_t>(m)] - 2.0 * z) < 2e-3;
+      for (int m = 0; m < g.n_images; ++m)
+        seen = seen || std::abs(g.mirror_z[static_cast<std::size_t>(m)] - 2.0 * z) < 2e-3;
       if (!seen)
-        mirror_z[static_cast<std::size_t>(n_images++)] = 2.0 * z;
+        g.mirror_z[static_cast<std::size_t>(g.n_images++)] = 2.0 * z;
     }
+    g.valid = true;
+    g.bounds_min_m = o.bounds_min_m;
+    g.bounds_max_m = o.bounds_max_m;
   }
+  const int n_images = config_.target_ground_image ? g.n_images : 0;
+  const std::array<double, 2>& mirror_z = g.mirror_z;
   RowSpan* rows = row_spans_.data() + row_spans_used_;
   for (std::size_t r = 0; r < b.n_el; ++r)
     rows[r] = RowSpan{static_cast<std::uint32_t>(b.n_az), 0, 0};

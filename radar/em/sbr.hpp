@@ -399,7 +399,15 @@ class SbrTracer {
   static constexpr std::size_t kMaskParts = 16;
   void split_parts(const scene::Mesh& mesh);
   std::vector<PartBox> part_boxes_;
-  std::vector<std::size_t> part_first_;     ///< per object, into part_boxes_ (+1 entry)
+  std::vector<std::size_t> part_first_;  ///< per object, into part_boxes_ (+1 entry)
+  /// Per object: the planes its ground image is taken in (mask_rows), and its box then.
+  struct GroundPlanes {
+    bool valid = false;
+    glm::dvec3 bounds_min_m{0.0}, bounds_max_m{0.0};
+    std::array<double, 2> mirror_z{};  ///< twice the ground's height
+    int n_images = 0;
+  };
+  mutable std::vector<GroundPlanes> ground_planes_;
   mutable std::vector<RowSpan> row_spans_;  ///< this frame's masks (capacity set at setup)
   mutable std::size_t row_spans_used_ = 0;
   static constexpr std::uint8_t kAllSlices = 0xff;
