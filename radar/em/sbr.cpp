@@ -1125,7 +1125,7 @@ void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) co
         }
         double az_lo = 1e9, az_hi = -1e9, el_lo = 1e9, el_hi = -1e9;
         for (const glm::dvec3& corner : a) {
-          const AzEl ae = azel_from_direction(corner);
+          const AzEl ae = arrival_azel(corner);  // within 4 ulp: far inside the cell added
           az_lo = std::min(az_lo, ae.azimuth_rad);
           az_hi = std::max(az_hi, ae.azimuth_rad);
           el_lo = std::min(el_lo, ae.elevation_rad);
