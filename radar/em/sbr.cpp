@@ -491,10 +491,16 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
     }
     return answer;
   };
-  // TraceKnobs::facet_centroid_only: the centroid's sample alone decides, lit or dark whole.
+  // TraceKnobs::facet_centroid_only: the centroid's sample alone decides, lit or dark whole. So
+  // it does for a facet no longer than the spacing: the rule (facet_light) would cut it, were it
+  // partly lit, into m = 1 sub-triangle, the facet itself, lit by its centroid's sample, which
+  // is the first of its seven; all seven clear or all blocked, the centroid's says the same. The
+  // other six samples could not change the outcome, so they are not asked.
+  const int m = facet_subdivisions(longest, resolution_m);
   const FacetLight light =
-      centroid_only ? (blocked(centroid + offset_m * n) ? FacetLight::kDark : FacetLight::kLit)
-                    : facet_light(facet_samples(v0, v1, v2, n, offset_m), blocked);
+      centroid_only || m == 1
+          ? (blocked(centroid + offset_m * n) ? FacetLight::kDark : FacetLight::kLit)
+          : facet_light(facet_samples(v0, v1, v2, n, offset_m), blocked);
   if (light == FacetLight::kDark)
     return dark;
   // The exact PO integral (facet_po.hpp) over the facet, or over its lit sub-triangles, in the
@@ -506,7 +512,6 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   if (light == FacetLight::kLit) {
     integral = triangle_phase_integral(v0 - centroid, v1 - centroid, v2 - centroid, g);
   } else {
-    const int m = facet_subdivisions(longest, resolution_m);
     (void)for_each_lit_subtriangle(
         v0, v1, v2, n, offset_m, m, blocked,
         [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& e) {

@@ -604,3 +604,33 @@ TEST(SbrReuse, AMoversFacetsAskAgainWhenItHasTurnedPastTheLimit) {
   EXPECT_EQ(barely.stats.replayed_mover_facets, 2u);
   EXPECT_EQ(barely.stats.facet_queries, 0u);
 }
+
+TEST(SbrFacetPass, AFacetNoLongerThanTheSpacingAsksOneSample) {
+  // A 1 m plate (two facets) seen face on, nothing in the way. The lighting rule (facet_light)
+  // asks seven samples a facet; a partly lit facet is then cut into m x m sub-triangles, m its
+  // longest edge over the spacing, rounded up. At a 2 m spacing m = 1: the facet is lit or dark
+  // whole by its centroid's sample, the first of the seven, so it alone is asked (one query a
+  // facet) and the returns are those of the centroid rule (TraceKnobs::facet_centroid_only). At
+  // 0.3 m (m = 5) all seven are asked.
+  sc::Scene scene(with({plate(1.0, glm::dvec3(0.0))}));
+  const rd::RadarPose pose = pose_around(1000.0, 0.0);
+  auto frame = [&](double spacing_m, bool centroid_only) {
+    rd::SbrConfig c = config(10e9, spacing_m);
+    c.reuse_static_paths = false;
+    c.edges = false;
+    rd::SbrTracer tracer(scene, c);
+    rd::TraceKnobs knobs;
+    knobs.facet_centroid_only = centroid_only;
+    return trace(tracer, pose, knobs);
+  };
+  const Frame coarse = frame(2.0, false), centroid = frame(2.0, true), fine = frame(0.3, false);
+  EXPECT_EQ(coarse.stats.facet_queries, 2u);
+  EXPECT_EQ(fine.stats.facet_queries, 14u);
+  ASSERT_EQ(coarse.out.size(), centroid.out.size());
+  for (std::size_t i = 0; i < coarse.out.size(); ++i)
+    EXPECT_EQ(coarse.out[i].amplitude, centroid.out[i].amplitude) << i;
+  std::size_t facets = 0;
+  for (const rd::Contribution& x : coarse.out)
+    facets += x.bounces == 1 ? 1u : 0u;
+  EXPECT_EQ(facets, 2u);
+}
