@@ -935,8 +935,8 @@ void ModbusServer::accept_clients(std::int64_t now_ns) noexcept {
         ::close(m.spare_fd);
         fd = ::accept4(m.listen_fd, nullptr, nullptr, SOCK_CLOEXEC);
         if (fd >= 0) {
+          k.clients_refused.fetch_add(1, kRelaxed);  // counted before the peer can see it
           ::close(fd);
-          k.clients_refused.fetch_add(1, kRelaxed);
         }
         m.spare_fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
         continue;
@@ -957,13 +957,13 @@ void ModbusServer::accept_clients(std::int64_t now_ns) noexcept {
     }
     if (slot == nullptr && idlest != nullptr &&
         now_ns - idlest->last_activity_ns >= m.evict_idle_ns) {
+      k.clients_evicted.fetch_add(1, kRelaxed);  // counted before the peer can see it
       close_connection(*idlest);
-      k.clients_evicted.fetch_add(1, kRelaxed);
       slot = idlest;
     }
     if (slot == nullptr) {
-      ::close(fd);
       k.clients_refused.fetch_add(1, kRelaxed);
+      ::close(fd);
       continue;
     }
     const int on = 1;
