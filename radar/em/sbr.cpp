@@ -1724,7 +1724,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // The reuse rule's last condition: the same facets left to the rays as when the paths were
   // kept. A bundle that fails it is traced after all, its facets asked again (and recorded).
   for (Bundle& bd : bundles_) {
-    if (bd.trace || same_facets_by_rays(bd.object_id))
+    if ((bd.trace && bd.slice == kAllSlices) || same_facets_by_rays(bd.object_id))
       continue;
     const std::size_t paid = traced_rays(bd);  // a slice's, when it was to be refreshed
     bd.trace = true;
