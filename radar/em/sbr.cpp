@@ -752,9 +752,7 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   b.object_id = id;
   b.n_az = n_az;
   b.n_el = n_el;
-  b.row_lo = 0;
-  b.row_hi = n_el;
-  b.slice = kAllSlices;
+  b.trace_whole();
   b.mask = kNoMask;
   b.daz_rad = (az_hi - az_lo) / static_cast<double>(n_az);
   b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
@@ -818,13 +816,10 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
                              double& credit, bool defer_refresh) const noexcept {
   const SbrConfig& c = config_;
   for (Bundle& b : bundles) {
-    b.trace = true;
+    b.trace_whole();
     b.keep = false;
     b.still = false;
     b.refreshed = false;
-    b.row_lo = 0;
-    b.row_hi = b.n_el;
-    b.slice = kAllSlices;
   }
   if (!c.reuse_static_paths)
     return;
@@ -1012,11 +1007,9 @@ void SbrTracer::ray_cell(const Bundle& b, std::size_t j, std::size_t& ia,
   ia = r->lo + (at - r->first);
 }
 
-void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) const noexcept {
-  if (part_first_[id] == part_first_[id + 1] || row_spans_used_ + b.n_el + 1 > row_spans_.size())
-    return;
+const SbrTracer::GroundPlanes& SbrTracer::ground_under(std::uint32_t id) const noexcept {
   const scene::ObjectState& o = scene_->objects()[id];
-  // Its ground-first paths start where the rays aim at its image in the ground (image method):
+  // A target's image in the ground, where its ground-first paths start (image method), is
   // mirrored in the planes of the lowest and highest ground under it, found by downward
   // queries at its box's corners and centre, from just above its base, past its own surfaces
   // (with nothing below, in the plane of its base, as the box's image).
@@ -1062,6 +1055,14 @@ void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) co
     g.bounds_min_m = o.bounds_min_m;
     g.bounds_max_m = o.bounds_max_m;
   }
+  return g;
+}
+
+void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) const noexcept {
+  if (part_first_[id] == part_first_[id + 1] || row_spans_used_ + b.n_el + 1 > row_spans_.size())
+    return;
+  // Its ground-first paths start where the rays aim at its image in the ground (image method).
+  const GroundPlanes& g = ground_under(id);
   const int n_images = config_.target_ground_image ? g.n_images : 0;
   const std::array<double, 2>& mirror_z = g.mirror_z;
   RowSpan* rows = row_spans_.data() + row_spans_used_;
@@ -1727,10 +1728,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     if ((bd.trace && bd.slice == kAllSlices) || same_facets_by_rays(bd.object_id))
       continue;
     const std::size_t paid = traced_rays(bd);  // a slice's, when it was to be refreshed
-    bd.trace = true;
-    bd.row_lo = 0;
-    bd.row_hi = bd.n_el;
-    bd.slice = kAllSlices;
+    bd.trace_whole();
     bd.memo = kMemoRecord;
     refresh_credit_ = std::max(0.0, refresh_credit_ - static_cast<double>(all_rays(bd) - paid));
     std::uint64_t queries = 0;

@@ -368,6 +368,13 @@ class SbrTracer {
     /// Its rows' spans of columns in row_spans_ (n_el + 1 entries from here), or kNoMask: every
     /// column of every row.
     std::size_t mask = kNoMask;
+    /// Traced this frame, every row of it.
+    void trace_whole() noexcept {
+      trace = true;
+      row_lo = 0;
+      row_hi = n_el;
+      slice = kAllSlices;
+    }
   };
   static constexpr std::size_t kNoMask = static_cast<std::size_t>(-1);
   /// The columns [lo, hi) of one row of a bundle's grid where its target's facets or their
@@ -408,6 +415,8 @@ class SbrTracer {
     int n_images = 0;
   };
   mutable std::vector<GroundPlanes> ground_planes_;
+  /// Target `id`'s GroundPlanes, found again when its box has moved.
+  [[nodiscard]] const GroundPlanes& ground_under(std::uint32_t id) const noexcept;
   mutable std::vector<RowSpan> row_spans_;  ///< this frame's masks (capacity set at setup)
   mutable std::size_t row_spans_used_ = 0;
   static constexpr std::uint8_t kAllSlices = 0xff;

@@ -49,6 +49,14 @@ sc::SceneDescription with(std::vector<sc::ObjectDesc> objects) {
   return d;
 }
 
+// Eight equal dihedrals side by side, 4 m apart along x (the refresh tests' scene).
+sc::SceneDescription eight_dihedrals() {
+  std::vector<sc::ObjectDesc> objects;
+  for (int i = 0; i < 8; ++i)
+    objects.push_back(dihedral(1.0, 0.5, {-14.0 + 4.0 * i, 0.0, 0.0}));
+  return with(std::move(objects));
+}
+
 // The radar in the horizontal plane at `range` from the z axis, `phi_rad` clockwise (seen from
 // above) from the -y axis, looking at the axis (antenna x toward it, z down).
 rd::RadarPose pose_around(double range, double phi_rad) {
@@ -302,10 +310,7 @@ TEST(SbrReuse, TheRefreshTracesTheLongestKeptFirst) {
   // two longest kept (ceil(8 / 4) bundles' rays), so every bundle is traced every 4 frames and
   // the oldest kept paths in use are 3 frames old.
   const double f = 10e9, rho = 1000.0;
-  std::vector<sc::ObjectDesc> objects;
-  for (int i = 0; i < 8; ++i)
-    objects.push_back(dihedral(1.0, 0.5, {-14.0 + 4.0 * i, 0.0, 0.0}));
-  sc::Scene scene(with(std::move(objects)));
+  sc::Scene scene(eight_dihedrals());
   rd::SbrConfig c = config(f, 0.05);
   c.reuse_refresh_frames = 4;
   c.reuse_refresh_slices = 1;  // whole bundles (TheRefreshGoesASliceAtATime: slices)
@@ -370,10 +375,7 @@ TEST(SbrReuse, ADeferredRefreshWaitsUntilAKeptBundleIsTwiceItsPeriodOld) {
   // credit's share of one frame), deferred or not. A frame without the knob right after
   // refreshes as usual.
   const double f = 10e9, rho = 1000.0;
-  std::vector<sc::ObjectDesc> objects;
-  for (int i = 0; i < 8; ++i)
-    objects.push_back(dihedral(1.0, 0.5, {-14.0 + 4.0 * i, 0.0, 0.0}));
-  sc::Scene scene(with(std::move(objects)));
+  sc::Scene scene(eight_dihedrals());
   rd::SbrConfig c = config(f, 0.05);
   c.reuse_refresh_frames = 4;
   c.reuse_refresh_slices = 1;  // whole bundles (TheRefreshGoesASliceAtATime: slices)
@@ -406,10 +408,7 @@ TEST(SbrReuse, ADeferredRefreshWaitsUntilAKeptBundleIsTwiceItsPeriodOld) {
 TEST(SbrReuse, KeptPathsDoNotDependOnTheThreads) {
   // A moving radar over eight dihedrals (traced, kept, refreshed in turn): every frame's returns
   // are bit-identical on one thread and on all of them.
-  std::vector<sc::ObjectDesc> objects;
-  for (int i = 0; i < 8; ++i)
-    objects.push_back(dihedral(1.0, 0.5, {-14.0 + 4.0 * i, 0.0, 0.0}));
-  sc::Scene scene(with(std::move(objects)));
+  sc::Scene scene(eight_dihedrals());
   rd::SbrConfig c = config(10e9, 0.05);
   c.reuse_refresh_frames = 3;
   auto run = [&](std::size_t threads) {
