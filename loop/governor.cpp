@@ -398,17 +398,27 @@ void FidelityGovernor::observe(double trace_ms, double sensor_ms, std::uint64_t 
                                std::uint64_t terrain_patches, std::uint64_t terrain_returns,
                                std::uint64_t terrain_facets,
                                std::uint64_t merged_returns) noexcept {
-  if (config_.mode == GovernorConfig::Mode::kMeasured) {
-    // Factors of measured over modelled cost: up at once, down by an exponential average (a
-    // tenth a frame), bounded so one odd frame cannot stall the governor.
-    auto update = [](double& factor, double measured_ms, double model_ms) {
-      if (!(model_ms > 0.05) || !std::isfinite(measured_ms))
+  const bool timed = std::isfinite(trace_ms) && std::isfinite(sensor_ms);
+  if (config_.mode == GovernorConfig::Mode::kMeasured && timed && timed_frames_++ > 0) {
+    // Factors of measured over modelled cost (header): up when two frames in a row were slower
+    // than the factor says, to the smaller of their ratios; down by an exponential average (a
+    // tenth a frame); bounded so one odd frame cannot stall the governor. Not from the first
+    // timed frame.
+    auto update = [](double& factor, double& prev_ratio, double measured_ms, double model_ms) {
+      if (!(model_ms > 0.05)) {
+        prev_ratio = 0.0;
         return;
+      }
       const double ratio = std::clamp(measured_ms / model_ms, 0.05, 50.0);
-      factor = ratio > factor ? ratio : factor + 0.1 * (ratio - factor);
+      const double confirmed = std::min(ratio, prev_ratio);
+      if (confirmed > factor)
+        factor = confirmed;
+      else if (ratio < factor)
+        factor += 0.1 * (ratio - factor);
+      prev_ratio = ratio;
     };
-    update(trace_factor_, trace_ms, last_predicted_trace_ms_);
-    update(sensor_factor_, sensor_ms, last_predicted_sensor_ms_);
+    update(trace_factor_, prev_trace_ratio_, trace_ms, last_predicted_trace_ms_);
+    update(sensor_factor_, prev_sensor_ratio_, sensor_ms, last_predicted_sensor_ms_);
   }
   prev_rays_ = static_cast<double>(rays);
   prev_returns_ = static_cast<double>(returns);

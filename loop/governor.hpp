@@ -52,9 +52,14 @@
 // the configured ones (defaults measured on the project's 2-core machine, docs/performance.md), so
 // the choice depends only on the scenario and the previous frames: runs and replays are
 // reproducible. In "measured" mode (the default with --realtime) two factors scale the trace and
-// sensor terms by what the last frames measured: a slower frame raises them at once, a faster
-// one lowers them slowly (exponential average), so the governor errs on the side of the
-// deadline.
+// sensor terms by what the last frames measured: two slower frames in a row raise them at once
+// (to the smaller of the two ratios), a faster one lowers them slowly (exponential average), so
+// the governor errs on the side of the deadline. One slow frame alone does not: a frame that
+// costs more once (a refresh, a new level's first trace, the machine taking the core for a
+// moment) would otherwise degrade the frames after it for tens of frames, and at each coarser
+// level's first trace raise the factors again. The first timed frame is not learnt from at all:
+// it traces everything and touches every buffer for the first time (in a real-time run on the
+// 2-core machine it took three times its model's trace time, and no later frame does).
 //
 // Returning to a finer level. With static path reuse a target's paths are kept at the spacing
 // they were traced with, and a level that asks another spacing traces the target again (plan()
@@ -233,6 +238,9 @@ class FidelityGovernor {
   [[nodiscard]] double model_trace_ms(const radar::TracePlan& plan) const noexcept;
   [[nodiscard]] double model_sensor_ms(const radar::TracePlan& plan) const noexcept;
   double trace_factor_ = 1.0, sensor_factor_ = 1.0;
+  /// Measured mode: the previous timed frame's measured / modelled ratios (0: none yet).
+  double prev_trace_ratio_ = 0.0, prev_sensor_ratio_ = 0.0;
+  std::uint64_t timed_frames_ = 0;  ///< frames observed with finite times
   double last_predicted_trace_ms_ = 0.0, last_predicted_sensor_ms_ = 0.0;
 };
 

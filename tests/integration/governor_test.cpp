@@ -225,20 +225,40 @@ TEST(Governor, MeasuredSlownessCoarsensAndSpeedRecoversSlowly) {
   every_ray.reuse_static_paths = false;
   const radar::SbrTracer tracer(f.scene, every_ray);
   loop::FidelityGovernor gov(g, f.scene, tracer, f.sensor, 1.0 / f.s.rate_hz);
-  // A first frame exactly as fast as the model: the factors stay at 1.
-  const loop::GovernorDecision first = gov.decide(f.pose);
   auto model_trace_ms = [&](std::size_t rays) {
     return g.trace_ns_per_ray * static_cast<double>(rays) * 1e-6;
   };
   constexpr std::uint64_t kCells = 300'000;
   const double sensor_ms = g.sensor_ns_per_cell * static_cast<double>(kCells) * 1e-6;
-  gov.observe(model_trace_ms(first.rays), sensor_ms, first.rays, 0, kCells);
-  const loop::GovernorDecision steady = gov.decide(f.pose);
+  // The first timed frame teaches nothing, however slow (it traces everything, cold): nor is it
+  // the first of two slow frames, so a slow second one changes nothing either.
+  const loop::GovernorDecision first = gov.decide(f.pose);
+  gov.observe(10.0 * model_trace_ms(first.rays), 10.0 * sensor_ms, first.rays, 0, kCells);
   EXPECT_EQ(gov.trace_factor(), 1.0);
+  EXPECT_EQ(gov.sensor_factor(), 1.0);
+  (void)gov.decide(f.pose);
+  gov.observe(3.0 * model_trace_ms(first.rays), 3.0 * sensor_ms, first.rays, 0, kCells);
+  EXPECT_EQ(gov.trace_factor(), 1.0);
+  EXPECT_EQ(gov.sensor_factor(), 1.0);
+  // A frame exactly as fast as the model: the factors stay at 1.
+  const loop::GovernorDecision steady = gov.decide(f.pose);
   gov.observe(model_trace_ms(steady.rays), sensor_ms, steady.rays, 0, kCells);
+  EXPECT_EQ(gov.trace_factor(), 1.0);
   EXPECT_NEAR(gov.sensor_factor(), 1.0, 1e-9);
-  // A frame that took three times the model's trace time: the factor follows at once, and the
-  // next frame is coarser.
+  // One frame that took three times the model's trace time: alone, it changes nothing.
+  (void)gov.decide(f.pose);
+  gov.observe(3.0 * model_trace_ms(steady.rays), sensor_ms, steady.rays, 0, kCells);
+  EXPECT_EQ(gov.trace_factor(), 1.0);
+  EXPECT_EQ(gov.decide(f.pose).level, steady.level);
+  // The next one twice the model's: two slow frames in a row, the factor rises to the smaller
+  // of their ratios.
+  gov.observe(2.0 * model_trace_ms(steady.rays), sensor_ms, steady.rays, 0, kCells);
+  EXPECT_NEAR(gov.trace_factor(), 2.0, 1e-9);
+  // Two at three times: to 3 at once, and the next frame is coarser.
+  (void)gov.decide_at(f.pose, steady.level);
+  gov.observe(3.0 * model_trace_ms(steady.rays), sensor_ms, steady.rays, 0, kCells);
+  EXPECT_NEAR(gov.trace_factor(), 2.0, 1e-9);  // min(3, 2): not above the factor
+  (void)gov.decide_at(f.pose, steady.level);
   gov.observe(3.0 * model_trace_ms(steady.rays), sensor_ms, steady.rays, 0, kCells);
   EXPECT_NEAR(gov.trace_factor(), 3.0, 1e-9);
   const loop::GovernorDecision slow = gov.decide(f.pose);
