@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <iostream>
 #include <numbers>
 #include <vector>
@@ -365,6 +366,66 @@ TEST(SbrReuse, TheRefreshGoesASliceAtATime) {
     }
   }
   EXPECT_NEAR(traced, 2.0 * all_rays, 0.3 * all_rays);
+}
+
+TEST(SbrReuse, FacetsTurningToTheRaysTraceTheBundleWholeAlsoWhenASliceWasDue) {
+  // A dihedral (faces 1 m x 0.5 m, each two right triangles whose farthest vertex is rho =
+  // 0.687 m from the centroid) at 10 GHz: its facets are integrated by the facet pass beyond
+  // R_ff = 8 k rho^2 / pi (facet_in_far_field, 252 m) and left to the rays nearer. The radar
+  // keeps its paths for n frames at 1.01 R_ff, then steps along its boresight to 0.99 R_ff: the
+  // kept paths hold no bounce-1 return on the facets the rays now sample, so the reuse rule's
+  // last condition (the same facets left to the rays) traces the bundle whole, also in a frame
+  // where one of its 4 slices was due for refresh. That frame equals a tracer's without reuse
+  // at that pose. Control: the same n frames then a step to 1.005 R_ff (no facet turns) refresh
+  // one slice only, for some n; that is the frame the rule must not skip.
+  const double f = 10e9;
+  const double k = 2.0 * kPi * f / kC;
+  const double rho =
+      std::hypot(0.5 / 3.0, 2.0 / 3.0);  // to the vertex (0.5, 1) of (0, 0), (0.5, 0)
+  const double r_ff = 8.0 * k * rho * rho / kPi;
+  sc::Scene scene(with({dihedral(1.0, 0.5)}));
+  rd::SbrConfig c = config(f, 0.05);
+  c.reuse_refresh_frames = 4;
+  c.reuse_refresh_slices = 4;
+  rd::SbrConfig every_ray = c;
+  every_ray.reuse_static_paths = false;
+  auto energy = [](const Frame& x, int bounces) {
+    double e = 0.0;
+    for (const rd::Contribution& q : x.out)
+      e += q.bounces == bounces ? std::norm(q.amplitude) : 0.0;
+    return e;
+  };
+  int slice_frames = 0;
+  for (int n = 1; n <= 4; ++n) {
+    auto after = [&](double step_to) {
+      rd::SbrTracer tracer(scene, c);
+      for (int frame = 0; frame <= n; ++frame)
+        (void)trace(tracer, pose_around(1.01 * r_ff, 0.0));
+      return trace(tracer, pose_around(step_to, 0.0));
+    };
+    const Frame control = after(1.005 * r_ff);
+    rd::SbrTracer fresh(scene, c);
+    const auto all_rays =
+        static_cast<double>(trace(fresh, pose_around(1.005 * r_ff, 0.0)).stats.rays);
+    if (control.stats.rays > 0 && static_cast<double>(control.stats.rays) < 0.5 * all_rays)
+      ++slice_frames;
+    EXPECT_EQ(control.stats.reused_bundles, 1u) << n;
+    const Frame x = after(0.99 * r_ff);
+    rd::SbrTracer reference(scene, every_ray);
+    const Frame ref = trace(reference, pose_around(0.99 * r_ff, 0.0));
+    EXPECT_EQ(x.stats.reused_bundles, 0u) << n;
+    EXPECT_EQ(x.stats.rays, ref.stats.rays) << n;
+    ASSERT_EQ(x.out.size(), ref.out.size()) << n;
+    for (int bounces = 1; bounces <= 3; ++bounces) {
+      const std::complex<double> a = sum(ref, bounces, k, r_ff), b = sum(x, bounces, k, r_ff);
+      EXPECT_LE(std::abs(a - b), 1e-9 * std::abs(a) + 1e-12) << n << " " << bounces;
+      EXPECT_NEAR(energy(x, bounces), energy(ref, bounces), 1e-9 * energy(ref, bounces) + 1e-24)
+          << n << " " << bounces;
+    }
+  }
+  std::printf("R_ff %.1f m; frames where the control refreshed one slice: %d of 4\n", r_ff,
+              slice_frames);
+  EXPECT_GE(slice_frames, 1);
 }
 
 TEST(SbrReuse, ADeferredRefreshWaitsUntilAKeptBundleIsTwiceItsPeriodOld) {
