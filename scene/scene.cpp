@@ -361,8 +361,9 @@ struct Scene::Impl {
   // The parts of a query after the static BVH (defined with the queries below).
   bool finish_intersect(const Ray& ray, RTCRayHit& rh, Hit& hit) const noexcept;
   bool occluded_beyond_static(const Ray& ray, const RTCRay& r) const noexcept;
-  // Batched occlusion of n rays, ray_at(i) the i-th: the static BVH as coherent streams of
-  // kStreamChunk rays, then per ray what lies beyond it (levels of detail, movers).
+  // Batched occlusion of n rays, ray_at(i) the i-th, kStreamChunk at a time: the static BVH,
+  // then each level of detail, then each moving object (in its body frame), each as one coherent
+  // stream of the rays not blocked yet that can reach it.
   template <class RayAt>
   void occluded_batch(std::size_t n, const RayAt& ray_at,
                       std::span<std::uint8_t> blocked) const noexcept;
@@ -757,6 +758,7 @@ namespace {
 
 // Rays per Embree stream call of the batched queries (a stack buffer: no allocation).
 constexpr std::size_t kStreamChunk = 64;
+static_assert(kStreamChunk <= 256, "occluded_batch keeps a ray's lane in a byte");
 
 }  // namespace
 
@@ -957,35 +959,81 @@ bool Scene::occluded(const Ray& ray) const noexcept {
 template <class RayAt>
 void Scene::Impl::occluded_batch(std::size_t n, const RayAt& ray_at,
                                  std::span<std::uint8_t> blocked) const noexcept {
-  const bool beyond = !level_scenes.empty() || !movers.empty();
+  // Per chunk: the rays in our layout and in Embree's (`world`: as to_embree made them, kept for
+  // the levels and movers since a stream call overwrites tfar), their indices in the span, and
+  // the stream handed to Embree (`buf`) with, per entry, its lane in the chunk.
+  std::array<Ray, kStreamChunk> rays;
+  std::array<RTCRay, kStreamChunk> world;
   std::array<RTCRay, kStreamChunk> buf;
   std::array<std::uint32_t, kStreamChunk> index;
+  std::array<std::uint8_t, kStreamChunk> lane_blocked;
+  std::array<std::uint8_t, kStreamChunk> lane_of;
+  // Per lane, for the levels' bands (level_ray): as the single query computes them.
+  std::array<double, kStreamChunk> origin_offset_m{}, direction_length{};
+  const bool levels = !level_scenes.empty();
+  // One coherent stream of `count` rays of buf on `scene`; marks the lanes it finds blocked
+  // (Embree sets tfar to -inf on a hit).
+  auto stream = [&](RTCScene scene, unsigned count) {
+    if (count == 0)
+      return;
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    rtcOccluded1M(scene, &ctx, buf.data(), count, sizeof(RTCRay));
+    for (unsigned k = 0; k < count; ++k) {
+      if (buf[k].tfar < 0.0f)
+        lane_blocked[lane_of[k]] = 1;
+    }
+  };
   for (std::size_t begin = 0; begin < n; begin += kStreamChunk) {
     const std::size_t count = std::min(kStreamChunk, n - begin);
     unsigned valid = 0;
     for (std::size_t i = 0; i < count; ++i) {
-      if (!to_embree(ray_at(begin + i), buf[valid])) {
+      rays[valid] = ray_at(begin + i);
+      if (!to_embree(rays[valid], world[valid])) {
         blocked[begin + i] = 0;
         continue;
       }
+      buf[valid] = world[valid];
+      lane_of[valid] = static_cast<std::uint8_t>(valid);
+      lane_blocked[valid] = 0;
+      if (levels) {
+        origin_offset_m[valid] =
+            view_bands ? glm::length(rays[valid].origin_m - view_position_m) : 0.0;
+        direction_length[valid] = glm::length(rays[valid].direction);
+      }
       index[valid++] = static_cast<std::uint32_t>(begin + i);
     }
-    if (static_scene && valid > 0) {
-      RTCIntersectContext ctx;
-      rtcInitIntersectContext(&ctx);
-      ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-      rtcOccluded1M(static_scene, &ctx, buf.data(), valid, sizeof(RTCRay));
-    }
-    for (unsigned k = 0; k < valid; ++k) {
-      const std::uint32_t i = index[k];
-      bool b = static_scene && buf[k].tfar < 0.0f;  // Embree sets tfar to -inf on a hit
-      if (!b && beyond) {
-        const Ray ray = ray_at(i);
-        RTCRay r{};
-        b = to_embree(ray, r) && occluded_beyond_static(ray, r);
+    // The single query's stages (occluded, occluded_beyond_static), each as one stream of the
+    // lanes that no earlier stage has blocked: a ray is blocked when any stage blocks it, so
+    // the answers are the single query's whichever stage answers first.
+    if (static_scene)
+      stream(static_scene, valid);
+    for (const LevelBvh& l : level_scenes) {
+      unsigned asked = 0;
+      for (unsigned k = 0; k < valid; ++k) {
+        if (lane_blocked[k] != 0 ||
+            !level_ray(l, world[k], origin_offset_m[k], direction_length[k], buf[asked]))
+          continue;
+        lane_of[asked++] = static_cast<std::uint8_t>(k);
       }
-      blocked[i] = b ? 1 : 0;
+      stream(l.scene, asked);
     }
+    for (const Mover& mv : movers) {
+      unsigned asked = 0;
+      for (unsigned k = 0; k < valid; ++k) {
+        if (lane_blocked[k] != 0 ||
+            !crosses_box(rays[k], padded_bounds[mv.object], static_cast<double>(world[k].tnear),
+                         static_cast<double>(world[k].tfar))) {
+          continue;
+        }
+        to_body(rays[k], world_from_body[mv.object], world[k], buf[asked]);
+        lane_of[asked++] = static_cast<std::uint8_t>(k);
+      }
+      stream(mv.scene, asked);
+    }
+    for (unsigned k = 0; k < valid; ++k)
+      blocked[index[k]] = lane_blocked[k];
   }
 }
 

@@ -80,8 +80,10 @@ class Scene {
   /// of a facet toward a plane wave, a row of parallel ray tubes): the answers of the single
   /// queries above, ray by ray, with the static BVH traversed as Embree ray streams marked
   /// coherent (rtcIntersect1M / rtcOccluded1M, which trace them in SIMD packets; several times
-  /// the single-ray throughput on such rays). Order the rays so that neighbours in the span are
-  /// neighbours in space. found[i] = intersect(rays[i], hits[i]); blocked[i] =
+  /// the single-ray throughput on such rays). The occlusion query asks the levels of detail and
+  /// the moving objects' BVHs as streams too (per BVH, the rays that no earlier one blocked and
+  /// that can reach it; a mover's in its body frame). Order the rays so that neighbours in the
+  /// span are neighbours in space. found[i] = intersect(rays[i], hits[i]); blocked[i] =
   /// occluded(rays[i]); only the first min(sizes) rays are answered. Real-time safe (no
   /// allocation: a fixed stack buffer), thread-safe.
   void intersect(std::span<const Ray> rays, std::span<Hit> hits,

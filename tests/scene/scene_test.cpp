@@ -475,6 +475,81 @@ TEST(SceneBatch, BatchedQueriesAnswerAsSingleOnes) {
   EXPECT_EQ(mismatches, 0);
 }
 
+// The batched occlusion asks each moving object's BVH as a stream too (the rays not blocked yet
+// that cross its box, in its body frame): the same answers as the single query, ray by ray, for
+// the rays the tracer's facet pass batches (samples just off each mover's triangles toward a
+// radar, some blocked by the mover's own other part) and for rays from behind the movers. Two
+// movers are yawed (a linear motion off the x axis, a trajectory heading north), a third
+// straight; all have moved (t = 2 s), so a ray left in the world frame would miss them.
+TEST(SceneBatch, MoversAskedAsStreamsAnswerAsSingleQueries) {
+  sc::SceneDescription d;
+  d.materials = {{"grass", {}}, {"metal", {}}};
+  d.objects.push_back(ground_triangle());
+  sc::ObjectDesc a{"yawed", {}, glm::dmat4(1.0), sc::LinearMotion{{0, 0, 0}, {10, 5, 0}}};
+  add_box(a.mesh, {-3, -1.5, 0}, {3, 1.5, 1.5}, 1);  // hull
+  add_box(a.mesh, {-1, -1, 1.5}, {1, 1, 2.5}, 1);    // turret: shades part of the hull's top
+  d.objects.push_back(a);
+  sc::ObjectDesc b{"north", {}, glm::dmat4(1.0), std::nullopt};
+  b.trajectory = sc::Trajectory{{{30, -20, 0}, {30, 100, 0}}, 5.0};
+  add_box(b.mesh, {-3, -1, 0}, {3, 1, 2}, 1);
+  d.objects.push_back(b);
+  sc::ObjectDesc c{"straight", {}, glm::dmat4(1.0), sc::LinearMotion{{-20, 10, 0}, {4, 0, 0}}};
+  add_box(c.mesh, {-2, -1, 0}, {2, 1, 2}, 1);
+  d.objects.push_back(c);
+  sc::Scene s(d);
+  s.set_time(2.0);
+  const glm::dvec3 radar(-200.0, -300.0, 80.0);
+  auto toward_radar = [&](const glm::dvec3& p) {
+    return ray(p, radar - p, 0.0, glm::length(radar - p));
+  };
+  std::vector<sc::Ray> rays;
+  for (std::uint32_t id = 1; id < d.objects.size(); ++id) {
+    const glm::dmat4 x = s.world_from_body(id);
+    const sc::Mesh& mesh = d.objects[id].mesh;
+    for (const glm::uvec3& t : mesh.triangles) {
+      const glm::dvec3 v0(x * glm::dvec4(glm::dvec3(mesh.positions_m[t.x]), 1.0));
+      const glm::dvec3 v1(x * glm::dvec4(glm::dvec3(mesh.positions_m[t.y]), 1.0));
+      const glm::dvec3 v2(x * glm::dvec4(glm::dvec3(mesh.positions_m[t.z]), 1.0));
+      const glm::dvec3 n = glm::normalize(glm::cross(v1 - v0, v2 - v0));
+      // Seven points over the triangle, 1 mm off it on its outer side.
+      for (int k = 0; k < 7; ++k) {
+        const double u = 0.05 + 0.13 * k, v = 0.9 - u;
+        rays.push_back(toward_radar(v0 + u * (v1 - v0) + 0.5 * v * (v2 - v0) + 1e-3 * n));
+      }
+    }
+  }
+  const std::size_t from_surfaces = rays.size();
+  for (int i = 0; i < 60; ++i) {  // from behind each mover, at its height
+    for (std::uint32_t id = 1; id < d.objects.size(); ++id) {
+      const glm::dvec3 centre = 0.5 * (s.objects()[id].bounds_min_m + s.objects()[id].bounds_max_m);
+      const glm::dvec3 away = glm::normalize(centre - radar);
+      const glm::dvec3 side = glm::normalize(glm::cross(away, glm::dvec3(0, 0, 1)));
+      rays.push_back(toward_radar(centre + 8.0 * away + (0.1 * i - 3.0) * side +
+                                  glm::dvec3(0, 0, 0.03 * i - 0.8)));
+    }
+  }
+  std::vector<std::uint8_t> blocked(rays.size(), 7);
+  s.occluded(rays, blocked);
+  int mismatches = 0, blocked_surface = 0, clear_surface = 0, blocked_behind = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const bool single = s.occluded(rays[i]);
+    mismatches += single != (blocked[i] != 0) ? 1 : 0;
+    if (i < from_surfaces) {
+      blocked_surface += single ? 1 : 0;
+      clear_surface += single ? 0 : 1;
+    } else {
+      blocked_behind += single ? 1 : 0;
+    }
+  }
+  // Both answers occur among the surface samples and behind the movers (nothing but a mover
+  // can block these rays: they climb from above the ground toward the radar).
+  EXPECT_GT(blocked_surface, 100);
+  EXPECT_GT(clear_surface, 100);
+  EXPECT_GT(blocked_behind, 50);
+  EXPECT_LT(blocked_behind, 180);
+  EXPECT_EQ(mismatches, 0);
+}
+
 TEST(SceneValidation, BrokenDescriptionsFailWithContext) {
   auto error_of = [](sc::SceneDescription d) -> std::string {
     try {
