@@ -346,6 +346,18 @@ void SbrTracer::occluded(std::span<const scene::Ray> rays,
     blocked[i] = scene_->occluded(rays[i]) ? 1 : 0;
 }
 
+void SbrTracer::occluded_coherent(std::span<const scene::Ray> rays,
+                                  std::span<std::uint8_t> blocked) const noexcept {
+  if (query_log_ != nullptr) {
+    for (const scene::Ray& ray : rays) {
+      const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
+      if (i < query_log_->occlusions.size())
+        query_log_->occlusions[i] = ray;
+    }
+  }
+  scene_->occluded(rays, blocked);
+}
+
 bool SbrTracer::occluded(const scene::Ray& ray) const noexcept {
   if (query_log_ != nullptr) {
     const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
@@ -368,6 +380,21 @@ namespace {
 double surface_offset_m(const glm::dvec3& p) noexcept {
   return 1e-6 * (1.0 + glm::length(p));
 }
+
+// The occlusion query of a bounce-1 sample at `p`: the segment from p to the radar at
+// `radar_m` (facet_pass, facet_batch: the same ray either way).
+scene::Ray ray_toward(const glm::dvec3& p, const glm::dvec3& radar_m) noexcept {
+  scene::Ray ray;
+  const glm::dvec3 to = radar_m - p;
+  ray.t_far_m = glm::length(to);
+  ray.origin_m = p;
+  ray.direction = to / ray.t_far_m;
+  ray.t_near_m = 0.0;
+  return ray;
+}
+
+// facet_batch: a facet decided without a query.
+constexpr std::size_t kNoSlot = std::numeric_limits<std::size_t>::max();
 
 // Whether a direction `a` from the radar (antenna frame, unit) is inside the field of view:
 // ahead of the antenna (a.x > 0) and within its azimuth and elevation limits, by their tangents
@@ -428,12 +455,20 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
                                    bool centroid_only, double resolution_m, Contribution& out,
                                    std::uint64_t& queries, FacetMemo* record,
                                    const FacetMemo* replay) const noexcept {
-  const SbrConfig& c = config_;
   if (record != nullptr)
     *record = FacetMemo{};
+  FacetGeometry g;
+  const std::uint8_t decided = facet_geometry(pose, id, t, resolution_m, g);
+  if (decided != kFacetNeedsLight)
+    return decided;
+  return facet_finish(pose, g, centroid_only, out, queries, record, replay, {}, 0);
+}
+
+std::uint8_t SbrTracer::facet_geometry(const RadarPose& pose, std::uint32_t id, std::size_t t,
+                                       double resolution_m, FacetGeometry& g) const noexcept {
+  const SbrConfig& c = config_;
   const scene::Mesh& mesh = scene_->description().objects[id].mesh;
   const glm::uvec3 tri = mesh.triangles[t];
-  const std::uint16_t material = mesh.triangle_material[t];
   const auto dark = static_cast<std::uint8_t>(FacetLight::kDark);
   const glm::dmat4& xf = frame_world_from_body_[id];
   auto world = [&](unsigned i) { return glm::dvec3(xf * glm::dvec4(mesh.positions_m[i], 1.0)); };
@@ -471,20 +506,59 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   const bool in_view = in_field_of_view(fov_tan_, arrival);
   if (!in_view || range_m > c.max_range_m || !facet_in_far_field(rho_m, range_m, k))
     return kLightByRays;
-  const double offset_m = surface_offset_m(centroid);
+  g.v0_m = v0;
+  g.v1_m = v1;
+  g.v2_m = v2;
+  g.centroid_m = centroid;
+  g.n = n;
+  g.s = s;
+  g.arrival = arrival;
+  g.range_m = range_m;
+  g.cos_i = cos_i;
+  g.offset_m = surface_offset_m(centroid);
+  g.m = facet_subdivisions(longest, resolution_m);
+  g.id = id;
+  g.material = mesh.triangle_material[t];
+  return kFacetNeedsLight;
+}
+
+std::size_t SbrTracer::facet_sample_rays(const RadarPose& pose, const FacetGeometry& g,
+                                         bool centroid_only, std::size_t replayed,
+                                         std::span<scene::Ray> rays) const noexcept {
+  // facet_finish's first queries, in its order.
+  if (centroid_only || g.m == 1) {
+    if (replayed < 1)
+      rays[0] = ray_toward(g.centroid_m + g.offset_m * g.n, pose.position_m);
+    return 1;
+  }
+  const std::array<glm::dvec3, kFacetSamples> samples =
+      facet_samples(g.v0_m, g.v1_m, g.v2_m, g.n, g.offset_m);
+  for (std::size_t q = replayed; q < kFacetSamples; ++q)
+    rays[q] = ray_toward(samples[q], pose.position_m);
+  return kFacetSamples;
+}
+
+std::uint8_t SbrTracer::facet_finish(const RadarPose& pose, const FacetGeometry& g,
+                                     bool centroid_only, Contribution& out, std::uint64_t& queries,
+                                     FacetMemo* record, const FacetMemo* replay,
+                                     std::span<const std::uint8_t> answered,
+                                     std::size_t first_answered) const noexcept {
+  const SbrConfig& c = config_;
+  const auto dark = static_cast<std::uint8_t>(FacetLight::kDark);
+  const glm::dvec3 v0 = g.v0_m, v1 = g.v1_m, v2 = g.v2_m, centroid = g.centroid_m, n = g.n, s = g.s,
+                   d = -g.s;
+  const double offset_m = g.offset_m;
+  const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
   std::size_t asked = 0;  // this facet's queries so far (FacetMemo: answers in this order)
   auto blocked = [&](const glm::dvec3& p) {
     const std::size_t q = asked++;
     if (replay != nullptr && q < replay->count)
       return ((replay->blocked[q / 64] >> (q % 64)) & 1u) != 0;
     ++queries;
-    scene::Ray ray;
-    const glm::dvec3 to = pose.position_m - p;
-    ray.t_far_m = glm::length(to);
-    ray.origin_m = p;
-    ray.direction = to / ray.t_far_m;
-    ray.t_near_m = 0.0;
-    const bool answer = occluded(ray);
+    // Query q's answer asked beforehand (facet_batch), or asked now.
+    const bool answer = q >= first_answered && q - first_answered < answered.size()
+                            ? answered[q - first_answered] != 0
+                            : occluded(ray_toward(p, pose.position_m));
     if (record != nullptr && q < FacetMemo::kBits) {
       record->blocked[q / 64] |= static_cast<std::uint64_t>(answer ? 1 : 0) << (q % 64);
       record->count = static_cast<std::uint16_t>(q + 1);
@@ -495,44 +569,104 @@ std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std:
   // it does for a facet no longer than the spacing: the rule (facet_light) would cut it, were it
   // partly lit, into m = 1 sub-triangle, the facet itself, lit by its centroid's sample, which
   // is the first of its seven; all seven clear or all blocked, the centroid's says the same. The
-  // other six samples could not change the outcome, so they are not asked.
-  const int m = facet_subdivisions(longest, resolution_m);
+  // other six samples could not change the outcome, so they are not asked. (facet_sample_rays
+  // makes the same choice.)
+  const int m = g.m;
   const FacetLight light =
       centroid_only || m == 1
           ? (blocked(centroid + offset_m * n) ? FacetLight::kDark : FacetLight::kLit)
           : facet_light(facet_samples(v0, v1, v2, n, offset_m), blocked);
   if (light == FacetLight::kDark)
     return dark;
+  // The answers asked beforehand were the samples' only: a partly lit facet's sub-triangles
+  // ask theirs now (facet_light may have stopped before the last sample).
+  answered = {};
   // The exact PO integral (facet_po.hpp) over the facet, or over its lit sub-triangles, in the
   // local plane wave of the centroid direction, phase referred to the centroid:
   // integral exp(j k (s - d).(r' - c)) dS' times exp(-j k 2 R) of the centroid's two-way path
   // (sbr_core.hpp's footprint integral, over whole triangles).
-  const glm::dvec3 g = k * (s - d);
+  const glm::dvec3 gk = k * (s - d);
   std::complex<double> integral{0.0, 0.0};
   if (light == FacetLight::kLit) {
-    integral = triangle_phase_integral(v0 - centroid, v1 - centroid, v2 - centroid, g);
+    integral = triangle_phase_integral(v0 - centroid, v1 - centroid, v2 - centroid, gk);
   } else {
     (void)for_each_lit_subtriangle(
         v0, v1, v2, n, offset_m, m, blocked,
         [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& e) {
-          integral += triangle_phase_integral(a - centroid, b - centroid, e - centroid, g);
+          integral += triangle_phase_integral(a - centroid, b - centroid, e - centroid, gk);
         });
     if (integral == std::complex<double>(0.0, 0.0))
       return dark;  // no lit sub-triangle
   }
-  const SurfaceModel& sm = surfaces_.surfaces[material].specular;
+  const SurfaceModel& sm = surfaces_.surfaces[g.material].specular;
   const bool pec = sm.kind == SurfaceModel::Kind::kPec;
-  const ReflectionCoefficients rc = reflection_coefficients(sm, cos_i, k);
+  const ReflectionCoefficients rc = reflection_coefficients(sm, g.cos_i, k);
   const glm::dvec3 boresight = pose.world_from_antenna[0], up = -pose.world_from_antenna[2];
   const bool tx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kVH;
   const bool rx_h = c.polarisation == Polarisation::kHH || c.polarisation == Polarisation::kHV;
   const CVec e{pol_vector(tx_h, up, boresight, d), glm::dvec3(0.0)};
   const glm::dvec3 p = pol_vector(rx_h, up, boresight, d);
-  const glm::dvec3 v_obj = scene_->objects()[id].velocity_mps;
+  const glm::dvec3 v_obj = scene_->objects()[g.id].velocity_mps;
   out = bounce1_return(po_amplitude_m(k, p, po_source(e, d, n, s, rc, pec), 1.0) * integral *
-                           std::polar(1.0, -2.0 * k * range_m),
-                       range_m, glm::dot(v_obj - pose.velocity_mps, d), arrival_azel(arrival), id);
+                           std::polar(1.0, -2.0 * k * g.range_m),
+                       g.range_m, glm::dot(v_obj - pose.velocity_mps, d), arrival_azel(g.arrival),
+                       g.id);
   return static_cast<std::uint8_t>(light);
+}
+
+void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std::size_t begin,
+                            std::size_t end, std::size_t& b, std::uint64_t& queries) noexcept {
+  // Per facet of the batch: its geometry, slot, memo pointers and where its up-front rays
+  // start in `rays` (count: how many it has there). On the stack: no allocation.
+  std::array<FacetGeometry, kFacetBatch> geometry;
+  std::array<std::size_t, kFacetBatch> slot;
+  std::array<FacetMemo*, kFacetBatch> record;
+  std::array<const FacetMemo*, kFacetBatch> replay;
+  std::array<std::uint16_t, kFacetBatch> first_ray, ray_count, first_query;
+  std::array<scene::Ray, kFacetBatch * kFacetSamples> rays;
+  std::array<std::uint8_t, kFacetBatch * kFacetSamples> answers;
+  std::size_t n_rays = 0;
+  for (std::size_t i = begin; i != end; ++i) {
+    const std::size_t j = i - begin;
+    const std::size_t t = run_item(bundles_, &Bundle::first_facet, i, b);
+    const Bundle& bd = bundles_[b];
+    slot[j] = facet_first_[bd.object_id] + t;
+    record[j] = memo_record(bd, slot[j], t);
+    replay[j] = memo_replay(bd, slot[j], t);
+    if (record[j] != nullptr)
+      *record[j] = FacetMemo{};
+    ray_count[j] = 0;
+    first_ray[j] = static_cast<std::uint16_t>(n_rays);
+    first_query[j] = 0;
+    const std::uint8_t decided = facet_geometry(pose, bd.object_id, t, bd.spacing_m, geometry[j]);
+    if (decided != kFacetNeedsLight) {
+      facet_light_[slot[j]] = decided;
+      slot[j] = kNoSlot;
+      continue;
+    }
+    const std::size_t replayed = replay[j] != nullptr ? replay[j]->count : 0;
+    const std::size_t samples =
+        facet_sample_rays(pose, geometry[j], knobs.facet_centroid_only, replayed,
+                          std::span<scene::Ray>(rays).subspan(n_rays, kFacetSamples));
+    if (replayed >= samples)
+      continue;
+    // The rays of queries replayed .. samples - 1 sit at rays[n_rays + q]: close the gap.
+    for (std::size_t q = replayed; q < samples; ++q)
+      rays[n_rays + q - replayed] = rays[n_rays + q];
+    first_query[j] = static_cast<std::uint16_t>(replayed);
+    ray_count[j] = static_cast<std::uint16_t>(samples - replayed);
+    n_rays += samples - replayed;
+  }
+  occluded_coherent(std::span<const scene::Ray>(rays.data(), n_rays),
+                    std::span<std::uint8_t>(answers.data(), n_rays));
+  for (std::size_t j = 0; j < end - begin; ++j) {
+    if (slot[j] == kNoSlot)
+      continue;
+    facet_light_[slot[j]] = facet_finish(
+        pose, geometry[j], knobs.facet_centroid_only, facet_out_[slot[j]], queries, record[j],
+        replay[j], std::span<const std::uint8_t>(answers.data() + first_ray[j], ray_count[j]),
+        first_query[j]);
+  }
 }
 
 WedgeEdge SbrTracer::world_edge(std::uint32_t id, std::size_t e) const noexcept {
@@ -1712,16 +1846,18 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     facet_light_[slot] = facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only, bd.spacing_m,
                                     facet_out_[slot], queries, record, replay);
   };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_facets, 64),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      std::uint64_t queries = 0;
-                      std::size_t b = 0;
-                      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-                        const std::size_t t = run_item(bundles_, &Bundle::first_facet, i, b);
-                        facet_of(bundles_[b], t, queries);
-                      }
-                      facet_queries += queries;
-                    });
+  // Batches of kFacetBatch facets (facet_batch), cut where the simple partitioner halves the
+  // run: the same batches whatever the threads.
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, n_facets, kFacetBatch),
+      [&](const tbb::blocked_range<std::size_t>& range) {
+        std::uint64_t queries = 0;
+        std::size_t b = 0;
+        for (std::size_t i = range.begin(); i < range.end(); i += kFacetBatch)
+          facet_batch(pose, knobs, i, std::min(range.end(), i + kFacetBatch), b, queries);
+        facet_queries += queries;
+      },
+      tbb::simple_partitioner());
   // The reuse rule's last condition: the same facets left to the rays as when the paths were
   // kept. A bundle that fails it is traced after all, its facets asked again (and recorded).
   for (Bundle& bd : bundles_) {
