@@ -382,7 +382,7 @@ double surface_offset_m(const glm::dvec3& p) noexcept {
 }
 
 // The occlusion query of a bounce-1 sample at `p`: the segment from p to the radar at
-// `radar_m` (facet_pass, facet_batch: the same ray either way).
+// `radar_m` (facet_sample_rays, facet_finish: the same ray either way).
 scene::Ray ray_toward(const glm::dvec3& p, const glm::dvec3& radar_m) noexcept {
   scene::Ray ray;
   const glm::dvec3 to = radar_m - p;
@@ -450,19 +450,6 @@ Contribution bounce1_return(std::complex<double> amplitude, double range_m,
   return out;
 }
 }  // namespace
-
-std::uint8_t SbrTracer::facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
-                                   bool centroid_only, double resolution_m, Contribution& out,
-                                   std::uint64_t& queries, FacetMemo* record,
-                                   const FacetMemo* replay) const noexcept {
-  if (record != nullptr)
-    *record = FacetMemo{};
-  FacetGeometry g;
-  const std::uint8_t decided = facet_geometry(pose, id, t, resolution_m, g);
-  if (decided != kFacetNeedsLight)
-    return decided;
-  return facet_finish(pose, g, centroid_only, out, queries, record, replay, {}, 0);
-}
 
 std::uint8_t SbrTracer::facet_geometry(const RadarPose& pose, std::uint32_t id, std::size_t t,
                                        double resolution_m, FacetGeometry& g) const noexcept {
@@ -578,8 +565,8 @@ std::uint8_t SbrTracer::facet_finish(const RadarPose& pose, const FacetGeometry&
           : facet_light(facet_samples(v0, v1, v2, n, offset_m), blocked);
   if (light == FacetLight::kDark)
     return dark;
-  // The answers asked beforehand were the samples' only: a partly lit facet's sub-triangles
-  // ask theirs now (facet_light may have stopped before the last sample).
+  // The answers asked beforehand were the samples' (facet_light may have stopped before the
+  // last): none is a sub-triangle's.
   answered = {};
   // The exact PO integral (facet_po.hpp) over the facet, or over its lit sub-triangles, in the
   // local plane wave of the centroid direction, phase referred to the centroid:
@@ -590,6 +577,23 @@ std::uint8_t SbrTracer::facet_finish(const RadarPose& pose, const FacetGeometry&
   if (light == FacetLight::kLit) {
     integral = triangle_phase_integral(v0 - centroid, v1 - centroid, v2 - centroid, gk);
   } else {
+    // A partly lit facet asks every one of its m^2 sub-triangles' samples
+    // (for_each_lit_subtriangle), queries asked .. asked + m^2 - 1: those a replay memo does not
+    // hold go as one coherent batch, consumed by `blocked` in the same order.
+    std::array<scene::Ray, kMaxFacetSubdivisions * kMaxFacetSubdivisions> sub_rays;
+    std::array<std::uint8_t, kMaxFacetSubdivisions * kMaxFacetSubdivisions> sub_answers;
+    std::size_t q = asked, n_sub = 0;
+    first_answered = std::max<std::size_t>(asked, replay != nullptr ? replay->count : 0);
+    for_each_subtriangle(
+        v0, v1, v2, m, [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& e) {
+          if (q++ >= first_answered) {
+            sub_rays[n_sub++] =
+                ray_toward(subtriangle_sample(a, b, e, n, offset_m), pose.position_m);
+          }
+        });
+    occluded_coherent(std::span<const scene::Ray>(sub_rays.data(), n_sub),
+                      std::span<std::uint8_t>(sub_answers.data(), n_sub));
+    answered = std::span<const std::uint8_t>(sub_answers.data(), n_sub);
     (void)for_each_lit_subtriangle(
         v0, v1, v2, n, offset_m, m, blocked,
         [&](const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& e) {
@@ -1839,13 +1843,6 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   stats.target_facets += n_facets;
   std::atomic<std::uint64_t> facet_queries{0};
   choose_memo(pose, knobs, bundles_);
-  auto facet_of = [&](const Bundle& bd, std::size_t t, std::uint64_t& queries) {
-    const std::size_t slot = facet_first_[bd.object_id] + t;
-    FacetMemo* record = memo_record(bd, slot, t);
-    const FacetMemo* replay = memo_replay(bd, slot, t);
-    facet_light_[slot] = facet_pass(pose, bd.object_id, t, knobs.facet_centroid_only, bd.spacing_m,
-                                    facet_out_[slot], queries, record, replay);
-  };
   // Batches of kFacetBatch facets (facet_batch), cut where the simple partitioner halves the
   // run: the same batches whatever the threads.
   tbb::parallel_for(
@@ -1868,8 +1865,11 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     bd.memo = kMemoRecord;
     refresh_credit_ = std::max(0.0, refresh_credit_ - static_cast<double>(all_rays(bd) - paid));
     std::uint64_t queries = 0;
-    for (std::size_t t = 0; t < facet_first_[bd.object_id + 1] - facet_first_[bd.object_id]; ++t)
-      facet_of(bd, t, queries);
+    std::size_t b = 0;  // run_item's cursor, walks to bd
+    const std::size_t end =
+        bd.first_facet + facet_first_[bd.object_id + 1] - facet_first_[bd.object_id];
+    for (std::size_t i = bd.first_facet; i < end; i += kFacetBatch)
+      facet_batch(pose, knobs, i, std::min(end, i + kFacetBatch), b, queries);
     facet_queries += queries;
   }
   count_reuse(bundles_, stats);

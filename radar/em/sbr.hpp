@@ -341,9 +341,10 @@ class SbrTracer {
   /// toward one point (the facet pass's samples). A stream's closest hit had depended on its
   /// neighbours (intersect above: which of the triangles met at an edge comes first); whether
   /// a ray is blocked does not depend on the order in which triangles are met, and the
-  /// streams answered as the single queries for every batched facet sample of the default
-  /// scenario and of 60 frames of the terrain one (8.99 million rays, none different). The
-  /// facet pass's batches are the same whatever the threads (trace: simple partitioner).
+  /// streams answered as the single queries for every ray the facet pass batched (its
+  /// samples and sub-triangles') in the default scenario and 60 frames of the terrain one
+  /// (10.0 million rays, none different; 2026-11-28). The facet pass's batches are the same
+  /// whatever the threads (trace: simple partitioner).
   void occluded_coherent(std::span<const scene::Ray> rays,
                          std::span<std::uint8_t> blocked) const noexcept;
   /// Per scene material at the carrier: specular model, sigma0 row (issue 4's models, "total":
@@ -517,7 +518,7 @@ class SbrTracer {
   /// Per facet of a kept target: left to the rays (kLightByRays) when its paths were kept.
   std::vector<std::uint8_t> kept_facet_by_rays_;
   /// Per facet of a static target, with reuse on: the answers of its bounce-1 occlusion queries
-  /// (facet_pass: its visibility samples toward the radar, then its sub-triangles', in the
+  /// (facet_finish: its visibility samples toward the radar, then its sub-triangles', in the
   /// order asked; bit i set: query i blocked), recorded when choose_memo says so. Later frames
   /// read the answers back instead of asking the scene again while the aspect change since
   /// bounds how far a shadow boundary can have moved across the target (at most half a ray
@@ -616,31 +617,26 @@ class SbrTracer {
   /// tan of the field of view's limits: azimuth min, max, elevation min, max (setup).
   std::array<double, 4> fov_tan_{};
   std::vector<glm::dmat4> frame_world_from_body_;  ///< per object, this frame (bundled targets)
-  /// Bounce 1 of triangle `t` of target `id` for a radar at `pose` (header): its light, and
-  /// its contribution in `out` when lit or partly lit. Adds its occlusion queries to `queries`.
-  /// Partly lit facets are cut to `resolution_m` (sbr_core.hpp, facet_subdivisions).
-  /// `record`: its occlusion answers are written there; `replay`: read from there (FacetMemo;
-  /// at most one of the two, each may be null). facet_geometry then facet_finish, every query
-  /// asked singly.
-  [[nodiscard]] std::uint8_t facet_pass(const RadarPose& pose, std::uint32_t id, std::size_t t,
-                                        bool centroid_only, double resolution_m, Contribution& out,
-                                        std::uint64_t& queries, FacetMemo* record = nullptr,
-                                        const FacetMemo* replay = nullptr) const noexcept;
-  /// facet_pass in two halves, so that a run of facets can ask their first queries (the
-  /// visibility samples) as one batch between them (facet_batch). What the first half found,
-  /// for the second (world frame).
+  /// The facet pass: bounce 1 of each triangle of the bundled targets for a radar at `pose`
+  /// (header), its light and its contribution when lit or partly lit, in three steps so that
+  /// neighbouring facets ask their occlusion queries together. Partly lit facets are cut to
+  /// their bundle's spacing (sbr_core.hpp, facet_subdivisions). A facet's answers are recorded
+  /// into or replayed from its FacetMemo as memo_record / memo_replay say. What the first step
+  /// (facet_geometry) found, for the last (facet_finish), world frame:
+  /// (No initialisers: facet_batch keeps kFacetBatch of them on the stack per batch, each
+  /// written by facet_geometry before it is read.)
   struct FacetGeometry {
-    glm::dvec3 v0_m{0.0}, v1_m{0.0}, v2_m{0.0}, centroid_m{0.0};
-    glm::dvec3 n{0.0};        ///< unit normal of the lit side
-    glm::dvec3 s{0.0};        ///< unit, centroid to radar
-    glm::dvec3 arrival{0.0};  ///< -s in the antenna frame
-    double range_m = 0.0, cos_i = 0.0, offset_m = 0.0;
-    int m = 1;  ///< facet_subdivisions at the resolution
-    std::uint32_t id = 0;
-    std::uint16_t material = 0;
+    glm::dvec3 v0_m, v1_m, v2_m, centroid_m;
+    glm::dvec3 n;        ///< unit normal of the lit side
+    glm::dvec3 s;        ///< unit, centroid to radar
+    glm::dvec3 arrival;  ///< -s in the antenna frame
+    double range_m, cos_i, offset_m;
+    int m;  ///< facet_subdivisions at the resolution
+    std::uint32_t id;
+    std::uint16_t material;
   };
-  /// facet_pass's result when it is decided without a query (dark, or kLightByRays), or
-  /// kFacetNeedsLight, `g` then filled for facet_finish.
+  /// Triangle t of target `id`: its light when it is decided without a query (dark, or
+  /// kLightByRays), or kFacetNeedsLight, `g` then filled for facet_finish.
   static constexpr std::uint8_t kFacetNeedsLight = 254;
   [[nodiscard]] std::uint8_t facet_geometry(const RadarPose& pose, std::uint32_t id, std::size_t t,
                                             double resolution_m, FacetGeometry& g) const noexcept;
@@ -651,10 +647,10 @@ class SbrTracer {
   [[nodiscard]] std::size_t facet_sample_rays(const RadarPose& pose, const FacetGeometry& g,
                                               bool centroid_only, std::size_t replayed,
                                               std::span<scene::Ray> rays) const noexcept;
-  /// The rest of facet_pass: its light and return. `answered`: the answers of queries
+  /// The facet's light and return; its occlusion queries (counted in `queries`) are numbered in
+  /// the order the rule asks them (FacetMemo). `answered`: the answers of queries
   /// first_answered, first_answered + 1, ... asked beforehand (facet_sample_rays' rays, in
-  /// order); consumed as facet_pass would have asked them (counted in `queries`, recorded).
-  /// Later queries are asked singly.
+  /// order); a partly lit facet's sub-triangles are asked as one batch here.
   [[nodiscard]] std::uint8_t facet_finish(const RadarPose& pose, const FacetGeometry& g,
                                           bool centroid_only, Contribution& out,
                                           std::uint64_t& queries, FacetMemo* record,
@@ -662,8 +658,9 @@ class SbrTracer {
                                           std::span<const std::uint8_t> answered,
                                           std::size_t first_answered) const noexcept;
   /// Items [begin, end) (at most kFacetBatch) of the frame's run of facets (trace): their
-  /// geometry, then every facet's up-front samples as one coherent batch (occluded_coherent),
-  /// then each facet finished with those answers. `b`: run_item's cursor.
+  /// geometry, then every facet's samples as one coherent batch (occluded_coherent), then each
+  /// facet finished with those answers; light in facet_light_, return in facet_out_.
+  /// `b`: run_item's cursor.
   static constexpr std::size_t kFacetBatch = 64;
   void facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std::size_t begin,
                    std::size_t end, std::size_t& b, std::uint64_t& queries) noexcept;
