@@ -332,15 +332,19 @@ void SbrTracer::intersect(std::span<const scene::Ray> rays, std::span<scene::Hit
     found[i] = scene_->intersect(rays[i], hits[i]) ? 1 : 0;
 }
 
+void SbrTracer::log_occlusions(std::span<const scene::Ray> rays) const noexcept {
+  if (query_log_ == nullptr)
+    return;
+  for (const scene::Ray& ray : rays) {
+    const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
+    if (i < query_log_->occlusions.size())
+      query_log_->occlusions[i] = ray;
+  }
+}
+
 void SbrTracer::occluded(std::span<const scene::Ray> rays,
                          std::span<std::uint8_t> blocked) const noexcept {
-  if (query_log_ != nullptr) {
-    for (const scene::Ray& ray : rays) {
-      const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
-      if (i < query_log_->occlusions.size())
-        query_log_->occlusions[i] = ray;
-    }
-  }
+  log_occlusions(rays);
   // One query per ray, as intersect() above.
   for (std::size_t i = 0; i < rays.size() && i < blocked.size(); ++i)
     blocked[i] = scene_->occluded(rays[i]) ? 1 : 0;
@@ -348,22 +352,12 @@ void SbrTracer::occluded(std::span<const scene::Ray> rays,
 
 void SbrTracer::occluded_coherent(std::span<const scene::Ray> rays,
                                   std::span<std::uint8_t> blocked) const noexcept {
-  if (query_log_ != nullptr) {
-    for (const scene::Ray& ray : rays) {
-      const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
-      if (i < query_log_->occlusions.size())
-        query_log_->occlusions[i] = ray;
-    }
-  }
+  log_occlusions(rays);
   scene_->occluded(rays, blocked);
 }
 
 bool SbrTracer::occluded(const scene::Ray& ray) const noexcept {
-  if (query_log_ != nullptr) {
-    const std::size_t i = query_log_->n_occlusions.fetch_add(1, std::memory_order_relaxed);
-    if (i < query_log_->occlusions.size())
-      query_log_->occlusions[i] = ray;
-  }
+  log_occlusions(std::span<const scene::Ray>(&ray, 1));
   return scene_->occluded(ray);
 }
 

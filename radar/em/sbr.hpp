@@ -347,6 +347,8 @@ class SbrTracer {
   /// whatever the threads (trace: simple partitioner).
   void occluded_coherent(std::span<const scene::Ray> rays,
                          std::span<std::uint8_t> blocked) const noexcept;
+  /// Records occlusion queries in the query log, when one is set.
+  void log_occlusions(std::span<const scene::Ray> rays) const noexcept;
   /// Per scene material at the carrier: specular model, sigma0 row (issue 4's models, "total":
   /// surface + volume), conductor flag; resolved once here.
   SurfaceSet surfaces_;
