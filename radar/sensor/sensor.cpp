@@ -167,11 +167,11 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   item_beams_.resize(c.max_contributions);
   item_bucket_.resize(c.max_contributions);
   if (c.merge_step_bins > 0.0) {
-    std::size_t cap = 2;
-    while (cap < 2 * c.max_contributions)
-      cap <<= 1;
-    merge_table_.assign(cap, 0);
+    // Each part's region: twice its returns plus 2 (merge_returns()).
+    merge_table_.assign(2 * c.max_contributions + 2 * kMergeParts, 0);
     merge_used_.resize(c.max_contributions);
+    merge_order_.resize(c.max_contributions);
+    merge_part_.resize(c.max_contributions);
     merge_keys_.resize(c.max_contributions);
     merge_hash_.resize(c.max_contributions);
     merge_hashed_.resize(c.max_contributions);
@@ -857,99 +857,120 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
   // Coherent returns of one object within one merge cell of each other (merge_step_bins in range
   // and velocity, merge_step_beamwidths of the sum beam in azimuth and elevation) reach the image
   // through responses that differ by less than the direct path's own table step: they are one
-  // return, with the sum of their amplitudes at their amplitude-weighted mean position. Open
-  // addressing on a table of at least twice the frame's coherent returns (a power of two); the
-  // first return of a cell represents it, so the result does not depend on anything but the
-  // input order (not on the table's size or the hash).
+  // return, with the sum of their amplitudes at their amplitude-weighted mean position. The
+  // first return of a cell represents it, and the cell's sums accumulate in input order, so the
+  // result depends on nothing but the input order (not on the table, the hash or the threads).
   // The keys, hashes and weighted positions are computed per item in parallel beforehand
-  // (merge_key()); only the table is walked here, in input order. An entry holds the upper half
-  // of its key's hash beside the item, so that a probe of another cell seldom reads its key. A
-  // cell's sums and amplitude accumulate on its representative's entries; the representatives'
-  // items are written once, by the parallel finish.
-  std::size_t n_mergeable = 0;
+  // (merge_key()). The cells are split into kMergeParts parts by the top bits of their key's
+  // hash: every return of a cell is in the cell's part, so the parts are merged independently
+  // (in parallel), each walking its own returns in input order through its own region of the
+  // table (open addressing, at least twice its returns). An entry holds the upper half of its
+  // key's hash beside the item, so that a probe of another cell seldom reads its key. A cell's
+  // sums and amplitude accumulate on its representative's entries; the representatives' items
+  // are written once, by the part's finish.
+  auto part_of = [&](std::size_t i) { return static_cast<std::size_t>(merge_part_[i]); };
+  // Each part's returns in input order (a stable counting sort) and its region of the table.
+  std::array<std::size_t, kMergeParts + 1> first{};
   for (std::size_t i = 0; i < item_count_; ++i)
-    n_mergeable += merge_hashed_[i];
-  std::size_t size = 2;
-  while (size < 2 * n_mergeable)
-    size <<= 1;
-  const std::size_t mask = size - 1;  // size <= merge_table_.size(): set up for every return
-  std::uint64_t* table = merge_table_.data();
-  // The table's lines are random: fetched kAhead returns ahead of the walk.
-  constexpr std::size_t kAhead = 16;
-  std::size_t n_used = 0;
-  for (std::size_t i = 0; i < item_count_; ++i) {
-    if (i + kAhead < item_count_ && merge_hashed_[i + kAhead])
-      __builtin_prefetch(table + (static_cast<std::size_t>(merge_hash_[i + kAhead]) & mask));
-    if (!merge_hashed_[i])
-      continue;
-    const MergeKey& key = merge_keys_[i];
-    const std::uint64_t tag = merge_hash_[i] >> 32;
-    std::size_t slot = static_cast<std::size_t>(merge_hash_[i]) & mask;
-    std::size_t rep = 0;
-    bool found = false;
-    for (std::uint64_t e = table[slot]; e != 0; slot = (slot + 1) & mask, e = table[slot]) {
-      rep = static_cast<std::size_t>(e & 0xFFFFFFFFu) - 1;
-      if ((e >> 32) == tag && merge_keys_[rep] == key) {
-        found = true;
-        break;
+    first[part_of(i) + 1] += merge_hashed_[i];
+  for (std::size_t p = 0; p < kMergeParts; ++p)
+    first[p + 1] += first[p];
+  std::array<std::size_t, kMergeParts> next{};
+  std::copy_n(first.begin(), kMergeParts, next.begin());
+  for (std::size_t i = 0; i < item_count_; ++i)
+    if (merge_hashed_[i])
+      merge_order_[next[part_of(i)]++] = static_cast<std::uint32_t>(i);
+  std::array<std::uint64_t, kMergeParts> merged{};
+  // Part p's returns are merge_order_[first[p], first[p + 1]); its region of the table starts at
+  // 2 first[p] + 2 p and holds 2 n + 2 entries (within merge_table_: set up for every return).
+  auto merge_part = [&](std::size_t p) {
+    const std::size_t begin = first[p], end = first[p + 1];
+    if (begin == end)
+      return;
+    std::uint64_t* table = merge_table_.data() + 2 * begin + 2 * p;
+    const std::uint64_t size = 2 * (end - begin) + 2;
+    // A hash's slot in the region: its lower 32 bits scaled to [0, size) (Lemire, "Fast random
+    // integer generation in an interval", ACM TOMACS 29(1), 2019).
+    auto home = [&](std::size_t i) {
+      return static_cast<std::size_t>(((merge_hash_[i] & 0xFFFFFFFFull) * size) >> 32);
+    };
+    // The table's lines are random: fetched kAhead returns ahead of the walk.
+    constexpr std::size_t kAhead = 16;
+    std::size_t n_used = begin;  // the part's used slots: merge_used_[begin, n_used)
+    for (std::size_t q = begin; q < end; ++q) {
+      if (q + kAhead < end)
+        __builtin_prefetch(table + home(merge_order_[q + kAhead]));
+      const std::size_t i = merge_order_[q];
+      const MergeKey& key = merge_keys_[i];
+      const std::uint64_t tag = merge_hash_[i] >> 32;
+      std::size_t slot = home(i);
+      std::size_t rep = 0;
+      bool found = false;
+      for (std::uint64_t e = table[slot]; e != 0;
+           slot = slot + 1 == size ? 0 : slot + 1, e = table[slot]) {
+        rep = static_cast<std::size_t>(e & 0xFFFFFFFFu) - 1;
+        if ((e >> 32) == tag && merge_keys_[rep] == key) {
+          found = true;
+          break;
+        }
       }
+      if (!found) {  // the first return of its cell represents it
+        table[slot] = (tag << 32) | static_cast<std::uint64_t>(i + 1);
+        merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
+        continue;
+      }
+      // The cell's sums and amplitude accumulate on its representative's entries.
+      const MergeSums& m = merge_sums_[i];
+      MergeSums& a = merge_sums_[rep];
+      merge_amplitude_[rep] += merge_amplitude_[i];
+      a.weight += m.weight;
+      a.range_bin += m.range_bin;
+      a.velocity_bin += m.velocity_bin;
+      a.range_m += m.range_m;
+      a.velocity_mps += m.velocity_mps;
+      a.azimuth_rad += m.azimuth_rad;
+      a.elevation_rad += m.elevation_rad;
+      ++a.count;
+      item_state_[i] = kMerged;  // its beam span stays empty (prepare)
+      ++merged[p];
     }
-    if (!found) {  // the first return of its cell represents it
-      table[slot] = (tag << 32) | static_cast<std::uint64_t>(i + 1);
-      merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
-      continue;
-    }
-    // The cell's sums and amplitude accumulate on its representative's entries.
-    const MergeSums& m = merge_sums_[i];
-    MergeSums& a = merge_sums_[rep];
-    merge_amplitude_[rep] += merge_amplitude_[i];
-    a.weight += m.weight;
-    a.range_bin += m.range_bin;
-    a.velocity_bin += m.velocity_bin;
-    a.range_m += m.range_m;
-    a.velocity_mps += m.velocity_mps;
-    a.azimuth_rad += m.azimuth_rad;
-    a.elevation_rad += m.elevation_rad;
-    ++a.count;
-    item_state_[i] = kMerged;  // its beam span stays empty (prepare)
-    ++stats.merged_returns;
-  }
-  // Each merged cell's representative independently (in parallel): its item (from its
-  // contribution, as the prepare step writes the others' items), with the summed amplitude and
-  // the mean position, and its elevation channels there.
-  auto finish = [&](std::size_t u) {
-    const std::uint32_t slot = merge_used_[u];
-    const auto rep = static_cast<std::size_t>(merge_table_[slot] & 0xFFFFFFFFu) - 1;
-    merge_table_[slot] = 0;
-    const MergeSums& a = merge_sums_[rep];
-    const Contribution& c = contributions[rep];
-    Item& r = items_[rep];
-    r.amplitude = merge_amplitude_[rep];
-    r.pos = processor_->position_of(c.range_m, c.radial_velocity_mps);
-    r.coherent = true;
-    r.object_id = c.object_id;
-    r.half_bins = 0.0;
-    r.range_m = c.range_m;
-    r.radial_velocity_mps = c.radial_velocity_mps;
-    r.azimuth_rad = c.azimuth_rad;
-    r.elevation_rad = c.elevation_rad;
-    if (a.count >= 2 && a.weight > 0.0) {
-      r.pos.range_bin = a.range_bin / a.weight;
-      r.pos.velocity_bin = a.velocity_bin / a.weight;
-      r.range_m = a.range_m / a.weight;
-      r.radial_velocity_mps = a.velocity_mps / a.weight;
-      r.azimuth_rad = a.azimuth_rad / a.weight;
-      r.elevation_rad = a.elevation_rad / a.weight;
-    }
-    antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el,
-                         r.delta_el);
-    item_beams_[rep] = beam_span(r);
+    for (std::size_t u = begin; u < n_used; ++u)
+      finish_merged(contributions, table, merge_used_[u]);
   };
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_used, 2048),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t u = r.begin(); u != r.end(); ++u)
-                        finish(u);
-                    });
+  tbb::parallel_for(std::size_t{0}, kMergeParts, merge_part);
+  for (const std::uint64_t m : merged)
+    stats.merged_returns += m;
+}
+
+void Sensor::finish_merged(std::span<const Contribution> contributions, std::uint64_t* table,
+                           std::uint32_t slot) noexcept {
+  // A merged cell's representative: its item (from its contribution, as the prepare step writes
+  // the others' items), with the summed amplitude and the mean position, and its elevation
+  // channels there; the slot is emptied for the next frame.
+  const auto rep = static_cast<std::size_t>(table[slot] & 0xFFFFFFFFu) - 1;
+  table[slot] = 0;
+  const MergeSums& a = merge_sums_[rep];
+  const Contribution& c = contributions[rep];
+  Item& r = items_[rep];
+  r.amplitude = merge_amplitude_[rep];
+  r.pos = processor_->position_of(c.range_m, c.radial_velocity_mps);
+  r.coherent = true;
+  r.object_id = c.object_id;
+  r.half_bins = 0.0;
+  r.range_m = c.range_m;
+  r.radial_velocity_mps = c.radial_velocity_mps;
+  r.azimuth_rad = c.azimuth_rad;
+  r.elevation_rad = c.elevation_rad;
+  if (a.count >= 2 && a.weight > 0.0) {
+    r.pos.range_bin = a.range_bin / a.weight;
+    r.pos.velocity_bin = a.velocity_bin / a.weight;
+    r.range_m = a.range_m / a.weight;
+    r.radial_velocity_mps = a.velocity_mps / a.weight;
+    r.azimuth_rad = a.azimuth_rad / a.weight;
+    r.elevation_rad = a.elevation_rad / a.weight;
+  }
+  antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el, r.delta_el);
+  item_beams_[rep] = beam_span(r);
 }
 
 void Sensor::merge_key(std::size_t i, const Contribution& c, const ImagePosition& pos,
@@ -965,6 +986,7 @@ void Sensor::merge_key(std::size_t i, const Contribution& c, const ImagePosition
                      cell(c.azimuth_rad * merge_per_rad_az_),
                      cell(c.elevation_rad * merge_per_rad_el_)};
   merge_keys_[i] = key;
+  merge_part_[i] = static_cast<std::uint8_t>(c.object_id % kMergeParts);
   // The hash places the key in the table only (the result does not depend on it): one
   // multiply a field, then splitmix64's finaliser (Steele, Lea and Flood, "Fast splittable
   // pseudorandom number generators", OOPSLA 2014).

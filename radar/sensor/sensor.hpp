@@ -246,6 +246,10 @@ class Sensor {
   /// Sums coherent returns that share a merge cell (SensorConfig::merge_step_bins), and writes
   /// the Item of each cell's representative.
   void merge_returns(std::span<const Contribution> contributions, SensorStats& stats) noexcept;
+  /// merge_returns()'s last step for the cell whose representative is in `slot` of `table` (a
+  /// part's region): writes its item and empties the slot.
+  void finish_merged(std::span<const Contribution> contributions, std::uint64_t* table,
+                     std::uint32_t slot) noexcept;
   struct MergeKey {
     std::uint32_t object_id = 0;
     long long range = 0, velocity = 0, azimuth = 0, elevation = 0;
@@ -256,10 +260,14 @@ class Sensor {
     double azimuth_rad = 0, elevation_rad = 0;
     std::uint32_t count = 0;
   };
-  /// Open addressing, the first 2^k >= 2 x (the frame's coherent returns) entries: 0 empty,
+  /// The merge's parts (merge_returns(): merged independently, in parallel).
+  static constexpr std::size_t kMergeParts = 8;
+  /// Open addressing, a region of 2 n + 2 entries for each part of n coherent returns: 0 empty,
   /// else (the key hash's upper 32 bits << 32) | (item index + 1).
   std::vector<std::uint64_t> merge_table_;
-  std::vector<std::uint32_t> merge_used_;   ///< slots taken this frame
+  std::vector<std::uint32_t> merge_used_;   ///< slots taken this frame (in each part's region)
+  std::vector<std::uint32_t> merge_order_;  ///< the coherent returns by part, in input order
+  std::vector<std::uint8_t> merge_part_;    ///< per coherent return: its part (its object's)
   std::vector<MergeKey> merge_keys_;        ///< per usable coherent item
   std::vector<std::uint64_t> merge_hash_;   ///< ... its key's hash
   std::vector<std::uint8_t> merge_hashed_;  ///< per item: 1 when it has a key (usable, coherent)
