@@ -861,13 +861,16 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
   // first return of a cell represents it, and the cell's sums accumulate in input order, so the
   // result depends on nothing but the input order (not on the table, the hash or the threads).
   // The keys, hashes and weighted positions are computed per item in parallel beforehand
-  // (merge_key()). The cells are split into kMergeParts parts by the top bits of their key's
-  // hash: every return of a cell is in the cell's part, so the parts are merged independently
-  // (in parallel), each walking its own returns in input order through its own region of the
-  // table (open addressing, at least twice its returns). An entry holds the upper half of its
-  // key's hash beside the item, so that a probe of another cell seldom reads its key. A cell's
-  // sums and amplitude accumulate on its representative's entries; the representatives' items
-  // are written once, by the part's finish.
+  // (merge_key()). The returns are split into kMergeParts parts by their object (object_id mod
+  // kMergeParts, merge_part_): a cell is one object's, so every return of a cell is in one part,
+  // and the parts are merged independently (in parallel), each walking its own returns in input
+  // order through its own region of the table (open addressing, at least twice its returns). An
+  // object's returns come in runs (its kept paths, its rays' returns), so a part reads them in
+  // sequence (a split by the key's hash read every kMergeParts-th return and was 2.5 times
+  // slower, docs/performance.md). An entry holds the upper half of its key's hash beside the
+  // item, so that a probe of another cell seldom reads its key. A cell's sums and amplitude
+  // accumulate on its representative's entries; the representatives' items are written once, by
+  // the part's finish.
   auto part_of = [&](std::size_t i) { return static_cast<std::size_t>(merge_part_[i]); };
   // Each part's returns in input order (a stable counting sort) and its region of the table.
   std::array<std::size_t, kMergeParts + 1> first{};
