@@ -515,7 +515,7 @@ std::size_t SbrTracer::facet_sample_rays(const RadarPose& pose, const FacetGeome
   const std::array<glm::dvec3, kFacetSamples> samples =
       facet_samples(g.v0_m, g.v1_m, g.v2_m, g.n, g.offset_m);
   for (std::size_t q = replayed; q < kFacetSamples; ++q)
-    rays[q] = ray_toward(samples[q], pose.position_m);
+    rays[q - replayed] = ray_toward(samples[q], pose.position_m);
   return kFacetSamples;
 }
 
@@ -648,9 +648,6 @@ void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std:
                           std::span<scene::Ray>(rays).subspan(n_rays, kFacetSamples));
     if (replayed >= samples)
       continue;
-    // The rays of queries replayed .. samples - 1 sit at rays[n_rays + q]: close the gap.
-    for (std::size_t q = replayed; q < samples; ++q)
-      rays[n_rays + q - replayed] = rays[n_rays + q];
     first_query[j] = static_cast<std::uint16_t>(replayed);
     ray_count[j] = static_cast<std::uint16_t>(samples - replayed);
     n_rays += samples - replayed;

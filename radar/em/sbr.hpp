@@ -644,8 +644,8 @@ class SbrTracer {
                                             double resolution_m, FacetGeometry& g) const noexcept;
   /// The facet's up-front queries, the samples its light is judged by (the centroid's alone
   /// for centroid_only or m == 1, else the seven of facet_samples): their count, and in
-  /// rays[q] for q >= `replayed` (the answers a replay memo holds are not asked) the ray of
-  /// query q. `rays` holds kFacetSamples.
+  /// rays[q - replayed] for q >= `replayed` (the answers a replay memo holds are not asked) the
+  /// ray of query q. `rays` holds kFacetSamples.
   [[nodiscard]] std::size_t facet_sample_rays(const RadarPose& pose, const FacetGeometry& g,
                                               bool centroid_only, std::size_t replayed,
                                               std::span<scene::Ray> rays) const noexcept;
