@@ -132,6 +132,9 @@ cfar_pfa = 1.0e-6
 min_snr_db = 13.0
 max_detections = 64
 noise_seed = 20261123       # receiver noise and clutter speckle; fixed for reproducible runs
+return_floor_db = -60.0     # a return whose peak in a beam is more than 60 dB below a cell's noise
+                            # is left out of that beam's image (counted in report.json: sensor
+                            # returns_below_floor); -400: off, every return kept
 
 [faults]
 # Software-bus fault injection (sim_bus/fault_injector.hpp), all off by default. Seeded: a run
@@ -769,7 +772,8 @@ void read_detector(Scenario& s, const Table& root) {
   const Table det = root.table("detector");
   det.refuse_unknown({"cfar", "cfar_training_cells", "cfar_guard_cells",
                       "cfar_velocity_training_cells", "cfar_velocity_guard_cells", "cfar_pfa",
-                      "os_rank", "min_snr_db", "max_detections", "noise_seed", "thermal_noise"});
+                      "os_rank", "min_snr_db", "max_detections", "noise_seed", "thermal_noise",
+                      "return_floor_db"});
   std::string cfar = cf.kind == radar::CfarKind::kCellAveraging ? "ca" : "os";
   det.choice("cfar", cfar, {"ca", "os"});
   cf.kind = cfar == "ca" ? radar::CfarKind::kCellAveraging : radar::CfarKind::kOrderStatistic;
@@ -787,6 +791,7 @@ void read_detector(Scenario& s, const Table& root) {
   det.integer("noise_seed", seed, 0, std::numeric_limits<std::int64_t>::max());
   s.sensor.noise_seed = static_cast<std::uint64_t>(seed);
   det.boolean("thermal_noise", s.sensor.thermal_noise);
+  det.number("return_floor_db", s.sensor.return_floor_db, {-400.0, -30.0});
 }
 
 // [input] (CANaerospace identifiers of the ownship fields) and [output].

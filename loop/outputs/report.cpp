@@ -453,6 +453,12 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                    {"cells_processed", r.sensor.cells_touched},
                    {"cells_synthesised", r.sensor.cells_synthesised},
                    {"returns_merged", r.sensor.merged_returns},
+                   // (return, beam) pairs left out under the floor; the floor null when off
+                   {"return_floor_db",
+                    s.sensor.thermal_noise && s.sensor.return_floor_db > radar::kReturnFloorOff_db
+                        ? nlohmann::json(s.sensor.return_floor_db)
+                        : nlohmann::json(nullptr)},
+                   {"returns_below_floor", r.sensor.returns_below_floor},
                    {"cfar_crossings", r.sensor.cfar_crossings},
                    {"false_alarm_rate_upper_bound",
                     r.sensor.cells_touched ? static_cast<double>(r.sensor.cfar_crossings) /
@@ -566,6 +572,14 @@ void print_run_lines(const RunReport& p, std::FILE* out) {
       w.range_bins, w.pulses, s.sensor.cfar.kind == radar::CfarKind::kCellAveraging ? "CA" : "OS",
       s.sensor.cfar.pfa, cells > 0.0 ? static_cast<double>(r.sensor.cfar_crossings) / cells : 0.0,
       static_cast<ull>(r.sensor.merged));
+  if (r.sensor.returns_below_floor > 0)
+    std::fprintf(
+        out,
+        "              %.0f returns a frame left out of a beam's image, each below %.0f dB "
+        "of a cell's noise there ([detector] return_floor_db)\n",
+        r.frames ? static_cast<double>(r.sensor.returns_below_floor) / static_cast<double>(r.frames)
+                 : 0.0,
+        s.sensor.return_floor_db);
   using timing::Stage;
   std::fprintf(out, "  stage times [ms]      p50      p99      max\n");
   for (Stage st : {Stage::kInput, Stage::kSceneUpdate, Stage::kTrace, Stage::kSensor,

@@ -125,6 +125,7 @@ struct Sensor::Workspace {
   /// elsewhere): the running sum reads those only. None: begin >= end.
   std::uint32_t clutter_begin = std::numeric_limits<std::uint32_t>::max(), clutter_end = 0;
   std::uint64_t crossings = 0, overflowed = 0, synthesised = 0;
+  std::uint64_t below_floor = 0;  ///< (return, this beam) pairs under return_floor_db
 };
 
 Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.antenna) {
@@ -136,6 +137,8 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
           "must be >= 1 (linear)");
   require(std::isfinite(c.min_snr_db), "min_snr_db", "must be finite");
   require(c.beam_floor_db < 0 && c.beam_floor_db > -200, "beam_floor_db", "must be in (-200, 0)");
+  require(!std::isnan(c.return_floor_db) && c.return_floor_db <= -30.0, "return_floor_db",
+          "must be <= -30 dB (below the noise, where it changes no detection) or -inf (off)");
   require(c.max_hits_per_beam >= 1 && c.max_hits_per_beam <= (1u << 22), "max_hits_per_beam",
           "must be in [1, 2^22]");
   require(std::isfinite(c.max_range_m) && c.max_range_m > 0, "max_range_m", "must be > 0");
@@ -160,6 +163,9 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   footprint_cells_.resize(n_workers_ * kFootprintCells);
   beam_work_.resize(antenna_.beams() + 1);
   gain_floor_ = std::pow(10.0, c.beam_floor_db / 10.0);
+  return_floor_ = c.thermal_noise && c.return_floor_db > kReturnFloorOff_db
+                      ? std::pow(10.0, c.return_floor_db / 10.0)
+                      : 0.0;
   for (std::size_t i = 0; i < antenna_.beams(); ++i)
     workspaces_.push_back(std::make_unique<Workspace>(c.cfar, *processor_, c.max_hits_per_beam));
   items_.resize(c.max_contributions);
@@ -388,6 +394,7 @@ void Sensor::process_worker(std::size_t w) noexcept {
   const auto nrl = static_cast<long>(nr), nvl = static_cast<long>(proc.velocity_bins());
   const auto [dj0, dj1] = proc.velocity_support(proc.config().kernel_half_width_bins);
   const auto nv = static_cast<std::size_t>(nvl);
+  const double processing_gain = proc.processing_gain();
   // This worker's beams: a contiguous block (a return reaches a few neighbouring beams, so most
   // returns are prepared by one worker only), of about equal work (split_beams()).
   const std::size_t beam_begin = worker_beams_[w], beam_end = worker_beams_[w + 1];
@@ -419,6 +426,13 @@ void Sensor::process_worker(std::size_t w) noexcept {
       continue;
     const Item& item = items_[i];
     bool prepared = false;
+    // The most power any one cell of the image gets from the return at unit two-way gain: for a
+    // coherent return its on-grid peak |a|^2 G_p, which bounds its whole response (with
+    // non-negative tapers on a constant-envelope pulse, |sum w_i s_i conj(s_i+k) e^(j phi_i)| <=
+    // sum w_i |s_i|^2 by the triangle inequality, in range and likewise in Doppler); for a
+    // diffuse one, its densest tap (set when prepared). Compared with return_floor_ per beam.
+    const double coherent_peak = item.coherent ? std::norm(item.amplitude) * processing_gain : 0.0;
+    double diffuse_peak = 0.0;
     long n_bins = 0;  // coherent: the footprint's range bins
     int n_taps = 0;
     // Diffuse: its range footprint as up to three pieces of the difference array (the bins it
@@ -486,6 +500,12 @@ void Sensor::process_worker(std::size_t w) noexcept {
       }
       Workspace& ws = *workspaces_[b];
       if (item.coherent) {
+        // Below the floor in this beam (SensorConfig::return_floor_db): left out before its
+        // response is prepared, which is most of a return's cost.
+        if (g.sum * g.sum * coherent_peak < return_floor_) {
+          ++ws.below_floor;
+          continue;
+        }
         if (!prepared) {
           if (!proc.footprint(item.amplitude, item.pos, item.radial_velocity_mps, fp))
             break;
@@ -531,6 +551,7 @@ void Sensor::process_worker(std::size_t w) noexcept {
           values[0][t] = pieces.single ? v : v * pieces.share[0];
           values[1][t] = v * pieces.share[1];
           values[2][t] = v;
+          diffuse_peak = std::max(diffuse_peak, v);  // no cell of it gets more (shares <= 1)
         }
         prepared = true;
       }
@@ -539,6 +560,10 @@ void Sensor::process_worker(std::size_t w) noexcept {
       // Each piece's two ends added to the taps' rows times the beam's two-way power gain
       // (contiguous in the transposed array; two runs where the rows wrap).
       const double s = g.sum * g.sum;
+      if (s * diffuse_peak < return_floor_) {  // below the floor in this beam
+        ++ws.below_floor;
+        continue;
+      }
       for (int t = 0; t < n_taps; ++t)
         cover(ws.dirty[tap_rows[t]], pieces.span_begin, pieces.span_end);
       // The terrain engine's cells come in range order: the one-bin sums a few bins beyond this
@@ -1150,7 +1175,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   }
 
   for (auto& ws : workspaces_)
-    ws->crossings = ws->overflowed = ws->synthesised = 0;
+    ws->crossings = ws->overflowed = ws->synthesised = ws->below_floor = 0;
   // Beams are independent; worker w handles the w-th block of beams. Every random stream is keyed
   // by (seed, frame, beam, ...), so the result does not depend on the schedule.
   tbb::parallel_for(std::size_t{0}, n_workers_, [&](std::size_t w) { process_worker(w); });
@@ -1158,6 +1183,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     stats.cfar_crossings += ws->crossings;
     stats.hits_overflowed += ws->overflowed;
     stats.cells_synthesised += ws->synthesised;
+    stats.returns_below_floor += ws->below_floor;
   }
   stats.cells_touched += n_beams * proc.image_cells();
   if (capturing_) {

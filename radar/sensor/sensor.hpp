@@ -34,6 +34,9 @@
 
 namespace radar_emu::radar {
 
+/// SensorConfig::return_floor_db at or below which no return is left out (every return kept).
+inline constexpr double kReturnFloorOff_db = -400.0;
+
 struct SensorConfig {
   ProcessingConfig processing;  ///< waveform, windows, direct-path support
   AntennaConfig antenna;
@@ -46,7 +49,15 @@ struct SensorConfig {
   bool thermal_noise = true;
   std::uint64_t noise_seed = 20261123;
   double beam_floor_db = -40.0;  ///< two-way sum gain below which a beam ignores a return
-  double max_range_m = 6000.0;   ///< farthest return of interest: sets the range-ambiguity flag
+  /// A return whose largest cell in a beam's image would hold less than this power, relative to
+  /// the receiver noise power of a cell (the image's unit), is left out of that beam's image,
+  /// and counted (SensorStats::returns_below_floor). The bound used is the on-grid peak,
+  /// |a|^2 G_p (RangeDopplerProcessor::processing_gain(), which no off-grid or Doppler-shifted
+  /// response exceeds) times the beam's two-way power gain: a return left out could have
+  /// changed no cell by more than this fraction of its noise power. Applied with thermal noise
+  /// only (without it there is no noise to measure against); kReturnFloorOff_db or below: off.
+  double return_floor_db = -60.0;
+  double max_range_m = 6000.0;  ///< farthest return of interest: sets the range-ambiguity flag
   std::size_t max_hits_per_beam = 4096;
   std::size_t max_contributions = 1u << 18;  ///< per frame; beyond it returns are counted, dropped
   /// Synthesise receiver noise in every cell of every beam instead of drawing the noise-only
@@ -96,6 +107,9 @@ struct SensorStats {
   std::uint64_t rejected_input = 0;   ///< contributions with non-finite fields
   std::uint64_t dropped_input = 0;    ///< contributions beyond max_contributions
   std::uint64_t merged_returns = 0;   ///< coherent returns summed into another (merge_step_bins)
+  /// (return, beam) pairs left out of the beam's image: the return's bound there was below
+  /// SensorConfig::return_floor_db
+  std::uint64_t returns_below_floor = 0;
 };
 
 /// One return of a captured frame as the sensor saw it (after merging): what the frame's raw
@@ -323,6 +337,8 @@ class Sensor {
   double amplitude_scale_ = 0.0;  ///< sqrt(Pt G^2 lambda^2 / ((4 pi)^3 L) / (k T0 F fs))
   double az_extent_rad_ = 0.0;
   double gain_floor_ = 0.0;  ///< beam_floor_db as a linear two-way power ratio
+  /// return_floor_db as a power in noise units; 0 when off (or without thermal noise)
+  double return_floor_ = 0.0;
   std::size_t n_workers_ = 1;
   /// Per worker: a coherent return's response cells at unit gain, [velocity row][range bin].
   static constexpr std::size_t kFootprintCells =

@@ -224,6 +224,48 @@ TEST(RangeDoppler, NoiseIsNormalisedToOnePerCellAndGainIsTheTheoreticalOne) {
   }
 }
 
+TEST(RangeDoppler, NoCellOfAResponseExceedsTheOnGridPeak) {
+  // The sensor's return floor (SensorConfig::return_floor_db) bounds a return's response by its
+  // on-grid peak |a|^2 G_p. With non-negative tapers on a constant-envelope pulse that holds for
+  // every offset and Doppler shift (triangle inequality: |sum w_i |s|^2 e^(j phi_i)| <=
+  // sum w_i |s|^2). Checked on the direct path's responses at random positions and velocities
+  // (range-Doppler coupling included), and the bound is reached on the grid.
+  std::mt19937_64 rng(20261128);
+  std::printf("seed 20261128\n");
+  for (const rd::Waveform& w : {pulsed(), fmcw()}) {
+    for (const rd::WindowKind window :
+         {rd::WindowKind::kRectangular, rd::WindowKind::kHann, rd::WindowKind::kTaylor}) {
+      rd::RangeDopplerProcessor p(processing(w, window, window));
+      const double g = p.processing_gain();
+      std::uniform_real_distribution<double> bin(10.0, static_cast<double>(p.range_bins()) - 10.0);
+      std::uniform_real_distribution<double> speed(-50.0, 50.0);
+      double worst = 0.0;
+      for (int i = 0; i < 2000; ++i) {
+        const double v = speed(rng);
+        const double range_m = p.range_of_bin(bin(rng));
+        const rd::ImagePosition pos = p.position_of(range_m, v);
+        rd::Footprint f;
+        if (!p.footprint({0.6, -0.8}, pos, v, f))
+          continue;
+        for (int r = 0; r < f.n_rows; ++r)
+          for (long l = 0; l <= f.l1 - f.l0; ++l)
+            worst = std::max(worst, std::norm(f.velocity[r] * f.range[l]) / g);
+      }
+      // On the grid: a whole range bin, zero velocity (a velocity bin's centre).
+      rd::Footprint f;
+      ASSERT_TRUE(p.footprint({1.0, 0.0}, p.position_of(p.range_of_bin(40.0), 0.0), 0.0, f));
+      double on_grid = 0.0;
+      for (int r = 0; r < f.n_rows; ++r)
+        for (long l = 0; l <= f.l1 - f.l0; ++l)
+          on_grid = std::max(on_grid, std::norm(f.velocity[r] * f.range[l]) / g);
+      std::printf("%s, window %d: largest cell / (|a|^2 G_p) %.6f at random, %.6f on the grid\n",
+                  rd::waveform_name(w.kind), static_cast<int>(window), worst, on_grid);
+      EXPECT_LE(worst, 1.0 + 1e-9);
+      EXPECT_NEAR(on_grid, 1.0, 1e-3);
+    }
+  }
+}
+
 TEST(RangeDoppler, DirectPathEqualsTheDataCube) {
   std::mt19937_64 rng(7);
   std::printf("seed 7\n");
@@ -537,6 +579,14 @@ TEST(Sensor, RejectsBadConfigurationWithTheFieldName) {
   c = sensor_config();
   c.antenna.azimuth.beamwidth_rad = -1.0;
   EXPECT_THROW(rd::Sensor s(c), std::invalid_argument);
+  c = sensor_config();
+  c.return_floor_db = -10.0;  // above -30 dB: a floor that could change detections
+  try {
+    rd::Sensor s(c);
+    FAIL() << "accepted a return floor of -10 dB";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("return_floor_db"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Sensor, NonFiniteContributionsAreCountedNotUsed) {
@@ -594,6 +644,80 @@ TEST(Sensor, MergedCoherentReturnsGiveTheImageOfTheSeparateReturns) {
     EXPECT_NEAR(merged[i].range_m, separate[i].range_m, 0.02);  // 1/150 of a bin
     EXPECT_EQ(merged[i].object_id, 4u);
   }
+}
+
+TEST(Sensor, ReturnsBelowTheFloorAreLeftOutOfTheImageAndCounted) {
+  // A target at 25 dB, 300 returns whose peak SNR on boresight is -80 dB and 40 diffuse ones far
+  // weaker, spread over the swath, and 20 returns at -40 dB.
+  // With the floor at -60 dB the -80 dB returns are left out of the image, counted one each
+  // (one beam): the frame is bit-for-bit the frame without them. With the floor off they are
+  // synthesised (more cells). A return at -40 dB is kept either way.
+  rd::SensorConfig c = sensor_config();
+  rd::Sensor sensor(c);
+  const rd::RangeDopplerProcessor& p = sensor.processor();
+  const double bin_m = sensor.range_cell_m();
+  rd::NoiseRng rng(20261128);
+  std::printf("seed 20261128, noise seed %llu\n", static_cast<unsigned long long>(c.noise_seed));
+  std::vector<rd::Contribution> kept, weak;
+  const double r_target = p.range_of_bin(30.0);
+  kept.push_back(point(sigma_for(sensor, std::pow(10.0, 2.5), r_target), r_target, 0.3));
+  for (int i = 0; i < 20; ++i) {
+    const double r = p.range_of_bin(50.0 + 70.0 * rng.uniform());
+    kept.push_back(point(sigma_for(sensor, 1e-4, r), r, 2.0 * rng.uniform(), 0.0, 0.0,
+                         2 * kPi * rng.uniform()));
+  }
+  for (int i = 0; i < 300; ++i) {
+    const double r = p.range_of_bin(5.0 + 118.0 * rng.uniform());
+    weak.push_back(point(sigma_for(sensor, 1e-8, r), r, 4.0 * rng.uniform() - 2.0, 0.0, 0.0,
+                         2 * kPi * rng.uniform()));
+  }
+  for (int i = 0; i < 40; ++i) {
+    // Diffuse, a bin long, with the sigma of a coherent return whose on-grid peak would be
+    // -140 dB: its mean power spread over the cells it reaches is lower still.
+    const double r = p.range_of_bin(5.0 + 118.0 * rng.uniform());
+    rd::Contribution d = point(sigma_for(sensor, 1e-14, r), r, 4.0 * rng.uniform() - 2.0);
+    d.coherent = false;
+    d.range_spread_m = bin_m;
+    weak.push_back(d);
+  }
+  std::vector<rd::Contribution> all = kept;
+  all.insert(all.end(), weak.begin(), weak.end());
+
+  auto run = [&](const std::vector<rd::Contribution>& in, double floor_db, rd::SensorStats& stats) {
+    rd::SensorConfig cc = c;
+    cc.return_floor_db = floor_db;
+    std::vector<rd::Detection> out(32);
+    out.resize(rd::Sensor(cc).process(in, out, stats));
+    return out;
+  };
+  rd::SensorStats with_floor, without_weak, floor_off;
+  const std::vector<rd::Detection> a = run(all, -60.0, with_floor);
+  const std::vector<rd::Detection> b = run(kept, -60.0, without_weak);
+  (void)run(all, rd::kReturnFloorOff_db, floor_off);
+  std::printf("left out %llu, cells synthesised %llu (without them %llu, floor off %llu)\n",
+              static_cast<unsigned long long>(with_floor.returns_below_floor),
+              static_cast<unsigned long long>(with_floor.cells_synthesised),
+              static_cast<unsigned long long>(without_weak.cells_synthesised),
+              static_cast<unsigned long long>(floor_off.cells_synthesised));
+  EXPECT_EQ(with_floor.returns_below_floor, weak.size());
+  EXPECT_EQ(without_weak.returns_below_floor, 0u);
+  EXPECT_EQ(floor_off.returns_below_floor, 0u);
+  EXPECT_EQ(with_floor.cells_synthesised, without_weak.cells_synthesised);
+  EXPECT_GT(floor_off.cells_synthesised, with_floor.cells_synthesised);
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_GE(a.size(), 1u);
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].range_m, b[i].range_m);
+    EXPECT_EQ(a[i].snr, b[i].snr);
+    EXPECT_EQ(a[i].radial_velocity_mps, b[i].radial_velocity_mps);
+  }
+  // Without receiver noise there is nothing to measure the floor against: every return is kept.
+  rd::SensorConfig quiet = c;
+  quiet.thermal_noise = false;
+  rd::SensorStats quiet_stats;
+  std::vector<rd::Detection> out(32);
+  (void)rd::Sensor(quiet).process(all, out, quiet_stats);
+  EXPECT_EQ(quiet_stats.returns_below_floor, 0u);
 }
 
 TEST(Sensor, DiffuseMeanPowerIsTheRadarEquationSpreadOverItsRangeExtent) {
