@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -999,6 +1000,12 @@ void Sensor::finish_merged(std::span<const Contribution> contributions, std::uin
   }
   antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el, r.delta_el);
   item_beams_[rep] = beam_span(r);
+  item_bucket_[rep] = bucket_of(r);
+}
+
+std::uint32_t Sensor::bucket_of(const Item& it) const noexcept {
+  return static_cast<std::uint32_t>(std::clamp<long>(
+      std::lround(it.pos.range_bin), 0, static_cast<long>(processor_->range_bins()) - 1));
 }
 
 void Sensor::merge_key(std::size_t i, const Contribution& c, const ImagePosition& pos,
@@ -1066,10 +1073,6 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   item_count_ = contributions.size();
   max_half_bins_ = 0.0;
   std::fill(range_start_.begin(), range_start_.end(), 0u);
-  auto bucket_of = [&](const Item& it) {
-    return static_cast<std::size_t>(
-        std::clamp<long>(std::lround(it.pos.range_bin), 0, static_cast<long>(nr) - 1));
-  };
   // Independent per item: prepared in parallel, counted after in order.
   auto prepare = [&](std::size_t i) {
     const Contribution& c = contributions[i];
@@ -1116,35 +1119,52 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
                          it.delta_el);
     item_beams_[i] = beam_span(it);
+    item_bucket_[i] = bucket_of(it) | (it.coherent ? 0u : kDiffuseBucket);
+    return;
   };
+  // The largest diffuse half extent, per block (a maximum: the same whatever the blocks).
+  std::atomic<double> max_half_bins{0.0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                      double block_max = 0.0;
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
                         prepare(i);
+                        // A return to be merged is coherent (half extent 0), its item not
+                        // written yet; a diffuse one is tagged.
+                        if (item_state_[i] == kUsable &&
+                            (merge_hashed_.empty() || merge_hashed_[i] == 0) &&
+                            (item_bucket_[i] & kDiffuseBucket) != 0)
+                          block_max = std::max(block_max, items_[i].half_bins);
+                      }
+                      double m = max_half_bins.load(std::memory_order_relaxed);
+                      while (block_max > m && !max_half_bins.compare_exchange_weak(m, block_max)) {
+                      }
                     });
+  max_half_bins_ = max_half_bins.load();
   if (config_.merge_step_bins > 0.0)
     merge_returns(contributions, stats);
-  // One pass over the items (the counts, then each usable item's bucket, kept for the second
-  // pass, which then reads 4 bytes an item).
+  // One pass over the items' states, buckets (written where each item was, in parallel) and
+  // beam spans: the counts, and each usable item's bucket kept for the second pass (4 bytes an
+  // item); the items themselves are not read.
   constexpr std::uint32_t kNoBucket = 0xFFFFFFFFu;
   std::fill(beam_work_.begin(), beam_work_.end(), 0.0);
   for (std::size_t i = 0; i < item_count_; ++i) {
     const std::uint8_t state = item_state_[i];
     stats.rejected_input += state == kNotFinite ? 1u : 0u;
     stats.out_of_grid += state == kOffImage ? 1u : 0u;
-    item_bucket_[i] = kNoBucket;
-    if (state == kUsable) {
-      const Item& it = items_[i];
-      max_half_bins_ = std::max(max_half_bins_, it.half_bins);
-      const std::size_t bucket = bucket_of(it);
-      item_bucket_[i] = static_cast<std::uint32_t>(bucket);
-      ++range_start_[bucket + 1];
-      // The work it brings to each beam of its span (a difference array over the beams).
-      const BeamSpan span = item_beams_[i];
-      const double work = it.coherent ? kCoherentWork : kDiffuseWork;
-      beam_work_[span.first] += work;
-      beam_work_[span.end] -= work;
+    if (state != kUsable) {
+      item_bucket_[i] = kNoBucket;
+      continue;
     }
+    const std::uint32_t tagged = item_bucket_[i];
+    const std::uint32_t bucket = tagged & ~kDiffuseBucket;
+    item_bucket_[i] = bucket;
+    ++range_start_[bucket + 1];
+    // The work it brings to each beam of its span (a difference array over the beams).
+    const BeamSpan span = item_beams_[i];
+    const double work = (tagged & kDiffuseBucket) == 0 ? kCoherentWork : kDiffuseWork;
+    beam_work_[span.first] += work;
+    beam_work_[span.end] -= work;
   }
   split_beams();
   for (std::size_t b = 0; b + 1 < range_start_.size(); ++b)

@@ -53,9 +53,11 @@ struct SensorConfig {
   /// the receiver noise power of a cell (the image's unit), is left out of that beam's image,
   /// and counted (SensorStats::returns_below_floor). The bound used is the on-grid peak,
   /// |a|^2 G_p (RangeDopplerProcessor::processing_gain(), which no off-grid or Doppler-shifted
-  /// response exceeds) times the beam's two-way power gain: a return left out could have
-  /// changed no cell by more than this fraction of its noise power. Applied with thermal noise
-  /// only (without it there is no noise to measure against); kReturnFloorOff_db or below: off.
+  /// response exceeds) times the beam's two-way power gain: a return left out had at most this
+  /// fraction of a cell's noise power in any cell, so its amplitude was at most sqrt(floor) of
+  /// the noise's (-60 dB: 1e-3, moving a cell at the noise level by 0.009 dB at most). Applied
+  /// with thermal noise only (without it there is no noise to measure against);
+  /// kReturnFloorOff_db or below: off.
   double return_floor_db = -60.0;
   double max_range_m = 6000.0;  ///< farthest return of interest: sets the range-ambiguity flag
   std::size_t max_hits_per_beam = 4096;
@@ -324,6 +326,11 @@ class Sensor {
   /// Item i's beam span from its azimuth (usable items).
   [[nodiscard]] BeamSpan beam_span(const Item& item) const noexcept;
   std::vector<std::uint32_t> item_bucket_;  ///< per item: its nearest range bin, or ~0 (unusable)
+  /// item_bucket_ as written with the item (prepare, finish_merged): the bin, this bit set for
+  /// a diffuse return; process() clears it.
+  static constexpr std::uint32_t kDiffuseBucket = 0x80000000u;
+  /// Item `it`'s bucket: its nearest range bin, clamped to the image.
+  [[nodiscard]] std::uint32_t bucket_of(const Item& it) const noexcept;
   std::vector<std::uint32_t> by_range_;     ///< item indices sorted by nearest range bin
   std::vector<std::uint32_t> range_start_;  ///< by_range_ offset of each range bin (+1 entry)
   std::size_t item_count_ = 0;
