@@ -364,9 +364,12 @@ struct Scene::Impl {
   // Batched occlusion of n rays, ray_at(i) the i-th, kStreamChunk at a time: the static BVH,
   // then each level of detail, then each moving object (in its body frame), each as one coherent
   // stream of the rays not blocked yet that can reach it.
+  // `split` (optional, per ray): ask everything but the moving object split[i]
+  // (MoverSplit::kRest) or that object alone (kOwn); kNoMover: everything.
   template <class RayAt>
-  void occluded_batch(std::size_t n, const RayAt& ray_at,
-                      std::span<std::uint8_t> blocked) const noexcept;
+  void occluded_batch(std::size_t n, const RayAt& ray_at, std::span<std::uint8_t> blocked,
+                      const std::uint32_t* split = nullptr,
+                      MoverSplit mode = MoverSplit::kRest) const noexcept;
 
   Impl() = default;
   Impl(const Impl&) = delete;
@@ -958,7 +961,11 @@ bool Scene::occluded(const Ray& ray) const noexcept {
 
 template <class RayAt>
 void Scene::Impl::occluded_batch(std::size_t n, const RayAt& ray_at,
-                                 std::span<std::uint8_t> blocked) const noexcept {
+                                 std::span<std::uint8_t> blocked, const std::uint32_t* split,
+                                 MoverSplit mode) const noexcept {
+  // kOwn: the static BVH and the levels are not asked, only each lane's own mover.
+  const bool own_only = split != nullptr && mode == MoverSplit::kOwn;
+  std::array<std::uint32_t, kStreamChunk> lane_split;
   // Per chunk: the rays in our layout and in Embree's (`world`: as to_embree made them, kept for
   // the levels and movers since a stream call overwrites tfar), their indices in the span, and
   // the stream handed to Embree (`buf`) with, per entry, its lane in the chunk.
@@ -997,6 +1004,7 @@ void Scene::Impl::occluded_batch(std::size_t n, const RayAt& ray_at,
       buf[valid] = world[valid];
       lane_of[valid] = static_cast<std::uint8_t>(valid);
       lane_blocked[valid] = 0;
+      lane_split[valid] = split != nullptr ? split[begin + i] : kNoMover;
       if (levels) {
         origin_offset_m[valid] =
             view_bands ? glm::length(rays[valid].origin_m - view_position_m) : 0.0;
@@ -1007,9 +1015,11 @@ void Scene::Impl::occluded_batch(std::size_t n, const RayAt& ray_at,
     // The single query's stages (occluded, occluded_beyond_static), each as one stream of the
     // lanes that no earlier stage has blocked: a ray is blocked when any stage blocks it, so
     // the answers are the single query's whichever stage answers first.
-    if (static_scene)
+    if (static_scene && !own_only)
       stream(static_scene, valid);
     for (const LevelBvh& l : level_scenes) {
+      if (own_only)
+        break;
       unsigned asked = 0;
       for (unsigned k = 0; k < valid; ++k) {
         if (lane_blocked[k] != 0 ||
@@ -1022,7 +1032,9 @@ void Scene::Impl::occluded_batch(std::size_t n, const RayAt& ray_at,
     for (const Mover& mv : movers) {
       unsigned asked = 0;
       for (unsigned k = 0; k < valid; ++k) {
-        if (lane_blocked[k] != 0 ||
+        // With a split, lane k skips its own mover (kRest) or asks it alone (kOwn).
+        const bool own = lane_split[k] == mv.object;
+        if (lane_blocked[k] != 0 || (split != nullptr && own != own_only) ||
             !crosses_box(rays[k], padded_bounds[mv.object], static_cast<double>(world[k].tnear),
                          static_cast<double>(world[k].tfar))) {
           continue;
@@ -1041,6 +1053,13 @@ void Scene::occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked)
   const std::size_t n = std::min(rays.size(), blocked.size());
   impl_->occluded_batch(
       n, [&](std::size_t i) -> const Ray& { return rays[i]; }, blocked);
+}
+
+void Scene::occluded(std::span<const Ray> rays, std::span<const std::uint32_t> mover,
+                     MoverSplit split, std::span<std::uint8_t> blocked) const noexcept {
+  const std::size_t n = std::min({rays.size(), mover.size(), blocked.size()});
+  impl_->occluded_batch(
+      n, [&](std::size_t i) -> const Ray& { return rays[i]; }, blocked, mover.data(), split);
 }
 
 void Scene::occluded_along(const glm::dvec3& direction, std::span<const glm::dvec3> origins,

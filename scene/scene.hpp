@@ -55,6 +55,11 @@ struct ViewStats {
   std::uint64_t invalid_views = 0;      ///< set_view() calls rejected (volume invalid: defaults)
 };
 
+/// Scene::occluded split by a moving object: the rest of the scene, or that object alone.
+enum class MoverSplit : std::uint8_t { kRest, kOwn };
+/// No moving object (Scene::occluded's split).
+inline constexpr std::uint32_t kNoMover = 0xFFFFFFFFu;
+
 class Scene {
  public:
   /// Builds the acceleration structures (setup; throws std::runtime_error with context on
@@ -89,6 +94,14 @@ class Scene {
   void intersect(std::span<const Ray> rays, std::span<Hit> hits,
                  std::span<std::uint8_t> found) const noexcept;
   void occluded(std::span<const Ray> rays, std::span<std::uint8_t> blocked) const noexcept;
+  /// occluded() split by one moving object a ray: blocked[i] is rays[i]'s answer from the whole
+  /// scene but the moving object mover[i] (MoverSplit::kRest), or from mover[i] alone (kOwn; its
+  /// BVH in its body frame, after the same box test); kNoMover: the whole scene (kRest) or
+  /// nothing (kOwn). The two answers' OR is occluded(rays[i]) (the same stages, each asked as
+  /// in the unsplit query). For a mover's own facets: what its body shadows on itself depends
+  /// on its aspect only, the rest on its place in the scene as well.
+  void occluded(std::span<const Ray> rays, std::span<const std::uint32_t> mover, MoverSplit split,
+                std::span<std::uint8_t> blocked) const noexcept;
   /// The same for parallel rays over [0, infinity) from `origins` along the unit `direction`
   /// (toward a plane wave's source): blocked[i] = occluded({origins[i], direction, 0, inf}).
   void occluded_along(const glm::dvec3& direction, std::span<const glm::dvec3> origins,

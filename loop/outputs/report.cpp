@@ -397,6 +397,7 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"facet_queries", r.trace.facet_queries},
                   {"mover_facets", r.trace.mover_facets},
                   {"replayed_mover_facets", r.trace.replayed_mover_facets},
+                  {"self_replayed_mover_facets", r.trace.self_replayed_mover_facets},
                   {"edges_used", r.trace.edges_used},
                   {"edges_shadowed", r.trace.edges_shadowed},
                   {"edges_skipped", r.trace.edges_skipped},
@@ -651,13 +652,16 @@ void print_reuse_line(const RunReport& p, std::FILE* out) {
 // their facets' shadowing answers came from earlier frames.
 void print_mover_memo_line(const RunReport& p, std::FILE* out) {
   const radar::TraceStats& t = p.result->trace;
-  if (t.replayed_mover_facets == 0 || t.mover_facets == 0)
+  if (t.replayed_mover_facets + t.self_replayed_mover_facets == 0 || t.mover_facets == 0)
     return;
   std::fprintf(
       out,
       "  movers      %.1f %% of the moving targets' facets read their shadowing from "
-      "earlier frames (motion since within half a ray tube, no other mover near)\n",
-      100.0 * static_cast<double>(t.replayed_mover_facets) / static_cast<double>(t.mover_facets));
+      "earlier frames (motion since within half a ray tube, no other mover near), %.1f %% "
+      "the shadows of their own body (aspect since within half a tube; the scene asked)\n",
+      100.0 * static_cast<double>(t.replayed_mover_facets) / static_cast<double>(t.mover_facets),
+      100.0 * static_cast<double>(t.self_replayed_mover_facets) /
+          static_cast<double>(t.mover_facets));
 }
 
 // The outcome per target: one row per object that was in the beam, then the false alarms.

@@ -290,6 +290,7 @@ SbrTracer::SbrTracer(const scene::Scene& scene, const SbrConfig& config)
     static_assert(FacetMemo::kBits >=
                   kFacetSamples + kMaxFacetSubdivisions * kMaxFacetSubdivisions);
     facet_memo_.assign(facet_first_.back(), FacetMemo{});
+    facet_self_memo_.assign(facet_first_.back(), 0);
     memo_state_.assign(desc.objects.size(), MemoState{});
     // Movers' facets keep their answers too, in groups asked again in turn (mover_memo_).
     memo_groups_ = std::min(static_cast<std::size_t>(c.reuse_refresh_frames), kMaxMemoGroups);
@@ -356,6 +357,16 @@ void SbrTracer::occluded_coherent(std::span<const scene::Ray> rays,
   scene_->occluded(rays, blocked);
 }
 
+void SbrTracer::occluded_split(std::span<const scene::Ray> rays,
+                               std::span<const std::uint32_t> mover, scene::MoverSplit split,
+                               std::span<std::uint8_t> blocked) const noexcept {
+  // The query log holds whole queries: a ray asked split is logged with its rest of the scene
+  // (kRest), the part that a raw query of the same ray would traverse the most of.
+  if (split == scene::MoverSplit::kRest)
+    log_occlusions(rays);
+  scene_->occluded(rays, mover, split, blocked);
+}
+
 bool SbrTracer::occluded(const scene::Ray& ray) const noexcept {
   log_occlusions(std::span<const scene::Ray>(&ray, 1));
   return scene_->occluded(ray);
@@ -389,6 +400,9 @@ scene::Ray ray_toward(const glm::dvec3& p, const glm::dvec3& radar_m) noexcept {
 
 // facet_batch: a facet decided without a query.
 constexpr std::size_t kNoSlot = std::numeric_limits<std::size_t>::max();
+// facet_batch's answer of a sample that the mover's own body blocked when recorded (its self
+// memo), not asked this frame: blocked (non-zero), and no query counted (facet_finish).
+constexpr std::uint8_t kAnswerKnown = 2;
 
 // Whether a direction `a` from the radar (antenna frame, unit) is inside the field of view:
 // ahead of the antenna (a.x > 0) and within its azimuth and elevation limits, by their tangents
@@ -535,11 +549,17 @@ std::uint8_t SbrTracer::facet_finish(const RadarPose& pose, const FacetGeometry&
     const std::size_t q = asked++;
     if (replay != nullptr && q < replay->count)
       return ((replay->blocked[q / 64] >> (q % 64)) & 1u) != 0;
-    ++queries;
-    // Query q's answer asked beforehand (facet_batch), or asked now.
-    const bool answer = q >= first_answered && q - first_answered < answered.size()
-                            ? answered[q - first_answered] != 0
-                            : occluded(ray_toward(p, pose.position_m));
+    // Query q's answer asked beforehand (facet_batch; kAnswerKnown: blocked by the mover's own
+    // body as recorded, not asked), or asked now.
+    bool answer = false;
+    if (q >= first_answered && q - first_answered < answered.size()) {
+      const std::uint8_t a = answered[q - first_answered];
+      queries += a == kAnswerKnown ? 0u : 1u;
+      answer = a != 0;
+    } else {
+      ++queries;
+      answer = occluded(ray_toward(p, pose.position_m));
+    }
     if (record != nullptr && q < FacetMemo::kBits) {
       record->blocked[q / 64] |= static_cast<std::uint64_t>(answer ? 1 : 0) << (q % 64);
       record->count = static_cast<std::uint16_t>(q + 1);
@@ -614,16 +634,25 @@ std::uint8_t SbrTracer::facet_finish(const RadarPose& pose, const FacetGeometry&
 
 void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std::size_t begin,
                             std::size_t end, std::size_t& b, std::uint64_t& queries) noexcept {
-  // Per facet of the batch: its geometry, slot, memo pointers and where its up-front rays
-  // start in `rays` (count: how many it has there). On the stack: no allocation.
+  // Per facet of the batch: its geometry, slot, memo pointers and where its up-front answers
+  // start in `answers` (count: how many it has there). On the stack: no allocation.
   std::array<FacetGeometry, kFacetBatch> geometry;
   std::array<std::size_t, kFacetBatch> slot;
   std::array<FacetMemo*, kFacetBatch> record;
   std::array<const FacetMemo*, kFacetBatch> replay;
   std::array<std::uint16_t, kFacetBatch> first_ray, ray_count, first_query;
-  std::array<scene::Ray, kFacetBatch * kFacetSamples> rays;
+  // A mover's facet (kMemoRolling) whose group records asks its own body and the rest of the
+  // scene apart (split_record: its own answers are its self memo); one whose group reads its
+  // own shadows back asks only the rest, for the samples its body did not block.
+  std::array<std::uint8_t, kFacetBatch> split_record;
   std::array<std::uint8_t, kFacetBatch * kFacetSamples> answers;
-  std::size_t n_rays = 0;
+  // The rays asked, in facet and sample order: the answer slot each fills, and the mover it
+  // leaves out (scene::kNoMover: the whole scene).
+  std::array<scene::Ray, kFacetBatch * kFacetSamples> rays;
+  std::array<std::uint16_t, kFacetBatch * kFacetSamples> ask_slot;
+  std::array<std::uint32_t, kFacetBatch * kFacetSamples> ask_mover;
+  std::size_t n_answers = 0, n_ask = 0;
+  bool any_split = false;
   for (std::size_t i = begin; i != end; ++i) {
     const std::size_t j = i - begin;
     const std::size_t t = run_item(bundles_, &Bundle::first_facet, i, b);
@@ -631,10 +660,17 @@ void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std:
     slot[j] = facet_first_[bd.object_id] + t;
     record[j] = memo_record(bd, slot[j], t);
     replay[j] = memo_replay(bd, slot[j], t);
+    const bool rolling = bd.memo == kMemoRolling;
+    split_record[j] = rolling && record[j] != nullptr ? 1 : 0;
+    // Its own shadows read back (its group's, recorded with its samples' answers).
+    const bool self_replay = rolling && ((bd.memo_self_groups >> (t % memo_groups_)) & 1u) != 0 &&
+                             (facet_self_memo_[slot[j]] & kSelfRecorded) != 0;
     if (record[j] != nullptr)
       *record[j] = FacetMemo{};
+    if (split_record[j] != 0)
+      facet_self_memo_[slot[j]] = 0;
     ray_count[j] = 0;
-    first_ray[j] = static_cast<std::uint16_t>(n_rays);
+    first_ray[j] = static_cast<std::uint16_t>(n_answers);
     first_query[j] = 0;
     const std::uint8_t decided = facet_geometry(pose, bd.object_id, t, bd.spacing_m, geometry[j]);
     if (decided != kFacetNeedsLight) {
@@ -645,15 +681,68 @@ void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std:
     const std::size_t replayed = replay[j] != nullptr ? replay[j]->count : 0;
     const std::size_t samples =
         facet_sample_rays(pose, geometry[j], knobs.facet_centroid_only, replayed,
-                          std::span<scene::Ray>(rays).subspan(n_rays, kFacetSamples));
+                          std::span<scene::Ray>(rays).subspan(n_ask, kFacetSamples));
     if (replayed >= samples)
       continue;
     first_query[j] = static_cast<std::uint16_t>(replayed);
     ray_count[j] = static_cast<std::uint16_t>(samples - replayed);
-    n_rays += samples - replayed;
+    const std::uint32_t leave_out =
+        split_record[j] != 0 || self_replay ? bd.object_id : scene::kNoMover;
+    any_split = any_split || leave_out != scene::kNoMover;
+    const std::size_t first_ask = n_ask;
+    for (std::size_t q = replayed; q < samples; ++q) {
+      const std::size_t a = n_answers + (q - replayed);
+      if (self_replay && ((facet_self_memo_[slot[j]] >> q) & 1u) != 0) {
+        answers[a] = kAnswerKnown;  // its own body blocked it: nothing else to ask
+        continue;
+      }
+      rays[n_ask] = rays[first_ask + (q - replayed)];  // compacted (n_ask <= that index)
+      ask_slot[n_ask] = static_cast<std::uint16_t>(a);
+      ask_mover[n_ask++] = leave_out;
+    }
+    n_answers += samples - replayed;
   }
-  occluded_coherent(std::span<const scene::Ray>(rays.data(), n_rays),
-                    std::span<std::uint8_t>(answers.data(), n_rays));
+  std::array<std::uint8_t, kFacetBatch * kFacetSamples> asked;
+  if (!any_split) {  // no mover's facet: the whole scene for each (as ever)
+    occluded_coherent(std::span<const scene::Ray>(rays.data(), n_ask),
+                      std::span<std::uint8_t>(asked.data(), n_ask));
+  } else {
+    occluded_split(std::span<const scene::Ray>(rays.data(), n_ask),
+                   std::span<const std::uint32_t>(ask_mover.data(), n_ask),
+                   scene::MoverSplit::kRest, std::span<std::uint8_t>(asked.data(), n_ask));
+  }
+  for (std::size_t k = 0; k < n_ask; ++k)
+    answers[ask_slot[k]] = asked[k];
+  if (any_split) {
+    // The recording facets' own answers: their rays again, each against its own mover alone.
+    std::array<scene::Ray, kFacetBatch * kFacetSamples> own_rays;
+    std::array<std::uint32_t, kFacetBatch * kFacetSamples> own_mover;
+    std::array<std::uint16_t, kFacetBatch * kFacetSamples> own_slot;
+    std::array<std::uint8_t, kFacetBatch * kFacetSamples> own;
+    std::size_t n_own = 0;
+    for (std::size_t k = 0, j = 0; k < n_ask; ++k) {
+      while (j + 1 < end - begin &&
+             (slot[j] == kNoSlot || ask_slot[k] >= first_ray[j] + ray_count[j]))
+        ++j;
+      if (split_record[j] == 0)
+        continue;
+      own_rays[n_own] = rays[k];
+      own_mover[n_own] = ask_mover[k];
+      own_slot[n_own++] = ask_slot[k];
+    }
+    scene_->occluded(std::span<const scene::Ray>(own_rays.data(), n_own),
+                     std::span<const std::uint32_t>(own_mover.data(), n_own),
+                     scene::MoverSplit::kOwn, std::span<std::uint8_t>(own.data(), n_own));
+    for (std::size_t k = 0, j = 0; k < n_own; ++k) {
+      while (j + 1 < end - begin &&
+             (slot[j] == kNoSlot || own_slot[k] >= first_ray[j] + ray_count[j]))
+        ++j;
+      answers[own_slot[k]] |= own[k];  // the whole scene's answer: its body's or the rest's
+      const std::size_t q = std::size_t{first_query[j]} + own_slot[k] - first_ray[j];
+      facet_self_memo_[slot[j]] |=
+          static_cast<std::uint8_t>(kSelfRecorded | (own[k] != 0 ? 1u << q : 0u));
+    }
+  }
   for (std::size_t j = 0; j < end - begin; ++j) {
     if (slot[j] == kNoSlot)
       continue;
@@ -1346,6 +1435,7 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
   for (Bundle& b : bundles) {
     b.memo = kMemoNone;
     b.memo_replay_groups = 0;
+    b.memo_self_groups = 0;
     if (!facet_memo_.empty() && mover_memo_first_[b.object_id] != kNoRegion &&
         !mover_near(pose, b.object_id)) {
       // A mover with no other mover near it: its groups of facets read back the answers
@@ -1354,12 +1444,18 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
       const std::size_t turn = frame_count_ % memo_groups_;
       for (std::size_t g = 0; g < memo_groups_; ++g) {
         const MemoState& m = mover_memo_[mover_memo_first_[b.object_id] + g];
-        if (g != turn && m.valid && m.spacing_m == b.spacing_m &&
-            m.centroid_only == knobs.facet_centroid_only &&
-            frame_count_ - m.recorded_at <
-                static_cast<std::uint64_t>(config_.reuse_refresh_frames) &&
-            mover_memo_fraction(pose, b, m) <= 1.0)
+        if (g == turn || !m.valid || m.spacing_m != b.spacing_m ||
+            m.centroid_only != knobs.facet_centroid_only ||
+            frame_count_ - m.recorded_at >=
+                static_cast<std::uint64_t>(config_.reuse_refresh_frames))
+          continue;
+        // Everything read back while the motion keeps every shadow on it within half a tube;
+        // else its own shadows, while its aspect alone keeps them there (the scene asked).
+        double self = 0.0;
+        if (mover_memo_fraction(pose, b, m, &self) <= 1.0)
           b.memo_replay_groups |= std::uint32_t{1} << g;
+        else if (self <= 1.0)
+          b.memo_self_groups |= std::uint32_t{1} << g;
       }
       continue;
     }
@@ -1380,8 +1476,8 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
   }
 }
 
-double SbrTracer::mover_memo_fraction(const RadarPose& pose, const Bundle& b,
-                                      const MemoState& m) const noexcept {
+double SbrTracer::mover_memo_fraction(const RadarPose& pose, const Bundle& b, const MemoState& m,
+                                      double* self_fraction) const noexcept {
   // A moving target's occlusion answers toward the radar change in two ways:
   // - by its own parts (self-shadowing): these depend only on the direction to the radar in
   //   its body frame, which has turned by at most dtheta + phi since the recording (dtheta:
@@ -1405,8 +1501,13 @@ double SbrTracer::mover_memo_fraction(const RadarPose& pose, const Bundle& b,
       std::acos(std::clamp(0.5 * (turn[0][0] + turn[1][1] + turn[2][2] - 1.0), -1.0, 1.0));
   const double moved_m = glm::length(glm::dvec3(now[3]) - glm::dvec3(m.world_from_body[3]));
   const double half_tube_m = limit * extent_m;
-  if (!(half_tube_m > 0.0))
+  if (!(half_tube_m > 0.0)) {
+    if (self_fraction != nullptr)
+      *self_fraction = std::numeric_limits<double>::infinity();
     return std::numeric_limits<double>::infinity();
+  }
+  if (self_fraction != nullptr)
+    *self_fraction = extent_m * (dtheta + phi) / half_tube_m;
   return (extent_m * (dtheta + phi) + moved_m + phi * m.reach_m) / half_tube_m;
 }
 
@@ -1425,10 +1526,13 @@ void SbrTracer::record_mover_memo(const RadarPose& pose, const TraceKnobs& knobs
     now.reach_m =
         glm::length(glm::dvec3(now.world_from_body[3]) - now.centre_m) + 0.5 * glm::length(hi - lo);
     for (std::size_t g = 0; g < memo_groups_; ++g) {
-      if (((bd.memo_replay_groups >> g) & 1u) == 0)
+      const std::size_t in_group = g < n ? (n - g + memo_groups_ - 1) / memo_groups_ : 0;
+      if (((bd.memo_replay_groups >> g) & 1u) != 0)  // its facets t = g, g + groups, ...
+        stats.replayed_mover_facets += in_group;     // read their answers back
+      else if (((bd.memo_self_groups >> g) & 1u) != 0)
+        stats.self_replayed_mover_facets += in_group;  // their own shadows back
+      else
         mover_memo_[mover_memo_first_[bd.object_id] + g] = now;
-      else if (g < n)  // its facets t = g, g + groups, ... read their answers back
-        stats.replayed_mover_facets += (n - g + memo_groups_ - 1) / memo_groups_;
     }
   }
 }
@@ -1436,7 +1540,8 @@ void SbrTracer::record_mover_memo(const RadarPose& pose, const TraceKnobs& knobs
 SbrTracer::FacetMemo* SbrTracer::memo_record(const Bundle& bd, std::size_t slot,
                                              std::size_t t) noexcept {
   if (bd.memo == kMemoRecord ||
-      (bd.memo == kMemoRolling && ((bd.memo_replay_groups >> (t % memo_groups_)) & 1u) == 0))
+      (bd.memo == kMemoRolling &&
+       (((bd.memo_replay_groups | bd.memo_self_groups) >> (t % memo_groups_)) & 1u) == 0))
     return &facet_memo_[slot];
   return nullptr;
 }

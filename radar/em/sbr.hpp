@@ -260,6 +260,9 @@ struct TraceStats {
   /// of asking again (a facet with no answer recorded, turned away then, still asks).
   std::uint64_t mover_facets = 0;
   std::uint64_t replayed_mover_facets = 0;
+  /// Of the others, those in groups that read back only what the mover's own body blocks and ask
+  /// the rest of the scene (its own shadows within half a tube, the scene's not).
+  std::uint64_t self_replayed_mover_facets = 0;
   std::uint64_t edges_used = 0;      ///< edge-diffraction contributions (SbrConfig::edges)
   std::uint64_t edges_shadowed = 0;  ///< edges whose midpoint does not see the radar
   std::uint64_t edges_skipped = 0;   ///< back-facing, along the Keller cone, out of view/range
@@ -345,6 +348,9 @@ class SbrTracer {
   /// samples and sub-triangles') in the default scenario and 60 frames of the terrain one
   /// (10.0 million rays, none different; 2026-11-28). The facet pass's batches are the same
   /// whatever the threads (trace: simple partitioner).
+  /// occluded_coherent split by the mover of each ray (scene::Scene::occluded's split).
+  void occluded_split(std::span<const scene::Ray> rays, std::span<const std::uint32_t> mover,
+                      scene::MoverSplit split, std::span<std::uint8_t> blocked) const noexcept;
   void occluded_coherent(std::span<const scene::Ray> rays,
                          std::span<std::uint8_t> blocked) const noexcept;
   /// Records occlusion queries in the query log, when one is set.
@@ -373,6 +379,10 @@ class SbrTracer {
     /// kMemoRolling (a mover): bit g set: its facets t with t % memo_groups_ == g read their
     /// answers back this frame; the others' ask and record.
     std::uint32_t memo_replay_groups = 0;
+    /// kMemoRolling, the groups that do not read everything back: bit g set: their facets read
+    /// back what the mover's own body blocks (facet_self_memo_) and ask the rest of the scene
+    /// (its motion moved a shadow cast by the scene too far, its aspect not its own shadows).
+    std::uint32_t memo_self_groups = 0;
     double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
     /// The rows traced this frame (all of them, or one slice's for the refresh) and that slice
     /// (kAllSlices: the whole bundle).
@@ -562,10 +572,19 @@ class SbrTracer {
   std::size_t memo_groups_ = 0;  ///< min(reuse_refresh_frames, kMaxMemoGroups); 0: reuse off
   std::vector<MemoState> mover_memo_;
   std::vector<std::size_t> mover_memo_first_;
+  /// Per facet of a mover, recorded with its group's answers (mover_memo_): which of its up to
+  /// kFacetSamples visibility samples the mover's own body blocked (bit i: sample i), and
+  /// kSelfRecorded once recorded. Its own shadows move with its aspect only (the self fraction of
+  /// mover_memo_fraction): a group whose motion since has moved the scene's shadows too far, but
+  /// not its own, reads these back and asks the rest of the scene (Bundle::memo_self_groups).
+  static constexpr std::uint8_t kSelfRecorded = 0x80;
+  std::vector<std::uint8_t> facet_self_memo_;
   /// A mover's motion since `m` was recorded, as a fraction of what keeps its facets' answers
-  /// within half a ray tube (<= 1: they may be read back).
+  /// within half a ray tube (<= 1: they may be read back); `self_fraction`: the same for the
+  /// shadows its own body casts on it (its aspect change alone, the first term below).
   [[nodiscard]] double mover_memo_fraction(const RadarPose& pose, const Bundle& b,
-                                           const MemoState& m) const noexcept;
+                                           const MemoState& m,
+                                           double* self_fraction = nullptr) const noexcept;
   /// The record of a mover's memo groups that asked the scene this frame (kMemoRolling).
   void record_mover_memo(const RadarPose& pose, const TraceKnobs& knobs,
                          TraceStats& stats) noexcept;

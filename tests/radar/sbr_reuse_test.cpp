@@ -530,6 +530,17 @@ std::vector<std::complex<double>> bounce1(const Frame& fr) {
   }
   return a;
 }
+
+// The same facets lit and partly lit, and the same bounce-1 returns to 1e-9 (at least `min`).
+void expect_same_bounce1(const Frame& a, const Frame& b, std::size_t min = 3) {
+  EXPECT_EQ(a.stats.lit_facets, b.stats.lit_facets);
+  EXPECT_EQ(a.stats.partial_facets, b.stats.partial_facets);
+  const std::vector<std::complex<double>> x = bounce1(a), y = bounce1(b);
+  ASSERT_EQ(x.size(), y.size());
+  ASSERT_GE(x.size(), min);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    EXPECT_LE(std::abs(x[i] - y[i]), 1e-9 * std::abs(y[i])) << i;
+}
 }  // namespace
 
 TEST(SbrReuse, AMoversFacetsReadTheirShadowsBackWhileItsMotionStaysWithinHalfATube) {
@@ -569,15 +580,6 @@ TEST(SbrReuse, AMoversFacetsReadTheirShadowsBackWhileItsMotionStaysWithinHalfATu
     rd::SbrTracer tracer(s, fresh_config);
     s.set_time(t_s);
     return trace(tracer, pose);
-  };
-  auto expect_same_bounce1 = [](const Frame& a, const Frame& b) {
-    EXPECT_EQ(a.stats.lit_facets, b.stats.lit_facets);
-    EXPECT_EQ(a.stats.partial_facets, b.stats.partial_facets);
-    const std::vector<std::complex<double>> x = bounce1(a), y = bounce1(b);
-    ASSERT_EQ(x.size(), y.size());
-    ASSERT_GE(x.size(), 3u);
-    for (std::size_t i = 0; i < x.size(); ++i)
-      EXPECT_LE(std::abs(x[i] - y[i]), 1e-9 * std::abs(y[i])) << i;
   };
   const rd::RadarPose ahead = pose_around(rho, 0.0);
   // Displacement: the mover's two facets (groups 0 and 1; frame 2's turn is group 2) read back.
@@ -663,6 +665,78 @@ TEST(SbrReuse, AMoversFacetsAskAgainWhenItHasTurnedPastTheLimit) {
   const Frame barely = second(1e-5);
   EXPECT_EQ(barely.stats.replayed_mover_facets, 2u);
   EXPECT_EQ(barely.stats.facet_queries, 0u);
+}
+
+TEST(SbrReuse, AMoversFacetsReadTheirOwnShadowsBackAndAskTheSceneWhenItHasMovedFurther) {
+  // One mover of two parallel plates facing the radar: a 1 m back plate (a 4 x 4 grid, 32
+  // facets) and a 0.3 m plate 0.5 m in front of it and off centre, which shadows part of it
+  // (its own body). A static 0.3 m plate 2 m in front shadows another part (the scene). The
+  // mover moves toward the radar along the line of sight by 1.25 of half a ray tube: the scene's
+  // shadow on it has moved too far for its answers to be read back, but its own shadow has not
+  // moved (its aspect is the same). Its facets outside this frame's turn read back which of
+  // their samples its own body blocked and ask the rest of the scene for the others: fewer
+  // queries than a fresh trace, and the fresh trace's bounce-1 returns to 1e-9. With the radar
+  // also turned by 1.25 of the aspect limit, its own shadows have moved too: everything asked.
+  const double f = 10e9, rho = 1000.0, spacing = 0.05, speed = 0.01;
+  const double half_tube_m = 0.5 * spacing;
+  sc::ObjectDesc mover{"two_plates", {}, glm::dmat4(1.0), std::nullopt};
+  const int n = 4;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j)
+      mover.mesh.positions_m.push_back(
+          {0.0F, static_cast<float>(i / double{n} - 0.5), static_cast<float>(j / double{n} - 0.5)});
+  auto v = [&](int i, int j) { return static_cast<unsigned>(i * (n + 1) + j); };
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      mover.mesh.triangles.push_back({v(i, j), v(i + 1, j), v(i + 1, j + 1)});
+      mover.mesh.triangles.push_back({v(i, j), v(i + 1, j + 1), v(i, j + 1)});
+    }
+  }
+  const auto base = static_cast<unsigned>(mover.mesh.positions_m.size());
+  // Body x is along the motion (sc::LinearMotion), toward the radar: the plates' normal.
+  for (const glm::vec3 c : {glm::vec3{0.5F, 0.1F, 0.1F}, glm::vec3{0.5F, 0.4F, 0.1F},
+                            glm::vec3{0.5F, 0.4F, 0.4F}, glm::vec3{0.5F, 0.1F, 0.4F}})
+    mover.mesh.positions_m.push_back(c);
+  mover.mesh.triangles.push_back({base, base + 1, base + 2});
+  mover.mesh.triangles.push_back({base, base + 2, base + 3});
+  mover.mesh.triangle_material.assign(mover.mesh.triangles.size(), 0);
+  mover.motion = sc::LinearMotion{glm::dvec3(0.0), {0.0, -speed, 0.0}};
+  sc::Scene scene(with({mover, plate(0.3, {-0.25, -2.0, -0.2})}));
+  const rd::SbrConfig c = config(f, spacing);
+  rd::SbrConfig fresh_config = c;
+  fresh_config.reuse_static_paths = false;
+  const double moved_s = 1.25 * half_tube_m / speed;
+  auto second_frame = [&](const rd::RadarPose& second) {
+    rd::SbrTracer tracer(scene, c);
+    scene.set_time(0.0);
+    const Frame first = trace(tracer, pose_around(rho, 0.0));
+    EXPECT_EQ(first.stats.self_replayed_mover_facets, 0u);
+    EXPECT_GE(first.stats.partial_facets, 2u);  // one shadow of each
+    scene.set_time(moved_s);
+    return trace(tracer, second);
+  };
+  auto fresh_frame = [&](const rd::RadarPose& pose) {
+    rd::SbrTracer tracer(scene, fresh_config);
+    scene.set_time(moved_s);
+    return trace(tracer, pose);
+  };
+  const rd::RadarPose ahead = pose_around(rho, 0.0);
+  const Frame moved = second_frame(ahead), fresh = fresh_frame(ahead);
+  std::printf("moved: %llu of %llu facets read their own shadows back, %llu queries (fresh %llu)\n",
+              static_cast<unsigned long long>(moved.stats.self_replayed_mover_facets),
+              static_cast<unsigned long long>(moved.stats.mover_facets),
+              static_cast<unsigned long long>(moved.stats.facet_queries),
+              static_cast<unsigned long long>(fresh.stats.facet_queries));
+  EXPECT_EQ(moved.stats.replayed_mover_facets, 0u);
+  EXPECT_EQ(moved.stats.mover_facets, 34u);
+  EXPECT_GE(moved.stats.self_replayed_mover_facets, 30u);  // all but this frame's turn
+  EXPECT_LT(moved.stats.facet_queries, fresh.stats.facet_queries);
+  expect_same_bounce1(moved, fresh, 20);
+  // Turned past the aspect limit of the mover's region (its 1.03 m diagonal).
+  const double limit = 0.5 * spacing / std::sqrt(1.0 + 0.25 + 1.0 / 16.0);
+  const Frame turned = second_frame(pose_around(rho, 1.25 * limit));
+  EXPECT_EQ(turned.stats.self_replayed_mover_facets, 0u);
+  EXPECT_EQ(turned.stats.replayed_mover_facets, 0u);
 }
 
 TEST(SbrFacetPass, AFacetNoLongerThanTheSpacingAsksOneSample) {

@@ -548,6 +548,41 @@ TEST(SceneBatch, MoversAskedAsStreamsAnswerAsSingleQueries) {
   EXPECT_GT(blocked_behind, 50);
   EXPECT_LT(blocked_behind, 180);
   EXPECT_EQ(mismatches, 0);
+
+  // Split by the mover whose surface a ray leaves (the rays behind the movers: split by the
+  // mover they are behind): the rest of the scene's answer OR the mover's own is the whole
+  // answer; kNoMover asks the whole scene (kRest) or nothing (kOwn). Each part occurs.
+  std::vector<std::uint32_t> mover(rays.size());
+  std::size_t r = 0;
+  for (std::uint32_t id = 1; id < d.objects.size(); ++id)
+    for (std::size_t t = 0; t < d.objects[id].mesh.triangles.size() * 7; ++t)
+      mover[r++] = id;
+  for (int i = 0; i < 60; ++i)
+    for (std::uint32_t id = 1; id < d.objects.size(); ++id)
+      mover[r++] = id;
+  ASSERT_EQ(r, rays.size());
+  std::vector<std::uint8_t> rest(rays.size(), 7), own(rays.size(), 7), none_rest(rays.size(), 7),
+      none_own(rays.size(), 7);
+  s.occluded(rays, mover, sc::MoverSplit::kRest, rest);
+  s.occluded(rays, mover, sc::MoverSplit::kOwn, own);
+  const std::vector<std::uint32_t> nobody(rays.size(), sc::kNoMover);
+  s.occluded(rays, nobody, sc::MoverSplit::kRest, none_rest);
+  s.occluded(rays, nobody, sc::MoverSplit::kOwn, none_own);
+  int split_mismatches = 0, by_own = 0, by_rest = 0, none_mismatches = 0, none_own_blocked = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    split_mismatches += ((rest[i] | own[i]) != 0) != (blocked[i] != 0) ? 1 : 0;
+    by_own += own[i] != 0 ? 1 : 0;
+    by_rest += rest[i] != 0 ? 1 : 0;
+    none_mismatches += (none_rest[i] != 0) != (blocked[i] != 0) ? 1 : 0;
+    none_own_blocked += none_own[i] != 0 ? 1 : 0;
+  }
+  std::printf("split: %d blocked by the ray's own mover, %d by the rest of the scene\n", by_own,
+              by_rest);
+  EXPECT_EQ(split_mismatches, 0);
+  EXPECT_GT(by_own, 100);  // the turret over the hull, a box's far faces
+  EXPECT_GT(by_rest, 0);   // another mover
+  EXPECT_EQ(none_mismatches, 0);
+  EXPECT_EQ(none_own_blocked, 0);
 }
 
 TEST(SceneValidation, BrokenDescriptionsFailWithContext) {
