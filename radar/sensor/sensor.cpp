@@ -1,3 +1,6 @@
+#include <atomic>
+#include <chrono>
+#include <cstdio>
 #include "radar/sensor/sensor.hpp"
 
 #include <tbb/blocked_range.h>
@@ -172,6 +175,18 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   items_.resize(c.max_contributions);
   item_state_.resize(c.max_contributions);
   item_beams_.resize(c.max_contributions);
+  item_bound_.resize(c.max_contributions);
+  // The azimuth sum pattern's largest value (1 on boresight for the patterns here; a squinted
+  // pair's sum can peak off it), sampled every 1/2000 beamwidth over its extent, and raised by
+  // 1e-4 for what the sampling and the gains' recurrence can miss.
+  {
+    const double extent = antenna_.extent_az_rad(c.beam_floor_db);
+    const double step = c.antenna.azimuth.beamwidth_rad / 2000.0;
+    double m = 0.0;
+    for (double a = -extent; a <= extent; a += step)
+      m = std::max(m, std::abs(antenna_.sum_az(a)));
+    max_sum_az_ = (1.0 + 1e-4) * std::max(m, std::abs(antenna_.sum_az(0.0)));
+  }
   item_bucket_.resize(c.max_contributions);
   if (c.merge_step_bins > 0.0) {
     // Each part's region: twice its returns plus 2 (merge_returns()).
@@ -388,7 +403,9 @@ Sensor::BeamSpan Sensor::beam_span(const Item& item) const noexcept {
           std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) - az.begin())};
 }
 
+std::atomic<double> HKW_acc{0}, HKW_det{0};
 void Sensor::process_worker(std::size_t w) noexcept {
+  auto HT0 = std::chrono::steady_clock::now();
   constexpr long kPrefetchBins = 4;
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t nr = proc.range_bins();
@@ -425,6 +442,11 @@ void Sensor::process_worker(std::size_t w) noexcept {
                       b_end = std::min<std::size_t>(beam_end, span.end);
     if (b_first >= b_end)
       continue;
+    if (item_bound_[i] < return_floor_) {  // under the floor in every beam: its item not read
+      for (std::size_t b = b_first; b < b_end; ++b)
+        ++workspaces_[b]->below_floor;
+      continue;
+    }
     const Item& item = items_[i];
     bool prepared = false;
     // The most power any one cell of the image gets from the return at unit two-way gain: for a
@@ -606,8 +628,12 @@ void Sensor::process_worker(std::size_t w) noexcept {
       }
     }
   }
+  auto HT1 = std::chrono::steady_clock::now();
   for (std::size_t b = beam_begin; b < beam_end; ++b)
     detect_beam(b, *workspaces_[b]);
+  auto HT2 = std::chrono::steady_clock::now();
+  HKW_acc += std::chrono::duration<double, std::milli>(HT1 - HT0).count();
+  HKW_det += std::chrono::duration<double, std::milli>(HT2 - HT1).count();
 }
 
 void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
@@ -1001,6 +1027,14 @@ void Sensor::finish_merged(std::span<const Contribution> contributions, std::uin
   antenna_.channels_el(r.elevation_rad - config_.antenna.beam_elevation_rad, r.sum_el, r.delta_el);
   item_beams_[rep] = beam_span(r);
   item_bucket_[rep] = bucket_of(r);
+  item_bound_[rep] = bound_of(r);
+}
+
+double Sensor::bound_of(const Item& it) const noexcept {
+  if (!it.coherent)
+    return std::numeric_limits<double>::infinity();
+  const double g = max_sum_az_ * it.sum_el;  // the two-way amplitude gain is g^2 at most
+  return std::norm(it.amplitude) * processor_->processing_gain() * (g * g) * (g * g);
 }
 
 std::uint32_t Sensor::bucket_of(const Item& it) const noexcept {
@@ -1049,6 +1083,8 @@ void Sensor::merge_key(std::size_t i, const Contribution& c, const ImagePosition
 
 std::size_t Sensor::process(std::span<const Contribution> contributions, std::span<Detection> out,
                             SensorStats& stats) noexcept {
+  auto HP0 = std::chrono::steady_clock::now(); auto HPl = HP0; std::string HPs;
+  auto HP = [&](const char* n) { auto t = std::chrono::steady_clock::now(); HPs += std::string(n) + "=" + std::to_string(std::chrono::duration<double, std::milli>(t - HPl).count()) + " "; HPl = t; };
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t n_beams = antenna_.beams();
   const std::size_t nr = proc.range_bins();
@@ -1119,6 +1155,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
                          it.delta_el);
     item_beams_[i] = beam_span(it);
+    item_bound_[i] = bound_of(it);
     item_bucket_[i] = bucket_of(it) | (it.coherent ? 0u : kDiffuseBucket);
     return;
   };
@@ -1141,8 +1178,10 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
                       }
                     });
   max_half_bins_ = max_half_bins.load();
+  HP("prep");
   if (config_.merge_step_bins > 0.0)
     merge_returns(contributions, stats);
+  HP("merge");
   // One pass over the items' states, buckets (written where each item was, in parallel) and
   // beam spans: the counts, and each usable item's bucket kept for the second pass (4 bytes an
   // item); the items themselves are not read.
@@ -1198,7 +1237,9 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     ws->crossings = ws->overflowed = ws->synthesised = ws->below_floor = 0;
   // Beams are independent; worker w handles the w-th block of beams. Every random stream is keyed
   // by (seed, frame, beam, ...), so the result does not depend on the schedule.
+  HP("bucket"); HKW_acc = 0; HKW_det = 0;
   tbb::parallel_for(std::size_t{0}, n_workers_, [&](std::size_t w) { process_worker(w); });
+  HP("workers"); HPs += "acc=" + std::to_string(HKW_acc.load()) + " det=" + std::to_string(HKW_det.load()) + " ";
   for (auto& ws : workspaces_) {
     stats.cfar_crossings += ws->crossings;
     stats.hits_overflowed += ws->overflowed;
@@ -1314,6 +1355,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   }
   stats.detections += n_out;
   ++frame_;
+  HP("group"); fprintf(stderr, "HKQ %s\n", HPs.c_str());
   return n_out;
 }
 

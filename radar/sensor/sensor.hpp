@@ -323,6 +323,14 @@ class Sensor {
     std::uint32_t first = 0, end = 0;
   };
   std::vector<BeamSpan> item_beams_;
+  /// Per usable item: the most power any cell of any beam's image can get from it (a coherent
+  /// return: |a|^2 G_p (max_sum_az_ sum_el)^4, the two-way sum gain at most; a diffuse one:
+  /// infinity, judged per beam), so that a worker leaves out a return under the floor in every
+  /// beam without reading its item.
+  std::vector<double> item_bound_;
+  double max_sum_az_ = 1.0;  ///< the azimuth sum pattern's largest value (setup, sampled)
+  /// item_bound_ for item `it` (its amplitude and elevation channel set).
+  [[nodiscard]] double bound_of(const Item& it) const noexcept;
   /// Item i's beam span from its azimuth (usable items).
   [[nodiscard]] BeamSpan beam_span(const Item& item) const noexcept;
   std::vector<std::uint32_t> item_bucket_;  ///< per item: its nearest range bin, or ~0 (unusable)
