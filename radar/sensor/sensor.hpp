@@ -109,7 +109,8 @@ struct SensorStats {
   std::uint64_t rejected_input = 0;   ///< contributions with non-finite fields
   std::uint64_t dropped_input = 0;    ///< contributions beyond max_contributions
   std::uint64_t merged_returns = 0;   ///< coherent returns summed into another (merge_step_bins)
-  /// (return, beam) pairs left out of the beam's image: the return's bound there was below
+  /// (return, beam) pairs, over the beams of the return's span, left out of the beam's image: the
+  /// return's bound there (or in every beam) was below
   /// SensorConfig::return_floor_db
   std::uint64_t returns_below_floor = 0;
 };
