@@ -1,6 +1,3 @@
-#include <atomic>
-#include <chrono>
-#include <cstdio>
 #include "radar/sensor/sensor.hpp"
 
 #include <tbb/blocked_range.h>
@@ -403,9 +400,7 @@ Sensor::BeamSpan Sensor::beam_span(const Item& item) const noexcept {
           std::upper_bound(az.begin(), az.end(), item.azimuth_rad + az_extent_rad_) - az.begin())};
 }
 
-std::atomic<double> HKW_acc{0}, HKW_det{0};
 void Sensor::process_worker(std::size_t w) noexcept {
-  auto HT0 = std::chrono::steady_clock::now();
   constexpr long kPrefetchBins = 4;
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t nr = proc.range_bins();
@@ -628,12 +623,8 @@ void Sensor::process_worker(std::size_t w) noexcept {
       }
     }
   }
-  auto HT1 = std::chrono::steady_clock::now();
   for (std::size_t b = beam_begin; b < beam_end; ++b)
     detect_beam(b, *workspaces_[b]);
-  auto HT2 = std::chrono::steady_clock::now();
-  HKW_acc += std::chrono::duration<double, std::milli>(HT1 - HT0).count();
-  HKW_det += std::chrono::duration<double, std::milli>(HT2 - HT1).count();
 }
 
 void Sensor::detect_beam(std::size_t beam, Workspace& ws) noexcept {
@@ -1083,8 +1074,6 @@ void Sensor::merge_key(std::size_t i, const Contribution& c, const ImagePosition
 
 std::size_t Sensor::process(std::span<const Contribution> contributions, std::span<Detection> out,
                             SensorStats& stats) noexcept {
-  auto HP0 = std::chrono::steady_clock::now(); auto HPl = HP0; std::string HPs;
-  auto HP = [&](const char* n) { auto t = std::chrono::steady_clock::now(); HPs += std::string(n) + "=" + std::to_string(std::chrono::duration<double, std::milli>(t - HPl).count()) + " "; HPl = t; };
   const RangeDopplerProcessor& proc = *processor_;
   const std::size_t n_beams = antenna_.beams();
   const std::size_t nr = proc.range_bins();
@@ -1178,10 +1167,8 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
                       }
                     });
   max_half_bins_ = max_half_bins.load();
-  HP("prep");
   if (config_.merge_step_bins > 0.0)
     merge_returns(contributions, stats);
-  HP("merge");
   // One pass over the items' states, buckets (written where each item was, in parallel) and
   // beam spans: the counts, and each usable item's bucket kept for the second pass (4 bytes an
   // item); the items themselves are not read.
@@ -1237,9 +1224,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     ws->crossings = ws->overflowed = ws->synthesised = ws->below_floor = 0;
   // Beams are independent; worker w handles the w-th block of beams. Every random stream is keyed
   // by (seed, frame, beam, ...), so the result does not depend on the schedule.
-  HP("bucket"); HKW_acc = 0; HKW_det = 0;
   tbb::parallel_for(std::size_t{0}, n_workers_, [&](std::size_t w) { process_worker(w); });
-  HP("workers"); HPs += "acc=" + std::to_string(HKW_acc.load()) + " det=" + std::to_string(HKW_det.load()) + " ";
   for (auto& ws : workspaces_) {
     stats.cfar_crossings += ws->crossings;
     stats.hits_overflowed += ws->overflowed;
@@ -1355,7 +1340,6 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   }
   stats.detections += n_out;
   ++frame_;
-  HP("group"); fprintf(stderr, "HKQ %s\n", HPs.c_str());
   return n_out;
 }
 
