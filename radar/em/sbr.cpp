@@ -94,6 +94,63 @@ inline AzEl atan2_pair(double y0, double x0, double y1, double x1) noexcept {
 #endif
 }
 
+#if defined(RADAR_EMU_HAVE_MVEC)
+// Two doubles in the lanes of an SSE2 register, with double's arithmetic lane by lane (each an
+// IEEE operation, so each lane gets what the same expression in double gives): for evaluating
+// two kept paths at once with the scalar code's operations in the scalar code's order.
+struct D2 {
+  __m128d v;
+};
+inline D2 d2(double x) noexcept {
+  return {_mm_set1_pd(x)};
+}
+inline D2 d2(double lane0, double lane1) noexcept {
+  return {_mm_set_pd(lane1, lane0)};
+}
+inline D2 operator+(D2 a, D2 b) noexcept {
+  return {_mm_add_pd(a.v, b.v)};
+}
+inline D2 operator-(D2 a, D2 b) noexcept {
+  return {_mm_sub_pd(a.v, b.v)};
+}
+inline D2 operator*(D2 a, D2 b) noexcept {
+  return {_mm_mul_pd(a.v, b.v)};
+}
+inline D2 operator/(D2 a, D2 b) noexcept {
+  return {_mm_div_pd(a.v, b.v)};
+}
+inline D2 operator+(D2 a, double b) noexcept {
+  return a + d2(b);
+}
+inline D2 operator+(double a, D2 b) noexcept {
+  return d2(a) + b;
+}
+inline D2 operator-(D2 a, double b) noexcept {
+  return a - d2(b);
+}
+inline D2 operator-(double a, D2 b) noexcept {
+  return d2(a) - b;
+}
+inline D2 operator*(D2 a, double b) noexcept {
+  return a * d2(b);
+}
+inline D2 operator*(double a, D2 b) noexcept {
+  return d2(a) * b;
+}
+inline D2 operator-(D2 a) noexcept {  // the sign flipped, as double's unary minus
+  return {_mm_xor_pd(a.v, _mm_set1_pd(-0.0))};
+}
+inline D2 sqrt(D2 a) noexcept {
+  return {_mm_sqrt_pd(a.v)};
+}
+inline double lane0(D2 a) noexcept {
+  return _mm_cvtsd_f64(a.v);
+}
+inline double lane1(D2 a) noexcept {
+  return _mm_cvtsd_f64(_mm_unpackhi_pd(a.v, a.v));
+}
+#endif
+
 // azel_from_direction for a return's direction of arrival (an output, no decision rests on
 // it): sqrt(x^2 + y^2) for hypot(x, y), whose overflow guard a unit vector does not need; both
 // angles from one atan2_pair.
@@ -2216,39 +2273,119 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
     const double k = 2.0 * kPi * c.carrier_hz / kSpeedOfLight_mps;
     const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
     const glm::dvec3 v = pose.velocity_mps;
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, n_eval, 256),
-        [&](const tbb::blocked_range<std::size_t>& range) {
-          std::size_t r = 0;
-          for (std::size_t i = range.begin(); i != range.end(); ++i) {
-            while (r + 1 < kept_runs_.size() && i >= kept_runs_[r + 1].first)
-              ++r;
-            const KeptRun& run = kept_runs_[r];
-            const KeptPath& kp = kept_paths_[kept_region_[run.object_id] +
+    // A kept path's fields that do not depend on the pose.
+    auto set_fixed = [](const KeptPath& kp, std::uint32_t object_id, Contribution& x) {
+      x.range_spread_m = 0.0;
+      x.object_id = object_id;
+      x.radiated_by_owner = kp.radiated_by_owner;
+      x.bounces = kp.bounces;
+      x.coherent = true;
+    };
+    // The kept path for this pose (SbrConfig::reuse_static_paths): exact end segments.
+    auto evaluate = [&](const KeptPath& kp, std::uint32_t object_id, Contribution& x) {
+      const glm::dvec3 to_first = kp.first_hit_m - pose.position_m;
+      const double first_m = glm::length(to_first);
+      const glm::dvec3 to_radar = pose.position_m - kp.last_hit_m;
+      const double back_m = glm::length(to_radar);
+      const glm::dvec3 s = to_radar / back_m;
+      const double total_m = first_m + kp.inner_m + back_m;
+      x.amplitude = times(std::complex<double>(kp.amplitude_re_m, kp.amplitude_im_m),
+                          unit_phasor(-k * total_m));
+      x.range_m = 0.5 * total_m;
+      // Static path: d(path)/dt = -v . d1 + v . s (the radar's velocity on its two ends).
+      x.radial_velocity_mps = 0.5 * (-glm::dot(v, to_first / first_m) + glm::dot(v, s));
+      const AzEl ae = arrival_azel(antenna_from_world * (-s));
+      x.azimuth_rad = ae.azimuth_rad;
+      x.elevation_rad = ae.elevation_rad;
+      set_fixed(kp, object_id, x);
+    };
+#if defined(RADAR_EMU_HAVE_MVEC)
+    // Two kept paths at once, one a lane (D2): evaluate's operations in evaluate's order (glm's
+    // length, dot, division by a scalar and matrix product written out as glm computes them),
+    // so each lane is bit for bit what evaluate gives (libmvec's atan2 works lane by lane).
+    const glm::dmat3& m = antenna_from_world;
+    auto evaluate_pair = [&](const KeptPath& a, std::uint32_t id_a, const KeptPath& b,
+                             std::uint32_t id_b, Contribution& xa, Contribution& xb) {
+      const D2 px = d2(pose.position_m.x), py = d2(pose.position_m.y), pz = d2(pose.position_m.z);
+      const D2 fx = d2(a.first_hit_m.x, b.first_hit_m.x) - px,
+               fy = d2(a.first_hit_m.y, b.first_hit_m.y) - py,
+               fz = d2(a.first_hit_m.z, b.first_hit_m.z) - pz;
+      const D2 first_m = sqrt(fx * fx + fy * fy + fz * fz);
+      const D2 rx = px - d2(a.last_hit_m.x, b.last_hit_m.x),
+               ry = py - d2(a.last_hit_m.y, b.last_hit_m.y),
+               rz = pz - d2(a.last_hit_m.z, b.last_hit_m.z);
+      const D2 back_m = sqrt(rx * rx + ry * ry + rz * rz);
+      const D2 sx = rx / back_m, sy = ry / back_m, sz = rz / back_m;
+      const D2 total_m = first_m + d2(a.inner_m, b.inner_m) + back_m;
+      // unit_phasor(-k total): sin_cos, its reduction two lanes at once.
+      const D2 phase = -k * total_m;
+      SinCos ua, ub;
+      if (detail::sin_cos_reducible(lane0(phase)) && detail::sin_cos_reducible(lane1(phase))) {
+        D2 fn{}, sn{}, cs{};
+        detail::sin_cos_reduced(phase, fn, sn, cs);
+        ua = detail::sin_cos_quadrant(lane0(fn), lane0(sn), lane0(cs));
+        ub = detail::sin_cos_quadrant(lane1(fn), lane1(sn), lane1(cs));
+      } else {
+        ua = sin_cos(lane0(phase));
+        ub = sin_cos(lane1(phase));
+      }
+      xa.amplitude = times(std::complex<double>(a.amplitude_re_m, a.amplitude_im_m),
+                           std::complex<double>(ua.cos, ua.sin));
+      xb.amplitude = times(std::complex<double>(b.amplitude_re_m, b.amplitude_im_m),
+                           std::complex<double>(ub.cos, ub.sin));
+      const D2 range_m = 0.5 * total_m;
+      const D2 vx = d2(v.x), vy = d2(v.y), vz = d2(v.z);
+      const D2 along_first = vx * (fx / first_m) + vy * (fy / first_m) + vz * (fz / first_m);
+      const D2 along_back = vx * sx + vy * sy + vz * sz;
+      const D2 radial = 0.5 * (-along_first + along_back);
+      // antenna_from_world * (-s), then arrival_azel's two atan2: azimuths of both, elevations
+      // of both.
+      const D2 nx = -sx, ny = -sy, nz = -sz;
+      const D2 dx = m[0][0] * nx + m[1][0] * ny + m[2][0] * nz;
+      const D2 dy = m[0][1] * nx + m[1][1] * ny + m[2][1] * nz;
+      const D2 dz = m[0][2] * nx + m[1][2] * ny + m[2][2] * nz;
+      const D2 horizontal = sqrt(dx * dx + dy * dy);
+      const D2 az{_ZGVbN2vv_atan2(dy.v, dx.v)};
+      const D2 el{_ZGVbN2vv_atan2((-dz).v, horizontal.v)};
+      xa.range_m = lane0(range_m);
+      xb.range_m = lane1(range_m);
+      xa.radial_velocity_mps = lane0(radial);
+      xb.radial_velocity_mps = lane1(radial);
+      xa.azimuth_rad = lane0(az);
+      xb.azimuth_rad = lane1(az);
+      xa.elevation_rad = lane0(el);
+      xb.elevation_rad = lane1(el);
+      set_fixed(a, id_a, xa);
+      set_fixed(b, id_b, xb);
+    };
+#endif
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_eval, 256),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        std::size_t r = 0;
+                        auto path = [&](std::size_t i,
+                                        std::uint32_t& object_id) -> const KeptPath& {
+                          while (r + 1 < kept_runs_.size() && i >= kept_runs_[r + 1].first)
+                            ++r;
+                          const KeptRun& run = kept_runs_[r];
+                          object_id = run.object_id;
+                          return kept_paths_[kept_region_[run.object_id] +
                                              run.slice * kept_slice_slots() + (i - run.first)];
-            // The kept path for this pose (SbrConfig::reuse_static_paths): exact end segments.
-            const glm::dvec3 to_first = kp.first_hit_m - pose.position_m;
-            const double first_m = glm::length(to_first);
-            const glm::dvec3 to_radar = pose.position_m - kp.last_hit_m;
-            const double back_m = glm::length(to_radar);
-            const glm::dvec3 s = to_radar / back_m;
-            const double total_m = first_m + kp.inner_m + back_m;
-            Contribution& x = out[n + i];
-            x.amplitude = times(std::complex<double>(kp.amplitude_re_m, kp.amplitude_im_m),
-                                unit_phasor(-k * total_m));
-            x.range_m = 0.5 * total_m;
-            x.range_spread_m = 0.0;
-            // Static path: d(path)/dt = -v . d1 + v . s (the radar's velocity on its two ends).
-            x.radial_velocity_mps = 0.5 * (-glm::dot(v, to_first / first_m) + glm::dot(v, s));
-            const AzEl ae = arrival_azel(antenna_from_world * (-s));
-            x.azimuth_rad = ae.azimuth_rad;
-            x.elevation_rad = ae.elevation_rad;
-            x.object_id = run.object_id;
-            x.radiated_by_owner = kp.radiated_by_owner;
-            x.bounces = kp.bounces;
-            x.coherent = true;
-          }
-        });
+                        };
+                        std::size_t i = range.begin();
+#if defined(RADAR_EMU_HAVE_MVEC)
+                        for (; i + 1 < range.end(); i += 2) {
+                          std::uint32_t id_a = 0, id_b = 0;
+                          const KeptPath& a = path(i, id_a);
+                          const KeptPath& b = path(i + 1, id_b);
+                          evaluate_pair(a, id_a, b, id_b, out[n + i], out[n + i + 1]);
+                        }
+#endif
+                        for (; i < range.end(); ++i) {
+                          std::uint32_t id = 0;
+                          const KeptPath& kp = path(i, id);
+                          evaluate(kp, id, out[n + i]);
+                        }
+                      });
     n += n_eval;
   }
   // Then the bounce-1 terms (each appended while there is room, else counted as dropped): the

@@ -140,32 +140,37 @@ struct CVec {
 struct SinCos {
   double sin = 0.0, cos = 1.0;
 };
-[[nodiscard]] inline SinCos sin_cos(double x) noexcept {
+namespace detail {
+/// sin_cos's reduction and polynomials for an x with |x 2/pi| < 2^24, on any T with double's
+/// arithmetic (double, or a SIMD type whose lanes each do what double does: each lane then gets
+/// the scalar's result bit for bit): n (fn, an integer in T), sin r (s) and cos r (c).
+template <class T>
+inline void sin_cos_reduced(T x, T& fn, T& s, T& c) noexcept {
   constexpr double kTwoOverPi = 0x1.45f306dc9c883p-1;
   // pi/2 = kC1 + kC2 + kC3 + kC4 to 1.5e-43; kC1..kC3 have 28 significant bits.
   constexpr double kC1 = 0x1.921fb54p+0, kC2 = 0x1.10b4612p-30, kC3 = -0x1.676733ap-60,
                    kC4 = -0x1.d1fc8f8cbb5bfp-89;
-  const double q = x * kTwoOverPi;
-  if (!(std::abs(q) < 0x1p24))
-    return {std::sin(x), std::cos(x)};
   constexpr double kShift = 0x1.8p52;  // adding and removing it rounds q to the nearest integer
-  const double fn = (q + kShift) - kShift;
-  const double r = ((x - fn * kC1) - fn * kC2) - fn * kC3 - fn * kC4;
-  const double z = r * r;
-  const double s =
-      r + r * z *
+  const T q = x * kTwoOverPi;
+  fn = (q + kShift) - kShift;
+  const T r = ((x - fn * kC1) - fn * kC2) - fn * kC3 - fn * kC4;
+  const T z = r * r;
+  s = r + r * z *
               (-0x1.5555555555549p-3 +
                z * (0x1.111111110f8a6p-7 +
                     z * (-0x1.a01a019c161d5p-13 +
                          z * (0x1.71de357b1fe7dp-19 +
                               z * (-0x1.ae5e68a2b9cebp-26 + z * 0x1.5d93a5acfd57cp-33)))));
-  const double c = 1.0 - 0.5 * z +
-                   z * z *
-                       (0x1.555555555554cp-5 +
-                        z * (-0x1.6c16c16c15177p-10 +
-                             z * (0x1.a01a019cb159p-16 +
-                                  z * (-0x1.27e4f809c52adp-22 +
-                                       z * (0x1.1ee9ebdb4b1c4p-29 + z * -0x1.8fae9be8838d4p-37)))));
+  c = 1.0 - 0.5 * z +
+      z * z *
+          (0x1.555555555554cp-5 +
+           z * (-0x1.6c16c16c15177p-10 +
+                z * (0x1.a01a019cb159p-16 +
+                     z * (-0x1.27e4f809c52adp-22 +
+                          z * (0x1.1ee9ebdb4b1c4p-29 + z * -0x1.8fae9be8838d4p-37)))));
+}
+/// The quadrant n mod 4 maps sin r and cos r to sin x and cos x.
+[[nodiscard]] inline SinCos sin_cos_quadrant(double fn, double s, double c) noexcept {
   switch (static_cast<std::int64_t>(fn) & 3) {
     case 0:
       return {s, c};
@@ -176,6 +181,19 @@ struct SinCos {
     default:
       return {-c, s};
   }
+}
+/// Whether sin_cos_reduced holds for x (else sin_cos takes libm's).
+[[nodiscard]] inline bool sin_cos_reducible(double x) noexcept {
+  return std::abs(x * 0x1.45f306dc9c883p-1) < 0x1p24;
+}
+}  // namespace detail
+
+[[nodiscard]] inline SinCos sin_cos(double x) noexcept {
+  if (!detail::sin_cos_reducible(x))
+    return {std::sin(x), std::cos(x)};
+  double fn = 0.0, s = 0.0, c = 0.0;
+  detail::sin_cos_reduced(x, fn, s, c);
+  return detail::sin_cos_quadrant(fn, s, c);
 }
 
 /// A ray tube's footprint on a facet: its edge vectors (tube_u, tube_v at the hit, [m])
