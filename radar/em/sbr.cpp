@@ -1493,11 +1493,14 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
     b.memo = kMemoNone;
     b.memo_replay_groups = 0;
     b.memo_self_groups = 0;
-    if (!facet_memo_.empty() && mover_memo_first_[b.object_id] != kNoRegion &&
-        !mover_near(pose, b.object_id)) {
-      // A mover with no other mover near it: its groups of facets read back the answers
-      // recorded within the rule, except this frame's turn, which asks again (mover_memo_).
+    b.mover_near = false;
+    if (!facet_memo_.empty() && mover_memo_first_[b.object_id] != kNoRegion) {
+      // A mover: its groups of facets read back the answers recorded within the rule, except
+      // this frame's turn, which asks again (mover_memo_). With another mover near (within its
+      // region or across its line of sight), whose shadows the rule does not follow, only what
+      // its own body blocks is read back, and no answer recorded then is read back whole.
       b.memo = kMemoRolling;
+      b.mover_near = mover_near(pose, b.object_id);
       const std::size_t turn = frame_count_ % memo_groups_;
       for (std::size_t g = 0; g < memo_groups_; ++g) {
         const MemoState& m = mover_memo_[mover_memo_first_[b.object_id] + g];
@@ -1509,7 +1512,7 @@ void SbrTracer::choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
         // Everything read back while the motion keeps every shadow on it within half a tube;
         // else its own shadows, while its aspect alone keeps them there (the scene asked).
         double self = 0.0;
-        if (mover_memo_fraction(pose, b, m, &self) <= 1.0)
+        if (mover_memo_fraction(pose, b, m, &self) <= 1.0 && !b.mover_near && !m.mover_near)
           b.memo_replay_groups |= std::uint32_t{1} << g;
         else if (self <= 1.0)
           b.memo_self_groups |= std::uint32_t{1} << g;
@@ -1578,6 +1581,7 @@ void SbrTracer::record_mover_memo(const RadarPose& pose, const TraceKnobs& knobs
     glm::dvec3 lo, hi;
     target_region(scene_->objects()[bd.object_id], config_.target_ground_image, lo, hi);
     MemoState now{true, pose.position_m, bd.spacing_m, knobs.facet_centroid_only, frame_count_};
+    now.mover_near = bd.mover_near;
     now.centre_m = 0.5 * (lo + hi);
     now.world_from_body = frame_world_from_body_[bd.object_id];
     now.reach_m =

@@ -383,6 +383,9 @@ class SbrTracer {
     /// back what the mover's own body blocks (facet_self_memo_) and ask the rest of the scene
     /// (its motion moved a shadow cast by the scene too far, its aspect not its own shadows).
     std::uint32_t memo_self_groups = 0;
+    /// kMemoRolling: another mover is near (SbrTracer::mover_near): only the self groups read
+    /// back, and what its groups record now is never read back whole.
+    bool mover_near = false;
     double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
     /// The rows traced this frame (all of them, or one slice's for the refresh) and that slice
     /// (kAllSlices: the whole bundle).
@@ -557,10 +560,14 @@ class SbrTracer {
     glm::dvec3 centre_m{0.0};
     glm::dmat4 world_from_body{1.0};
     double reach_m = 0.0;
+    /// Movers: another mover was near when recorded (its shadows in the answers): only the
+    /// mover's own answers may be read back.
+    bool mover_near = false;
   };
   std::vector<MemoState> memo_state_;
   static constexpr std::uint8_t kMemoNone = 0, kMemoRecord = 1, kMemoReplay = 2, kMemoRolling = 3;
-  /// The facet memo of a moving target (no other mover near it or its line of sight), in
+  /// The facet memo of a moving target (with another mover near it or across its line of
+  /// sight, only its own body's answers, facet_self_memo_), in
   /// memo_groups_ groups of its facets (facet t in group t % memo_groups_), each with its own
   /// MemoState: every frame one group (frame_count_ % memo_groups_) asks the scene again and
   /// records, so a mover's queries are spread over the frames instead of all asked in one; a
@@ -596,7 +603,8 @@ class SbrTracer {
   /// keep its paths, or whose answers are out of date) or read them back (recorded at this
   /// spacing and facet knob, fewer than reuse_refresh_frames frames ago, the aspect changed by
   /// no more than half a tube across the target since), or neither (a static target with a
-  /// mover near); a mover with no other mover near: kMemoRolling (mover_memo_).
+  /// mover near); a mover: kMemoRolling (mover_memo_; with another mover near, its own body's
+  /// answers only).
   void choose_memo(const RadarPose& pose, const TraceKnobs& knobs,
                    std::span<Bundle> bundles) const noexcept;
   /// The change dtheta in the direction from target `b`'s region to the radar since the radar

@@ -706,22 +706,22 @@ TEST(SbrReuse, AMoversFacetsReadTheirOwnShadowsBackAndAskTheSceneWhenItHasMovedF
   rd::SbrConfig fresh_config = c;
   fresh_config.reuse_static_paths = false;
   const double moved_s = 1.25 * half_tube_m / speed;
-  auto second_frame = [&](const rd::RadarPose& second) {
-    rd::SbrTracer tracer(scene, c);
-    scene.set_time(0.0);
+  auto second_frame = [&](const rd::RadarPose& second, sc::Scene& s) {
+    rd::SbrTracer tracer(s, c);
+    s.set_time(0.0);
     const Frame first = trace(tracer, pose_around(rho, 0.0));
     EXPECT_EQ(first.stats.self_replayed_mover_facets, 0u);
     EXPECT_GE(first.stats.partial_facets, 2u);  // one shadow of each
-    scene.set_time(moved_s);
+    s.set_time(moved_s);
     return trace(tracer, second);
   };
-  auto fresh_frame = [&](const rd::RadarPose& pose) {
-    rd::SbrTracer tracer(scene, fresh_config);
-    scene.set_time(moved_s);
+  auto fresh_frame = [&](const rd::RadarPose& pose, sc::Scene& s) {
+    rd::SbrTracer tracer(s, fresh_config);
+    s.set_time(moved_s);
     return trace(tracer, pose);
   };
   const rd::RadarPose ahead = pose_around(rho, 0.0);
-  const Frame moved = second_frame(ahead), fresh = fresh_frame(ahead);
+  const Frame moved = second_frame(ahead, scene), fresh = fresh_frame(ahead, scene);
   std::printf("moved: %llu of %llu facets read their own shadows back, %llu queries (fresh %llu)\n",
               static_cast<unsigned long long>(moved.stats.self_replayed_mover_facets),
               static_cast<unsigned long long>(moved.stats.mover_facets),
@@ -734,9 +734,18 @@ TEST(SbrReuse, AMoversFacetsReadTheirOwnShadowsBackAndAskTheSceneWhenItHasMovedF
   expect_same_bounce1(moved, fresh, 20);
   // Turned past the aspect limit of the mover's region (its 1.03 m diagonal).
   const double limit = 0.5 * spacing / std::sqrt(1.0 + 0.25 + 1.0 / 16.0);
-  const Frame turned = second_frame(pose_around(rho, 1.25 * limit));
+  const Frame turned = second_frame(pose_around(rho, 1.25 * limit), scene);
   EXPECT_EQ(turned.stats.self_replayed_mover_facets, 0u);
   EXPECT_EQ(turned.stats.replayed_mover_facets, 0u);
+  // Another mover (a 0.3 m plate) across the line of sight, 500 m out, its shadow on the two
+  // plates: their own shadows are still read back, and everything else is asked, the other
+  // mover included (nothing is read back whole while it is near).
+  sc::Scene crossing(
+      with({mover, plate(0.3, {-0.25, -2.0, -0.2}), plate(0.3, {0.0, -500.0, 0.0}, {1e-3, 0, 0})}));
+  const Frame crossed = second_frame(ahead, crossing), fresh_crossed = fresh_frame(ahead, crossing);
+  EXPECT_GE(crossed.stats.self_replayed_mover_facets, 30u);
+  EXPECT_LE(crossed.stats.replayed_mover_facets, 2u);  // the other plate's own two, at most
+  expect_same_bounce1(crossed, fresh_crossed, 20);
 }
 
 TEST(SbrFacetPass, AFacetNoLongerThanTheSpacingAsksOneSample) {
