@@ -139,7 +139,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   require(std::isfinite(c.min_snr_db), "min_snr_db", "must be finite");
   require(c.beam_floor_db < 0 && c.beam_floor_db > -200, "beam_floor_db", "must be in (-200, 0)");
   require(!std::isnan(c.return_floor_db) && c.return_floor_db <= -30.0, "return_floor_db",
-          "must be <= -30 dB (below the noise, where it changes no detection) or -inf (off)");
+          "must be <= -30 dB (below the noise, where it changes no detection); -400 or below: off");
   require(c.max_hits_per_beam >= 1 && c.max_hits_per_beam <= (1u << 22), "max_hits_per_beam",
           "must be in [1, 2^22]");
   require(std::isfinite(c.max_range_m) && c.max_range_m > 0, "max_range_m", "must be > 0");
