@@ -1005,7 +1005,7 @@ void Scene::Impl::occluded_batch(std::size_t n, const RayAt& ray_at,
       lane_of[valid] = static_cast<std::uint8_t>(valid);
       lane_blocked[valid] = 0;
       lane_split[valid] = split != nullptr ? split[begin + i] : kNoMover;
-      if (levels) {
+      if (levels && !own_only) {
         origin_offset_m[valid] =
             view_bands ? glm::length(rays[valid].origin_m - view_position_m) : 0.0;
         direction_length[valid] = glm::length(rays[valid].direction);

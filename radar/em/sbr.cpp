@@ -703,11 +703,13 @@ void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std:
   // own shadows back asks only the rest, for the samples its body did not block.
   std::array<std::uint8_t, kFacetBatch> split_record;
   std::array<std::uint8_t, kFacetBatch * kFacetSamples> answers;
-  // The rays asked, in facet and sample order: the answer slot each fills, and the mover it
-  // leaves out (scene::kNoMover: the whole scene).
+  // The rays asked, in facet and sample order: the answer slot each fills, its facet in the
+  // batch, and the mover it leaves out (scene::kNoMover: the whole scene).
   std::array<scene::Ray, kFacetBatch * kFacetSamples> rays;
   std::array<std::uint16_t, kFacetBatch * kFacetSamples> ask_slot;
+  std::array<std::uint8_t, kFacetBatch * kFacetSamples> ask_facet;
   std::array<std::uint32_t, kFacetBatch * kFacetSamples> ask_mover;
+  static_assert(kFacetBatch <= 256, "ask_facet holds a facet's index in a byte");
   std::size_t n_answers = 0, n_ask = 0;
   bool any_split = false;
   for (std::size_t i = begin; i != end; ++i) {
@@ -755,6 +757,7 @@ void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std:
       }
       rays[n_ask] = rays[first_ask + (q - replayed)];  // compacted (n_ask <= that index)
       ask_slot[n_ask] = static_cast<std::uint16_t>(a);
+      ask_facet[n_ask] = static_cast<std::uint8_t>(j);
       ask_mover[n_ask++] = leave_out;
     }
     n_answers += samples - replayed;
@@ -774,28 +777,23 @@ void SbrTracer::facet_batch(const RadarPose& pose, const TraceKnobs& knobs, std:
     // The recording facets' own answers: their rays again, each against its own mover alone.
     std::array<scene::Ray, kFacetBatch * kFacetSamples> own_rays;
     std::array<std::uint32_t, kFacetBatch * kFacetSamples> own_mover;
-    std::array<std::uint16_t, kFacetBatch * kFacetSamples> own_slot;
+    std::array<std::uint16_t, kFacetBatch * kFacetSamples> own_ask;  // its index among the asked
     std::array<std::uint8_t, kFacetBatch * kFacetSamples> own;
     std::size_t n_own = 0;
-    for (std::size_t k = 0, j = 0; k < n_ask; ++k) {
-      while (j + 1 < end - begin &&
-             (slot[j] == kNoSlot || ask_slot[k] >= first_ray[j] + ray_count[j]))
-        ++j;
-      if (split_record[j] == 0)
+    for (std::size_t k = 0; k < n_ask; ++k) {
+      if (split_record[ask_facet[k]] == 0)
         continue;
       own_rays[n_own] = rays[k];
       own_mover[n_own] = ask_mover[k];
-      own_slot[n_own++] = ask_slot[k];
+      own_ask[n_own++] = static_cast<std::uint16_t>(k);
     }
-    scene_->occluded(std::span<const scene::Ray>(own_rays.data(), n_own),
-                     std::span<const std::uint32_t>(own_mover.data(), n_own),
-                     scene::MoverSplit::kOwn, std::span<std::uint8_t>(own.data(), n_own));
-    for (std::size_t k = 0, j = 0; k < n_own; ++k) {
-      while (j + 1 < end - begin &&
-             (slot[j] == kNoSlot || own_slot[k] >= first_ray[j] + ray_count[j]))
-        ++j;
-      answers[own_slot[k]] |= own[k];  // the whole scene's answer: its body's or the rest's
-      const std::size_t q = std::size_t{first_query[j]} + own_slot[k] - first_ray[j];
+    occluded_split(std::span<const scene::Ray>(own_rays.data(), n_own),
+                   std::span<const std::uint32_t>(own_mover.data(), n_own), scene::MoverSplit::kOwn,
+                   std::span<std::uint8_t>(own.data(), n_own));
+    for (std::size_t k = 0; k < n_own; ++k) {
+      const std::size_t a = ask_slot[own_ask[k]], j = ask_facet[own_ask[k]];
+      answers[a] |= own[k];  // the whole scene's answer: its body's or the rest's
+      const std::size_t q = std::size_t{first_query[j]} + a - first_ray[j];
       facet_self_memo_[slot[j]] |=
           static_cast<std::uint8_t>(kSelfRecorded | (own[k] != 0 ? 1u << q : 0u));
     }

@@ -1098,15 +1098,16 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   item_count_ = contributions.size();
   max_half_bins_ = 0.0;
   std::fill(range_start_.begin(), range_start_.end(), 0u);
-  // Independent per item: prepared in parallel, counted after in order.
-  auto prepare = [&](std::size_t i) {
+  // Independent per item: prepared in parallel, counted after in order. Returns the half extent
+  // of a usable item along range (0 for every other return).
+  auto prepare = [&](std::size_t i) -> double {
     const Contribution& c = contributions[i];
     item_beams_[i] = {};
     if (!merge_hashed_.empty())
       merge_hashed_[i] = 0;
     if (!finite(c) || !(c.range_m > 0.0)) {
       item_state_[i] = kNotFinite;
-      return;
+      return 0.0;
     }
     const std::complex<double> amplitude =
         c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
@@ -1117,11 +1118,11 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     if (c.coherent && !merge_table_.empty()) {
       if (!pos.in_swath) {
         item_state_[i] = kOffImage;
-        return;
+        return 0.0;
       }
       item_state_[i] = kUsable;
       merge_key(i, c, pos, amplitude);
-      return;
+      return 0.0;
     }
     Item& it = items_[i];
     it.amplitude = amplitude;
@@ -1138,7 +1139,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
         it.coherent ? it.pos.in_swath : hi >= -0.5 && lo < static_cast<double>(nr) - 0.5;
     if (!visible) {
       item_state_[i] = kOffImage;
-      return;
+      return 0.0;
     }
     item_state_[i] = kUsable;
     antenna_.channels_el(it.elevation_rad - config_.antenna.beam_elevation_rad, it.sum_el,
@@ -1146,22 +1147,15 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     item_beams_[i] = beam_span(it);
     item_bound_[i] = bound_of(it);
     item_bucket_[i] = bucket_of(it) | (it.coherent ? 0u : kDiffuseBucket);
-    return;
+    return it.half_bins;
   };
   // The largest diffuse half extent, per block (a maximum: the same whatever the blocks).
   std::atomic<double> max_half_bins{0.0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, contributions.size(), 4096),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       double block_max = 0.0;
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        prepare(i);
-                        // A return to be merged is coherent (half extent 0), its item not
-                        // written yet; a diffuse one is tagged.
-                        if (item_state_[i] == kUsable &&
-                            (merge_hashed_.empty() || merge_hashed_[i] == 0) &&
-                            (item_bucket_[i] & kDiffuseBucket) != 0)
-                          block_max = std::max(block_max, items_[i].half_bins);
-                      }
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        block_max = std::max(block_max, prepare(i));
                       double m = max_half_bins.load(std::memory_order_relaxed);
                       while (block_max > m && !max_half_bins.compare_exchange_weak(m, block_max)) {
                       }
