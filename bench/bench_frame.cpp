@@ -319,14 +319,16 @@ BENCHMARK(BM_SensorReturns)
 // 5 ms"): the default scenario as `radar-emu run` flies it ([radar] terrain = "engine"): the
 // tracer's returns (no terrain rays) followed by the terrain engine's cells, one diffuse return
 // per lit range-azimuth cell, traced once at the scenario's first pose (argument 1 = 0) or 5 s
-// into the flight (1). Argument 0: threads (0: as many as TBB runs, 1: one, so that the CPU time
-// of the benchmark's thread is the sensor's whole work however loaded the machine).
+// into the flight (1), or examples/terrain_movers.toml's frame at its first pose (2: the terrain
+// database, most of its returns its buildings' paths). Argument 0: threads (0: as many as TBB
+// runs, 1: one, so that the CPU time of the benchmark's thread is the sensor's whole work however
+// loaded the machine).
 struct LoopFrame {
-  loop::Scenario s = loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>");
+  loop::Scenario s;
   radar_emu::scene::Scene scene{loop::scene_description(s)};
   std::vector<radar::Contribution> contributions;
   std::size_t coherent = 0;
-  explicit LoopFrame(double t_s) {
+  LoopFrame(loop::Scenario scenario, double t_s) : s(std::move(scenario)) {
     scene.set_time(t_s);
     const radar::RadarPose pose = loop::scripted_pose(s, t_s);
     radar::SbrConfig cfg = s.sbr;
@@ -350,7 +352,11 @@ struct LoopFrame {
 };
 
 void BM_SensorLoopFrame(benchmark::State& state) {
-  static LoopFrame frames[] = {LoopFrame(0.0), LoopFrame(5.0)};
+  static LoopFrame frames[] = {
+      LoopFrame(loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>"), 0.0),
+      LoopFrame(loop::parse_scenario(loop::default_scenario_toml(), "<default scenario>"), 5.0),
+      LoopFrame(loop::load_scenario(std::string(RADAR_EMU_EXAMPLES_DIR) + "/terrain_movers.toml"),
+                0.0)};
   const LoopFrame& f = frames[state.range(1)];
   std::optional<tbb::global_control> serial;
   if (state.range(0) == 1)
@@ -369,7 +375,7 @@ void BM_SensorLoopFrame(benchmark::State& state) {
   state.SetLabel(serial ? "1 thread" : "all threads");
 }
 BENCHMARK(BM_SensorLoopFrame)
-    ->ArgsProduct({{0, 1}, {0, 1}})
+    ->ArgsProduct({{0, 1}, {0, 1, 2}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

@@ -428,7 +428,18 @@ void Sensor::process_worker(std::size_t w) noexcept {
   std::uint32_t tap_rows[Footprint::kMaxBins];
   // A diffuse return's pieces, tap by tap, at unit two-way gain (scaled by each beam's).
   double values[3][Footprint::kMaxBins];
+  // The items this worker will read are fetched kItemAhead returns ahead (the others, most of
+  // them, are skipped by their span and bound alone, and are not fetched).
+  constexpr std::size_t kItemAhead = 8;
   for (std::size_t i = 0; i < item_count_; ++i) {
+    if (i + kItemAhead < item_count_) {
+      const std::size_t a = i + kItemAhead;
+      const BeamSpan ahead = item_beams_[a];
+      if (ahead.first < beam_end && ahead.end > beam_begin && !(item_bound_[a] < return_floor_)) {
+        __builtin_prefetch(&items_[a]);
+        __builtin_prefetch(reinterpret_cast<const char*>(&items_[a]) + sizeof(Item) - 1);
+      }
+    }
     // The beams within the azimuth extent of the return (gains_of() tests it again), from the
     // return's span of the whole scan; items outside this worker's beams are not read.
     const BeamSpan span = item_beams_[i];
@@ -942,7 +953,7 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
     };
     // The table's lines are random: fetched kAhead returns ahead of the walk.
     constexpr std::size_t kAhead = 16;
-    std::size_t n_used = begin;  // the part's used slots: merge_used_[begin, n_used)
+    std::size_t n_used = begin;  // the part's representatives: merge_used_[begin, n_used)
     for (std::size_t q = begin; q < end; ++q) {
       if (q + kAhead < end)
         __builtin_prefetch(table + home(merge_order_[q + kAhead]));
@@ -962,7 +973,7 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
       }
       if (!found) {  // the first return of its cell represents it
         table[slot] = (tag << 32) | static_cast<std::uint64_t>(i + 1);
-        merge_used_[n_used++] = static_cast<std::uint32_t>(slot);
+        merge_used_[n_used++] = static_cast<std::uint32_t>(i);
         continue;
       }
       // The cell's sums and amplitude accumulate on its representative's entries.
@@ -980,21 +991,31 @@ void Sensor::merge_returns(std::span<const Contribution> contributions,
       item_state_[i] = kMerged;  // its beam span stays empty (prepare)
       ++merged[p];
     }
-    for (std::size_t u = begin; u < n_used; ++u)
-      finish_merged(contributions, table, merge_used_[u]);
+    // The region emptied for the next frame at once (it is contiguous), and the representatives
+    // finished in input order (they are, within a part): their sums, contributions and items are
+    // then read and written in ascending order, not at the table's random slots.
+    std::fill_n(table, size, std::uint64_t{0});
+    for (std::size_t u = begin; u < n_used; ++u) {
+      if (u + kAhead < n_used) {
+        const std::size_t ahead = merge_used_[u + kAhead];
+        __builtin_prefetch(&merge_sums_[ahead]);
+        __builtin_prefetch(&contributions[ahead]);
+        __builtin_prefetch(&items_[ahead], 1);
+      }
+      finish_merged(contributions, merge_used_[u]);
+    }
   };
   tbb::parallel_for(std::size_t{0}, kMergeParts, merge_part);
   for (const std::uint64_t m : merged)
     stats.merged_returns += m;
 }
 
-void Sensor::finish_merged(std::span<const Contribution> contributions, std::uint64_t* table,
-                           std::uint32_t slot) noexcept {
+void Sensor::finish_merged(std::span<const Contribution> contributions,
+                           std::uint32_t representative) noexcept {
   // A merged cell's representative: its item (from its contribution, as the prepare step writes
   // the others' items), with the summed amplitude and the mean position, and its elevation
-  // channels there; the slot is emptied for the next frame.
-  const auto rep = static_cast<std::size_t>(table[slot] & 0xFFFFFFFFu) - 1;
-  table[slot] = 0;
+  // channels there.
+  const std::size_t rep = representative;
   const MergeSums& a = merge_sums_[rep];
   const Contribution& c = contributions[rep];
   Item& r = items_[rep];
@@ -1182,7 +1203,10 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     ++range_start_[bucket + 1];
     // The work it brings to each beam of its span (a difference array over the beams).
     const BeamSpan span = item_beams_[i];
-    const double work = (tagged & kDiffuseBucket) == 0 ? kCoherentWork : kDiffuseWork;
+    // A coherent return under the floor in every beam is skipped by its bound alone.
+    const double work = (tagged & kDiffuseBucket) != 0   ? kDiffuseWork
+                        : item_bound_[i] < return_floor_ ? kSkippedWork
+                                                         : kCoherentWork;
     beam_work_[span.first] += work;
     beam_work_[span.end] -= work;
   }
