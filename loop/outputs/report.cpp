@@ -411,6 +411,7 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                   {"reuse_max_angle_fraction", r.trace.reuse_max_angle_fraction},
                   {"reuse_max_age_frames", r.trace.reuse_max_age_frames},
                   {"refresh_deferred_frames", r.trace.refresh_deferred},
+                  {"kept_paths_left_view", r.trace.kept_paths_left_view},
                   {"mask_target_rays", s.sbr.mask_target_rays},
                   {"masked_rays", r.trace.masked_rays}};
   rep["terrain"] = {{"source", s.terrain_engine ? "engine" : "rays"},
@@ -640,6 +641,12 @@ void print_reuse_line(const RunReport& p, std::FILE* out) {
                100.0 * static_cast<double>(t.reused_rays) / all,
                static_cast<ull>(t.reuse_max_age_frames), t.reuse_max_angle_fraction,
                p.scenario->sbr.reuse_max_phase_rad * 180.0 / std::numbers::pi);
+  if (t.kept_paths_left_view > 0) {
+    std::fprintf(out,
+                 "              %llu kept paths of targets leaving the field of view left out "
+                 "(their first hit out of view: a trace would not shoot them)\n",
+                 static_cast<ull>(t.kept_paths_left_view));
+  }
   if (t.refresh_deferred > 0) {
     std::fprintf(out,
                  "              the refresh of kept paths waited in %llu frames (the governor's "

@@ -583,6 +583,8 @@ std::size_t SbrTracer::facet_sample_rays(const RadarPose& pose, const FacetGeome
       rays[0] = ray_toward(g.centroid_m + g.offset_m * g.n, pose.position_m);
     return 1;
   }
+  if (replayed >= kFacetSamples)
+    return kFacetSamples;  // every sample's answer read back: no ray to make
   const std::array<glm::dvec3, kFacetSamples> samples =
       facet_samples(g.v0_m, g.v1_m, g.v2_m, g.n, g.offset_m);
   for (std::size_t q = replayed; q < kFacetSamples; ++q)
@@ -1001,6 +1003,15 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   }
   b.clipped = behind || az_lo < c.azimuth_min_rad || az_hi > c.azimuth_max_rad ||
               el_lo < c.elevation_min_rad || el_hi > c.elevation_max_rad;
+  b.behind = behind;
+  // The share of the box in view along each angle (ViewShare), before the cut.
+  const double box_az_rad = az_hi - az_lo, box_el_rad = el_hi - el_lo;
+  auto share = [](double lo, double width, double min, double max, double& s0, double& s1) {
+    s0 = width > 0.0 ? std::clamp((min - lo) / width, 0.0, 1.0) : 0.0;
+    s1 = width > 0.0 ? std::clamp((max - lo) / width, 0.0, 1.0) : 1.0;
+  };
+  share(az_lo, box_az_rad, c.azimuth_min_rad, c.azimuth_max_rad, b.view.az0, b.view.az1);
+  share(el_lo, box_el_rad, c.elevation_min_rad, c.elevation_max_rad, b.view.el0, b.view.el1);
   az_lo = std::max(az_lo, c.azimuth_min_rad);
   az_hi = std::min(az_hi, c.azimuth_max_rad);
   el_lo = std::max(el_lo, c.elevation_min_rad);
@@ -1031,6 +1042,8 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
   b.az0_rad = az_lo;
   b.el0_rad = el_lo;
+  b.half_tube_az = box_az_rad > 0.0 ? 0.5 * b.daz_rad / box_az_rad : 0.0;
+  b.half_tube_el = box_el_rad > 0.0 ? 0.5 * b.del_rad / box_el_rad : 0.0;
   if (c.mask_target_rays)
     mask_rows(pose, id, b);
   return true;
@@ -1104,7 +1117,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     const std::uint32_t id = b.object_id;
     const std::size_t rays = all_rays(b);
     b.still = kept_region_[id] != kNoRegion && !objects[id].moving && !mover_near(pose, id);
-    b.keep = b.still && !b.clipped;
+    b.keep = b.still && !b.behind;
     if (!b.keep)
       continue;
     const Kept& kp = kept_[id];
@@ -1125,6 +1138,17 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
         fraction = std::max(fraction, std::max(dtheta, turn) / limit);
       }
       reuse = fraction <= 1.0;
+      // A target cut by the field of view: its paths cover the part of it that was in view when
+      // they were traced. They serve while the part in view now lies within that part, to half
+      // a ray tube (a trace samples the view's edge no closer); the paths whose first hit has
+      // left the view are then left out (prune_outside_view). A target coming into view is
+      // traced.
+      for (int s = 0; s < n_slices && reuse; ++s) {
+        const ViewShare& then = kp.slices[static_cast<std::size_t>(s)].view;
+        reuse = b.view.az0 >= then.az0 - b.half_tube_az &&
+                b.view.az1 <= then.az1 + b.half_tube_az &&
+                b.view.el0 >= then.el0 - b.half_tube_el && b.view.el1 <= then.el1 + b.half_tube_el;
+      }
     }
     if (reuse) {
       b.trace = false;
@@ -1161,7 +1185,8 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
       if (b.trace)
         continue;
       const Kept& kp = kept_[b.object_id];
-      const bool by_slice = n_slices > 1 && b.n_el == kp.n_el;
+      // A target cut by the view is traced whole: its slices then cover one part in view.
+      const bool by_slice = n_slices > 1 && b.n_el == kp.n_el && !b.clipped;
       for (int s = 0; s < n_slices; ++s) {
         const std::uint64_t at = kp.slices[static_cast<std::size_t>(s)].traced_at;
         if (pick == nullptr || at < pick_at) {
@@ -1621,6 +1646,41 @@ bool SbrTracer::same_facets_by_rays(std::uint32_t id) const noexcept {
   return true;
 }
 
+void SbrTracer::prune_outside_view(const RadarPose& pose, std::span<const Bundle> bundles,
+                                   TraceStats& stats) noexcept {
+  const SbrConfig& c = config_;
+  const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
+  for (const Bundle& b : bundles) {
+    // Kept whole (a target cut by the view is refreshed whole, never a slice at a time).
+    if (b.trace || !b.clipped)
+      continue;
+    Kept& kp = kept_[b.object_id];
+    for (int s = 0; s < config_.reuse_refresh_slices; ++s) {
+      KeptSlice& ks = kp.slices[static_cast<std::size_t>(s)];
+      KeptPath* region = kept_paths_.get() + kept_region_[b.object_id] +
+                         static_cast<std::size_t>(s) * kept_slice_slots();
+      // A path's first segment is its ray: in view when the direction to its first hit is
+      // (bundle_for's cut, by the same angles).
+      std::size_t m = 0;
+      for (std::size_t i = 0; i < ks.count; ++i) {
+        const glm::dvec3 a = antenna_from_world * (region[i].first_hit_m - pose.position_m);
+        bool in_view = a.x > 0.0;
+        if (in_view) {
+          const AzEl ae = azel_from_direction(a);
+          in_view = ae.azimuth_rad >= c.azimuth_min_rad && ae.azimuth_rad <= c.azimuth_max_rad &&
+                    ae.elevation_rad >= c.elevation_min_rad &&
+                    ae.elevation_rad <= c.elevation_max_rad;
+        }
+        if (in_view)
+          region[m++] = region[i];
+      }
+      stats.kept_paths_left_view += ks.count - m;
+      ks.count = m;
+      ks.view = b.view;
+    }
+  }
+}
+
 void SbrTracer::count_reuse(std::span<const Bundle> bundles, TraceStats& stats) const noexcept {
   double worst_fraction = 0.0;
   std::uint64_t oldest = 0;
@@ -1989,6 +2049,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
   // re-evaluated below), before the facet pass, whose kept bundles read their facets' occlusion
   // answers back (FacetMemo).
   choose_reuse(pose, frame.max_bounces, bundles_, refresh_credit_, knobs.defer_refresh);
+  prune_outside_view(pose, bundles_, stats);
   stats.refresh_deferred += knobs.defer_refresh && c.reuse_static_paths ? 1u : 0u;
   // Bounce 1 of every facet of the bundled targets (header), before the rays that read it: one
   // parallel loop over all their facets (bundle b's run from its first_facet).
@@ -2263,6 +2324,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         KeptSlice& ks = kp.slices[static_cast<std::size_t>(s)];
         ks.radar_m = pose.position_m;
         ks.world_from_antenna = pose.world_from_antenna;
+        ks.view = bd.view;
         ks.count = m;
         ks.traced_at = frame_count_;
       }

@@ -133,24 +133,26 @@ struct SbrConfig {
   /// stationary in its reflection points (Fermat's principle; Born & Wolf, Principles of
   /// Optics, 7th ed., sec. 3.3.2) the length is off by the second order, at most about
   /// D dtheta^2 (a right dihedral: 0.26 D dtheta^2, tests/radar/sbr_reuse_test.cpp).
-  /// Kept paths are used while dtheta <= min(spacing / (2 D), sqrt(reuse_max_phase_rad /
-  /// (k D))) (the hit points move by less than half a tube, the phase by less than
-  /// reuse_max_phase_rad), the antenna has turned by no more than that angle (polarisation
-  /// basis), the bundle's spacing and bounces are unchanged, it was and is whole inside the
-  /// field of view, the same facets are left to its rays (FacetLight::kLightByRays), no path
-  /// met a moving object and no moving object comes near the target or its line of sight to
-  /// the radar; else the bundle is traced again. Besides, about 1 / reuse_refresh_frames of the
-  /// kept rays are traced again each frame, the longest kept first, so a kept path is at most
-  /// about that many frames old (a frame is a trace() call). The refresh goes a slice at a time:
-  /// a bundle's rows fall into reuse_refresh_slices bands of its box's elevation span (a row
-  /// whose centre lies in band s belongs to slice s), each kept and traced again on its own,
-  /// so one refresh traces a slice's rays, not the bundle's. A slice is refreshed only while
-  /// the bundle has the rows its paths were kept with, so that the slices' rows together are
-  /// each of the bundle's rows once; else the whole bundle is. While its paths are kept, a
-  /// target's bounce-1 facets also keep the answers of their occlusion queries (which samples
-  /// and sub-triangles see the radar): under the same rule a shadow boundary moves across it
-  /// by at most D dtheta <= spacing / 2, within the rays' own resolution. Their PO integrals,
-  /// phases and angles are computed for the pose. Off: every bundle every frame.
+  /// Kept paths are used while dtheta <= min(spacing / (2 D), sqrt(reuse_max_phase_rad / (k D)))
+  /// (the hit points move by less than half a tube, the phase by less than reuse_max_phase_rad),
+  /// the antenna has turned by no more than that angle (polarisation basis), the bundle's spacing
+  /// and bounces are unchanged, the part of it inside the field of view lies within the part its
+  /// paths cover, to half a tube (a target leaving the view keeps its paths and leaves out for good
+  /// those whose first hit has left it, as a trace would not shoot them; one coming into view, or
+  /// whose box straddles the antenna's plane, is traced), the same facets are left to its rays
+  /// (FacetLight::kLightByRays), no path met a moving object and no moving object comes near the
+  /// target or its line of sight to the radar; else the bundle is traced again. Besides, about 1 /
+  /// reuse_refresh_frames of the kept rays are traced again each frame, the longest kept first, so
+  /// a kept path is at most about that many frames old (a frame is a trace() call). The refresh
+  /// goes a slice at a time: a bundle's rows fall into reuse_refresh_slices bands of its box's
+  /// elevation span (a row whose centre lies in band s belongs to slice s), each kept and traced
+  /// again on its own, so one refresh traces a slice's rays, not the bundle's. A slice is refreshed
+  /// only while the bundle has the rows its paths were kept with and is whole inside the view, so
+  /// that the slices' rows together are each of the bundle's rows once; else the whole bundle is.
+  /// While its paths are kept, a target's bounce-1 facets also keep the answers of their occlusion
+  /// queries (which samples and sub-triangles see the radar): under the same rule a shadow boundary
+  /// moves across it by at most D dtheta <= spacing / 2, within the rays' own resolution. Their PO
+  /// integrals, phases and angles are computed for the pose. Off: every bundle every frame.
   bool reuse_static_paths = false;
   double reuse_max_phase_rad = 0.39269908169872414;  ///< pi / 8
   int reuse_refresh_frames = 16;                     ///< >= 1
@@ -281,6 +283,9 @@ struct TraceStats {
   std::uint64_t reused_contributions = 0;
   std::uint64_t refreshed_bundles = 0;
   std::uint64_t refresh_deferred = 0;  ///< frames whose refresh waited (TraceKnobs)
+  /// Kept paths of targets cut by the field of view whose first hit had left the view: left
+  /// out, as a trace would not shoot them (SbrTracer::prune_outside_view).
+  std::uint64_t kept_paths_left_view = 0;
   /// Cells of the traced bundles' grids where none of the target's facets projects
   /// (SbrConfig::mask_target_rays): rays not shot.
   std::uint64_t masked_rays = 0;
@@ -358,6 +363,12 @@ class SbrTracer {
   /// Per scene material at the carrier: specular model, sigma0 row (issue 4's models, "total":
   /// surface + volume), conductor flag; resolved once here.
   SurfaceSet surfaces_;
+  /// The part of a target's angular box (its box and ground image seen from the radar, in the
+  /// antenna's azimuth and elevation) that lies inside the field of view, as fractions of the
+  /// box along each: [az0, az1] x [el0, el1], the whole box [0, 1] x [0, 1].
+  struct ViewShare {
+    double az0 = 0.0, az1 = 1.0, el0 = 0.0, el1 = 1.0;
+  };
   struct Bundle {
     std::uint32_t object_id = 0;
     double spacing_m = 0;  ///< the configured (or knob) spacing at the target, before coarsening
@@ -369,6 +380,12 @@ class SbrTracer {
     std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame (or none)
     /// Its box (with the ground image) reached past the field of view and was cut to it.
     bool clipped = false;
+    /// Its box straddles the antenna's plane: its grid covers the whole field of view.
+    bool behind = false;
+    /// The part of its box's angular extent inside the field of view (ViewShare), and half a ray
+    /// tube in those units along azimuth and elevation (the coverage rule's tolerance).
+    ViewShare view;
+    double half_tube_az = 0.0, half_tube_el = 0.0;
     /// Static path reuse (SbrConfig::reuse_static_paths, choose_reuse): traced this frame, whole
     /// or one slice (else its kept paths are re-evaluated), and its paths kept once traced.
     bool trace = true;
@@ -476,6 +493,11 @@ class SbrTracer {
   [[nodiscard]] bool same_facets_by_rays(std::uint32_t id) const noexcept;
   /// The frame's reuse figures of `bundles` (those not traced re-evaluate kept paths).
   void count_reuse(std::span<const Bundle> bundles, TraceStats& stats) const noexcept;
+  /// A kept target cut by the field of view (choose_reuse): its kept paths whose first hit has
+  /// left the view are left out for good (a trace now would not shoot them), counted in
+  /// stats.kept_paths_left_view, and its slices' coverage becomes the part in view now.
+  void prune_outside_view(const RadarPose& pose, std::span<const Bundle> bundles,
+                          TraceStats& stats) noexcept;
   /// The frame the longest kept slice of static target `id` was traced in.
   [[nodiscard]] std::uint64_t oldest_kept_at(std::uint32_t id) const noexcept;
   /// Kept returns of `b`'s slices not traced this frame (re-evaluated).
@@ -498,6 +520,9 @@ class SbrTracer {
   struct KeptSlice {
     glm::dvec3 radar_m{0.0};
     glm::dmat3 world_from_antenna{1.0};
+    /// The part of the target its paths cover: in view when traced, less what has left the
+    /// view since (prune_outside_view).
+    ViewShare view;
     std::size_t count = 0;        ///< kept returns, at the front of the slice's region
     std::uint64_t traced_at = 0;  ///< frame_count_ then
   };
