@@ -880,7 +880,14 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
           }
         }
       }
-      double power = sigma0(f, cos_inc) * patch_area_m2;
+      // sigma0 and, when asked for, its samples' flags from one lookup (one acos): the same
+      // samples and interpolation as sigma0() and sigma0_flags() (radar/clutter/terrain.cpp).
+      const bool want_flags = !sigma0_use.empty() || !cell_flags.empty();
+      std::uint32_t flags = 0;
+      double power = (want_flags ? static_cast<double>(materials_.table.lookup(
+                                       f.sigma0_row, spec_.channel, cos_inc, flags))
+                                 : sigma0(f, cos_inc)) *
+                     patch_area_m2;
       if (view.one_way_loss_db_per_m > 0.0)
         power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
       const std::size_t cell = bin * grid.columns + col;
@@ -910,8 +917,7 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
         if (!elevation_power.empty())
           elevation_power[cell] += power * sin_el;
       }
-      if (!sigma0_use.empty() || !cell_flags.empty()) {  // issue 28: flagged sigma0 values
-        const std::uint32_t flags = sigma0_flags(f, cos_inc);
+      if (want_flags) {  // issue 28: flagged sigma0 values
         if (f.sigma0_row < sigma0_use.size())
           sigma0_use[f.sigma0_row].add(flags, cos_inc, power);
         if (!cell_flags.empty())
