@@ -464,6 +464,15 @@ inline double fast_atan2(double y, double x) noexcept {
   return y < 0.0 ? -r : r;
 }
 
+// Whether v lies farther than margin from every integer. A value computed from an azimuth within
+// kFastAtan2Error_rad of the exact one, by operations monotone in the azimuth, then has the same
+// floor and the same side of every integer bound as the value from the exact azimuth when the
+// margin covers that azimuth error in v's units plus the rounding of the few operations between.
+inline bool clear_of_integers(double v, double margin) noexcept {
+  const double frac = v - std::floor(v);
+  return frac > margin && frac < 1.0 - margin;
+}
+
 // The facets are visited through index lists (tiles, pass 2's list), scattered over a large array:
 // their cache lines are asked for a few facets ahead.
 constexpr std::uint32_t kPrefetchAhead = 8;
@@ -782,6 +791,24 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
   }
 
   // ---- Pass 2: the patches of the grid's cells, facet by facet.
+  // A patch's azimuth decides its column, its horizon column and, through the horizon's linear
+  // interpolation weight, whether it is shadowed. The exact std::atan2 is the costliest step of a
+  // patch; fast_atan2 is within kFastAtan2Error_rad of it (its bound, above), so its answer is
+  // taken wherever these decisions come out the same for every azimuth within that bound: the
+  // column and horizon positions away from the integers (half-integers for the interpolation's
+  // left column) by the bound in their units, and the shadow test away from the horizon by what
+  // the weight can move it. Elsewhere (about one patch in a hundred on the shipped scenarios) the
+  // exact azimuth decides.
+  // The margins add 1e-9 (relative to the position) for the rounding of the few operations
+  // between the azimuth and the position, far above it.
+  const double col_margin = kFastAtan2Error_rad / grid.azimuth_step_rad;
+  // On the fast path the column by a multiplication (its rounding, 1e-16 relative, inside the
+  // margin's 1e-9): only its floor and its side of the grid's bounds are used.
+  const double inv_azimuth_step = 1.0 / grid.azimuth_step_rad;
+  const double hz_margin = kFastAtan2Error_rad * inv_col_step;
+  auto margin_of = [](double position, double margin) {
+    return margin + 1e-9 * (1.0 + std::abs(position));
+  };
   auto patches_of = [&](std::uint32_t fi, double rc) {
     const TerrainFacet& f = facets_[fi];
     ++st.facets_considered;
@@ -800,6 +827,24 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
     st.patches += count;
     for_each_patch(f, n, [&](const glm::dvec3& centre, std::uint32_t k) {
       const glm::dvec3 d = centre - view.position_m;
+      // The fast azimuth from the unnormalised direction, so that it need not wait for the
+      // range's square root and division: the azimuth of d and of u = d / R differ only by the
+      // rounding of u (a few 1e-16 on a unit vector), at most ~1e-15 / rho_u rad with rho_u the
+      // horizontal part of u in the antenna frame, kept above 1e-6 (otherwise the exact
+      // azimuth) so that this stays below 1e-9 rad, far inside kFastAtan2Error_rad beside the
+      // approximation's own 1.7e-6 rad.
+      const glm::dvec3 ad = antenna_from_world * d;
+      double az = fast_atan2(ad.y, ad.x);
+      double col_f = (az - grid.azimuth_min_rad) * inv_azimuth_step;
+      bool az_exact = !(std::max(std::abs(ad.x), std::abs(ad.y)) >
+                        1e-6 * std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}));
+      if (!az_exact) {
+        // The horizon's column and the interpolation's left column: cf and cf - 1/2 clear of
+        // the integers, i.e. 2 cf clear of them by twice the margin (the doubling is exact).
+        const double cf2 = terrain_hz ? 2.0 * ((az - hz.az0_rad) * inv_col_step) : 0.5;
+        az_exact = !clear_of_integers(col_f, margin_of(col_f, col_margin)) ||
+                   !clear_of_integers(cf2, 2.0 * margin_of(cf2, hz_margin));
+      }
       const double range = glm::length(d);
       if (!(range > 0.0)) {
         ++st.patches_outside;
@@ -807,8 +852,10 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
       }
       const glm::dvec3 u = d / range;
       const glm::dvec3 a = antenna_from_world * u;
-      const double az = std::atan2(a.y, a.x);
-      const double col_f = (az - grid.azimuth_min_rad) / grid.azimuth_step_rad;
+      if (az_exact) {
+        az = std::atan2(a.y, a.x);
+        col_f = (az - grid.azimuth_min_rad) / grid.azimuth_step_rad;
+      }
       const double sin_el = -a.z;
       if (!(col_f >= 0.0 && col_f < static_cast<double>(grid.columns)) || sin_el < sin_el_min ||
           sin_el > sin_el_max) {
@@ -859,10 +906,20 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
               const double x = (az - hz.az0_rad) * inv_col_step - 0.5;
               const auto c0 = static_cast<std::size_t>(std::max(0.0, std::floor(x)));
               const std::size_t c1 = std::min(c0 + 1, hz.columns - 1);
-              const double w = std::clamp(x - static_cast<double>(c0), 0.0, 1.0);
               const double h0 = terrain_hz[(hb - 1) * hz.columns + c0];
               const double h1 = terrain_hz[(hb - 1) * hz.columns + c1];
-              const double h = h0 < -1.5 ? h1 : (h1 < -1.5 ? h0 : h0 + w * (h1 - h0));
+              auto horizon_at = [&](double x_at) {
+                const double w = std::clamp(x_at - static_cast<double>(c0), 0.0, 1.0);
+                return h0 < -1.5 ? h1 : (h1 < -1.5 ? h0 : h0 + w * (h1 - h0));
+              };
+              double h = horizon_at(x);
+              // The weight moves by at most the azimuth's bound in columns (clamp is
+              // 1-Lipschitz), the horizon by that times |h1 - h0|, plus the rounding of the
+              // interpolation (a few units of 1e-16 on values of at most 2): closer than that,
+              // the exact azimuth decides.
+              if (!az_exact && h0 >= -1.5 && h1 >= -1.5 &&
+                  !(std::abs(sin_el - h) > margin_of(x, hz_margin) * std::abs(h1 - h0) + 1e-12))
+                h = horizon_at((std::atan2(a.y, a.x) - hz.az0_rad) * inv_col_step - 0.5);
               if (sin_el < h) {
                 ++st.patches_shadowed;  // below the horizon of the nearer terrain
                 return;
