@@ -47,15 +47,21 @@ Poly clip(const Poly& in, int axis, double bound, double s) {
   return out;
 }
 
-}  // namespace
-
-std::uint32_t patch_divisions(const TerrainFacet& f, double patch_m) noexcept {
+// patch_divisions' body, inline: integrate() asks it once per facet of pass 2, where the call
+// itself showed in the profile.
+inline std::uint32_t divisions_of(const TerrainFacet& f, double patch_m) noexcept {
   if (!(patch_m > 0.0))
     return 1;
   const double n = std::ceil(f.longest_edge_m / patch_m);
   if (!(n >= 1.0))
     return 1;
   return static_cast<std::uint32_t>(std::min(n, 65535.0));
+}
+
+}  // namespace
+
+std::uint32_t patch_divisions(const TerrainFacet& f, double patch_m) noexcept {
+  return divisions_of(f, patch_m);
 }
 
 TerrainPatch facet_patch(const TerrainFacet& f, std::uint32_t facet, std::uint32_t n,
@@ -464,6 +470,30 @@ inline double fast_atan2(double y, double x) noexcept {
   return y < 0.0 ? -r : r;
 }
 
+// fast_atan2's polynomial by Estrin's scheme (Knuth, The Art of Computer Programming vol. 2,
+// 3rd ed., 1997, sec. 4.6.4) instead of Horner's: three multiplications deep instead of six,
+// for pass 2, where the azimuth heads each patch's chain of dependent operations. Its values
+// differ from fast_atan2's by the rounding of the other order (1e-16), so it keeps the same
+// bound (largest error 1.66e-6 rad against std::atan2, checked on 2e8 points of [0, 1] and
+// 5e7 random (x, y)). Pass 1 keeps fast_atan2 itself: its values decide which facets pass 2
+// lists, exactly.
+inline double fast_atan2_estrin(double y, double x) noexcept {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double hi = std::max(ax, ay), lo = std::min(ax, ay);
+  const double a = hi > 0.0 ? lo / hi : 0.0;
+  const double t = a * a;
+  const double t2 = t * t;
+  const double p01 = 0.99997726 + t * -0.33262347;
+  const double p23 = 0.19354346 + t * -0.11643287;
+  const double p45 = 0.05265332 - t * 0.01172120;
+  double r = a * ((p01 + t2 * p23) + (t2 * t2) * p45);
+  if (ay > ax)
+    r = 0.5 * kPi - r;
+  if (x < 0.0)
+    r = kPi - r;
+  return y < 0.0 ? -r : r;
+}
+
 // Whether v lies farther than margin from every integer. A value computed from an azimuth within
 // kFastAtan2Error_rad of the exact one, by operations monotone in the azimuth, then has the same
 // floor and the same side of every integer bound as the value from the exact azimuth when the
@@ -571,7 +601,7 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
   };
   auto divisions = [&](const TerrainFacet& f, double rc) {
     const double r_near = std::max(0.0, rc - f.radius_m);
-    return patch_divisions(f, std::max(view.patch_min_m, r_near * view.patch_angle_rad));
+    return divisions_of(f, std::max(view.patch_min_m, r_near * view.patch_angle_rad));
   };
 
   // ---- Pass 1 (kHorizon): the terrain's horizon and the occluders' map, per column and bin.
@@ -834,7 +864,7 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
       // azimuth) so that this stays below 1e-9 rad, far inside kFastAtan2Error_rad beside the
       // approximation's own 1.7e-6 rad.
       const glm::dvec3 ad = antenna_from_world * d;
-      double az = fast_atan2(ad.y, ad.x);
+      double az = fast_atan2_estrin(ad.y, ad.x);
       double col_f = (az - grid.azimuth_min_rad) * inv_azimuth_step;
       bool az_exact = !(std::max(std::abs(ad.x), std::abs(ad.y)) >
                         1e-6 * std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}));
