@@ -839,6 +839,211 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
   auto margin_of = [](double position, double margin) {
     return margin + 1e-9 * (1.0 + std::abs(position));
   };
+  // The patches go through a batch: first the arithmetic that does not branch (direction, fast
+  // azimuth and column, range, unit vector, antenna frame) for every patch of the batch, then each
+  // patch's decisions in turn, in the same order as one at a time. Each patch's chain of
+  // dependent square roots and divisions then overlaps the others' instead of waiting behind the
+  // branches that end the patch before it; every value is computed by the same operations as
+  // before, so the results are the same.
+  struct Pending {
+    glm::dvec3 centre{0.0};
+    const TerrainFacet* f = nullptr;
+    double patch_area_m2 = 0.0;
+    double inv_n = 1.0;
+    std::uint64_t key0 = 0;
+    std::uint32_t k = 0;
+    bool az_exact = false;
+    double range = 0.0, az = 0.0, col_f = 0.0;
+    glm::dvec3 u{0.0}, a{0.0};
+  };
+  constexpr std::size_t kBatch = 32;
+  std::array<Pending, kBatch> batch;
+  std::size_t pending = 0;
+  auto evaluate = [&](const Pending& p) {
+    const TerrainFacet& f = *p.f;
+    const double range = p.range;
+    if (!(range > 0.0)) {
+      ++st.patches_outside;
+      return;
+    }
+    const glm::dvec3& u = p.u;
+    const glm::dvec3& a = p.a;
+    double az = p.az;
+    double col_f = p.col_f;
+    const bool az_exact = p.az_exact;
+    if (az_exact) {
+      az = std::atan2(a.y, a.x);
+      col_f = (az - grid.azimuth_min_rad) / grid.azimuth_step_rad;
+    }
+    const double sin_el = -a.z;
+    if (!(col_f >= 0.0 && col_f < static_cast<double>(grid.columns)) || sin_el < sin_el_min ||
+        sin_el > sin_el_max) {
+      ++st.patches_outside;
+      return;
+    }
+    const auto col = static_cast<std::size_t>(col_f);
+    const double* e = e0 + (grid.per_column_edges ? col * (grid.bins + 1) : 0);
+    std::size_t bin = 0;
+    if (uniform) {
+      const double bf = (range - e[0]) * inv_edge_step;
+      if (!(bf >= 0.0 && bf < static_cast<double>(grid.bins) + 1.0)) {
+        ++st.patches_outside;
+        return;
+      }
+      bin = static_cast<std::size_t>(bf);
+      // Rounding at an edge: the bin with e[bin] <= range < e[bin + 1], as upper_bound.
+      if (bin > 0 && range < e[bin])
+        --bin;
+      else if (bin < grid.bins && range >= e[bin + 1])
+        ++bin;
+      if (bin >= grid.bins || range < e[bin]) {
+        ++st.patches_outside;
+        return;
+      }
+    } else {
+      const double* it = std::upper_bound(e, e + grid.bins + 1, range);
+      if (it == e || it == e + grid.bins + 1) {
+        ++st.patches_outside;
+        return;
+      }
+      bin = static_cast<std::size_t>(it - e - 1);
+    }
+    const double cos_inc = std::abs(glm::dot(f.normal, u));
+    if (!(cos_inc > 1e-9)) {
+      ++st.patches_grazing;
+      return;
+    }
+    if (view.shadowing) {
+      bool query = true;
+      if (terrain_hz) {
+        std::size_t index = 0, hb = 0;
+        const double rho = range * std::sqrt(a.x * a.x + a.y * a.y);
+        if (hz_index(az, rho, index, hb)) {
+          if (hb > 0) {
+            // The horizon at the patch's azimuth: between the profiles of the two nearest
+            // column centres, linearly (one alone where the other holds no terrain).
+            const double x = (az - hz.az0_rad) * inv_col_step - 0.5;
+            const auto c0 = static_cast<std::size_t>(std::max(0.0, std::floor(x)));
+            const std::size_t c1 = std::min(c0 + 1, hz.columns - 1);
+            const double h0 = terrain_hz[(hb - 1) * hz.columns + c0];
+            const double h1 = terrain_hz[(hb - 1) * hz.columns + c1];
+            auto horizon_at = [&](double x_at) {
+              const double w = std::clamp(x_at - static_cast<double>(c0), 0.0, 1.0);
+              return h0 < -1.5 ? h1 : (h1 < -1.5 ? h0 : h0 + w * (h1 - h0));
+            };
+            double h = horizon_at(x);
+            // The weight moves by at most the azimuth's bound in columns (clamp is
+            // 1-Lipschitz), the horizon by that times |h1 - h0|, plus the rounding of the
+            // interpolation (a few units of 1e-16 on values of at most 2): closer than that,
+            // the exact azimuth decides.
+            if (!az_exact && h0 >= -1.5 && h1 >= -1.5 &&
+                !(std::abs(sin_el - h) > margin_of(x, hz_margin) * std::abs(h1 - h0) + 1e-12))
+              h = horizon_at((std::atan2(a.y, a.x) - hz.az0_rad) * inv_col_step - 0.5);
+            if (sin_el < h) {
+              ++st.patches_shadowed;  // below the horizon of the nearer terrain
+              return;
+            }
+          }
+          // Behind something that is not terrain, or a layer under another terrain object.
+          query = f.layered || sin_el < occluder_hz[index];
+        }
+      }
+      if (query) {
+        ++st.occlusion_queries;
+        if (!clear(p.centre, f.normal, view.position_m)) {
+          ++st.patches_shadowed;
+          return;
+        }
+      }
+    }
+    // sigma0 and, when asked for, its samples' flags from one lookup (one acos): the same
+    // samples and interpolation as sigma0() and sigma0_flags() (radar/clutter/terrain.cpp).
+    const bool want_flags = !sigma0_use.empty() || !cell_flags.empty();
+    std::uint32_t flags = 0;
+    double power = (want_flags ? static_cast<double>(materials_.table.lookup(
+                                     f.sigma0_row, spec_.channel, cos_inc, flags))
+                               : sigma0(f, cos_inc)) *
+                   p.patch_area_m2;
+    if (view.one_way_loss_db_per_m > 0.0)
+      power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
+    const std::size_t cell = bin * grid.columns + col;
+    double half_m = 0.0;
+    if (spread) {
+      // The patches' edges: the facet's edges / n, the same for every patch of the facet.
+      const glm::dvec3 pe1 = (f.b_m - f.a_m) * p.inv_n, pe2 = (f.c_m - f.a_m) * p.inv_n;
+      const glm::dvec3 pe3 = pe2 - pe1;
+      half_m = 0.5 * std::max({std::abs(glm::dot(u, pe1)), std::abs(glm::dot(u, pe2)),
+                               std::abs(glm::dot(u, pe3))});
+    }
+    if (half_m > 1e-6 * edge_step) {
+      // The box [range - h, range + h] over the bins it overlaps, clipped to the grid (what
+      // falls outside is lost, as for a patch outside). Weights sum to 1 inside the grid.
+      const double lo = range - half_m, hi = range + half_m, inv_len = 0.5 / half_m;
+      const auto b_lo = static_cast<std::size_t>(std::clamp(
+          std::floor((lo - e[0]) * inv_edge_step), 0.0, static_cast<double>(grid.bins - 1)));
+      const auto b_hi = static_cast<std::size_t>(std::clamp(
+          std::floor((hi - e[0]) * inv_edge_step), 0.0, static_cast<double>(grid.bins - 1)));
+      for (std::size_t b = b_lo; b <= b_hi; ++b) {
+        const double w = (std::min(hi, e[b + 1]) - std::max(lo, e[b])) * inv_len;
+        if (!(w > 0.0))
+          continue;
+        const std::size_t c = b * grid.columns + col;
+        mean[c] += w * power;
+        if (!elevation_power.empty())
+          elevation_power[c] += w * power * sin_el;
+      }
+    } else {
+      mean[cell] += power;
+      if (!elevation_power.empty())
+        elevation_power[cell] += power * sin_el;
+    }
+    if (want_flags) {  // issue 28: flagged sigma0 values
+      if (f.sigma0_row < sigma0_use.size())
+        sigma0_use[f.sigma0_row].add(flags, cos_inc, power);
+      if (!cell_flags.empty())
+        cell_flags[cell] |= flags;
+    }
+    ++st.patches_lit;
+    if (field.empty())
+      return;
+    const double path = -k2 * range;
+    const TerrainPatch patch{p.centre, p.patch_area_m2, p.key0 + p.k};
+    for (std::size_t l = 0; l < looks; ++l) {
+      const SpeckleSample s = speckle(patch, l);
+      field[l * cells + cell] += std::polar(std::sqrt(power * static_cast<double>(s.intensity)),
+                                            static_cast<double>(s.phase_rad) + path);
+    }
+  };
+  auto flush = [&] {
+    for (std::size_t i = 0; i < pending; ++i) {
+      Pending& p = batch[i];
+      const glm::dvec3 d = p.centre - view.position_m;
+      // The fast azimuth from the unnormalised direction, so that it need not wait for the
+      // range's square root and division: the azimuth of d and of u = d / R differ only by the
+      // rounding of u (a few 1e-16 on a unit vector), at most ~1e-15 / rho_u rad with rho_u the
+      // horizontal part of u in the antenna frame, kept above 1e-6 (otherwise the exact
+      // azimuth) so that this stays below 1e-9 rad, far inside kFastAtan2Error_rad beside the
+      // approximation's own 1.7e-6 rad.
+      const glm::dvec3 ad = antenna_from_world * d;
+      p.az = fast_atan2_estrin(ad.y, ad.x);
+      p.col_f = (p.az - grid.azimuth_min_rad) * inv_azimuth_step;
+      // The horizon's column and the interpolation's left column: cf and cf - 1/2 clear of the
+      // integers, i.e. 2 cf clear of them by twice the margin (the doubling is exact).
+      const double cf2 = terrain_hz ? 2.0 * ((p.az - hz.az0_rad) * inv_col_step) : 0.5;
+      p.az_exact = !(std::max(std::abs(ad.x), std::abs(ad.y)) >
+                     1e-6 * std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)})) ||
+                   !clear_of_integers(p.col_f, margin_of(p.col_f, col_margin)) ||
+                   !clear_of_integers(cf2, 2.0 * margin_of(cf2, hz_margin));
+      // A patch at the radar itself (range 0) gets no usable unit vector: evaluate() leaves it
+      // out before reading one.
+      p.range = glm::length(d);
+      p.u = d / p.range;
+      p.a = antenna_from_world * p.u;
+    }
+    for (std::size_t i = 0; i < pending; ++i)
+      evaluate(batch[i]);
+    pending = 0;
+  };
   auto patches_of = [&](std::uint32_t fi, double rc) {
     const TerrainFacet& f = facets_[fi];
     ++st.facets_considered;
@@ -850,176 +1055,18 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
     }
     const double patch_area_m2 = f.area_m2 / static_cast<double>(count);
     const std::uint64_t key0 = mix64((static_cast<std::uint64_t>(fi) << 20) ^ n);
-    // The patches' edges (spread_range): the facet's edges / n, the same for every patch.
-    const double inv_n = 1.0 / static_cast<double>(n);
-    const glm::dvec3 pe1 = (f.b_m - f.a_m) * inv_n, pe2 = (f.c_m - f.a_m) * inv_n;
-    const glm::dvec3 pe3 = pe2 - pe1;
+    const double inv_n = 1.0 / static_cast<double>(n);  // the patches' edges (spread_range)
     st.patches += count;
     for_each_patch(f, n, [&](const glm::dvec3& centre, std::uint32_t k) {
-      const glm::dvec3 d = centre - view.position_m;
-      // The fast azimuth from the unnormalised direction, so that it need not wait for the
-      // range's square root and division: the azimuth of d and of u = d / R differ only by the
-      // rounding of u (a few 1e-16 on a unit vector), at most ~1e-15 / rho_u rad with rho_u the
-      // horizontal part of u in the antenna frame, kept above 1e-6 (otherwise the exact
-      // azimuth) so that this stays below 1e-9 rad, far inside kFastAtan2Error_rad beside the
-      // approximation's own 1.7e-6 rad.
-      const glm::dvec3 ad = antenna_from_world * d;
-      double az = fast_atan2_estrin(ad.y, ad.x);
-      double col_f = (az - grid.azimuth_min_rad) * inv_azimuth_step;
-      bool az_exact = !(std::max(std::abs(ad.x), std::abs(ad.y)) >
-                        1e-6 * std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}));
-      if (!az_exact) {
-        // The horizon's column and the interpolation's left column: cf and cf - 1/2 clear of
-        // the integers, i.e. 2 cf clear of them by twice the margin (the doubling is exact).
-        const double cf2 = terrain_hz ? 2.0 * ((az - hz.az0_rad) * inv_col_step) : 0.5;
-        az_exact = !clear_of_integers(col_f, margin_of(col_f, col_margin)) ||
-                   !clear_of_integers(cf2, 2.0 * margin_of(cf2, hz_margin));
-      }
-      const double range = glm::length(d);
-      if (!(range > 0.0)) {
-        ++st.patches_outside;
-        return;
-      }
-      const glm::dvec3 u = d / range;
-      const glm::dvec3 a = antenna_from_world * u;
-      if (az_exact) {
-        az = std::atan2(a.y, a.x);
-        col_f = (az - grid.azimuth_min_rad) / grid.azimuth_step_rad;
-      }
-      const double sin_el = -a.z;
-      if (!(col_f >= 0.0 && col_f < static_cast<double>(grid.columns)) || sin_el < sin_el_min ||
-          sin_el > sin_el_max) {
-        ++st.patches_outside;
-        return;
-      }
-      const auto col = static_cast<std::size_t>(col_f);
-      const double* e = e0 + (grid.per_column_edges ? col * (grid.bins + 1) : 0);
-      std::size_t bin = 0;
-      if (uniform) {
-        const double bf = (range - e[0]) * inv_edge_step;
-        if (!(bf >= 0.0 && bf < static_cast<double>(grid.bins) + 1.0)) {
-          ++st.patches_outside;
-          return;
-        }
-        bin = static_cast<std::size_t>(bf);
-        // Rounding at an edge: the bin with e[bin] <= range < e[bin + 1], as upper_bound.
-        if (bin > 0 && range < e[bin])
-          --bin;
-        else if (bin < grid.bins && range >= e[bin + 1])
-          ++bin;
-        if (bin >= grid.bins || range < e[bin]) {
-          ++st.patches_outside;
-          return;
-        }
-      } else {
-        const double* it = std::upper_bound(e, e + grid.bins + 1, range);
-        if (it == e || it == e + grid.bins + 1) {
-          ++st.patches_outside;
-          return;
-        }
-        bin = static_cast<std::size_t>(it - e - 1);
-      }
-      const double cos_inc = std::abs(glm::dot(f.normal, u));
-      if (!(cos_inc > 1e-9)) {
-        ++st.patches_grazing;
-        return;
-      }
-      if (view.shadowing) {
-        bool query = true;
-        if (terrain_hz) {
-          std::size_t index = 0, hb = 0;
-          const double rho = range * std::sqrt(a.x * a.x + a.y * a.y);
-          if (hz_index(az, rho, index, hb)) {
-            if (hb > 0) {
-              // The horizon at the patch's azimuth: between the profiles of the two nearest
-              // column centres, linearly (one alone where the other holds no terrain).
-              const double x = (az - hz.az0_rad) * inv_col_step - 0.5;
-              const auto c0 = static_cast<std::size_t>(std::max(0.0, std::floor(x)));
-              const std::size_t c1 = std::min(c0 + 1, hz.columns - 1);
-              const double h0 = terrain_hz[(hb - 1) * hz.columns + c0];
-              const double h1 = terrain_hz[(hb - 1) * hz.columns + c1];
-              auto horizon_at = [&](double x_at) {
-                const double w = std::clamp(x_at - static_cast<double>(c0), 0.0, 1.0);
-                return h0 < -1.5 ? h1 : (h1 < -1.5 ? h0 : h0 + w * (h1 - h0));
-              };
-              double h = horizon_at(x);
-              // The weight moves by at most the azimuth's bound in columns (clamp is
-              // 1-Lipschitz), the horizon by that times |h1 - h0|, plus the rounding of the
-              // interpolation (a few units of 1e-16 on values of at most 2): closer than that,
-              // the exact azimuth decides.
-              if (!az_exact && h0 >= -1.5 && h1 >= -1.5 &&
-                  !(std::abs(sin_el - h) > margin_of(x, hz_margin) * std::abs(h1 - h0) + 1e-12))
-                h = horizon_at((std::atan2(a.y, a.x) - hz.az0_rad) * inv_col_step - 0.5);
-              if (sin_el < h) {
-                ++st.patches_shadowed;  // below the horizon of the nearer terrain
-                return;
-              }
-            }
-            // Behind something that is not terrain, or a layer under another terrain object.
-            query = f.layered || sin_el < occluder_hz[index];
-          }
-        }
-        if (query) {
-          ++st.occlusion_queries;
-          if (!clear(centre, f.normal, view.position_m)) {
-            ++st.patches_shadowed;
-            return;
-          }
-        }
-      }
-      // sigma0 and, when asked for, its samples' flags from one lookup (one acos): the same
-      // samples and interpolation as sigma0() and sigma0_flags() (radar/clutter/terrain.cpp).
-      const bool want_flags = !sigma0_use.empty() || !cell_flags.empty();
-      std::uint32_t flags = 0;
-      double power = (want_flags ? static_cast<double>(materials_.table.lookup(
-                                       f.sigma0_row, spec_.channel, cos_inc, flags))
-                                 : sigma0(f, cos_inc)) *
-                     patch_area_m2;
-      if (view.one_way_loss_db_per_m > 0.0)
-        power *= std::pow(10.0, -0.2 * view.one_way_loss_db_per_m * range);
-      const std::size_t cell = bin * grid.columns + col;
-      const double half_m =
-          spread ? 0.5 * std::max({std::abs(glm::dot(u, pe1)), std::abs(glm::dot(u, pe2)),
-                                   std::abs(glm::dot(u, pe3))})
-                 : 0.0;
-      if (half_m > 1e-6 * edge_step) {
-        // The box [range - h, range + h] over the bins it overlaps, clipped to the grid (what
-        // falls outside is lost, as for a patch outside). Weights sum to 1 inside the grid.
-        const double lo = range - half_m, hi = range + half_m, inv_len = 0.5 / half_m;
-        const auto b_lo = static_cast<std::size_t>(std::clamp(
-            std::floor((lo - e[0]) * inv_edge_step), 0.0, static_cast<double>(grid.bins - 1)));
-        const auto b_hi = static_cast<std::size_t>(std::clamp(
-            std::floor((hi - e[0]) * inv_edge_step), 0.0, static_cast<double>(grid.bins - 1)));
-        for (std::size_t b = b_lo; b <= b_hi; ++b) {
-          const double w = (std::min(hi, e[b + 1]) - std::max(lo, e[b])) * inv_len;
-          if (!(w > 0.0))
-            continue;
-          const std::size_t c = b * grid.columns + col;
-          mean[c] += w * power;
-          if (!elevation_power.empty())
-            elevation_power[c] += w * power * sin_el;
-        }
-      } else {
-        mean[cell] += power;
-        if (!elevation_power.empty())
-          elevation_power[cell] += power * sin_el;
-      }
-      if (want_flags) {  // issue 28: flagged sigma0 values
-        if (f.sigma0_row < sigma0_use.size())
-          sigma0_use[f.sigma0_row].add(flags, cos_inc, power);
-        if (!cell_flags.empty())
-          cell_flags[cell] |= flags;
-      }
-      ++st.patches_lit;
-      if (field.empty())
-        return;
-      const double path = -k2 * range;
-      const TerrainPatch p{centre, patch_area_m2, key0 + k};
-      for (std::size_t l = 0; l < looks; ++l) {
-        const SpeckleSample s = speckle(p, l);
-        field[l * cells + cell] += std::polar(std::sqrt(power * static_cast<double>(s.intensity)),
-                                              static_cast<double>(s.phase_rad) + path);
-      }
+      if (pending == kBatch)
+        flush();
+      Pending& p = batch[pending++];
+      p.centre = centre;
+      p.f = &f;
+      p.patch_area_m2 = patch_area_m2;
+      p.inv_n = inv_n;
+      p.key0 = key0;
+      p.k = k;
     });
   };
   if (use_list) {
@@ -1029,6 +1076,7 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
       const std::uint32_t fi = facet_list[k];
       patches_of(fi, glm::length(facets_[fi].centroid_m - view.position_m));
     }
+    flush();
     return st;
   }
   for (std::size_t t = 0; t < tiles_.size(); ++t) {
@@ -1045,6 +1093,7 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
         patches_of(fi, rc);
     }
   }
+  flush();
   return st;
 }
 
