@@ -655,114 +655,149 @@ TerrainStats TerrainEngine::integrate(const TerrainView& view, const CellGrid& g
                sin_az_min = std::sin(grid.azimuth_min_rad);
   const double cos_az_max = std::cos(az_max), sin_az_max = std::sin(az_max);
   const bool narrow_window = az_max - grid.azimuth_min_rad < kPi;
+  // A facet's vertices in the antenna frame and what pass 1 reads of them (below).
+  struct FacetFront {
+    double rc = 0.0;
+    glm::dvec3 v[3]{};
+    double az_lo = 0.0, az_hi = 0.0, sin_el_top = 0.0, sin_el_bottom = 0.0;
+    bool around_axis = false, right_of_min = false, left_of_max = false;
+  };
+  constexpr std::uint32_t kFacetBatch = 32;
+  std::array<FacetFront, kFacetBatch> fronts;
   if (terrain_hz) {
     for (std::size_t t = 0; t < tiles_.size(); ++t) {
       double rt = 0.0;
       if (!sphere_meets(tiles_[t].centre_m, tiles_[t].radius_m, 0.0, r_max, hz.az0_rad, hz_az_max,
                         grid.elevation_min_rad, 0.5 * kPi, rt))
         continue;
-      for (std::uint32_t j = tile_first_[t]; j < tile_first_[t + 1]; ++j) {
-        if (j + kPrefetchAhead < tile_first_[t + 1])
-          prefetch(facets_[tile_facets_[j + kPrefetchAhead]]);
-        const std::uint32_t fi = tile_facets_[j];
-        const TerrainFacet& f = facets_[fi];
-        const double rc = glm::length(f.centroid_m - view.position_m);
-        if (rc - f.radius_m > r_max)
-          continue;  // beyond the grid (the angles by the vertices below)
-        // The facet's profile in each column's centre plane (azimuth az_c: the plane through
-        // the radar holding the antenna's z axis, normal (-sin az_c, cos az_c, 0)): the segment
-        // where the plane cuts the triangle. Along a straight segment the elevation seen from
-        // the radar is monotone, so its two ends carry the profile's extremes; in between lies
-        // this facet alone (layers apart), which cannot shadow itself unless it faces away, and
-        // then its near end, written first along rho, shadows the rest.
-        const glm::dvec3 v[3] = {antenna_from_world * (f.a_m - view.position_m),
-                                 antenna_from_world * (f.b_m - view.position_m),
-                                 antenna_from_world * (f.c_m - view.position_m)};
-        double az_lo = std::numeric_limits<double>::infinity(), az_hi = -az_lo;
-        double sin_el_top = -1.0;  // a planar facet's highest elevation is at a vertex
-        double sin_el_bottom = 1.0;
-        bool around_axis = false;
-        bool right_of_min = true, left_of_max = true;  // every vertex outside one azimuth edge
-        for (const glm::dvec3& p : v) {
-          const double rho_p = std::sqrt(p.x * p.x + p.y * p.y);
-          if (!(rho_p > 1e-9 * (1.0 + std::abs(p.z))))
-            around_axis = true;
-          const double az = fast_atan2(p.y, p.x);
-          az_lo = std::min(az_lo, az);
-          az_hi = std::max(az_hi, az);
-          const double sin_el = -p.z / std::sqrt(rho_p * rho_p + p.z * p.z);
-          sin_el_top = std::max(sin_el_top, sin_el);
-          sin_el_bottom = std::min(sin_el_bottom, sin_el);
-          const double slack = 1e-9 * (std::abs(p.x) + std::abs(p.y));
-          right_of_min = right_of_min && cos_az_min * p.y - sin_az_min * p.x < -slack;
-          left_of_max = left_of_max && cos_az_max * p.y - sin_az_max * p.x > slack;
-        }
-        if (std::abs(az_hi - az_lo - kPi) < 4.0 * kFastAtan2Error_rad) {
-          // Near the half-turn below, decide by the exact azimuths.
-          az_lo = std::numeric_limits<double>::infinity();
-          az_hi = -az_lo;
-          for (const glm::dvec3& p : v) {
-            az_lo = std::min(az_lo, std::atan2(p.y, p.x));
-            az_hi = std::max(az_hi, std::atan2(p.y, p.x));
+      // The tile's facets in batches: first each facet's vertices in the antenna frame and
+      // their azimuths and elevations (arithmetic without branches, the facets' chains of square
+      // roots and divisions overlapping), then each facet's decisions and profile in turn, in
+      // the tile's order. Every value is computed by the same operations as one facet at a time.
+      const std::uint32_t tile_end = tile_first_[t + 1];
+      for (std::uint32_t j0 = tile_first_[t]; j0 < tile_end; j0 += kFacetBatch) {
+        const std::uint32_t jn = std::min(tile_end, j0 + kFacetBatch);
+        for (std::uint32_t j = j0; j < jn; ++j) {
+          if (j + kPrefetchAhead < tile_end)
+            prefetch(facets_[tile_facets_[j + kPrefetchAhead]]);
+          FacetFront& ff = fronts[j - j0];
+          const TerrainFacet& f = facets_[tile_facets_[j]];
+          ff.rc = glm::length(f.centroid_m - view.position_m);
+          ff.v[0] = antenna_from_world * (f.a_m - view.position_m);
+          ff.v[1] = antenna_from_world * (f.b_m - view.position_m);
+          ff.v[2] = antenna_from_world * (f.c_m - view.position_m);
+          double az_lo = std::numeric_limits<double>::infinity(), az_hi = -az_lo;
+          double sin_el_top = -1.0;  // a planar facet's highest elevation is at a vertex
+          double sin_el_bottom = 1.0;
+          bool around_axis = false;
+          bool right_of_min = true, left_of_max = true;  // every vertex outside one azimuth edge
+          for (const glm::dvec3& p : ff.v) {
+            const double rho_p = std::sqrt(p.x * p.x + p.y * p.y);
+            if (!(rho_p > 1e-9 * (1.0 + std::abs(p.z))))
+              around_axis = true;
+            const double az = fast_atan2(p.y, p.x);
+            az_lo = std::min(az_lo, az);
+            az_hi = std::max(az_hi, az);
+            const double sin_el = -p.z / std::sqrt(rho_p * rho_p + p.z * p.z);
+            sin_el_top = std::max(sin_el_top, sin_el);
+            sin_el_bottom = std::min(sin_el_bottom, sin_el);
+            const double slack = 1e-9 * (std::abs(p.x) + std::abs(p.y));
+            right_of_min = right_of_min && cos_az_min * p.y - sin_az_min * p.x < -slack;
+            left_of_max = left_of_max && cos_az_max * p.y - sin_az_max * p.x > slack;
           }
+          ff.az_lo = az_lo;
+          ff.az_hi = az_hi;
+          ff.sin_el_top = sin_el_top;
+          ff.sin_el_bottom = sin_el_bottom;
+          ff.around_axis = around_axis;
+          ff.right_of_min = right_of_min;
+          ff.left_of_max = left_of_max;
         }
-        // The vertices' azimuths widened by the approximation's bound (fast_atan2).
-        az_lo -= kFastAtan2Error_rad;
-        az_hi += kFastAtan2Error_rad;
-        if (use_list && rc + f.radius_m >= r_min) {
-          // The patches' window from the vertices. Azimuth: a triangle whose vertices all lie
-          // beyond the line of one azimuth edge (through the axis) lies wholly beyond it, the
-          // window being narrower than pi; between the edges, a triangle clear of the axis
-          // spans the azimuths of its vertices (margin 1e-9 rad for rounding). Elevation:
-          // every point of the triangle lies within its longest edge L of each vertex, so its
-          // direction within L / r_near of a vertex's, its sin(el) within that of the
-          // vertices' (sine is 1-Lipschitz). Conservative: the patches themselves are tested.
-          bool keep = !narrow_window || (!right_of_min && !left_of_max);
-          if (keep && !around_axis && az_hi - az_lo <= kPi)
-            keep = az_hi >= grid.azimuth_min_rad - 1e-9 && az_lo <= az_max + 1e-9;
-          const double r_near = rc - f.radius_m;
-          if (keep && r_near > 0.0) {
-            const double margin = f.longest_edge_m / r_near;
-            keep = sin_el_top + margin >= sin_el_min && sin_el_bottom - margin <= sin_el_max;
+        for (std::uint32_t j = j0; j < jn; ++j) {
+          const FacetFront& ff = fronts[j - j0];
+          const std::uint32_t fi = tile_facets_[j];
+          const TerrainFacet& f = facets_[fi];
+          const double rc = ff.rc;
+          if (rc - f.radius_m > r_max)
+            continue;  // beyond the grid (the angles by the vertices below)
+          // The facet's profile in each column's centre plane (azimuth az_c: the plane through
+          // the radar holding the antenna's z axis, normal (-sin az_c, cos az_c, 0)): the segment
+          // where the plane cuts the triangle. Along a straight segment the elevation seen from
+          // the radar is monotone, so its two ends carry the profile's extremes; in between lies
+          // this facet alone (layers apart), which cannot shadow itself unless it faces away, and
+          // then its near end, written first along rho, shadows the rest.
+          const glm::dvec3(&v)[3] = ff.v;
+          double az_lo = ff.az_lo, az_hi = ff.az_hi;
+          const double sin_el_top = ff.sin_el_top, sin_el_bottom = ff.sin_el_bottom;
+          const bool around_axis = ff.around_axis;
+          const bool right_of_min = ff.right_of_min, left_of_max = ff.left_of_max;
+          if (std::abs(az_hi - az_lo - kPi) < 4.0 * kFastAtan2Error_rad) {
+            // Near the half-turn below, decide by the exact azimuths.
+            az_lo = std::numeric_limits<double>::infinity();
+            az_hi = -az_lo;
+            for (const glm::dvec3& p : v) {
+              az_lo = std::min(az_lo, std::atan2(p.y, p.x));
+              az_hi = std::max(az_hi, std::atan2(p.y, p.x));
+            }
           }
-          if (keep) {
-            if (listed < facet_list.size())
-              facet_list[listed++] = fi;
-            else
-              use_list = false;
+          // The vertices' azimuths widened by the approximation's bound (fast_atan2).
+          az_lo -= kFastAtan2Error_rad;
+          az_hi += kFastAtan2Error_rad;
+          if (use_list && rc + f.radius_m >= r_min) {
+            // The patches' window from the vertices. Azimuth: a triangle whose vertices all lie
+            // beyond the line of one azimuth edge (through the axis) lies wholly beyond it, the
+            // window being narrower than pi; between the edges, a triangle clear of the axis
+            // spans the azimuths of its vertices (margin 1e-9 rad for rounding). Elevation:
+            // every point of the triangle lies within its longest edge L of each vertex, so its
+            // direction within L / r_near of a vertex's, its sin(el) within that of the
+            // vertices' (sine is 1-Lipschitz). Conservative: the patches themselves are tested.
+            bool keep = !narrow_window || (!right_of_min && !left_of_max);
+            if (keep && !around_axis && az_hi - az_lo <= kPi)
+              keep = az_hi >= grid.azimuth_min_rad - 1e-9 && az_lo <= az_max + 1e-9;
+            const double r_near = rc - f.radius_m;
+            if (keep && r_near > 0.0) {
+              const double margin = f.longest_edge_m / r_near;
+              keep = sin_el_top + margin >= sin_el_min && sin_el_bottom - margin <= sin_el_max;
+            }
+            if (keep) {
+              if (listed < facet_list.size())
+                facet_list[listed++] = fi;
+              else
+                use_list = false;
+            }
           }
-        }
-        if (around_axis || az_hi - az_lo - 2.0 * kFastAtan2Error_rad > kPi)
-          continue;  // a facet around the antenna's axis or behind it: no profile in the columns
-        if (sin_el_top < sin_el_min)
-          continue;  // wholly below the grid's elevations: it shadows none of its patches
-        // Centre c at az0 + (c + 1/2) step: the centres in [az_lo, az_hi].
-        const double c_lo = std::ceil((az_lo - hz.az0_rad) * inv_col_step - 0.5);
-        const double c_hi = std::floor((az_hi - hz.az0_rad) * inv_col_step - 0.5);
-        const double c_first = std::max(0.0, c_lo);
-        const double c_last = std::min(static_cast<double>(hz.columns) - 1.0, c_hi);
-        for (double cd = c_first; cd <= c_last; cd += 1.0) {
-          const auto col = static_cast<std::size_t>(cd);
-          const double sn = centre_sin[col], cs = centre_cos[col];
-          double sd[3];
-          for (int q = 0; q < 3; ++q)
-            sd[q] = cs * v[q].y - sn * v[q].x;
-          int ends = 0;
-          for (int q = 0; q < 3 && ends < 2; ++q) {
-            const int r = (q + 1) % 3;
-            if ((sd[q] > 0.0) == (sd[r] > 0.0))
-              continue;
-            const double u = sd[q] / (sd[q] - sd[r]);
-            const glm::dvec3 p = v[q] + u * (v[r] - v[q]);
-            ++ends;
-            ++st.horizon_patches;
-            const double rho = std::sqrt(p.x * p.x + p.y * p.y);
-            const double range = std::sqrt(rho * rho + p.z * p.z);
-            if (!(range > 0.0) || cs * p.x + sn * p.y < 0.0)
-              continue;  // the plane's other half, behind the axis
-            const auto bin = std::min(hz.bins - 1, static_cast<std::size_t>(rho * inv_rho_step));
-            double& h = terrain_hz[bin * hz.columns + col];
-            h = std::max(h, -p.z / range);
+          if (around_axis || az_hi - az_lo - 2.0 * kFastAtan2Error_rad > kPi)
+            continue;  // a facet around the antenna's axis or behind it: no profile in the columns
+          if (sin_el_top < sin_el_min)
+            continue;  // wholly below the grid's elevations: it shadows none of its patches
+          // Centre c at az0 + (c + 1/2) step: the centres in [az_lo, az_hi].
+          const double c_lo = std::ceil((az_lo - hz.az0_rad) * inv_col_step - 0.5);
+          const double c_hi = std::floor((az_hi - hz.az0_rad) * inv_col_step - 0.5);
+          const double c_first = std::max(0.0, c_lo);
+          const double c_last = std::min(static_cast<double>(hz.columns) - 1.0, c_hi);
+          for (double cd = c_first; cd <= c_last; cd += 1.0) {
+            const auto col = static_cast<std::size_t>(cd);
+            const double sn = centre_sin[col], cs = centre_cos[col];
+            double sd[3];
+            for (int q = 0; q < 3; ++q)
+              sd[q] = cs * v[q].y - sn * v[q].x;
+            int ends = 0;
+            for (int q = 0; q < 3 && ends < 2; ++q) {
+              const int r = (q + 1) % 3;
+              if ((sd[q] > 0.0) == (sd[r] > 0.0))
+                continue;
+              const double u = sd[q] / (sd[q] - sd[r]);
+              const glm::dvec3 p = v[q] + u * (v[r] - v[q]);
+              ++ends;
+              ++st.horizon_patches;
+              const double rho = std::sqrt(p.x * p.x + p.y * p.y);
+              const double range = std::sqrt(rho * rho + p.z * p.z);
+              if (!(range > 0.0) || cs * p.x + sn * p.y < 0.0)
+                continue;  // the plane's other half, behind the axis
+              const auto bin = std::min(hz.bins - 1, static_cast<std::size_t>(rho * inv_rho_step));
+              double& h = terrain_hz[bin * hz.columns + col];
+              h = std::max(h, -p.z / range);
+            }
           }
         }
       }
