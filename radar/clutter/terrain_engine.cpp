@@ -454,20 +454,27 @@ double last_edge(const CellGrid& grid) {
 // checked on 2e6 points against NumPy's arctan, is 1.7e-6 rad; the sweep only narrows its
 // searches with it, widened by the bound, and decides by exact tests.
 constexpr double kFastAtan2Error_rad = 1e-5;
-inline double fast_atan2(double y, double x) noexcept {
+// The octant folding of fast_atan2 and fast_atan2_estrin around `odd(a)`, an odd polynomial's
+// value at a = min(|x|, |y|) / max(|x|, |y|) in [0, 1].
+template <class OddPolynomial>
+inline double folded_atan2(double y, double x, OddPolynomial odd) noexcept {
   const double ax = std::abs(x), ay = std::abs(y);
   const double hi = std::max(ax, ay), lo = std::min(ax, ay);
-  const double a = hi > 0.0 ? lo / hi : 0.0;
-  const double a2 = a * a;
-  double r =
-      a * (0.99997726 +
-           a2 * (-0.33262347 +
-                 a2 * (0.19354346 + a2 * (-0.11643287 + a2 * (0.05265332 - a2 * 0.01172120)))));
+  double r = odd(hi > 0.0 ? lo / hi : 0.0);
   if (ay > ax)
     r = 0.5 * kPi - r;
   if (x < 0.0)
     r = kPi - r;
   return y < 0.0 ? -r : r;
+}
+inline double fast_atan2(double y, double x) noexcept {
+  return folded_atan2(y, x, [](double a) {
+    const double a2 = a * a;
+    return a *
+           (0.99997726 +
+            a2 * (-0.33262347 +
+                  a2 * (0.19354346 + a2 * (-0.11643287 + a2 * (0.05265332 - a2 * 0.01172120)))));
+  });
 }
 
 // fast_atan2's polynomial by Estrin's scheme (Knuth, The Art of Computer Programming vol. 2,
@@ -478,20 +485,14 @@ inline double fast_atan2(double y, double x) noexcept {
 // 5e7 random (x, y)). Pass 1 keeps fast_atan2 itself: its values decide which facets pass 2
 // lists, exactly.
 inline double fast_atan2_estrin(double y, double x) noexcept {
-  const double ax = std::abs(x), ay = std::abs(y);
-  const double hi = std::max(ax, ay), lo = std::min(ax, ay);
-  const double a = hi > 0.0 ? lo / hi : 0.0;
-  const double t = a * a;
-  const double t2 = t * t;
-  const double p01 = 0.99997726 + t * -0.33262347;
-  const double p23 = 0.19354346 + t * -0.11643287;
-  const double p45 = 0.05265332 - t * 0.01172120;
-  double r = a * ((p01 + t2 * p23) + (t2 * t2) * p45);
-  if (ay > ax)
-    r = 0.5 * kPi - r;
-  if (x < 0.0)
-    r = kPi - r;
-  return y < 0.0 ? -r : r;
+  return folded_atan2(y, x, [](double a) {
+    const double t = a * a;
+    const double t2 = t * t;
+    const double p01 = 0.99997726 + t * -0.33262347;
+    const double p23 = 0.19354346 + t * -0.11643287;
+    const double p45 = 0.05265332 - t * 0.01172120;
+    return a * ((p01 + t2 * p23) + (t2 * t2) * p45);
+  });
 }
 
 // Whether v lies farther than margin from every integer. A value computed from an azimuth within
