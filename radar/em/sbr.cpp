@@ -1648,7 +1648,6 @@ bool SbrTracer::same_facets_by_rays(std::uint32_t id) const noexcept {
 
 void SbrTracer::prune_outside_view(const RadarPose& pose, std::span<const Bundle> bundles,
                                    TraceStats& stats) noexcept {
-  const SbrConfig& c = config_;
   const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
   for (const Bundle& b : bundles) {
     // Kept whole (a target cut by the view is refreshed whole, never a slice at a time).
@@ -1660,18 +1659,11 @@ void SbrTracer::prune_outside_view(const RadarPose& pose, std::span<const Bundle
       KeptPath* region = kept_paths_.get() + kept_region_[b.object_id] +
                          static_cast<std::size_t>(s) * kept_slice_slots();
       // A path's first segment is its ray: in view when the direction to its first hit is
-      // (bundle_for's cut, by the same angles).
+      // (the facet pass's test, by the limits' tangents).
       std::size_t m = 0;
       for (std::size_t i = 0; i < ks.count; ++i) {
-        const glm::dvec3 a = antenna_from_world * (region[i].first_hit_m - pose.position_m);
-        bool in_view = a.x > 0.0;
-        if (in_view) {
-          const AzEl ae = azel_from_direction(a);
-          in_view = ae.azimuth_rad >= c.azimuth_min_rad && ae.azimuth_rad <= c.azimuth_max_rad &&
-                    ae.elevation_rad >= c.elevation_min_rad &&
-                    ae.elevation_rad <= c.elevation_max_rad;
-        }
-        if (in_view)
+        if (in_field_of_view(fov_tan_,
+                             antenna_from_world * (region[i].first_hit_m - pose.position_m)))
           region[m++] = region[i];
       }
       stats.kept_paths_left_view += ks.count - m;
