@@ -168,6 +168,17 @@ class Scene {
   std::unique_ptr<Impl> impl_;
 };
 
+/// How every Embree BVH of a Scene is built, as Embree's RTCSceneFlags and RTCBuildQuality
+/// values (the header does not include Embree's): robust mode, whose watertight traversal never
+/// lets a ray through the edge two triangles share, and high build quality. bench_frame's raw
+/// replay (BM_TraceRaw) builds its BVH the same way, so that it times the queries the tracer
+/// asks as the tracer's scene answers them.
+struct EmbreeBuild {
+  int scene_flags = 0;
+  int build_quality = 0;
+};
+[[nodiscard]] EmbreeBuild embree_build() noexcept;
+
 /// Whether `ray` crosses the axis-aligned box [lo, hi] somewhere in [t_near_m, t_far_m] (slab
 /// test in double; the box is padded by a relative 1e-6 so that float traversal inside it
 /// cannot be culled wrongly). Cheap: used to cull queries that cannot reach an object.
