@@ -398,6 +398,7 @@ struct Frame {
   bool valid = false;                          ///< a fresh ownship state (or the caller's)
   const GovernorDecision* decision = nullptr;  ///< null: nothing traced
   std::uint64_t rays_before = 0, cells_before = 0, truncated_before = 0, merged_before = 0;
+  std::uint64_t under_floor_before = 0;
   std::uint64_t terrain_patches = 0, terrain_returns = 0;  ///< the engine's, this frame
   std::uint64_t terrain_facets = 0;                        ///< the facets cut into its patches
   std::uint64_t kept_returns = 0, cells_synthesised = 0;   ///< this frame's (FrameRecord)
@@ -559,7 +560,7 @@ struct ClosedLoop::Impl {
     sensor.sensor.set_noise_frame(noise_frame);
     const double untimed = std::numeric_limits<double>::quiet_NaN();
     governor.observe(untimed, untimed, tracer.primed_rays, n, ss.cells_synthesised, patches,
-                     terrain_returns, facets, ss.merged_returns);
+                     terrain_returns, facets, ss.merged_returns + ss.returns_under_floor);
   }
 
   // ---- the frame's stages (ClosedLoop::step), each timed but wait_or_stop ----
@@ -733,6 +734,7 @@ void ClosedLoop::Impl::sense(Frame& f) {
   RunResult& r = rs.r;
   f.truncated_before = r.sensor.truncated;
   f.merged_before = r.sensor.merged_returns;
+  f.under_floor_before = r.sensor.returns_under_floor;
   {
     timing::ScopedStage stage(accounting.profiler, rs.wall, timing::Stage::kSensor);
     if (f.valid) {
@@ -749,7 +751,7 @@ void ClosedLoop::Impl::sense(Frame& f) {
                      static_cast<double>(p.last_ns(timing::Stage::kSensor)) * 1e-6,
                      r.trace.rays + r.trace.reused_rays - f.rays_before, f.contributions,
                      f.cells_synthesised, f.terrain_patches, f.terrain_returns, f.terrain_facets,
-                     f.merged_returns);
+                     f.merged_returns + (r.sensor.returns_under_floor - f.under_floor_before));
     ++r.governor.level_frames[static_cast<std::size_t>(d->level)];
     r.governor.frames_degraded += d->degraded ? 1 : 0;
     r.governor.frames_predicted_late += d->over_deadline ? 1 : 0;

@@ -167,6 +167,8 @@ class FidelityGovernor {
   /// rays traced and those kept paths stood for, `returns` all of them, `terrain_returns` of those
   /// the terrain engine's, `terrain_patches` the engine's patches; both 0 without the engine).
   /// `terrain_facets`: the facets the engine cut into those patches (0: unknown, no floor).
+  /// `merged_returns`: the returns summed into another or left out under the floor before the
+  /// merge (neither becomes an item of the sensor's image).
   /// Times that are not finite (a frame processed at setup): its counts only; measured mode's
   /// factors learn nothing from it.
   void observe(double trace_ms, double sensor_ms, std::uint64_t rays, std::uint64_t returns,

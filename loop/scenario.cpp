@@ -134,7 +134,9 @@ max_detections = 64
 noise_seed = 20261123       # receiver noise and clutter speckle; fixed for reproducible runs
 return_floor_db = -60.0     # a return whose peak in a beam is more than 60 dB below a cell's noise
                             # is left out of that beam's image (counted in report.json: sensor
-                            # returns_below_floor); -400: off, every return kept
+                            # returns_below_floor; a coherent one under it in every beam is left
+                            # out before the merge: returns_under_floor); -400: off, every return
+                            # kept
 
 [faults]
 # Software-bus fault injection (sim_bus/fault_injector.hpp), all off by default. Seeded: a run

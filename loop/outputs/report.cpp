@@ -461,6 +461,8 @@ void add_trace_and_sensor(const RunReport& p, Json& rep) {
                         ? nlohmann::json(s.sensor.return_floor_db)
                         : nlohmann::json(nullptr)},
                    {"returns_below_floor", r.sensor.returns_below_floor},
+                   // coherent returns left out before the merge, under the floor at any angle
+                   {"returns_under_floor", r.sensor.returns_under_floor},
                    {"cfar_crossings", r.sensor.cfar_crossings},
                    {"false_alarm_rate_upper_bound",
                     r.sensor.cells_touched ? static_cast<double>(r.sensor.cfar_crossings) /
@@ -574,6 +576,14 @@ void print_run_lines(const RunReport& p, std::FILE* out) {
       w.range_bins, w.pulses, s.sensor.cfar.kind == radar::CfarKind::kCellAveraging ? "CA" : "OS",
       s.sensor.cfar.pfa, cells > 0.0 ? static_cast<double>(r.sensor.cfar_crossings) / cells : 0.0,
       static_cast<ull>(r.sensor.merged));
+  if (r.sensor.returns_under_floor > 0)
+    std::fprintf(
+        out,
+        "              %.0f coherent returns a frame left out before the merge, each below %.0f "
+        "dB of a cell's noise at any angle ([detector] return_floor_db)\n",
+        r.frames ? static_cast<double>(r.sensor.returns_under_floor) / static_cast<double>(r.frames)
+                 : 0.0,
+        s.sensor.return_floor_db);
   if (r.sensor.returns_below_floor > 0)
     std::fprintf(
         out,

@@ -183,6 +183,15 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     for (double a = -extent; a <= extent; a += step)
       m = std::max(m, std::abs(antenna_.sum_az(a)));
     max_sum_az_ = (1.0 + 1e-4) * std::max(m, std::abs(antenna_.sum_az(0.0)));
+    // The elevation sum pattern's over the whole half space, at the same step (at most 2^18
+    // samples), raised alike.
+    const double step_el = std::max(c.antenna.elevation.beamwidth_rad / 2000.0, kPi / (1 << 18));
+    double m_el = std::abs(antenna_.sum_el(0.0));
+    for (double e = -0.5 * kPi; e <= 0.5 * kPi; e += step_el)
+      m_el = std::max(m_el, std::abs(antenna_.sum_el(e)));
+    max_sum_el_ = (1.0 + 1e-4) * m_el;
+    const double g = max_sum_az_ * max_sum_el_;
+    floor_norm_ = return_floor_ / (processor_->processing_gain() * (g * g) * (g * g));
   }
   item_bucket_.resize(c.max_contributions);
   if (c.merge_step_bins > 0.0) {
@@ -1132,6 +1141,13 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     }
     const std::complex<double> amplitude =
         c.amplitude * (amplitude_scale_ / (c.range_m * c.range_m));
+    // A coherent return under the floor in every cell of every beam whatever its angles (its
+    // on-grid peak at the patterns' largest gains, SensorConfig::return_floor_db) is left out
+    // before the merge: a cell then sums the returns over the floor only.
+    if (c.coherent && std::norm(amplitude) < floor_norm_) {
+      item_state_[i] = kUnderFloor;
+      return 0.0;
+    }
     const ImagePosition pos = proc.position_of(c.range_m, c.radial_velocity_mps);
     // A coherent return to be merged: its key, weighted position and amplitude only; its item
     // is written after the merge if it represents its cell (merge_returns()), so that the
@@ -1193,6 +1209,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     const std::uint8_t state = item_state_[i];
     stats.rejected_input += state == kNotFinite ? 1u : 0u;
     stats.out_of_grid += state == kOffImage ? 1u : 0u;
+    stats.returns_under_floor += state == kUnderFloor ? 1u : 0u;
     if (state != kUsable) {
       item_bucket_[i] = kNoBucket;
       continue;

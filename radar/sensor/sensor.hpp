@@ -57,7 +57,12 @@ struct SensorConfig {
   /// fraction of a cell's noise power in any cell, so its amplitude was at most sqrt(floor) of
   /// the noise's (-60 dB: 1e-3, moving a cell at the noise level by 0.009 dB at most). Applied
   /// with thermal noise only (without it there is no noise to measure against);
-  /// kReturnFloorOff_db or below: off.
+  /// kReturnFloorOff_db or below: off. A coherent return under the floor at the patterns'
+  /// largest gains (in every beam, whatever its angles) is left out before the merge
+  /// (merge_step_bins), counted once (SensorStats::returns_under_floor): a merged cell sums the
+  /// returns over the floor only. The ones a cell left out summed to at most -35 dB of a cell's
+  /// noise (at those gains) over the default and the terrain approaches, 200 frames each
+  /// (docs/performance.md), which moves a cell at the noise level by 0.15 dB at most.
   double return_floor_db = -60.0;
   double max_range_m = 6000.0;  ///< farthest return of interest: sets the range-ambiguity flag
   std::size_t max_hits_per_beam = 4096;
@@ -113,6 +118,9 @@ struct SensorStats {
   /// return's bound there (or in every beam) was below
   /// SensorConfig::return_floor_db
   std::uint64_t returns_below_floor = 0;
+  /// Coherent returns left out before the merge: under SensorConfig::return_floor_db in every
+  /// cell of every beam at the patterns' largest gains, whatever their angles
+  std::uint64_t returns_under_floor = 0;
 };
 
 /// One return of a captured frame as the sensor saw it (after merging): what the frame's raw
@@ -240,9 +248,10 @@ class Sensor {
   /// Per item, this frame: whether it is usable (its Item written) or why not.
   enum ItemState : std::uint8_t {
     kUsable = 0,
-    kNotFinite = 1,  ///< a field not finite, or no range
-    kOffImage = 2,   ///< outside the swath
-    kMerged = 3,     ///< summed into an earlier coherent return (merge_returns())
+    kNotFinite = 1,   ///< a field not finite, or no range
+    kOffImage = 2,    ///< outside the swath
+    kMerged = 3,      ///< summed into an earlier coherent return (merge_returns())
+    kUnderFloor = 4,  ///< coherent, under the floor in every beam at any angle (prepare)
   };
   std::vector<std::uint8_t> item_state_;
   struct Candidate {
@@ -330,6 +339,11 @@ class Sensor {
   /// beam without reading its item.
   std::vector<double> item_bound_;
   double max_sum_az_ = 1.0;  ///< the azimuth sum pattern's largest value (setup, sampled)
+  double max_sum_el_ = 1.0;  ///< the elevation sum pattern's largest value (setup, sampled)
+  /// return_floor_ / (G_p (max_sum_az_ max_sum_el_)^4): a coherent return with |a|^2 below it
+  /// (a at the receiver, noise units) is under the floor in every cell of every beam, whatever
+  /// its angles (0: the floor off).
+  double floor_norm_ = 0.0;
   /// item_bound_ for item `it` (its amplitude and elevation channel set).
   [[nodiscard]] double bound_of(const Item& it) const noexcept;
   /// Item i's beam span from its azimuth (usable items).

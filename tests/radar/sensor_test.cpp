@@ -648,10 +648,13 @@ TEST(Sensor, MergedCoherentReturnsGiveTheImageOfTheSeparateReturns) {
 
 TEST(Sensor, ReturnsBelowTheFloorAreLeftOutOfTheImageAndCounted) {
   // A target at 25 dB, 300 returns whose peak SNR on boresight is -80 dB and 40 diffuse ones far
-  // weaker, spread over the swath, and 20 returns at -40 dB.
-  // With the floor at -60 dB the -80 dB returns are left out of the image, counted one each
-  // (one beam): the frame is bit-for-bit the frame without them. With the floor off they are
-  // synthesised (more cells). A return at -40 dB is kept either way.
+  // weaker, spread over the swath, 5 more at -80 dB where the target is (its merge cell), and 20
+  // returns at -40 dB.
+  // With the floor at -60 dB the -80 dB returns are left out of the image: the coherent ones
+  // before the merge, counted once each (returns_under_floor), the diffuse ones per beam (one
+  // beam: returns_below_floor). The frame is bit-for-bit the frame without them, the target's
+  // cell included (a coherent return under the floor is not summed into a stronger one). With
+  // the floor off they are synthesised (more cells). A return at -40 dB is kept either way.
   rd::SensorConfig c = sensor_config();
   rd::Sensor sensor(c);
   const rd::RangeDopplerProcessor& p = sensor.processor();
@@ -671,6 +674,9 @@ TEST(Sensor, ReturnsBelowTheFloorAreLeftOutOfTheImageAndCounted) {
     weak.push_back(point(sigma_for(sensor, 1e-8, r), r, 4.0 * rng.uniform() - 2.0, 0.0, 0.0,
                          2 * kPi * rng.uniform()));
   }
+  for (int i = 0; i < 5; ++i)  // in the target's merge cell, at random phases
+    weak.push_back(
+        point(sigma_for(sensor, 1e-8, r_target), r_target, 0.3, 0.0, 0.0, 2 * kPi * rng.uniform()));
   for (int i = 0; i < 40; ++i) {
     // Diffuse, a bin long, with the sigma of a coherent return whose on-grid peak would be
     // -140 dB: its mean power spread over the cells it reaches is lower still.
@@ -694,14 +700,18 @@ TEST(Sensor, ReturnsBelowTheFloorAreLeftOutOfTheImageAndCounted) {
   const std::vector<rd::Detection> a = run(all, -60.0, with_floor);
   const std::vector<rd::Detection> b = run(kept, -60.0, without_weak);
   (void)run(all, rd::kReturnFloorOff_db, floor_off);
-  std::printf("left out %llu, cells synthesised %llu (without them %llu, floor off %llu)\n",
-              static_cast<unsigned long long>(with_floor.returns_below_floor),
-              static_cast<unsigned long long>(with_floor.cells_synthesised),
-              static_cast<unsigned long long>(without_weak.cells_synthesised),
-              static_cast<unsigned long long>(floor_off.cells_synthesised));
-  EXPECT_EQ(with_floor.returns_below_floor, weak.size());
-  EXPECT_EQ(without_weak.returns_below_floor, 0u);
-  EXPECT_EQ(floor_off.returns_below_floor, 0u);
+  std::printf(
+      "left out %llu before the merge, %llu (return, beam) pairs after, cells synthesised "
+      "%llu (without them %llu, floor off %llu)\n",
+      static_cast<unsigned long long>(with_floor.returns_under_floor),
+      static_cast<unsigned long long>(with_floor.returns_below_floor),
+      static_cast<unsigned long long>(with_floor.cells_synthesised),
+      static_cast<unsigned long long>(without_weak.cells_synthesised),
+      static_cast<unsigned long long>(floor_off.cells_synthesised));
+  EXPECT_EQ(with_floor.returns_under_floor, 305u);
+  EXPECT_EQ(with_floor.returns_below_floor, 40u);
+  EXPECT_EQ(without_weak.returns_under_floor + without_weak.returns_below_floor, 0u);
+  EXPECT_EQ(floor_off.returns_under_floor + floor_off.returns_below_floor, 0u);
   EXPECT_EQ(with_floor.cells_synthesised, without_weak.cells_synthesised);
   EXPECT_GT(floor_off.cells_synthesised, with_floor.cells_synthesised);
   ASSERT_EQ(a.size(), b.size());
@@ -717,7 +727,7 @@ TEST(Sensor, ReturnsBelowTheFloorAreLeftOutOfTheImageAndCounted) {
   rd::SensorStats quiet_stats;
   std::vector<rd::Detection> out(32);
   (void)rd::Sensor(quiet).process(all, out, quiet_stats);
-  EXPECT_EQ(quiet_stats.returns_below_floor, 0u);
+  EXPECT_EQ(quiet_stats.returns_below_floor + quiet_stats.returns_under_floor, 0u);
 }
 
 TEST(Sensor, DiffuseMeanPowerIsTheRadarEquationSpreadOverItsRangeExtent) {
