@@ -211,6 +211,7 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     merge_per_rad_el_ = 1.0 / (c.merge_step_beamwidths * antenna_.sum_beamwidth_el_rad());
   }
   by_range_.resize(c.max_contributions);
+  live_items_.resize(c.max_contributions);
   range_start_.resize(processor_->range_bins() + 2);
   range_energy_ = processor_->range_energy();
   per_beam_capacity_ = c.max_hits_per_beam;
@@ -437,12 +438,15 @@ void Sensor::process_worker(std::size_t w) noexcept {
   std::uint32_t tap_rows[Footprint::kMaxBins];
   // A diffuse return's pieces, tap by tap, at unit two-way gain (scaled by each beam's).
   double values[3][Footprint::kMaxBins];
-  // The items this worker will read are fetched kItemAhead returns ahead (the others, most of
-  // them, are skipped by their span and bound alone, and are not fetched).
+  // The live items (usable, their span holding a beam: live_items_, in input order); those this
+  // worker will read are fetched kItemAhead ahead (the others, skipped by their span and bound
+  // alone, are not).
   constexpr std::size_t kItemAhead = 8;
-  for (std::size_t i = 0; i < item_count_; ++i) {
-    if (i + kItemAhead < item_count_) {
-      const std::size_t a = i + kItemAhead;
+  const std::uint32_t* live = live_items_.data();
+  for (std::size_t q = 0; q < live_count_; ++q) {
+    const std::size_t i = live[q];
+    if (q + kItemAhead < live_count_) {
+      const std::size_t a = live[q + kItemAhead];
       const BeamSpan ahead = item_beams_[a];
       if (ahead.first < beam_end && ahead.end > beam_begin && !(item_bound_[a] < return_floor_)) {
         __builtin_prefetch(&items_[a]);
@@ -1205,6 +1209,7 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
   // item); the items themselves are not read.
   constexpr std::uint32_t kNoBucket = 0xFFFFFFFFu;
   std::fill(beam_work_.begin(), beam_work_.end(), 0.0);
+  live_count_ = 0;
   for (std::size_t i = 0; i < item_count_; ++i) {
     const std::uint8_t state = item_state_[i];
     stats.rejected_input += state == kNotFinite ? 1u : 0u;
@@ -1220,6 +1225,8 @@ std::size_t Sensor::process(std::span<const Contribution> contributions, std::sp
     ++range_start_[bucket + 1];
     // The work it brings to each beam of its span (a difference array over the beams).
     const BeamSpan span = item_beams_[i];
+    live_items_[live_count_] = static_cast<std::uint32_t>(i);
+    live_count_ += span.first < span.end ? 1u : 0u;
     // A coherent return under the floor in every beam is skipped by its bound alone.
     const double work = (tagged & kDiffuseBucket) != 0   ? kDiffuseWork
                         : item_bound_[i] < return_floor_ ? kSkippedWork

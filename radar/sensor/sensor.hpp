@@ -354,7 +354,11 @@ class Sensor {
   static constexpr std::uint32_t kDiffuseBucket = 0x80000000u;
   /// Item `it`'s bucket: its nearest range bin, clamped to the image.
   [[nodiscard]] std::uint32_t bucket_of(const Item& it) const noexcept;
-  std::vector<std::uint32_t> by_range_;     ///< item indices sorted by nearest range bin
+  std::vector<std::uint32_t> by_range_;  ///< item indices sorted by nearest range bin
+  /// The usable items whose span holds a beam, in input order (the workers' list: most returns
+  /// are merged or under the floor, and are not walked), and their number this frame.
+  std::vector<std::uint32_t> live_items_;
+  std::size_t live_count_ = 0;
   std::vector<std::uint32_t> range_start_;  ///< by_range_ offset of each range bin (+1 entry)
   std::size_t item_count_ = 0;
   double max_half_bins_ = 0.0;
