@@ -183,8 +183,9 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
     for (double a = -extent; a <= extent; a += step)
       m = std::max(m, std::abs(antenna_.sum_az(a)));
     max_sum_az_ = (1.0 + 1e-4) * std::max(m, std::abs(antenna_.sum_az(0.0)));
-    // The elevation sum pattern's over the whole half space, at the same step (at most 2^18
-    // samples), raised alike.
+    // The elevation sum pattern's largest value likewise, sampled over the whole half space
+    // (every elevation a return can arrive from) at the same step, at most 2^18 samples, and
+    // raised alike. Both bound the gains of a return before its angles are looked at.
     const double step_el = std::max(c.antenna.elevation.beamwidth_rad / 2000.0, kPi / (1 << 18));
     double m_el = std::abs(antenna_.sum_el(0.0));
     for (double e = -0.5 * kPi; e <= 0.5 * kPi; e += step_el)
