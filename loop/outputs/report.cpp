@@ -21,6 +21,11 @@ namespace {
 using Json = nlohmann::ordered_json;
 using ull = unsigned long long;
 
+// A run's count as a mean a frame (0 for a run of no frames).
+double per_frame(const RunResult& r, std::uint64_t count) {
+  return r.frames ? static_cast<double>(count) / static_cast<double>(r.frames) : 0.0;
+}
+
 // ---- report.json, one block of keys at a time (in the file's order) ----
 
 Json nav_json(const NavSourceReport& n) {
@@ -76,13 +81,9 @@ void add_run(const RunReport& p, Json& rep) {
     rep["modbus_server"] = Json::parse(p.modbus_server_json);
   rep["wall_time_s"] = r.wall_time_s;
   rep["detections"] = {
-      {"total", r.detections_total},
-      {"per_frame_mean",
-       r.frames ? static_cast<double>(r.detections_total) / static_cast<double>(r.frames) : 0.0},
-      {"per_frame_min", r.detections_min},
-      {"per_frame_max", r.detections_max},
-      {"icd_dropped", r.icd_dropped},
-      {"icd_truncated", r.icd_truncated}};
+      {"total", r.detections_total},       {"per_frame_mean", per_frame(r, r.detections_total)},
+      {"per_frame_min", r.detections_min}, {"per_frame_max", r.detections_max},
+      {"icd_dropped", r.icd_dropped},      {"icd_truncated", r.icd_truncated}};
 }
 
 // stage_timing, timing_record, schedule.
@@ -561,11 +562,9 @@ void print_run_lines(const RunReport& p, std::FILE* out) {
   std::fprintf(
       out, "  frames      %llu at %.1f Hz (%llu with a valid ownship state), wall %.2f s\n",
       static_cast<ull>(r.frames), s.rate_hz, static_cast<ull>(r.frames_valid), r.wall_time_s);
-  std::fprintf(
-      out, "  detections  %.2f per frame (min %llu, max %llu), %llu in total\n",
-      r.frames ? static_cast<double>(r.detections_total) / static_cast<double>(r.frames) : 0.0,
-      static_cast<ull>(r.detections_min), static_cast<ull>(r.detections_max),
-      static_cast<ull>(r.detections_total));
+  std::fprintf(out, "  detections  %.2f per frame (min %llu, max %llu), %llu in total\n",
+               per_frame(r, r.detections_total), static_cast<ull>(r.detections_min),
+               static_cast<ull>(r.detections_max), static_cast<ull>(r.detections_total));
   const radar::Waveform& w = s.sensor.processing.waveform;
   const double cells = static_cast<double>(r.sensor.cells_touched);
   std::fprintf(
@@ -581,17 +580,13 @@ void print_run_lines(const RunReport& p, std::FILE* out) {
         out,
         "              %.0f coherent returns a frame left out before the merge, each below %.0f "
         "dB of a cell's noise at any angle ([detector] return_floor_db)\n",
-        r.frames ? static_cast<double>(r.sensor.returns_under_floor) / static_cast<double>(r.frames)
-                 : 0.0,
-        s.sensor.return_floor_db);
+        per_frame(r, r.sensor.returns_under_floor), s.sensor.return_floor_db);
   if (r.sensor.returns_below_floor > 0)
     std::fprintf(
         out,
         "              %.0f returns a frame left out of a beam's image, each below %.0f dB "
         "of a cell's noise there ([detector] return_floor_db)\n",
-        r.frames ? static_cast<double>(r.sensor.returns_below_floor) / static_cast<double>(r.frames)
-                 : 0.0,
-        s.sensor.return_floor_db);
+        per_frame(r, r.sensor.returns_below_floor), s.sensor.return_floor_db);
   using timing::Stage;
   std::fprintf(out, "  stage times [ms]      p50      p99      max\n");
   for (Stage st : {Stage::kInput, Stage::kSceneUpdate, Stage::kTrace, Stage::kSensor,

@@ -173,27 +173,27 @@ Sensor::Sensor(const SensorConfig& config) : config_(config), antenna_(config.an
   item_state_.resize(c.max_contributions);
   item_beams_.resize(c.max_contributions);
   item_bound_.resize(c.max_contributions);
-  // The azimuth sum pattern's largest value (1 on boresight for the patterns here; a squinted
-  // pair's sum can peak off it), sampled every 1/2000 beamwidth over its extent, and raised by
-  // 1e-4 for what the sampling and the gains' recurrence can miss.
-  {
-    const double extent = antenna_.extent_az_rad(c.beam_floor_db);
-    const double step = c.antenna.azimuth.beamwidth_rad / 2000.0;
-    double m = 0.0;
+  // A sum pattern's largest value, sampled over [-extent, extent] at `step` and on boresight,
+  // and raised by 1e-4 for what the sampling and the gains' recurrence can miss.
+  auto largest = [](auto pattern, double extent, double step) {
+    double m = std::abs(pattern(0.0));
     for (double a = -extent; a <= extent; a += step)
-      m = std::max(m, std::abs(antenna_.sum_az(a)));
-    max_sum_az_ = (1.0 + 1e-4) * std::max(m, std::abs(antenna_.sum_az(0.0)));
-    // The elevation sum pattern's largest value likewise, sampled over the whole half space
-    // (every elevation a return can arrive from) at the same step, at most 2^18 samples, and
-    // raised alike. Both bound the gains of a return before its angles are looked at.
-    const double step_el = std::max(c.antenna.elevation.beamwidth_rad / 2000.0, kPi / (1 << 18));
-    double m_el = std::abs(antenna_.sum_el(0.0));
-    for (double e = -0.5 * kPi; e <= 0.5 * kPi; e += step_el)
-      m_el = std::max(m_el, std::abs(antenna_.sum_el(e)));
-    max_sum_el_ = (1.0 + 1e-4) * m_el;
-    const double g = max_sum_az_ * max_sum_el_;
-    floor_norm_ = return_floor_ / (processor_->processing_gain() * (g * g) * (g * g));
-  }
+      m = std::max(m, std::abs(pattern(a)));
+    return (1.0 + 1e-4) * m;
+  };
+  // Azimuth (1 on boresight for the patterns here; a squinted pair's sum can peak off it): every
+  // 1/2000 beamwidth over its extent. Elevation: over the whole half space (every elevation a
+  // return can arrive from) at the same step, at most 2^18 samples. Both bound the gains of a
+  // return before its angles are looked at; a coherent return under the floor at them is under
+  // it in every beam (floor_norm_).
+  max_sum_az_ =
+      largest([&](double a) { return antenna_.sum_az(a); }, antenna_.extent_az_rad(c.beam_floor_db),
+              c.antenna.azimuth.beamwidth_rad / 2000.0);
+  const double max_sum_el =
+      largest([&](double e) { return antenna_.sum_el(e); }, 0.5 * kPi,
+              std::max(c.antenna.elevation.beamwidth_rad / 2000.0, kPi / (1 << 18)));
+  const double peak = max_sum_az_ * max_sum_el;  // the one-way sum gain at most
+  floor_norm_ = return_floor_ / (processor_->processing_gain() * (peak * peak) * (peak * peak));
   item_bucket_.resize(c.max_contributions);
   if (c.merge_step_bins > 0.0) {
     // Each part's region: twice its returns plus 2 (merge_returns()).

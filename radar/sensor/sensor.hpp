@@ -339,8 +339,8 @@ class Sensor {
   /// beam without reading its item.
   std::vector<double> item_bound_;
   double max_sum_az_ = 1.0;  ///< the azimuth sum pattern's largest value (setup, sampled)
-  double max_sum_el_ = 1.0;  ///< the elevation sum pattern's largest value (setup, sampled)
-  /// return_floor_ / (G_p (max_sum_az_ max_sum_el_)^4): a coherent return with |a|^2 below it
+  /// return_floor_ / (G_p (max_sum_az_ max_sum_el)^4), max_sum_el the elevation sum pattern's
+  /// largest value (setup, sampled): a coherent return with |a|^2 below it
   /// (a at the receiver, noise units) is under the floor in every cell of every beam, whatever
   /// its angles (0: the floor off).
   double floor_norm_ = 0.0;
