@@ -1033,6 +1033,19 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
       spacing *= 1.01;
     } while (n_az * n_el > c.max_rays_per_target);
   }
+  // Static path reuse: a target whose paths are kept keeps the rows they were traced with while
+  // the grid asks for nearly as many (within kKeptRowsSlack of them, or one row), so that its
+  // slices stay a partition of its rows and are traced again one at a time (choose_reuse). Its
+  // elevation step then differs from the one its spacing asks for by at most that fraction.
+  if (c.reuse_static_paths && kept_region_[id] != kNoRegion) {
+    const Kept& kp = kept_[id];
+    const std::size_t d = kp.n_el > n_el ? kp.n_el - n_el : n_el - kp.n_el;
+    if (kp.valid && kp.spacing_m == spacing_m && d != 0 &&
+        (d <= 1 || static_cast<double>(d) <= kKeptRowsSlack * static_cast<double>(kp.n_el))) {
+      n_el = kp.n_el;
+      n_az = std::min(n_az, std::max<std::size_t>(1, c.max_rays_per_target / n_el));
+    }
+  }
   b.object_id = id;
   b.n_az = n_az;
   b.n_el = n_el;
@@ -1122,7 +1135,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
       continue;
     const Kept& kp = kept_[id];
     bool reuse = kp.valid && kp.spacing_m == b.spacing_m && kp.max_bounces == max_bounces;
-    double fraction = 0.0;
+    b.slice_fraction.fill(0.0);
     if (reuse) {
       // The aspect change since each slice was traced, against its limit
       // (SbrConfig::reuse_static_paths), and the antenna's turn (its polarisation basis: the
@@ -1135,9 +1148,8 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
         double turn = 0.0;
         for (int a = 0; a < 3; ++a)
           turn = std::max(turn, glm::length(pose.world_from_antenna[a] - ks.world_from_antenna[a]));
-        fraction = std::max(fraction, std::max(dtheta, turn) / limit);
+        b.slice_fraction[static_cast<std::size_t>(s)] = std::max(dtheta, turn) / limit;
       }
-      reuse = fraction <= 1.0;
       // A target cut by the field of view: its paths cover the part of it that was in view when
       // they were traced. They serve while the part in view now lies within that part, to half
       // a ray tube (a trace samples the view's edge no closer); the paths whose first hit has
@@ -1150,10 +1162,33 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
                 b.view.el0 >= then.el0 - b.half_tube_el && b.view.el1 <= then.el1 + b.half_tube_el;
       }
     }
-    if (reuse) {
+    // The aspect rule holds per slice: a slice past its limit is traced again. Of a bundle with
+    // the rows its slices were kept with (as for the refresh), the slices from the first past
+    // it to the last are traced (rows in one run), the others kept; else the whole bundle is.
+    int first_over = n_slices, end_over = 0;
+    for (int s = 0; s < n_slices && reuse; ++s) {
+      if (b.slice_fraction[static_cast<std::size_t>(s)] > 1.0) {
+        first_over = std::min(first_over, s);
+        end_over = s + 1;
+      }
+    }
+    const bool by_slice = n_slices > 1 && b.n_el == kp.n_el && !b.clipped;
+    if (reuse && end_over == 0) {
       b.trace = false;
-      b.kept_fraction = fraction;
+      b.kept_fraction =
+          *std::max_element(b.slice_fraction.begin(), b.slice_fraction.begin() + n_slices);
       kept_rays += rays;
+    } else if (reuse && by_slice && end_over - first_over < n_slices) {
+      b.trace_slices(first_over, end_over, n_slices);
+      const std::size_t traced = traced_rays(b);
+      b.kept_fraction = 0.0;  // of the slices kept
+      for (int s = 0; s < n_slices; ++s) {
+        if (!b.traces_slice(s))
+          b.kept_fraction =
+              std::max(b.kept_fraction, b.slice_fraction[static_cast<std::size_t>(s)]);
+      }
+      kept_rays += rays - traced;
+      forced_rays += traced;
     } else {
       forced_rays += rays;
     }
@@ -1175,12 +1210,15 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
   }
   credit += static_cast<double>(kept_rays) / static_cast<double>(c.reuse_refresh_frames);
   credit = std::max(0.0, credit - static_cast<double>(forced_rays));
-  // A slice at a time: the longest kept slice of a bundle that has the rows its slices were
-  // kept with, or the whole of one that has not (SbrConfig::reuse_refresh_slices).
+  // A slice at a time: the most urgent kept slice, the larger of its age over
+  // reuse_refresh_frames and its aspect change over its limit (so that a slice is refreshed
+  // before the aspect rule forces it), of a bundle that has the rows its slices were kept with,
+  // or the whole of one that has not (SbrConfig::reuse_refresh_slices).
+  const auto period = static_cast<double>(c.reuse_refresh_frames);
   for (;;) {
     Bundle* pick = nullptr;
     std::uint8_t pick_slice = kAllSlices;
-    std::uint64_t pick_at = 0;
+    double pick_urgency = 0.0;
     for (Bundle& b : bundles) {
       if (b.trace)
         continue;
@@ -1188,11 +1226,14 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
       // A target cut by the view is traced whole: its slices then cover one part in view.
       const bool by_slice = n_slices > 1 && b.n_el == kp.n_el && !b.clipped;
       for (int s = 0; s < n_slices; ++s) {
-        const std::uint64_t at = kp.slices[static_cast<std::size_t>(s)].traced_at;
-        if (pick == nullptr || at < pick_at) {
+        const auto i = static_cast<std::size_t>(s);
+        const double urgency =
+            std::max(static_cast<double>(frame_count_ - kp.slices[i].traced_at) / period,
+                     b.slice_fraction[i]);
+        if (pick == nullptr || urgency > pick_urgency) {
           pick = &b;
           pick_slice = by_slice ? static_cast<std::uint8_t>(s) : kAllSlices;
-          pick_at = at;
+          pick_urgency = urgency;
         }
       }
     }
@@ -1204,11 +1245,11 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
     const std::size_t rays = rays_in_rows(*pick, lo, hi);
     if (credit < static_cast<double>(rays))
       break;
-    pick->trace = true;
+    if (pick_slice != kAllSlices)
+      pick->trace_slices(pick_slice, pick_slice + 1, n_slices);
+    else
+      pick->trace_whole();
     pick->refreshed = true;
-    pick->row_lo = lo;
-    pick->row_hi = hi;
-    pick->slice = pick_slice;
     credit -= static_cast<double>(rays);
   }
 }
@@ -1466,10 +1507,9 @@ void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) co
 
 SbrTracer::KeptPath* SbrTracer::kept_slot(const Bundle& bd, std::size_t ia, std::size_t ie,
                                           std::size_t per_ray) const noexcept {
+  // Row ie's slice (slice_rows' rule).
   const int n_slices = config_.reuse_refresh_slices;
-  const std::size_t s = bd.slice != kAllSlices
-                            ? bd.slice
-                            : (2 * ie + 1) * static_cast<std::size_t>(n_slices) / (2 * bd.n_el);
+  const std::size_t s = (2 * ie + 1) * static_cast<std::size_t>(n_slices) / (2 * bd.n_el);
   std::size_t lo = 0, hi = 0;
   slice_rows(bd.n_el, n_slices, static_cast<int>(s), lo, hi);
   return kept_paths_.get() + kept_region_[bd.object_id] + s * kept_slice_slots() +
@@ -1488,7 +1528,7 @@ std::size_t SbrTracer::untraced_kept(const Bundle& b) const noexcept {
     return 0;
   std::size_t n = 0;
   for (int s = 0; s < config_.reuse_refresh_slices; ++s) {
-    if (!b.trace || s != b.slice)
+    if (!b.traces_slice(s))
       n += kept_[b.object_id].slices[static_cast<std::size_t>(s)].count;
   }
   return n;
@@ -2272,7 +2312,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       if (bd.trace && bd.slice == kAllSlices)
         continue;
       for (int s = 0; s < n_slices; ++s) {
-        if (bd.trace && s == bd.slice)
+        if (bd.traces_slice(s))
           continue;
         kept_runs_.push_back({n_kept, bd.object_id, static_cast<std::uint8_t>(s)});
         n_kept += kept_[bd.object_id].slices[static_cast<std::size_t>(s)].count;
@@ -2296,7 +2336,7 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
       }
       // Each traced slice's paths to the front of its region (rays in order).
       for (int s = 0; s < n_slices; ++s) {
-        if (bd.slice != kAllSlices && s != bd.slice)
+        if (!bd.traces_slice(s))
           continue;
         std::size_t lo = 0, hi = 0;
         slice_rows(bd.n_el, n_slices, s, lo, hi);

@@ -146,9 +146,14 @@ struct SbrConfig {
   /// a kept path is at most about that many frames old (a frame is a trace() call). The refresh
   /// goes a slice at a time: a bundle's rows fall into reuse_refresh_slices bands of its box's
   /// elevation span (a row whose centre lies in band s belongs to slice s), each kept and traced
-  /// again on its own, so one refresh traces a slice's rays, not the bundle's. A slice is refreshed
-  /// only while the bundle has the rows its paths were kept with and is whole inside the view, so
-  /// that the slices' rows together are each of the bundle's rows once; else the whole bundle is.
+  /// again on its own, so one refresh traces a slice's rays, not the bundle's. The refresh takes
+  /// the most urgent slice first: the larger of its age over reuse_refresh_frames and its aspect
+  /// change over its limit. The aspect rule holds per slice: one slice past its limit is traced
+  /// again alone, its bundle's other slices kept. A slice is traced alone only while the bundle
+  /// has the rows its paths were kept with and is whole inside the view, so that the slices'
+  /// rows together are each of the bundle's rows once; else the whole bundle is. To that end a
+  /// kept bundle keeps its rows while its grid asks for one row more or fewer, or up to 2 % of
+  /// them (its elevation step then differs from the spacing's by as much).
   /// While its paths are kept, a target's bounce-1 facets also keep the answers of their occlusion
   /// queries (which samples and sub-triangles see the radar): under the same rule a shadow boundary
   /// moves across it by at most D dtheta <= spacing / 2, within the rays' own resolution. Their PO
@@ -404,10 +409,14 @@ class SbrTracer {
     /// back, and what its groups record now is never read back whole.
     bool mover_near = false;
     double kept_fraction = 0.0;  ///< its aspect change over its limit, when kept paths are used
-    /// The rows traced this frame (all of them, or one slice's for the refresh) and that slice
+    /// Static path reuse, per kept slice: its aspect change (or the antenna's turn) since it was
+    /// traced, over its limit (choose_reuse; 0 for a bundle without valid kept paths).
+    std::array<double, SbrConfig::kMaxKeptSlices> slice_fraction{};
+    /// The rows traced this frame (all of them, or those of slices [slice, slice_end): one for
+    /// the refresh, those past the aspect limit and any between them) and those slices
     /// (kAllSlices: the whole bundle).
     std::size_t row_lo = 0, row_hi = 0;
-    std::uint8_t slice = kAllSlices;
+    std::uint8_t slice = kAllSlices, slice_end = kAllSlices;
     /// Its rows' spans of columns in row_spans_ (n_el + 1 entries from here), or kNoMask: every
     /// column of every row.
     std::size_t mask = kNoMask;
@@ -416,7 +425,20 @@ class SbrTracer {
       trace = true;
       row_lo = 0;
       row_hi = n_el;
-      slice = kAllSlices;
+      slice = slice_end = kAllSlices;
+    }
+    /// Traced this frame, slices [first, end) of `slices` (rows [row_lo, row_hi)).
+    void trace_slices(int first, int end, int slices) noexcept {
+      std::size_t lo = 0, hi = 0;
+      trace = true;
+      slice_rows(n_el, slices, first, row_lo, hi);
+      slice_rows(n_el, slices, end - 1, lo, row_hi);
+      slice = static_cast<std::uint8_t>(first);
+      slice_end = static_cast<std::uint8_t>(end);
+    }
+    /// Whether slice `s`'s rays are traced this frame (a whole bundle's are).
+    [[nodiscard]] bool traces_slice(int s) const noexcept {
+      return trace && (slice == kAllSlices || (s >= slice && s < slice_end));
     }
   };
   static constexpr std::size_t kNoMask = static_cast<std::size_t>(-1);
@@ -463,6 +485,9 @@ class SbrTracer {
   mutable std::vector<RowSpan> row_spans_;  ///< this frame's masks (capacity set at setup)
   mutable std::size_t row_spans_used_ = 0;
   static constexpr std::uint8_t kAllSlices = 0xff;
+  /// A kept target's grid keeps the rows its paths were traced with while it asks for no more
+  /// than this fraction of them more or fewer (bundle_for).
+  static constexpr double kKeptRowsSlack = 0.02;
   /// Rows [lo, hi) of slice `s` of `slices` in a grid of `n_el` rows: those whose centre lies in
   /// the slice's band, (ie + 1/2) / n_el in [s / slices, (s + 1) / slices).
   static void slice_rows(std::size_t n_el, int slices, int s, std::size_t& lo,

@@ -2,7 +2,8 @@
 // kept paths re-evaluated for a still radar give back the traced returns; for a moving radar the
 // right dihedral's double-bounce paths keep the image-method length to within Fermat's
 // second-order bound, and the square trihedral keeps its closed-form RCS; every rule that calls
-// for a new trace (aspect, antenna turn, spacing, a moving object near, the refresh) does; kept
+// for a new trace (aspect, antenna turn, spacing, a moving object near, the refresh) does, a slice
+// at a time where it can (a slice past the limit alone; a grid one row off keeps its rows); kept
 // targets' facets read their occlusion answers back.
 
 #include <gtest/gtest.h>
@@ -66,6 +67,18 @@ rd::RadarPose pose_around(double range, double phi_rad) {
   p.position_m = -range * look;
   const glm::dvec3 down(0, 0, -1);
   p.world_from_antenna = glm::dmat3(look, glm::cross(down, look), down);
+  return p;
+}
+
+// As pose_around, lifted by `elevation_rad` on the sphere of radius `range` (looking down at the
+// origin, the antenna's y axis horizontal).
+rd::RadarPose pose_above(double range, double phi_rad, double elevation_rad) {
+  rd::RadarPose p;
+  const glm::dvec3 look(std::sin(phi_rad) * std::cos(elevation_rad),
+                        std::cos(phi_rad) * std::cos(elevation_rad), -std::sin(elevation_rad));
+  p.position_m = -range * look;
+  const glm::dvec3 right = glm::normalize(glm::cross(glm::dvec3(0, 0, -1), look));
+  p.world_from_antenna = glm::dmat3(look, right, glm::cross(look, right));
   return p;
 }
 
@@ -366,6 +379,95 @@ TEST(SbrReuse, TheRefreshGoesASliceAtATime) {
     }
   }
   EXPECT_NEAR(traced, 2.0 * all_rays, 0.3 * all_rays);
+}
+
+// The climb of the next three tests: a trihedral (a = 0.5 m, 10 GHz, spacing 0.02 m, 4 slices)
+// traced once with the radar at 1 km level with it, then for `frames` frames climbing around it
+// by 0.15 of limit_rad a frame, which is 0.22 of the tracer's own limit (its grid's tube is a
+// little finer than the spacing). Every frame after the first re-evaluates kept paths, none in
+// use past its limit, and its triple-bounce sum stays within reuse_max_phase_rad's bound
+// (0.69 dB) of a fresh trace's of the same pose. Returns the first frame's rays and each later
+// frame's.
+struct Climb {
+  double first_rays = 0.0;
+  std::vector<double> rays;
+};
+
+Climb climb(int refresh_frames, bool mask, int frames) {
+  const double f = 10e9, k = 2.0 * kPi * f / kC, rho = 1000.0, spacing = 0.02;
+  sc::Scene scene(with({trihedral(0.5)}));
+  rd::SbrConfig c = config(f, spacing);
+  c.reuse_refresh_frames = refresh_frames;
+  c.reuse_refresh_slices = 4;
+  c.mask_target_rays = mask;
+  rd::SbrConfig fresh_config = c;
+  fresh_config.reuse_static_paths = false;
+  rd::SbrTracer reuse(scene, c), fresh(scene, fresh_config);
+  const double limit = limit_rad(c, spacing, std::sqrt(3.0) * 0.5);
+  const double bound_db = 20 * std::log10(1.0 / std::cos(c.reuse_max_phase_rad));
+  Climb out;
+  out.first_rays = static_cast<double>(trace(reuse, pose_above(rho, 0.0, 0.0)).stats.rays);
+  for (int frame = 1; frame <= frames; ++frame) {
+    const rd::RadarPose pose = pose_above(rho, 0.0, 0.15 * limit * frame);
+    const Frame r = trace(reuse, pose), t = trace(fresh, pose);
+    out.rays.push_back(static_cast<double>(r.stats.rays));
+    EXPECT_EQ(r.stats.reused_bundles, 1u) << frame;
+    EXPECT_LE(r.stats.reuse_max_angle_fraction, 1.0) << frame;
+    const double reuse_db = 10 * std::log10(std::norm(sum(r, 3, k, rho)));
+    const double fresh_db = 10 * std::log10(std::norm(sum(t, 3, k, rho)));
+    EXPECT_NEAR(reuse_db, fresh_db, bound_db) << frame;
+  }
+  return out;
+}
+
+TEST(SbrReuse, AKeptTargetKeepsItsRowsWhenItsGridAsksForOneMore) {
+  // The climb with reuse_refresh_frames = 4 and every column of every row shot (rays = columns
+  // x rows): over it the trihedral's box grows in elevation and a fresh grid gets another row
+  // (40 x 40 rays at the start, 40 x 41 at the top). The bundle keeps the rows its slices were
+  // traced with (one row off is within the slack), so its refresh still goes a slice at a
+  // time: no frame after the first traces more than a third of its rays (a whole trace would).
+  const int frames = 30;
+  const Climb c = climb(4, false, frames);
+  for (std::size_t i = 0; i < c.rays.size(); ++i)
+    EXPECT_LE(c.rays[i], c.first_rays / 3.0) << i + 1;
+  // The fresh grid at the top of the climb: one row more (a row is a few % of the rays).
+  rd::SbrConfig fresh_config = config(10e9, 0.02);
+  fresh_config.reuse_static_paths = false;
+  fresh_config.mask_target_rays = false;
+  sc::Scene scene(with({trihedral(0.5)}));
+  rd::SbrTracer fresh(scene, fresh_config);
+  const double limit = limit_rad(fresh_config, 0.02, std::sqrt(3.0) * 0.5);
+  const auto top_rays =
+      static_cast<double>(trace(fresh, pose_above(1000.0, 0.0, 0.15 * limit * frames)).stats.rays);
+  std::cout << "rays at the start " << c.first_rays << ", at the top " << top_rays << "\n";
+  EXPECT_GT(top_rays, c.first_rays);
+  EXPECT_LT(top_rays, 1.1 * c.first_rays);
+}
+
+TEST(SbrReuse, ASlicePastTheAspectLimitIsTracedAlone) {
+  // The climb with reuse_refresh_frames = 5: the refresh's credit traces a slice about every
+  // frame and a quarter, so the longest kept slice passes the limit (5 frames x 0.22) before
+  // its turn while the others are younger. That slice is traced again alone, the others kept:
+  // no frame after the first traces more than a third of the rays (tracing the whole bundle
+  // would put its slices back in step, to pass the limit together again).
+  const Climb c = climb(5, true, 24);
+  for (std::size_t i = 0; i < c.rays.size(); ++i)
+    EXPECT_LE(c.rays[i], c.first_rays / 3.0) << i + 1;
+}
+
+TEST(SbrReuse, SlicesPastTheAspectLimitTogetherAreTracedWithoutTheOthers) {
+  // The climb with reuse_refresh_frames = 8: the credit traces a slice about every other frame,
+  // so after a whole trace the last two slices, traced in the same frame, pass the limit
+  // together (5 frames x 0.22). Those two are traced again, the first two kept: no frame after
+  // the first traces more than 60 % of the rays (the two are about half of them), none the
+  // whole bundle.
+  const Climb c = climb(8, true, 24);
+  double most = 0.0;
+  for (std::size_t i = 0; i < c.rays.size(); ++i) {
+    EXPECT_LE(c.rays[i], 0.6 * c.first_rays) << i + 1;
+    most = std::max(most, c.rays[i]);
+  }
+  EXPECT_GT(most, 0.4 * c.first_rays);  // two slices at once happened
 }
 
 TEST(SbrReuse, FacetsTurningToTheRaysTraceTheBundleWholeAlsoWhenASliceWasDue) {
