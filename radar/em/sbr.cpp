@@ -1012,6 +1012,7 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   };
   share(az_lo, box_az_rad, c.azimuth_min_rad, c.azimuth_max_rad, b.view.az0, b.view.az1);
   share(el_lo, box_el_rad, c.elevation_min_rad, c.elevation_max_rad, b.view.el0, b.view.el1);
+  const double box_el_lo = el_lo;
   az_lo = std::max(az_lo, c.azimuth_min_rad);
   az_hi = std::min(az_hi, c.azimuth_max_rad);
   el_lo = std::max(el_lo, c.elevation_min_rad);
@@ -1022,14 +1023,22 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
   auto cells = [&](double span) {
     return std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(span / spacing)));
   };
-  std::size_t n_az = cells(az_hi - az_lo), n_el = cells(el_hi - el_lo);
+  // Static path reuse: a target whose paths are kept and that the view cuts takes the grid of
+  // its whole box (its spacing, under the ray cap, and its rows over the box's whole elevation
+  // extent), of which it shoots the rows whose centres are in view and the columns that cover
+  // the view. So its rows, hence its slices (choose_reuse), do not move as the cut does.
+  const bool whole_box =
+      c.reuse_static_paths && kept_region_[id] != kNoRegion && b.clipped && !behind;
+  const double grid_az_rad = whole_box ? box_az_rad : az_hi - az_lo;
+  const double grid_el_rad = whole_box ? box_el_rad : el_hi - el_lo;
+  std::size_t n_az = cells(grid_az_rad), n_el = cells(grid_el_rad);
   if (n_az * n_el > c.max_rays_per_target) {
     coarsened = true;
     spacing *=
         std::sqrt(static_cast<double>(n_az * n_el) / static_cast<double>(c.max_rays_per_target));
     do {
-      n_az = cells(az_hi - az_lo);
-      n_el = cells(el_hi - el_lo);
+      n_az = cells(grid_az_rad);
+      n_el = cells(grid_el_rad);
       spacing *= 1.01;
     } while (n_az * n_el > c.max_rays_per_target);
   }
@@ -1047,14 +1056,33 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
     }
   }
   b.object_id = id;
-  b.n_az = n_az;
-  b.n_el = n_el;
+  b.n_el_full = n_el;
+  b.row_offset = 0;
+  if (whole_box) {
+    // The box's rows whose centres lie in view, and columns over the view at the box's spacing.
+    const double del = box_el_rad / static_cast<double>(n_el);
+    const double first = std::ceil((el_lo - box_el_lo) / del - 0.5);
+    const double end = std::floor((el_hi - box_el_lo) / del - 0.5) + 1.0;
+    const double rows = static_cast<double>(n_el);
+    const auto r_lo = static_cast<std::size_t>(std::clamp(first, 0.0, rows));
+    const auto r_hi = static_cast<std::size_t>(std::clamp(end, 0.0, rows));
+    if (r_lo >= r_hi)
+      return false;
+    b.row_offset = r_lo;
+    b.n_el = r_hi - r_lo;
+    b.del_rad = del;
+    b.el0_rad = box_el_lo + static_cast<double>(r_lo) * del;
+    b.n_az = std::min(n_az, cells(az_hi - az_lo));
+  } else {
+    b.n_el = n_el;
+    b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
+    b.el0_rad = el_lo;
+    b.n_az = n_az;
+  }
   b.trace_whole();
   b.mask = kNoMask;
-  b.daz_rad = (az_hi - az_lo) / static_cast<double>(n_az);
-  b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
+  b.daz_rad = (az_hi - az_lo) / static_cast<double>(b.n_az);
   b.az0_rad = az_lo;
-  b.el0_rad = el_lo;
   b.half_tube_az = box_az_rad > 0.0 ? 0.5 * b.daz_rad / box_az_rad : 0.0;
   b.half_tube_el = box_el_rad > 0.0 ? 0.5 * b.del_rad / box_el_rad : 0.0;
   if (c.mask_target_rays)
@@ -1172,7 +1200,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
         end_over = s + 1;
       }
     }
-    const bool by_slice = n_slices > 1 && b.n_el == kp.n_el && !b.clipped;
+    const bool by_slice = n_slices > 1 && b.n_el_full == kp.n_el && !b.behind;
     if (reuse && end_over == 0) {
       b.trace = false;
       b.kept_fraction =
@@ -1223,8 +1251,8 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
       if (b.trace)
         continue;
       const Kept& kp = kept_[b.object_id];
-      // A target cut by the view is traced whole: its slices then cover one part in view.
-      const bool by_slice = n_slices > 1 && b.n_el == kp.n_el && !b.clipped;
+      // Of a target cut by the view, the rows in view (its box's grid: bundle_for).
+      const bool by_slice = n_slices > 1 && b.n_el_full == kp.n_el && !b.behind;
       for (int s = 0; s < n_slices; ++s) {
         const auto i = static_cast<std::size_t>(s);
         const double urgency =
@@ -1241,7 +1269,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
       break;
     std::size_t lo = 0, hi = pick->n_el;
     if (pick_slice != kAllSlices)
-      slice_rows(pick->n_el, n_slices, pick_slice, lo, hi);
+      pick->grid_slice_rows(n_slices, pick_slice, lo, hi);
     const std::size_t rays = rays_in_rows(*pick, lo, hi);
     if (credit < static_cast<double>(rays))
       break;
@@ -1507,11 +1535,12 @@ void SbrTracer::mask_rows(const RadarPose& pose, std::uint32_t id, Bundle& b) co
 
 SbrTracer::KeptPath* SbrTracer::kept_slot(const Bundle& bd, std::size_t ia, std::size_t ie,
                                           std::size_t per_ray) const noexcept {
-  // Row ie's slice (slice_rows' rule).
+  // Row ie's slice (slice_rows' rule, over its box's rows).
   const int n_slices = config_.reuse_refresh_slices;
-  const std::size_t s = (2 * ie + 1) * static_cast<std::size_t>(n_slices) / (2 * bd.n_el);
+  const std::size_t s =
+      (2 * (ie + bd.row_offset) + 1) * static_cast<std::size_t>(n_slices) / (2 * bd.n_el_full);
   std::size_t lo = 0, hi = 0;
-  slice_rows(bd.n_el, n_slices, static_cast<int>(s), lo, hi);
+  bd.grid_slice_rows(n_slices, static_cast<int>(s), lo, hi);
   return kept_paths_.get() + kept_region_[bd.object_id] + s * kept_slice_slots() +
          ((ie - lo) * bd.n_az + ia) * per_ray;
 }
@@ -1690,11 +1719,13 @@ void SbrTracer::prune_outside_view(const RadarPose& pose, std::span<const Bundle
                                    TraceStats& stats) noexcept {
   const glm::dmat3 antenna_from_world = glm::transpose(pose.world_from_antenna);
   for (const Bundle& b : bundles) {
-    // Kept whole (a target cut by the view is refreshed whole, never a slice at a time).
-    if (b.trace || !b.clipped)
+    // Kept, whole or but for the slices traced this frame.
+    if ((b.trace && b.slice == kAllSlices) || !b.clipped)
       continue;
     Kept& kp = kept_[b.object_id];
     for (int s = 0; s < config_.reuse_refresh_slices; ++s) {
+      if (b.traces_slice(s))
+        continue;
       KeptSlice& ks = kp.slices[static_cast<std::size_t>(s)];
       KeptPath* region = kept_paths_.get() + kept_region_[b.object_id] +
                          static_cast<std::size_t>(s) * kept_slice_slots();
@@ -2332,14 +2363,14 @@ std::size_t SbrTracer::trace(const RadarPose& pose, std::span<Contribution> out,
         kp.valid = true;
         kp.spacing_m = bd.spacing_m;
         kp.max_bounces = frame.max_bounces;
-        kp.n_el = bd.n_el;
+        kp.n_el = bd.n_el_full;
       }
       // Each traced slice's paths to the front of its region (rays in order).
       for (int s = 0; s < n_slices; ++s) {
         if (!bd.traces_slice(s))
           continue;
         std::size_t lo = 0, hi = 0;
-        slice_rows(bd.n_el, n_slices, s, lo, hi);
+        bd.grid_slice_rows(n_slices, s, lo, hi);
         KeptPath* region =
             kept_paths_.get() + kept_region_[id] + static_cast<std::size_t>(s) * kept_slice_slots();
         std::size_t m = 0;

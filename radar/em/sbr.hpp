@@ -46,6 +46,7 @@
 //   - Every return is labelled with its path's owner (Contribution::object_id), whichever
 //     surface the path last met: radar -> target -> ground -> radar is the target's echo.
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <complex>
@@ -150,10 +151,13 @@ struct SbrConfig {
   /// the most urgent slice first: the larger of its age over reuse_refresh_frames and its aspect
   /// change over its limit. The aspect rule holds per slice: one slice past its limit is traced
   /// again alone, its bundle's other slices kept. A slice is traced alone only while the bundle
-  /// has the rows its paths were kept with and is whole inside the view, so that the slices'
-  /// rows together are each of the bundle's rows once; else the whole bundle is. To that end a
-  /// kept bundle keeps its rows while its grid asks for one row more or fewer, or up to 2 % of
-  /// them (its elevation step then differs from the spacing's by as much).
+  /// has the rows its paths were kept with, so that the slices' rows together are each of the
+  /// bundle's rows once; else the whole bundle is. To that end a kept bundle keeps its rows
+  /// while its grid asks for one row more or fewer, or up to 2 % of them (its elevation step
+  /// then differs from the spacing's by as much), and a kept target cut by the view takes the
+  /// grid of its whole box (its rows over the box's whole elevation extent, the ray cap on the
+  /// whole box) and shoots the rows whose centres are in view, so its slices stay put as it
+  /// leaves the view.
   /// While its paths are kept, a target's bounce-1 facets also keep the answers of their occlusion
   /// queries (which samples and sub-triangles see the radar): under the same rule a shadow boundary
   /// moves across it by at most D dtheta <= spacing / 2, within the rays' own resolution. Their PO
@@ -383,7 +387,8 @@ class SbrTracer {
     std::size_t first_edge = 0;    ///< in this frame's run over the bundled targets' edges
     std::size_t first_pair = 0;    ///< the same for their edge pairs (double diffraction)
     std::size_t first_column = 0;  ///< in column_cos_ / column_sin_ this frame (or none)
-    /// Its box (with the ground image) reached past the field of view and was cut to it.
+    /// Its box (with the ground image) reached past the field of view and was cut to it (a kept
+    /// target: its box's grid, less the rows and columns out of view; bundle_for).
     bool clipped = false;
     /// Its box straddles the antenna's plane: its grid covers the whole field of view.
     bool behind = false;
@@ -427,12 +432,21 @@ class SbrTracer {
       row_hi = n_el;
       slice = slice_end = kAllSlices;
     }
+    /// Rows of the box's grid (slice_rows' rule), and the first of them in this grid: the grid
+    /// has rows [row_offset, row_offset + n_el) of them (a target cut by the view: bundle_for).
+    std::size_t n_el_full = 0, row_offset = 0;
+    /// This grid's rows [lo, hi) in slice `s` of `slices` (those of the box's rows in view).
+    void grid_slice_rows(int slices, int s, std::size_t& lo, std::size_t& hi) const noexcept {
+      slice_rows(n_el_full, slices, s, lo, hi);
+      lo = std::clamp(lo, row_offset, row_offset + n_el) - row_offset;
+      hi = std::clamp(hi, row_offset, row_offset + n_el) - row_offset;
+    }
     /// Traced this frame, slices [first, end) of `slices` (rows [row_lo, row_hi)).
     void trace_slices(int first, int end, int slices) noexcept {
       std::size_t lo = 0, hi = 0;
       trace = true;
-      slice_rows(n_el, slices, first, row_lo, hi);
-      slice_rows(n_el, slices, end - 1, lo, row_hi);
+      grid_slice_rows(slices, first, row_lo, hi);
+      grid_slice_rows(slices, end - 1, lo, row_hi);
       slice = static_cast<std::uint8_t>(first);
       slice_end = static_cast<std::uint8_t>(end);
     }

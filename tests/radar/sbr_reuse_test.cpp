@@ -470,6 +470,58 @@ TEST(SbrReuse, SlicesPastTheAspectLimitTogetherAreTracedWithoutTheOthers) {
   EXPECT_GT(most, 0.4 * c.first_rays);  // two slices at once happened
 }
 
+TEST(SbrReuse, ATargetLeavingTheViewInElevationIsRefreshedASliceAtATime) {
+  // The trihedral of ATargetLeavingTheViewKeepsItsPathsAndLeavesOutThoseThatHaveLeft at 30 m,
+  // on the lower elevation edge of the view (the antenna pitched up by 0.05 rad), the radar
+  // climbing 2 cm a frame (0.67 mrad, 0.06 of the aspect limit), so that the target leaves the
+  // bottom of the view (from a half in view to a fifth over 12 frames), with
+  // reuse_refresh_frames = 4. Its grid is its whole box's, of which the rows in view are shot
+  // (bundle_for), so its slices stay put as the cut moves: it is refreshed a slice at a time,
+  // never whole, its kept paths that leave the view are left out also in the frames that trace
+  // a slice, and what it keeps gives the triple bounce of a fresh trace from each pose, to two
+  // rows of tubes at the cut edge (by which slices traced from different poses and a fresh
+  // grid can differ). Fails if a cut target is traced whole, if its grid is cut with the view
+  // (its slices then move), or if a frame that traces a slice keeps the others' paths that
+  // have left the view.
+  const double f = 10e9, k = 2.0 * kPi * f / kC, rho = 30.0, spacing = 0.02, pitch = 0.05;
+  rd::SbrConfig c = config(f, spacing);
+  c.reuse_refresh_frames = 4;
+  c.reuse_refresh_slices = 4;
+  rd::SbrConfig fresh_config = c;
+  fresh_config.reuse_static_paths = false;
+  auto pose_at = [&](double h_m) {
+    rd::RadarPose p;
+    const glm::dvec3 look(0.0, std::cos(pitch), std::sin(pitch));
+    const glm::dvec3 right = glm::normalize(glm::cross(glm::dvec3(0, 0, -1), look));
+    p.position_m = {0.0, -rho, h_m};
+    p.world_from_antenna = glm::dmat3(look, right, glm::cross(look, right));
+    return p;
+  };
+  sc::Scene scene(with({trihedral(0.5)}));
+  rd::SbrTracer kept(scene, c), fresh(scene, fresh_config);
+  const Frame first = trace(kept, pose_at(0.0));
+  ASSERT_EQ(first.stats.target_bundles, 1u);
+  const auto first_rays = static_cast<double>(first.stats.rays);
+  std::uint64_t left_view = 0;
+  const double row = std::ceil(0.75 / spacing);  // the target's width over the spacing
+  for (int frame = 1; frame <= 12; ++frame) {
+    const rd::RadarPose pose = pose_at(0.02 * frame);
+    const Frame r = trace(kept, pose), t = trace(fresh, pose);
+    const double share = 2.0 * row / static_cast<double>(t.stats.rays);
+    left_view += r.stats.kept_paths_left_view;
+    const std::complex<double> s_kept = sum(r, 3, k, rho), s_traced = sum(t, 3, k, rho);
+    std::printf("frame %d: rays %llu of %g, left %llu, triple %g vs %g, fresh rays %llu\n", frame,
+                static_cast<unsigned long long>(r.stats.rays), first_rays,
+                static_cast<unsigned long long>(r.stats.kept_paths_left_view), std::abs(s_kept),
+                std::abs(s_traced), static_cast<unsigned long long>(t.stats.rays));
+    EXPECT_EQ(r.stats.reused_bundles, 1u) << frame;
+    EXPECT_LE(static_cast<double>(r.stats.rays), 0.55 * first_rays) << frame;
+    EXPECT_NEAR(std::abs(s_kept), std::abs(s_traced), share * std::abs(s_traced)) << frame;
+    EXPECT_LE(r.stats.reuse_max_angle_fraction, 1.0) << frame;
+  }
+  EXPECT_GT(left_view, 0u);
+}
+
 TEST(SbrReuse, FacetsTurningToTheRaysTraceTheBundleWholeAlsoWhenASliceWasDue) {
   // A dihedral (faces 1 m x 0.5 m, each two right triangles whose farthest vertex is rho =
   // 0.687 m from the centroid) at 10 GHz: its facets are integrated by the facet pass beyond
