@@ -1072,7 +1072,10 @@ bool SbrTracer::bundle_for(const RadarPose& pose, std::uint32_t id, double spaci
     b.n_el = r_hi - r_lo;
     b.del_rad = del;
     b.el0_rad = box_el_lo + static_cast<double>(r_lo) * del;
-    b.n_az = std::min(n_az, cells(az_hi - az_lo));
+    // The columns at the box grid's own step.
+    const double daz = grid_az_rad / static_cast<double>(n_az);
+    b.n_az = std::clamp<std::size_t>(
+        static_cast<std::size_t>(std::ceil((az_hi - az_lo) / daz - 1e-9)), 1, n_az);
   } else {
     b.n_el = n_el;
     b.del_rad = (el_hi - el_lo) / static_cast<double>(n_el);
