@@ -1203,13 +1203,12 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
         end_over = s + 1;
       }
     }
-    const bool by_slice = n_slices > 1 && b.n_el_full == kp.n_el && !b.behind;
     if (reuse && end_over == 0) {
       b.trace = false;
       b.kept_fraction =
           *std::max_element(b.slice_fraction.begin(), b.slice_fraction.begin() + n_slices);
       kept_rays += rays;
-    } else if (reuse && by_slice && end_over - first_over < n_slices) {
+    } else if (reuse && slices_apart(b) && end_over - first_over < n_slices) {
       b.trace_slices(first_over, end_over, n_slices);
       const std::size_t traced = traced_rays(b);
       b.kept_fraction = 0.0;  // of the slices kept
@@ -1255,7 +1254,7 @@ void SbrTracer::choose_reuse(const RadarPose& pose, int max_bounces, std::span<B
         continue;
       const Kept& kp = kept_[b.object_id];
       // Of a target cut by the view, the rows in view (its box's grid: bundle_for).
-      const bool by_slice = n_slices > 1 && b.n_el_full == kp.n_el && !b.behind;
+      const bool by_slice = slices_apart(b);
       for (int s = 0; s < n_slices; ++s) {
         const auto i = static_cast<std::size_t>(s);
         const double urgency =

@@ -149,15 +149,15 @@ struct SbrConfig {
   /// elevation span (a row whose centre lies in band s belongs to slice s), each kept and traced
   /// again on its own, so one refresh traces a slice's rays, not the bundle's. The refresh takes
   /// the most urgent slice first: the larger of its age over reuse_refresh_frames and its aspect
-  /// change over its limit. The aspect rule holds per slice: one slice past its limit is traced
-  /// again alone, its bundle's other slices kept. A slice is traced alone only while the bundle
-  /// has the rows its paths were kept with, so that the slices' rows together are each of the
-  /// bundle's rows once; else the whole bundle is. To that end a kept bundle keeps its rows
-  /// while its grid asks for one row more or fewer, or up to 2 % of them (its elevation step
-  /// then differs from the spacing's by as much), and a kept target cut by the view takes the
-  /// grid of its whole box (its rows over the box's whole elevation extent, the ray cap on the
-  /// whole box) and shoots the rows whose centres are in view, so its slices stay put as it
-  /// leaves the view.
+  /// change over its limit. The aspect rule holds per slice: the slices past their limit (and
+  /// any between them) are traced again, the bundle's others kept. Slices are traced apart only
+  /// while the bundle has the rows its paths were kept with, so that the slices' rows together
+  /// are each of the bundle's rows once; else the whole bundle is. To that end a kept bundle
+  /// keeps its rows while its grid asks for one row more or fewer, or up to 2 % of them (its
+  /// elevation step then differs from the spacing's by as much), and a kept target cut by the
+  /// view takes the grid of its whole box (its rows over the box's whole elevation extent, the
+  /// ray cap on the whole box) and shoots the rows whose centres are in view, so its slices stay
+  /// put as it leaves the view.
   /// While its paths are kept, a target's bounce-1 facets also keep the answers of their occlusion
   /// queries (which samples and sub-triangles see the radar): under the same rule a shadow boundary
   /// moves across it by at most D dtheta <= spacing / 2, within the rays' own resolution. Their PO
@@ -530,6 +530,12 @@ class SbrTracer {
   /// Whether target `id`'s facets left to the rays this frame (facet_light_) are those of when
   /// its paths were kept.
   [[nodiscard]] bool same_facets_by_rays(std::uint32_t id) const noexcept;
+  /// Whether kept bundle `b`'s slices may be traced apart this frame: it has the rows (of its
+  /// box's grid) its slices were kept with, so that they are each of its rows once, and does not
+  /// straddle the antenna's plane (SbrConfig::reuse_static_paths).
+  [[nodiscard]] bool slices_apart(const Bundle& b) const noexcept {
+    return config_.reuse_refresh_slices > 1 && b.n_el_full == kept_[b.object_id].n_el && !b.behind;
+  }
   /// The frame's reuse figures of `bundles` (those not traced re-evaluate kept paths).
   void count_reuse(std::span<const Bundle> bundles, TraceStats& stats) const noexcept;
   /// A kept target cut by the field of view (choose_reuse): its kept paths whose first hit has
